@@ -1,0 +1,161 @@
+//! File plumbing shared by every reader and writer: errors that say which file, which line or
+//! record, and what was wrong; and writes that never leave a half-written file behind.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Why a file could not be read. Every variant names the file; most name the place in it.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: line {line}: {msg}", path.display())]
+    Line {
+        path: PathBuf,
+        line: usize,
+        msg: String,
+    },
+    #[error("{}: {record}: {msg}", path.display())]
+    Record {
+        path: PathBuf,
+        record: String,
+        msg: String,
+    },
+    #[error("{}: {msg}", path.display())]
+    File { path: PathBuf, msg: String },
+}
+
+impl ReadError {
+    pub(crate) fn io(path: &Path, source: std::io::Error) -> Self {
+        ReadError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+    pub(crate) fn line(path: &Path, line: usize, msg: impl Into<String>) -> Self {
+        ReadError::Line {
+            path: path.to_path_buf(),
+            line,
+            msg: msg.into(),
+        }
+    }
+    pub(crate) fn record(path: &Path, record: impl Into<String>, msg: impl Into<String>) -> Self {
+        ReadError::Record {
+            path: path.to_path_buf(),
+            record: record.into(),
+            msg: msg.into(),
+        }
+    }
+    pub(crate) fn file(path: &Path, msg: impl Into<String>) -> Self {
+        ReadError::File {
+            path: path.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+}
+
+/// Why a file could not be written. Nothing is left at the target path when this is returned.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    #[error("{}: cannot write: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{}: {msg}", path.display())]
+    Content { path: PathBuf, msg: String },
+}
+
+/// Writes `path` by handing `fill` a buffered writer on a temporary file in the same folder,
+/// then renaming it into place. If `fill` fails, the temporary file is removed and `path` is
+/// left as it was: a crash or an error never leaves a half-written output.
+pub fn write_atomic<F>(path: &Path, fill: F) -> Result<(), WriteError>
+where
+    F: FnOnce(&mut BufWriter<&File>) -> std::io::Result<()>,
+{
+    let io_err = |source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let tmp = tempfile::Builder::new()
+        .prefix(".lamina-")
+        .suffix(".part")
+        .tempfile_in(dir)
+        .map_err(io_err)?;
+    {
+        let mut w = BufWriter::new(tmp.as_file());
+        fill(&mut w).map_err(io_err)?;
+        w.flush().map_err(io_err)?;
+    }
+    tmp.as_file().sync_all().map_err(io_err)?;
+    tmp.persist(path).map_err(|e| io_err(e.error))?;
+    Ok(())
+}
+
+/// Lower-case extension of `path`, without the dot ("" when there is none).
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+/// Reads a whole file, rejecting an empty one with a clear message.
+pub(crate) fn read_nonempty(path: &Path) -> Result<Vec<u8>, ReadError> {
+    let bytes = std::fs::read(path).map_err(|e| ReadError::io(path, e))?;
+    if bytes.is_empty() {
+        return Err(ReadError::file(path, "file is empty"));
+    }
+    Ok(bytes)
+}
+
+/// Decodes a text file as UTF-8, naming the line of the first invalid byte.
+pub(crate) fn utf8_text(path: &Path, bytes: Vec<u8>) -> Result<String, ReadError> {
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
+        ReadError::line(
+            path,
+            line,
+            "not UTF-8 text (is this a binary file with the wrong extension?)",
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failed_fill_leaves_no_file() -> Result<(), Box<dyn std::error::Error>> {
+        let dir = tempfile::tempdir()?;
+        let target = dir.path().join("out.txt");
+        let res = write_atomic(&target, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("boom"))
+        });
+        assert!(res.is_err());
+        assert!(!target.exists());
+        assert_eq!(std::fs::read_dir(dir.path())?.count(), 0, "temp file left");
+        Ok(())
+    }
+
+    #[test]
+    fn successful_fill_replaces_target() -> Result<(), Box<dyn std::error::Error>> {
+        let dir = tempfile::tempdir()?;
+        let target = dir.path().join("out.txt");
+        std::fs::write(&target, "old")?;
+        write_atomic(&target, |w| w.write_all(b"new"))?;
+        assert_eq!(std::fs::read_to_string(&target)?, "new");
+        Ok(())
+    }
+}

@@ -1,0 +1,13 @@
+//! lamina: grow branching structures and turn polyline networks into things that can be built.
+//!
+//! The core type is [`Network`] (nodes and edges in 3D, millimetres); surfaces are [`TriMesh`].
+//! Formats live in each type's `io` module; `files` holds the error types and atomic writes.
+
+pub mod files;
+pub mod geom;
+pub mod mesh;
+pub mod network;
+
+pub use files::{ReadError, WriteError};
+pub use mesh::TriMesh;
+pub use network::{Edge, Meta, Network, Node};

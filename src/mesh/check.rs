@@ -1,0 +1,255 @@
+//! `TriMesh::check_manifold`: topology counts (V, E, F, boundary loops, components, genus) and
+//! every problem that stops a mesh from being a manifold surface.
+
+use std::collections::HashMap;
+use std::fmt;
+
+use super::TriMesh;
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum MeshProblem {
+    NonFiniteVertex { vertex: u32 },
+    IndexOutOfRange { triangle: u32, index: u32, vertices: usize },
+    RepeatedCorner { triangle: u32 },
+    /// An edge shared by more than two triangles.
+    NonManifoldEdge { a: u32, b: u32, triangles: usize },
+    /// Two triangles that share an edge run it the same way: their normals disagree.
+    FlippedNeighbours { a: u32, b: u32 },
+}
+
+impl fmt::Display for MeshProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            MeshProblem::NonFiniteVertex { vertex } => {
+                write!(f, "vertex {vertex}: coordinate is not finite")
+            }
+            MeshProblem::IndexOutOfRange {
+                triangle,
+                index,
+                vertices,
+            } => write!(
+                f,
+                "triangle {triangle}: vertex index {index} out of range ({vertices} vertices)"
+            ),
+            MeshProblem::RepeatedCorner { triangle } => {
+                write!(f, "triangle {triangle}: uses one vertex twice")
+            }
+            MeshProblem::NonManifoldEdge { a, b, triangles } => {
+                write!(f, "edge {a}-{b}: shared by {triangles} triangles")
+            }
+            MeshProblem::FlippedNeighbours { a, b } => write!(
+                f,
+                "edge {a}-{b}: its two triangles are oriented inconsistently"
+            ),
+        }
+    }
+}
+
+/// Topology of a mesh. Counts use only vertices that some triangle references.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Topology {
+    pub vertices: usize,
+    pub edges: usize,
+    pub faces: usize,
+    pub boundary_edges: usize,
+    pub boundary_loops: usize,
+    pub components: usize,
+    /// V − E + F.
+    pub euler: i64,
+    /// Every edge has exactly two triangles, consistently oriented.
+    pub closed: bool,
+    /// Sum over components of (2 − χ − b) / 2; `None` unless the mesh is an oriented manifold.
+    pub genus: Option<i64>,
+    pub area: f64,
+    /// Enclosed volume in mm³, for a closed oriented manifold.
+    pub volume: Option<f64>,
+    pub problems: Vec<MeshProblem>,
+}
+
+impl Topology {
+    pub fn is_manifold(&self) -> bool {
+        self.problems.is_empty()
+    }
+}
+
+#[derive(Default)]
+struct EdgeUse {
+    forward: u32,
+    backward: u32,
+}
+
+impl TriMesh {
+    /// Counts V, E, F, boundary loops and components, and finds every problem. Genus and volume
+    /// are given only when there is no problem.
+    pub fn check_manifold(&self) -> Topology {
+        let nv = self.positions.len();
+        let mut problems = Vec::new();
+        for (i, p) in self.positions.iter().enumerate() {
+            if !p.is_finite() {
+                problems.push(MeshProblem::NonFiniteVertex { vertex: i as u32 });
+            }
+        }
+        let mut good = Vec::with_capacity(self.triangles.len());
+        for (k, t) in self.triangles.iter().enumerate() {
+            let triangle = k as u32;
+            if let Some(&index) = t.iter().find(|&&i| i as usize >= nv) {
+                problems.push(MeshProblem::IndexOutOfRange {
+                    triangle,
+                    index,
+                    vertices: nv,
+                });
+            } else if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                problems.push(MeshProblem::RepeatedCorner { triangle });
+            } else {
+                good.push(*t);
+            }
+        }
+        let mut edges: HashMap<(u32, u32), EdgeUse> = HashMap::with_capacity(good.len() * 2);
+        let mut parent: Vec<u32> = (0..nv as u32).collect();
+        let mut used = vec![false; nv];
+        for t in &good {
+            for j in 0..3 {
+                let (a, b) = (t[j], t[(j + 1) % 3]);
+                let u = edges.entry((a.min(b), a.max(b))).or_default();
+                if a < b {
+                    u.forward += 1;
+                } else {
+                    u.backward += 1;
+                }
+                used[a as usize] = true;
+                union(&mut parent, a, b);
+            }
+        }
+        let mut boundary_parent: Vec<u32> = (0..nv as u32).collect();
+        let mut boundary_edges = 0;
+        let mut boundary_vertex = vec![false; nv];
+        let mut sorted: Vec<(&(u32, u32), &EdgeUse)> = edges.iter().collect();
+        sorted.sort_by_key(|(k, _)| **k);
+        for (&(a, b), u) in sorted {
+            let n = u.forward + u.backward;
+            if n == 1 {
+                boundary_edges += 1;
+                boundary_vertex[a as usize] = true;
+                boundary_vertex[b as usize] = true;
+                union(&mut boundary_parent, a, b);
+            } else if n > 2 {
+                problems.push(MeshProblem::NonManifoldEdge {
+                    a,
+                    b,
+                    triangles: n as usize,
+                });
+            } else if u.forward != 1 {
+                problems.push(MeshProblem::FlippedNeighbours { a, b });
+            }
+        }
+        let vertices = used.iter().filter(|&&u| u).count();
+        let mut comp_euler: HashMap<u32, (i64, i64)> = HashMap::new(); // root -> (chi, loops)
+        for v in 0..nv as u32 {
+            if used[v as usize] {
+                comp_euler.entry(find(&mut parent, v)).or_default().0 += 1;
+            }
+        }
+        for &(a, _) in edges.keys() {
+            comp_euler.entry(find(&mut parent, a)).or_default().0 -= 1;
+        }
+        for t in &good {
+            comp_euler.entry(find(&mut parent, t[0])).or_default().0 += 1;
+        }
+        let mut boundary_loops = 0;
+        for v in 0..nv as u32 {
+            if boundary_vertex[v as usize] && find(&mut boundary_parent, v) == v {
+                boundary_loops += 1;
+                comp_euler.entry(find(&mut parent, v)).or_default().1 += 1;
+            }
+        }
+        let euler = vertices as i64 - edges.len() as i64 + good.len() as i64;
+        let manifold = problems.is_empty();
+        let closed = manifold && boundary_edges == 0 && !good.is_empty();
+        let genus = manifold.then(|| {
+            comp_euler
+                .values()
+                .map(|&(chi, loops)| (2 - chi - loops) / 2)
+                .sum()
+        });
+        Topology {
+            vertices,
+            edges: edges.len(),
+            faces: good.len(),
+            boundary_edges,
+            boundary_loops,
+            components: comp_euler.len(),
+            euler,
+            closed,
+            genus,
+            area: if manifold { self.area() } else { 0.0 },
+            volume: closed.then(|| self.signed_volume()),
+            problems,
+        }
+    }
+}
+
+fn find(parent: &mut [u32], mut v: u32) -> u32 {
+    while parent[v as usize] != v {
+        parent[v as usize] = parent[parent[v as usize] as usize];
+        v = parent[v as usize];
+    }
+    v
+}
+
+fn union(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(parent, a), find(parent, b));
+    if ra != rb {
+        parent[ra.max(rb) as usize] = ra.min(rb);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    fn tetra() -> TriMesh {
+        TriMesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+            colors: None,
+        }
+    }
+
+    #[test]
+    fn tetrahedron_is_a_closed_sphere() {
+        let t = tetra().check_manifold();
+        assert!(t.is_manifold(), "{:?}", t.problems);
+        assert_eq!((t.vertices, t.edges, t.faces), (4, 6, 4));
+        assert_eq!(t.euler, 2);
+        assert_eq!(t.genus, Some(0));
+        assert!(t.closed);
+        assert!((t.volume.unwrap_or(0.0) - 1.0 / 6.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn open_disc_has_one_boundary_loop() {
+        let mut m = tetra();
+        m.triangles.pop();
+        let t = m.check_manifold();
+        assert!(!t.closed);
+        assert_eq!(t.boundary_loops, 1);
+        assert_eq!(t.boundary_edges, 3);
+        assert_eq!(t.genus, Some(0));
+        assert_eq!(t.volume, None);
+    }
+
+    #[test]
+    fn flipped_face_is_found() {
+        let mut m = tetra();
+        m.triangles[0] = [0, 1, 2];
+        let t = m.check_manifold();
+        assert_eq!(t.problems.len(), 3);
+        assert!(t
+            .problems
+            .iter()
+            .all(|p| matches!(p, MeshProblem::FlippedNeighbours { .. })));
+        assert_eq!(t.genus, None);
+    }
+}

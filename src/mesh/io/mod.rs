@@ -1,0 +1,84 @@
+//! Mesh files: OBJ (read through tobj, vertex colours kept; our own writer) and STL (ASCII or
+//! binary in, binary out, through stl_io); PNG renders (write only).
+
+mod obj;
+mod png;
+mod stl;
+
+use std::path::Path;
+
+use super::TriMesh;
+use crate::files::{extension, ReadError, WriteError};
+
+pub use png::render_png_bytes;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    Obj,
+    Stl,
+    Png,
+}
+
+impl MeshFormat {
+    pub fn from_path(path: &Path) -> Option<Self> {
+        match extension(path).as_str() {
+            "obj" => Some(Self::Obj),
+            "stl" => Some(Self::Stl),
+            "png" => Some(Self::Png),
+            _ => None,
+        }
+    }
+}
+
+/// Reads a mesh, choosing the format by extension. The result has in-range indices and finite
+/// coordinates; whether it is a manifold is for `check_manifold` to say.
+pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
+    let mesh = match MeshFormat::from_path(path) {
+        Some(MeshFormat::Obj) => obj::read(path)?,
+        Some(MeshFormat::Stl) => stl::read(path)?,
+        _ => {
+            return Err(ReadError::file(
+                path,
+                "not a mesh file lamina reads (expected .obj or .stl)",
+            ))
+        }
+    };
+    if mesh.triangles.is_empty() {
+        return Err(ReadError::file(path, "no triangles: nothing to read"));
+    }
+    if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
+        return Err(ReadError::record(path, format!("vertex {v}"), "coordinate is not finite"));
+    }
+    Ok(mesh)
+}
+
+/// Writes a mesh, choosing the format by extension (`size` is the PNG render's longer side).
+pub fn write_mesh(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
+    let nv = mesh.positions.len();
+    let bad_index = mesh.triangles.iter().position(|t| t.iter().any(|&i| i as usize >= nv));
+    let bad_point = mesh.positions.iter().position(|p| !p.is_finite());
+    let content = |msg: String| WriteError::Content {
+        path: path.to_path_buf(),
+        msg,
+    };
+    if let Some(t) = bad_index {
+        return Err(content(format!("triangle {t} has a vertex index out of range")));
+    }
+    if let Some(c) = mesh.colors.as_ref().filter(|c| c.len() != nv) {
+        return Err(content(format!(
+            "{} vertex colours for {nv} vertices",
+            c.len()
+        )));
+    }
+    if let Some(v) = bad_point {
+        return Err(content(format!("vertex {v} is not finite")));
+    }
+    match MeshFormat::from_path(path) {
+        Some(MeshFormat::Obj) => obj::write(mesh, path),
+        Some(MeshFormat::Stl) => stl::write(mesh, path),
+        Some(MeshFormat::Png) => png::write(mesh, path, size),
+        None => Err(content(
+            "unknown mesh format (expected .obj, .stl or .png)".into(),
+        )),
+    }
+}

@@ -1,0 +1,127 @@
+//! Mesh OBJ: read through tobj (polygons triangulated, vertex colours `v x y z r g b` kept);
+//! written by our own few lines. tobj reports what went wrong but not where, so on an error we
+//! find the offending line ourselves.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
+use crate::mesh::TriMesh;
+
+pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
+    let text = utf8_text(path, read_nonempty(path)?)?;
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| locate(path, &text, e))?;
+    // tobj renumbers vertices per object; join objects again on identical positions.
+    let mut mesh = TriMesh::default();
+    let mut index: std::collections::HashMap<[u64; 3], u32> = Default::default();
+    let with_colors = models.iter().all(|m| !m.mesh.vertex_color.is_empty()) && !models.is_empty();
+    let mut colors = Vec::new();
+    for m in &models {
+        let local: Vec<u32> = m
+            .mesh
+            .positions
+            .chunks_exact(3)
+            .enumerate()
+            .map(|(i, c)| {
+                let p = DVec3::new(c[0], c[1], c[2]);
+                let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+                *index.entry(key).or_insert_with(|| {
+                    mesh.positions.push(p);
+                    if with_colors {
+                        let rgb = &m.mesh.vertex_color[3 * i..3 * i + 3];
+                        colors.push([rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]);
+                    }
+                    mesh.positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        for t in m.mesh.indices.chunks_exact(3) {
+            mesh.triangles
+                .push([local[t[0] as usize], local[t[1] as usize], local[t[2] as usize]]);
+        }
+    }
+    if with_colors {
+        mesh.colors = Some(colors);
+    }
+    Ok(mesh)
+}
+
+/// Turns a tobj error into one that names the line.
+fn locate(path: &Path, text: &str, e: tobj::LoadError) -> ReadError {
+    use tobj::LoadError as L;
+    let total_v = text.lines().filter(|l| l.trim_start().starts_with("v ")).count() as i64;
+    let mut seen_v = 0i64;
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let key = words.next().unwrap_or("");
+        let fields: Vec<&str> = words.collect();
+        let bad = match (key, &e) {
+            ("v", L::PositionParseError | L::ColorParseError) => {
+                seen_v += 1;
+                fields.len() < 3 || fields.iter().any(|w| w.parse::<f64>().is_err())
+            }
+            ("v", _) => {
+                seen_v += 1;
+                false
+            }
+            ("f", L::FaceParseError | L::FaceVertexOutOfBounds | L::InvalidPolygon) => {
+                fields.len() < 3
+                    || fields.iter().any(|w| {
+                        let head = w.split('/').next().unwrap_or("");
+                        match head.parse::<i64>() {
+                            Ok(k) if k > 0 => k > total_v,
+                            Ok(k) if k < 0 => -k > seen_v,
+                            _ => true,
+                        }
+                    })
+            }
+            _ => false,
+        };
+        if bad {
+            let what = match e {
+                L::FaceVertexOutOfBounds => format!(
+                    "face refers to a vertex that does not exist ({total_v} vertices in the file)"
+                ),
+                _ => format!("{e}"),
+            };
+            return ReadError::line(path, i + 1, what);
+        }
+    }
+    ReadError::file(path, format!("not a readable OBJ mesh: {e}"))
+}
+
+pub fn write(mesh: &TriMesh, path: &Path) -> Result<(), WriteError> {
+    write_atomic(path, |w| {
+        writeln!(
+            w,
+            "# lamina mesh: {} vertices, {} triangles, units mm",
+            mesh.positions.len(),
+            mesh.triangles.len()
+        )?;
+        for (i, p) in mesh.positions.iter().enumerate() {
+            match &mesh.colors {
+                Some(c) => {
+                    let [r, g, b] = c[i];
+                    writeln!(w, "v {} {} {} {r} {g} {b}", p.x, p.y, p.z)?
+                }
+                None => writeln!(w, "v {} {} {}", p.x, p.y, p.z)?,
+            }
+        }
+        for t in &mesh.triangles {
+            writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+        }
+        Ok(())
+    })
+}

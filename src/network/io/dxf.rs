@@ -1,0 +1,293 @@
+//! Network DXF through the `dxf` crate. Read: LINE, LWPOLYLINE, POLYLINE (2D and 3D) and POINT,
+//! in any layer, model space; 2D entities are taken from their object coordinate system (OCS)
+//! to world coordinates. Everything else is counted as skipped; a file with nothing to read is an
+//! error. Write: R2000, layer NETWORK; one LINE per lone edge, one LWPOLYLINE per chain that lies
+//! at one height, one 3D POLYLINE per other chain, one POINT per isolated node.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use dxf::entities::{Entity, EntityType, Line, LwPolyline, ModelPoint, Polyline, Vertex};
+use dxf::enums::AcadVersion;
+use dxf::tables::Layer;
+use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
+use glam::DVec3;
+
+use super::{Imported, ReadOptions};
+use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
+use crate::network::{weld, Network};
+
+pub const LAYER: &str = "NETWORK";
+
+pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
+    let bytes = read_nonempty(path)?;
+    let drawing = Drawing::load(&mut bytes.as_slice()).map_err(|e| load_error(path, e))?;
+    let mut points: Vec<DVec3> = Vec::new();
+    let mut segments: Vec<(u32, u32)> = Vec::new();
+    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    for (index, entity) in drawing.entities().enumerate() {
+        let record = || {
+            format!(
+                "entity {index} ({}, handle {:X}, layer \"{}\")",
+                type_name(&entity.specific),
+                entity.common.handle.0,
+                entity.common.layer
+            )
+        };
+        if entity.common.is_in_paper_space {
+            *skipped.entry("paper-space entity".into()).or_default() += 1;
+            continue;
+        }
+        let polyline: Vec<DVec3> = match &entity.specific {
+            EntityType::Line(l) => vec![wcs(&l.p1), wcs(&l.p2)],
+            EntityType::LwPolyline(pl) => lw_polyline(pl, entity.common.elevation)
+                .map_err(|msg| ReadError::record(path, record(), msg))?,
+            EntityType::Polyline(pl) if pl.is_polyface_mesh() || pl.is_3d_polygon_mesh() => {
+                *skipped.entry("POLYLINE mesh".into()).or_default() += 1;
+                continue;
+            }
+            EntityType::Polyline(pl) => {
+                polyline(pl).map_err(|msg| ReadError::record(path, record(), msg))?
+            }
+            EntityType::ModelPoint(p) => vec![wcs(&p.location)],
+            other => {
+                *skipped.entry(type_name(other)).or_default() += 1;
+                continue;
+            }
+        };
+        if let Some(bad) = polyline.iter().position(|p| !p.is_finite()) {
+            return Err(ReadError::record(
+                path,
+                record(),
+                format!("vertex {bad} has a non-finite coordinate"),
+            ));
+        }
+        let first = points.len() as u32;
+        segments.extend((1..polyline.len() as u32).map(|k| (first + k - 1, first + k)));
+        points.extend(polyline);
+    }
+    if points.is_empty() {
+        let found = if skipped.is_empty() {
+            "no entities at all".to_string()
+        } else {
+            skipped
+                .iter()
+                .map(|(k, n)| format!("{n} {k}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        return Err(ReadError::file(
+            path,
+            format!("no LINE, LWPOLYLINE, POLYLINE or POINT entities to read (found: {found})"),
+        ));
+    }
+    let (network, stats) = weld::assemble(&points, &segments, opts.weld);
+    Ok(Imported {
+        network,
+        weld: Some(stats),
+        skipped,
+    })
+}
+
+fn load_error(path: &Path, e: DxfError) -> ReadError {
+    let at = |o: usize| o;
+    match e {
+        DxfError::IoError(io) => ReadError::io(path, io),
+        DxfError::ParseFloatError(ref err, o) => {
+            ReadError::line(path, at(o), format!("not a number: {err}"))
+        }
+        DxfError::ParseIntError(ref err, o) => {
+            ReadError::line(path, at(o), format!("not an integer: {err}"))
+        }
+        DxfError::ParseError(o) => ReadError::line(path, at(o), "not valid DXF"),
+        DxfError::UnexpectedCode(c, o) => {
+            ReadError::line(path, at(o), format!("unexpected group code {c}"))
+        }
+        DxfError::UnexpectedByte(b, o) => {
+            ReadError::line(path, at(o), format!("unexpected byte 0x{b:02x}: not DXF"))
+        }
+        DxfError::UnexpectedEnumValue(o) => {
+            ReadError::line(path, at(o), "value out of range for its group code")
+        }
+        DxfError::ExpectedTableType(o) => {
+            ReadError::line(path, at(o), "expected a table type after TABLE")
+        }
+        DxfError::WrongValueType(o) => {
+            ReadError::line(path, at(o), "wrong value type for its group code")
+        }
+        DxfError::UnexpectedEndOfInput => ReadError::file(
+            path,
+            "the file ends before the drawing is complete (truncated?)",
+        ),
+        other => ReadError::file(path, format!("not a readable DXF: {other}")),
+    }
+}
+
+/// DXF name of an entity type, e.g. "CIRCLE", from the variant name.
+fn type_name(t: &EntityType) -> String {
+    let dbg = format!("{t:?}");
+    let name = dbg.split(['(', ' ', '{']).next().unwrap_or("ENTITY");
+    match name {
+        "ModelPoint" => "POINT".into(),
+        "LwPolyline" => "LWPOLYLINE".into(),
+        n => n.to_ascii_uppercase(),
+    }
+}
+
+fn wcs(p: &Point) -> DVec3 {
+    DVec3::new(p.x, p.y, p.z)
+}
+
+/// World axes of the object coordinate system with normal `n` (the DXF "arbitrary axis
+/// algorithm"): a 2D entity's (x, y, elevation) are coordinates along these axes.
+fn ocs_axes(n: DVec3) -> Result<[DVec3; 3], String> {
+    let n = n.try_normalize().ok_or("extrusion direction has zero length")?;
+    let limit = 1.0 / 64.0;
+    let ax = if n.x.abs() < limit && n.y.abs() < limit {
+        DVec3::Y.cross(n)
+    } else {
+        DVec3::Z.cross(n)
+    }
+    .normalize();
+    Ok([ax, n.cross(ax), n])
+}
+
+fn from_ocs(axes: &[DVec3; 3], x: f64, y: f64, z: f64) -> DVec3 {
+    axes[0] * x + axes[1] * y + axes[2] * z
+}
+
+fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>, String> {
+    let ex = &pl.extrusion_direction;
+    let axes = ocs_axes(DVec3::new(ex.x, ex.y, ex.z))?;
+    check_bulges(pl.vertices.iter().map(|v| v.bulge))?;
+    let mut pts: Vec<DVec3> = pl
+        .vertices
+        .iter()
+        .map(|v| from_ocs(&axes, v.x, v.y, elevation))
+        .collect();
+    close_if(&mut pts, pl.is_closed());
+    Ok(pts)
+}
+
+fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
+    // Spline-fit polylines list their frame control points too; the curve is the other vertices.
+    let vertices: Vec<&Vertex> = pl
+        .vertices()
+        .filter(|v| !v.is_spline_frame_control_point())
+        .collect();
+    let mut pts = if pl.is_3d_polyline() {
+        vertices.iter().map(|v| wcs(&v.location)).collect()
+    } else {
+        check_bulges(vertices.iter().map(|v| v.bulge))?;
+        let n = &pl.normal;
+        let axes = ocs_axes(DVec3::new(n.x, n.y, n.z))?;
+        let elevation = pl.location.z;
+        vertices
+            .iter()
+            .map(|v| from_ocs(&axes, v.location.x, v.location.y, elevation))
+            .collect()
+    };
+    close_if(&mut pts, pl.is_closed());
+    Ok(pts)
+}
+
+/// Arc segments would need a chord tolerance we have no basis to choose; ask for polylines.
+fn check_bulges(bulges: impl Iterator<Item = f64>) -> Result<(), String> {
+    for (i, b) in bulges.enumerate() {
+        if b != 0.0 {
+            return Err(format!(
+                "vertex {i} starts an arc segment (bulge {b}); lamina reads straight segments \
+                 only: convert arcs to polylines in your CAD program"
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn close_if(pts: &mut Vec<DVec3>, closed: bool) {
+    if closed && pts.len() > 2 {
+        pts.push(pts[0]);
+    }
+}
+
+pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
+    let mut drawing = Drawing::new();
+    drawing.header.version = AcadVersion::R2000;
+    drawing.add_layer(Layer {
+        name: LAYER.into(),
+        ..Default::default()
+    });
+    let point = |p: DVec3| Point::new(p.x, p.y, p.z);
+    let adj = net.adjacency();
+    for (i, n) in net.nodes.iter().enumerate() {
+        if adj.degree(i as u32) == 0 {
+            add(&mut drawing, EntityType::ModelPoint(ModelPoint::new(point(n.p))));
+        }
+    }
+    for chain in net.chains() {
+        let mut pts: Vec<DVec3> = chain.nodes.iter().map(|&i| net.nodes[i as usize].p).collect();
+        let closed = chain.is_closed();
+        if closed {
+            pts.pop();
+        }
+        if pts.len() == 2 && !closed {
+            add(&mut drawing, EntityType::Line(Line::new(point(pts[0]), point(pts[1]))));
+        } else if pts.iter().all(|p| p.z == pts[0].z) {
+            let mut pl = LwPolyline::default();
+            pl.set_is_closed(closed);
+            pl.vertices = pts
+                .iter()
+                .map(|p| LwPolylineVertex {
+                    x: p.x,
+                    y: p.y,
+                    ..Default::default()
+                })
+                .collect();
+            let mut e = Entity::new(EntityType::LwPolyline(pl));
+            e.common.elevation = pts[0].z;
+            e.common.layer = LAYER.into();
+            drawing.add_entity(e);
+        } else {
+            let mut pl = Polyline::default();
+            pl.set_is_3d_polyline(true);
+            pl.set_is_closed(closed);
+            for p in &pts {
+                let mut v = Vertex::new(point(*p));
+                v.set_is_3d_polyline_vertex(true);
+                pl.add_vertex(&mut drawing, v);
+            }
+            add(&mut drawing, EntityType::Polyline(pl));
+        }
+    }
+    write_atomic(path, |w| {
+        drawing
+            .save(w)
+            .map_err(|e| std::io::Error::other(e.to_string()))
+    })
+}
+
+fn add(drawing: &mut Drawing, specific: EntityType) {
+    let mut e = Entity::new(specific);
+    e.common.layer = LAYER.into();
+    drawing.add_entity(e);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ocs_of_world_z_is_identity() -> Result<(), String> {
+        let axes = ocs_axes(DVec3::Z)?;
+        assert_eq!(axes, [DVec3::X, DVec3::Y, DVec3::Z]);
+        Ok(())
+    }
+
+    #[test]
+    fn ocs_of_flipped_z_mirrors_x() -> Result<(), String> {
+        // A 2D entity drawn with extrusion (0,0,-1), as mirrored CAD geometry often is.
+        let axes = ocs_axes(-DVec3::Z)?;
+        assert_eq!(from_ocs(&axes, 1.0, 2.0, 3.0), DVec3::new(-1.0, 2.0, -3.0));
+        Ok(())
+    }
+}
