@@ -1,1 +1,50 @@
-fn main() {}
+//! The `lamina` command: parse, call the library, print. No algorithms here.
+
+mod cli;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "lamina",
+    version,
+    about = "Grow branching structures and turn polyline networks into buildable, checked parts"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Counts, bounding box, degrees, components, cycles, lengths and every problem of a network
+    /// (.json .obj .dxf) or a mesh (.obj .stl).
+    Info(cli::info::Args),
+    /// Convert between formats, chosen by extension (networks: json obj dxf svg png; meshes: obj
+    /// stl png).
+    Convert(cli::convert::Args),
+    /// Render a network (SVG or PNG) or a mesh (PNG).
+    Render(cli::render::Args),
+    /// Run the whole way on the embedded fixtures and write every output with an index.html.
+    Demo(cli::demo::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(args) => cli::info::run(args),
+        Command::Convert(args) => cli::convert::run(args),
+        Command::Render(args) => cli::render::run(args),
+        Command::Demo(args) => cli::demo::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("lamina: error: {e:#}");
+            // Bad input and failed writes alike: 2, as clap uses for bad arguments.
+            ExitCode::from(2)
+        }
+    }
+}

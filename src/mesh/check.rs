@@ -9,13 +9,28 @@ use super::TriMesh;
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum MeshProblem {
-    NonFiniteVertex { vertex: u32 },
-    IndexOutOfRange { triangle: u32, index: u32, vertices: usize },
-    RepeatedCorner { triangle: u32 },
+    NonFiniteVertex {
+        vertex: u32,
+    },
+    IndexOutOfRange {
+        triangle: u32,
+        index: u32,
+        vertices: usize,
+    },
+    RepeatedCorner {
+        triangle: u32,
+    },
     /// An edge shared by more than two triangles.
-    NonManifoldEdge { a: u32, b: u32, triangles: usize },
+    NonManifoldEdge {
+        a: u32,
+        b: u32,
+        triangles: usize,
+    },
     /// Two triangles that share an edge run it the same way: their normals disagree.
-    FlippedNeighbours { a: u32, b: u32 },
+    FlippedNeighbours {
+        a: u32,
+        b: u32,
+    },
 }
 
 impl fmt::Display for MeshProblem {

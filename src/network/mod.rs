@@ -104,7 +104,9 @@ impl Network {
 
     /// Length of edge `e`. The edge must be in range.
     pub fn edge_length(&self, e: &Edge) -> f64 {
-        self.nodes[e.a as usize].p.distance(self.nodes[e.b as usize].p)
+        self.nodes[e.a as usize]
+            .p
+            .distance(self.nodes[e.b as usize].p)
     }
 
     /// Edge length figures over the edges whose ends are in range; `None` with no such edge.

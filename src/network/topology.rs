@@ -145,7 +145,9 @@ mod tests {
 
     fn net(n: usize, edges: &[(u32, u32)]) -> Network {
         Network {
-            nodes: (0..n).map(|i| Node::at(DVec3::new(i as f64, 0.0, 0.0))).collect(),
+            nodes: (0..n)
+                .map(|i| Node::at(DVec3::new(i as f64, 0.0, 0.0)))
+                .collect(),
             edges: edges.iter().map(|&(a, b)| Edge::new(a, b)).collect(),
             ..Default::default()
         }
@@ -156,7 +158,17 @@ mod tests {
         // A Y with a loop hanging off one arm and a separate triangle.
         let g = net(
             9,
-            &[(0, 1), (1, 2), (1, 3), (3, 4), (4, 5), (5, 3), (6, 7), (7, 8), (8, 6)],
+            &[
+                (0, 1),
+                (1, 2),
+                (1, 3),
+                (3, 4),
+                (4, 5),
+                (5, 3),
+                (6, 7),
+                (7, 8),
+                (8, 6),
+            ],
         );
         let chains = g.chains();
         let mut seen: Vec<u32> = chains.iter().flat_map(|c| c.edges.clone()).collect();

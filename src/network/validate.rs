@@ -13,14 +13,38 @@ pub const ZERO_LENGTH_FRACTION: f64 = 1e-12;
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Problem {
-    NonFinitePosition { node: u32 },
-    NonFiniteNormal { node: u32 },
-    BadNodeRadius { node: u32, radius: f64 },
-    EdgeOutOfRange { edge: u32, a: u32, b: u32, nodes: usize },
-    SelfLoop { edge: u32, node: u32 },
-    RepeatedEdge { edge: u32, first: u32 },
-    ZeroLength { edge: u32, length: f64 },
-    BadEdgeRadius { edge: u32, radius: f64 },
+    NonFinitePosition {
+        node: u32,
+    },
+    NonFiniteNormal {
+        node: u32,
+    },
+    BadNodeRadius {
+        node: u32,
+        radius: f64,
+    },
+    EdgeOutOfRange {
+        edge: u32,
+        a: u32,
+        b: u32,
+        nodes: usize,
+    },
+    SelfLoop {
+        edge: u32,
+        node: u32,
+    },
+    RepeatedEdge {
+        edge: u32,
+        first: u32,
+    },
+    ZeroLength {
+        edge: u32,
+        length: f64,
+    },
+    BadEdgeRadius {
+        edge: u32,
+        radius: f64,
+    },
 }
 
 impl fmt::Display for Problem {
@@ -215,7 +239,9 @@ mod tests {
     #[test]
     fn a_tree_has_no_cycles() {
         let net = Network {
-            nodes: (0..4).map(|i| Node::at(DVec3::new(i as f64, 0.0, 0.0))).collect(),
+            nodes: (0..4)
+                .map(|i| Node::at(DVec3::new(i as f64, 0.0, 0.0)))
+                .collect(),
             edges: vec![Edge::new(0, 1), Edge::new(1, 2), Edge::new(1, 3)],
             ..Default::default()
         };

@@ -155,7 +155,10 @@ mod tests {
         let (net, stats) = assemble(&pts, &[(0, 1), (2, 3), (3, 4)], Weld::DEFAULT);
         assert_eq!(net.nodes.len(), 4);
         assert_eq!(stats.merged, 1);
-        assert_eq!(net.edges[1].a, 1, "second polyline starts on the first one's end");
+        assert_eq!(
+            net.edges[1].a, 1,
+            "second polyline starts on the first one's end"
+        );
     }
 
     #[test]
@@ -167,7 +170,11 @@ mod tests {
             DVec3::ZERO,
             DVec3::new(1.0, 1e-9, 0.0),
         ];
-        let (net, stats) = assemble(&pts, &[(0, 1), (1, 2), (2, 3), (1, 4)], Weld::Absolute(1e-6));
+        let (net, stats) = assemble(
+            &pts,
+            &[(0, 1), (1, 2), (2, 3), (1, 4)],
+            Weld::Absolute(1e-6),
+        );
         assert_eq!(net.edges.len(), 1);
         assert_eq!(stats.zero_length_segments, 2);
         assert_eq!(stats.duplicate_segments, 1);

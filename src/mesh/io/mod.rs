@@ -47,7 +47,11 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
         return Err(ReadError::file(path, "no triangles: nothing to read"));
     }
     if let Some(v) = mesh.positions.iter().position(|p| !p.is_finite()) {
-        return Err(ReadError::record(path, format!("vertex {v}"), "coordinate is not finite"));
+        return Err(ReadError::record(
+            path,
+            format!("vertex {v}"),
+            "coordinate is not finite",
+        ));
     }
     Ok(mesh)
 }
@@ -55,14 +59,19 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
 /// Writes a mesh, choosing the format by extension (`size` is the PNG render's longer side).
 pub fn write_mesh(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     let nv = mesh.positions.len();
-    let bad_index = mesh.triangles.iter().position(|t| t.iter().any(|&i| i as usize >= nv));
+    let bad_index = mesh
+        .triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i as usize >= nv));
     let bad_point = mesh.positions.iter().position(|p| !p.is_finite());
     let content = |msg: String| WriteError::Content {
         path: path.to_path_buf(),
         msg,
     };
     if let Some(t) = bad_index {
-        return Err(content(format!("triangle {t} has a vertex index out of range")));
+        return Err(content(format!(
+            "triangle {t} has a vertex index out of range"
+        )));
     }
     if let Some(c) = mesh.colors.as_ref().filter(|c| c.len() != nv) {
         return Err(content(format!(

@@ -48,8 +48,11 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
             })
             .collect();
         for t in m.mesh.indices.chunks_exact(3) {
-            mesh.triangles
-                .push([local[t[0] as usize], local[t[1] as usize], local[t[2] as usize]]);
+            mesh.triangles.push([
+                local[t[0] as usize],
+                local[t[1] as usize],
+                local[t[2] as usize],
+            ]);
         }
     }
     if with_colors {
@@ -61,7 +64,10 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
 /// Turns a tobj error into one that names the line.
 fn locate(path: &Path, text: &str, e: tobj::LoadError) -> ReadError {
     use tobj::LoadError as L;
-    let total_v = text.lines().filter(|l| l.trim_start().starts_with("v ")).count() as i64;
+    let total_v = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("v "))
+        .count() as i64;
     let mut seen_v = 0i64;
     for (i, line) in text.lines().enumerate() {
         let mut words = line.split_whitespace();

@@ -1,14 +1,18 @@
 //! PNG render of a mesh: orthographic view from the front-right and above, flat Lambert shading
-//! (two-sided, so open surfaces read from either side), painter's order. Vertex colours, when
-//! present, tint the faces. Fitted so the longer side is `size` pixels.
+//! (two-sided, so open surfaces read from either side), a depth buffer at twice the resolution,
+//! box-filtered down for smooth edges. Vertex colours, when present, tint the faces. Fitted so
+//! the longer side is `size` pixels.
 
 use std::path::Path;
 
-use glam::DVec3;
-use tiny_skia::{FillRule, Paint, PathBuilder, Pixmap, Transform};
+use glam::{DVec2, DVec3};
+use tiny_skia::{IntSize, Pixmap};
 
 use crate::files::{write_atomic, WriteError};
 use crate::mesh::TriMesh;
+
+const SUPERSAMPLE: usize = 2;
+const BACKGROUND: [u8; 3] = [0xf4, 0xf2, 0xee];
 
 pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     let bytes = render_png_bytes(mesh, size).map_err(|msg| WriteError::Content {
@@ -18,51 +22,38 @@ pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     write_atomic(path, |w| std::io::Write::write_all(w, &bytes))
 }
 
-/// The PNG bytes of a shaded render whose longer side is `size` pixels (16..=16384).
+/// The PNG bytes of a shaded render whose longer side is `size` pixels (16..=8192).
 pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
-    if !(16..=16384).contains(&size) {
-        return Err(format!("render size {size} px is outside 16..=16384 px"));
+    if !(16..=8192).contains(&size) {
+        return Err(format!("render size {size} px is outside 16..=8192 px"));
     }
     let eye = DVec3::new(0.55, -0.8, 0.45).normalize();
     let right = DVec3::Z.cross(eye).normalize();
     let up = eye.cross(right);
     let light = (eye + DVec3::new(-0.3, 0.0, 0.5)).normalize();
-    let screen = |p: DVec3| (p.dot(right), -p.dot(up));
-    let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+    let screen = |p: DVec3| DVec2::new(p.dot(right), -p.dot(up));
+    let (mut lo, mut hi) = (DVec2::splat(f64::MAX), DVec2::splat(f64::MIN));
     for p in &mesh.positions {
-        let (x, y) = screen(*p);
-        lo = (lo.0.min(x), lo.1.min(y));
-        hi = (hi.0.max(x), hi.1.max(y));
+        lo = lo.min(screen(*p));
+        hi = hi.max(screen(*p));
     }
-    let (w, h) = ((hi.0 - lo.0).max(1e-9), (hi.1 - lo.1).max(1e-9));
+    let ext = (hi - lo).max(DVec2::splat(1e-9));
     let margin = (size as f64 * 0.03).max(2.0);
-    let scale = (size as f64 - 2.0 * margin) / w.max(h);
-    let pw = (w * scale + 2.0 * margin).round().max(1.0) as u32;
-    let ph = (h * scale + 2.0 * margin).round().max(1.0) as u32;
-    let mut pixmap = Pixmap::new(pw, ph).ok_or("render size too small")?;
-    pixmap.fill(tiny_skia::Color::from_rgba8(0xf4, 0xf2, 0xee, 0xff));
-    let to_px = |p: DVec3| {
-        let (x, y) = screen(p);
-        (((x - lo.0) * scale + margin) as f32, ((y - lo.1) * scale + margin) as f32)
-    };
-    let mut order: Vec<(f64, usize)> = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(i, t)| {
-            let [a, b, c] = mesh.corners(t);
-            ((a + b + c).dot(eye), i)
-        })
-        .collect();
-    order.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-    let mut paint = Paint {
-        anti_alias: false,
-        ..Default::default()
-    };
-    for (_, i) in order {
-        let t = &mesh.triangles[i];
-        let [a, b, c] = mesh.corners(t);
-        let n = (b - a).cross(c - a).normalize_or_zero();
+    let scale = (size as f64 - 2.0 * margin) / ext.max_element();
+    let (w, h) = (
+        (ext.x * scale + 2.0 * margin).round().max(1.0) as usize,
+        (ext.y * scale + 2.0 * margin).round().max(1.0) as usize,
+    );
+    let ss = SUPERSAMPLE;
+    let (sw, sh) = (w * ss, h * ss);
+    let mut depth = vec![f64::NEG_INFINITY; sw * sh];
+    let mut color = vec![BACKGROUND; sw * sh];
+    let to_px = |p: DVec3| ((screen(p) - lo) * scale + DVec2::splat(margin)) * ss as f64;
+    for t in &mesh.triangles {
+        let corners = mesh.corners(t);
+        let n = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize_or_zero();
         let shade = 0.3 + 0.7 * n.dot(light).abs();
         let base = match &mesh.colors {
             Some(cols) => {
@@ -72,16 +63,63 @@ pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
             None => [0.80, 0.76, 0.70],
         };
         let rgb = base.map(|v| (v * shade * 255.0).round().clamp(0.0, 255.0) as u8);
-        paint.set_color_rgba8(rgb[0], rgb[1], rgb[2], 0xff);
-        let mut pb = PathBuilder::new();
-        let (p0, p1, p2) = (to_px(a), to_px(b), to_px(c));
-        pb.move_to(p0.0, p0.1);
-        pb.line_to(p1.0, p1.1);
-        pb.line_to(p2.0, p2.1);
-        pb.close();
-        if let Some(path) = pb.finish() {
-            pixmap.fill_path(&path, &paint, FillRule::Winding, Transform::identity(), None);
+        let px = corners.map(to_px);
+        let z = corners.map(|p| p.dot(eye));
+        fill_triangle(&px, &z, sw, sh, |i, d| {
+            if d > depth[i] {
+                depth[i] = d;
+                color[i] = rgb;
+            }
+        });
+    }
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = [0u32; 3];
+            for dy in 0..ss {
+                for dx in 0..ss {
+                    let c = color[(y * ss + dy) * sw + x * ss + dx];
+                    for ch in 0..3 {
+                        sum[ch] += c[ch] as u32;
+                    }
+                }
+            }
+            let n = (ss * ss) as u32;
+            rgba.extend(sum.map(|s| ((s + n / 2) / n) as u8));
+            rgba.push(0xff);
         }
     }
-    pixmap.encode_png().map_err(|e| format!("PNG encoding failed: {e}"))
+    let size = IntSize::from_wh(w as u32, h as u32).ok_or("render size too small")?;
+    let pixmap = Pixmap::from_vec(rgba, size).ok_or("render buffer has the wrong size")?;
+    pixmap
+        .encode_png()
+        .map_err(|e| format!("PNG encoding failed: {e}"))
+}
+
+/// Calls `plot(pixel index, depth)` for every pixel centre inside the triangle (either winding).
+fn fill_triangle(
+    p: &[DVec2; 3],
+    z: &[f64; 3],
+    w: usize,
+    h: usize,
+    mut plot: impl FnMut(usize, f64),
+) {
+    let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    if area.abs() < 1e-12 {
+        return;
+    }
+    let lo = p[0].min(p[1]).min(p[2]).floor().max(DVec2::ZERO);
+    let hi = p[0].max(p[1]).max(p[2]).ceil();
+    let (x1, y1) = ((hi.x as usize).min(w), (hi.y as usize).min(h));
+    for y in lo.y as usize..y1 {
+        for x in lo.x as usize..x1 {
+            let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let b0 = (p[2] - p[1]).perp_dot(c - p[1]) / area;
+            let b1 = (p[0] - p[2]).perp_dot(c - p[2]) / area;
+            let b2 = 1.0 - b0 - b1;
+            if b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 {
+                plot(y * w + x, b0 * z[0] + b1 * z[1] + b2 * z[2]);
+            }
+        }
+    }
 }

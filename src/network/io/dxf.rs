@@ -141,7 +141,9 @@ fn wcs(p: &Point) -> DVec3 {
 /// World axes of the object coordinate system with normal `n` (the DXF "arbitrary axis
 /// algorithm"): a 2D entity's (x, y, elevation) are coordinates along these axes.
 fn ocs_axes(n: DVec3) -> Result<[DVec3; 3], String> {
-    let n = n.try_normalize().ok_or("extrusion direction has zero length")?;
+    let n = n
+        .try_normalize()
+        .ok_or("extrusion direction has zero length")?;
     let limit = 1.0 / 64.0;
     let ax = if n.x.abs() < limit && n.y.abs() < limit {
         DVec3::Y.cross(n)
@@ -221,17 +223,27 @@ pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
     let adj = net.adjacency();
     for (i, n) in net.nodes.iter().enumerate() {
         if adj.degree(i as u32) == 0 {
-            add(&mut drawing, EntityType::ModelPoint(ModelPoint::new(point(n.p))));
+            add(
+                &mut drawing,
+                EntityType::ModelPoint(ModelPoint::new(point(n.p))),
+            );
         }
     }
     for chain in net.chains() {
-        let mut pts: Vec<DVec3> = chain.nodes.iter().map(|&i| net.nodes[i as usize].p).collect();
+        let mut pts: Vec<DVec3> = chain
+            .nodes
+            .iter()
+            .map(|&i| net.nodes[i as usize].p)
+            .collect();
         let closed = chain.is_closed();
         if closed {
             pts.pop();
         }
         if pts.len() == 2 && !closed {
-            add(&mut drawing, EntityType::Line(Line::new(point(pts[0]), point(pts[1]))));
+            add(
+                &mut drawing,
+                EntityType::Line(Line::new(point(pts[0]), point(pts[1]))),
+            );
         } else if pts.iter().all(|p| p.z == pts[0].z) {
             let mut pl = LwPolyline::default();
             pl.set_is_closed(closed);

@@ -99,11 +99,19 @@ pub fn read(path: &Path) -> Result<Imported, ReadError> {
     for (i, n) in file.nodes.iter().enumerate() {
         let p = DVec3::from_array(n.p);
         if !p.is_finite() {
-            return Err(ReadError::record(path, format!("node {i}"), "position is not finite"));
+            return Err(ReadError::record(
+                path,
+                format!("node {i}"),
+                "position is not finite",
+            ));
         }
         let normal = n.normal.map(DVec3::from_array);
         if normal.is_some_and(|v| !v.is_finite()) {
-            return Err(ReadError::record(path, format!("node {i}"), "normal is not finite"));
+            return Err(ReadError::record(
+                path,
+                format!("node {i}"),
+                "normal is not finite",
+            ));
         }
         nodes.push(Node {
             p,

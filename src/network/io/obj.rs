@@ -69,7 +69,10 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
         }
     }
     if points.is_empty() {
-        return Err(ReadError::file(path, "no vertices (`v` records): nothing to read"));
+        return Err(ReadError::file(
+            path,
+            "no vertices (`v` records): nothing to read",
+        ));
     }
     let (network, stats) = weld::assemble(&points, &segments, opts.weld);
     Ok(Imported {
@@ -137,9 +140,9 @@ fn parse_vertex<'a>(
 /// against the `count` vertices read so far.
 fn vertex_ref(path: &Path, line: usize, word: &str, count: usize) -> Result<u32, ReadError> {
     let head = word.split('/').next().unwrap_or(word);
-    let i: i64 = head.parse().map_err(|_| {
-        ReadError::line(path, line, format!("`{word}` is not a vertex index"))
-    })?;
+    let i: i64 = head
+        .parse()
+        .map_err(|_| ReadError::line(path, line, format!("`{word}` is not a vertex index")))?;
     let resolved = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || resolved < 0 || resolved >= count as i64 {
         return Err(ReadError::line(
@@ -156,7 +159,12 @@ fn vertex_ref(path: &Path, line: usize, word: &str, count: usize) -> Result<u32,
 pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
     let chains = net.chains();
     write_atomic(path, |w| {
-        writeln!(w, "# lamina network: {} nodes, {} edges, units mm", net.nodes.len(), net.edges.len())?;
+        writeln!(
+            w,
+            "# lamina network: {} nodes, {} edges, units mm",
+            net.nodes.len(),
+            net.edges.len()
+        )?;
         for n in &net.nodes {
             writeln!(w, "v {} {} {}", n.p.x, n.p.y, n.p.z)?;
         }
@@ -180,7 +188,10 @@ mod tests {
         let lines = logical_lines("v 0 0 0\nl 1 \\\n 2 3\n# end\n");
         assert_eq!(lines.len(), 3);
         assert_eq!(lines[1].0, 2);
-        assert_eq!(lines[1].1.split_whitespace().collect::<Vec<_>>(), ["l", "1", "2", "3"]);
+        assert_eq!(
+            lines[1].1.split_whitespace().collect::<Vec<_>>(),
+            ["l", "1", "2", "3"]
+        );
     }
 
     #[test]

@@ -42,7 +42,10 @@ pub fn render_png_bytes(net: &Network, size: u32) -> Result<Vec<u8>, String> {
     paint.anti_alias = true;
     let to_px = |p: glam::DVec3| {
         let [x, y] = proj.page(p);
-        ((x * scale + margin_px) as f32, (y * scale + margin_px) as f32)
+        (
+            (x * scale + margin_px) as f32,
+            (y * scale + margin_px) as f32,
+        )
     };
     // One path per stroke width (in quarter pixels), so a large network draws in a few calls.
     let mut by_width: BTreeMap<u32, PathBuilder> = BTreeMap::new();
@@ -74,7 +77,15 @@ pub fn render_png_bytes(net: &Network, size: u32) -> Result<Vec<u8>, String> {
         }
     }
     if let Some(path) = dots.finish() {
-        pixmap.fill_path(&path, &paint, tiny_skia::FillRule::Winding, Transform::identity(), None);
+        pixmap.fill_path(
+            &path,
+            &paint,
+            tiny_skia::FillRule::Winding,
+            Transform::identity(),
+            None,
+        );
     }
-    pixmap.encode_png().map_err(|e| format!("PNG encoding failed: {e}"))
+    pixmap
+        .encode_png()
+        .map_err(|e| format!("PNG encoding failed: {e}"))
 }

@@ -44,9 +44,16 @@ pub fn render_svg_string(net: &Network) -> String {
     for e in &net.edges {
         let [x1, y1] = proj.page(net.nodes[e.a as usize].p);
         let [x2, y2] = proj.page(net.nodes[e.b as usize].p);
-        let _ = write!(s, r#"<line x1="{x1:.4}" y1="{y1:.4}" x2="{x2:.4}" y2="{y2:.4}""#);
+        let _ = write!(
+            s,
+            r#"<line x1="{x1:.4}" y1="{y1:.4}" x2="{x2:.4}" y2="{y2:.4}""#
+        );
         if e.radius > 0.0 {
-            let _ = write!(s, r#" stroke-width="{:.4}""#, (2.0 * e.radius).max(hairline));
+            let _ = write!(
+                s,
+                r#" stroke-width="{:.4}""#,
+                (2.0 * e.radius).max(hairline)
+            );
         }
         s.push_str("/>\n");
     }

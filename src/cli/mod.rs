@@ -1,0 +1,7 @@
+//! One module per subcommand: an argument struct and a `run` that calls the library.
+
+pub mod convert;
+pub mod demo;
+pub mod info;
+pub mod input;
+pub mod render;
