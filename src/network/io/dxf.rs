@@ -215,6 +215,14 @@ fn close_if(pts: &mut Vec<DVec3>, closed: bool) {
 pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
     let mut drawing = Drawing::new();
     drawing.header.version = AcadVersion::R2000;
+    // The crate stamps the clock and random GUIDs into the header; fix them (the epoch and the
+    // nil GUID) so the same network always gives the same bytes.
+    drawing.header.creation_date = Default::default();
+    drawing.header.creation_date_universal = Default::default();
+    drawing.header.update_date = Default::default();
+    drawing.header.update_date_universal = Default::default();
+    drawing.header.fingerprint_guid = Default::default();
+    drawing.header.version_guid = Default::default();
     drawing.add_layer(Layer {
         name: LAYER.into(),
         ..Default::default()

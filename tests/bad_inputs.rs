@@ -1,0 +1,125 @@
+//! Every file in fixtures/bad/ gets one clear error naming the file (and the line or record where
+//! there is one), exit status 2, no panic, and no output file.
+
+mod common;
+
+use common::{fixture, lamina, stderr, TestResult};
+
+/// (file, words the error must contain). Every file in fixtures/bad/ must be listed here.
+const EXPECTED: &[(&str, &[&str])] = &[
+    ("empty.json", &["file is empty"]),
+    ("empty.obj", &["file is empty"]),
+    ("empty.dxf", &["file is empty"]),
+    ("empty.stl", &["file is empty"]),
+    ("truncated.stl", &["not an STL file", "12 triangles", "259"]),
+    ("garbage.stl", &["not an STL file"]),
+    ("garbage.dxf", &["line"]),
+    (
+        "obj_index_out_of_range.obj",
+        &["line 5", "vertex index 7 is out of range"],
+    ),
+    ("mesh_index_out_of_range.obj", &["line 5", "does not exist"]),
+    ("nan_coords.obj", &["line 2", "not finite"]),
+    ("nan_coords.dxf", &["entity 0 (LINE", "non-finite"]),
+    (
+        "wrong_schema.json",
+        &["line 1", "unknown field `type`", "lamina-network"],
+    ),
+    ("wrong_format.json", &["format is \"something-else\""]),
+    (
+        "edge_out_of_range.json",
+        &["edge 0", "joins nodes 0 and 3", "1 nodes"],
+    ),
+    ("unsupported_only.dxf", &["no LINE", "2 CIRCLE", "1 TEXT"]),
+];
+
+#[test]
+fn every_bad_file_is_listed() -> TestResult {
+    for entry in std::fs::read_dir(fixture("bad"))? {
+        let name = entry?.file_name().to_string_lossy().into_owned();
+        assert!(
+            EXPECTED.iter().any(|(n, _)| *n == name),
+            "fixtures/bad/{name} has no expectation in tests/bad_inputs.rs"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn bad_files_fail_cleanly_in_every_command() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    for (name, words) in EXPECTED {
+        let input = fixture(&format!("bad/{name}"));
+        let input = input.to_str().ok_or("utf-8 path")?;
+        let out_json = dir.path().join("out.json");
+        let out_png = dir.path().join("out.png");
+        let runs = [
+            vec!["info", input],
+            vec!["info", "--json", input],
+            vec!["convert", input, out_json.to_str().ok_or("path")?],
+            vec!["render", input, "-o", out_png.to_str().ok_or("path")?],
+        ];
+        for args in runs {
+            let o = lamina(&args);
+            let err = stderr(&o);
+            assert_eq!(
+                o.status.code(),
+                Some(2),
+                "{args:?}: exit {:?}, {err}",
+                o.status
+            );
+            assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+            assert!(
+                err.contains(name),
+                "{args:?}: error does not name the file: {err}"
+            );
+            for w in *words {
+                assert!(err.contains(w), "{args:?}: error lacks `{w}`: {err}");
+            }
+            assert_eq!(err.trim().lines().count(), 1, "one clear error line: {err}");
+            assert!(o.stdout.is_empty(), "{args:?} printed output");
+        }
+        assert!(
+            !out_json.exists() && !out_png.exists(),
+            "{name}: output written"
+        );
+        assert_eq!(
+            std::fs::read_dir(dir.path())?.count(),
+            0,
+            "{name}: stray files"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn a_failed_write_leaves_an_existing_output_untouched() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("keep.json");
+    std::fs::write(&out, "previous result")?;
+    let o = lamina(&[
+        "convert",
+        fixture("bad/truncated.stl").to_str().ok_or("path")?,
+        out.to_str().ok_or("path")?,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read_to_string(&out)?, "previous result");
+    Ok(())
+}
+
+#[test]
+fn mistyped_options_are_errors_not_defaults() {
+    let net = fixture("networks/ezdxf_veins.dxf");
+    let net = net.to_str().expect("utf-8 path");
+    for args in [
+        vec!["info", net, "--weld", "abc"],
+        vec!["info", net, "--weld", "-1"],
+        vec!["info", net, "--weld", "0.1", "--weld-rel", "1e-3"],
+        vec!["render", net, "-o", "x.png", "--size", "3"],
+        vec!["convert", net, "x.stl"],
+    ] {
+        let o = lamina(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+    }
+    assert!(!std::path::Path::new("x.png").exists());
+}

@@ -1,0 +1,177 @@
+//! End to end through the binary: info, convert, render, demo.
+
+mod common;
+
+use common::{fixture, lamina, stderr, stdout, TestResult};
+use serde_json::Value;
+
+fn info_json(path: &str) -> Result<Value, Box<dyn std::error::Error>> {
+    let o = lamina(&["info", "--json", path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    Ok(serde_json::from_slice(&o.stdout)?)
+}
+
+#[test]
+fn info_reports_the_ezdxf_fixture() -> TestResult {
+    let v = info_json(fixture("networks/ezdxf_veins.dxf").to_str().ok_or("path")?)?;
+    // 13 midrib vertices, 6 secondary veins of 2 new nodes each, 5 tertiary veins of 2, and a
+    // loop adding 2: 13 + 12 + 10 + 2 = 37 nodes. Edges: 12 + 12 + 10 + 3 = 37.
+    assert_eq!(v["nodes"], 37);
+    assert_eq!(v["edges"], 37);
+    assert_eq!(v["components"], 1);
+    assert_eq!(v["cycles"], 1);
+    assert_eq!(v["problems"].as_array().map(|a| a.len()), Some(0));
+    assert_eq!(v["import"]["skipped"]["CIRCLE"], 1);
+    assert_eq!(v["import"]["skipped"]["TEXT"], 1);
+    assert_eq!(v["bbox"]["max"][2], 5.0);
+    Ok(())
+}
+
+#[test]
+fn info_lists_every_validation_problem() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let path = dir.path().join("n.json");
+    std::fs::write(
+        &path,
+        r#"{"format":"lamina-network","version":1,
+            "nodes":[{"p":[0,0,0]},{"p":[1,0,0]},{"p":[1,0,0]}],
+            "edges":[{"a":0,"b":1},{"a":1,"b":0},{"a":2,"b":2},{"a":1,"b":2}]}"#,
+    )?;
+    let v = info_json(path.to_str().ok_or("path")?)?;
+    let kinds: Vec<&str> = v["problems"]
+        .as_array()
+        .ok_or("problems")?
+        .iter()
+        .filter_map(|p| p["kind"].as_str())
+        .collect();
+    assert_eq!(kinds, ["repeated_edge", "self_loop", "zero_length"]);
+    let human = stdout(&lamina(&["info", path.to_str().ok_or("path")?]));
+    assert!(human.contains("edge 2: self-loop at node 2"), "{human}");
+    Ok(())
+}
+
+#[test]
+fn info_on_meshes_gives_topology() -> TestResult {
+    let v = info_json(
+        fixture("surfaces/openscad_part.stl")
+            .to_str()
+            .ok_or("path")?,
+    )?;
+    assert_eq!(v["kind"], "mesh");
+    assert_eq!(v["topology"]["genus"], 1);
+    assert_eq!(v["topology"]["closed"], true);
+    let v = info_json(
+        fixture("surfaces/colored_patch.obj")
+            .to_str()
+            .ok_or("path")?,
+    )?;
+    assert_eq!(v["vertex_colors"], true);
+    assert_eq!(v["topology"]["boundary_loops"], 1);
+    Ok(())
+}
+
+#[test]
+fn weld_option_changes_what_joins() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let path = dir.path().join("gap.obj");
+    // Two polylines whose ends miss each other by 0.01 mm.
+    std::fs::write(
+        &path,
+        "v 0 0 0\nv 10 0 0\nv 10.01 0 0\nv 20 0 0\nl 1 2\nl 3 4\n",
+    )?;
+    let p = path.to_str().ok_or("path")?;
+    let apart = info_json(p)?;
+    assert_eq!(apart["components"], 2);
+    let o = lamina(&["info", "--json", "--weld", "0.02", p]);
+    let joined: Value = serde_json::from_slice(&o.stdout)?;
+    assert_eq!(joined["components"], 1);
+    assert_eq!(joined["nodes"], 3);
+    Ok(())
+}
+
+#[test]
+fn convert_and_render_write_what_they_say() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let src = fixture("networks/ezdxf_veins.dxf");
+    for ext in ["json", "obj", "dxf", "svg", "png"] {
+        let out = dir.path().join(format!("veins.{ext}"));
+        let o = lamina(&[
+            "convert",
+            src.to_str().ok_or("path")?,
+            out.to_str().ok_or("path")?,
+        ]);
+        assert!(o.status.success(), "{ext}: {}", stderr(&o));
+        assert!(std::fs::metadata(&out)?.len() > 0);
+    }
+    let svg = std::fs::read_to_string(dir.path().join("veins.svg"))?;
+    assert_eq!(svg.matches("<line ").count(), 37);
+    let png = dir.path().join("r.png");
+    let o = lamina(&[
+        "render",
+        src.to_str().ok_or("path")?,
+        "-o",
+        png.to_str().ok_or("path")?,
+        "--size",
+        "300",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&png)?;
+    assert_eq!(&bytes[1..4], b"PNG");
+    let (w, h) = (
+        u32::from_be_bytes(bytes[16..20].try_into()?),
+        u32::from_be_bytes(bytes[20..24].try_into()?),
+    );
+    assert_eq!(w.max(h), 300, "longer side fits --size: {w}x{h}");
+    Ok(())
+}
+
+#[test]
+fn demo_writes_every_output_and_an_index() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("demo");
+    let o = lamina(&[
+        "demo",
+        "--out",
+        out.to_str().ok_or("path")?,
+        "--size",
+        "400",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let index = std::fs::read_to_string(out.join("index.html"))?;
+    let mut links = 0;
+    for part in index.split("href=\"").skip(1) {
+        let target = part.split('"').next().ok_or("link")?;
+        assert!(out.join(target).exists(), "index links to missing {target}");
+        links += 1;
+    }
+    assert!(links >= 20, "{links} links");
+    let calyx: Value = serde_json::from_str(&std::fs::read_to_string(
+        out.join("surfaces/calyx.info.json"),
+    )?)?;
+    assert_eq!(calyx["topology"]["genus"], 0);
+    Ok(())
+}
+
+#[test]
+fn demo_is_deterministic() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    for d in [&a, &b] {
+        let o = lamina(&["demo", "--out", d.to_str().ok_or("path")?, "--size", "200"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    for sub in ["networks", "surfaces"] {
+        for entry in std::fs::read_dir(a.join(sub))? {
+            let name = entry?.file_name();
+            let (x, y) = (
+                std::fs::read(a.join(sub).join(&name))?,
+                std::fs::read(b.join(sub).join(&name))?,
+            );
+            // info files name their input path, which differs between the two runs.
+            if !name.to_string_lossy().ends_with(".info.json") {
+                assert!(x == y, "{sub}/{name:?} differs between runs");
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,76 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use lamina::network::Network;
+
+pub type TestResult = Result<(), Box<dyn std::error::Error>>;
+
+pub fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+pub fn lamina(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lamina"))
+        .args(args)
+        .output()
+        .expect("the lamina binary runs")
+}
+
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Every edge as its two end positions, ordered, then all edges sorted: a form that ignores node
+/// numbering and edge direction, for comparing topology across formats.
+pub fn canonical_edges(net: &Network) -> Vec<[[f64; 3]; 2]> {
+    let mut v: Vec<[[f64; 3]; 2]> = net
+        .edges
+        .iter()
+        .map(|e| {
+            let a = net.nodes[e.a as usize].p.to_array();
+            let b = net.nodes[e.b as usize].p.to_array();
+            if a.partial_cmp(&b) == Some(std::cmp::Ordering::Greater) {
+                [b, a]
+            } else {
+                [a, b]
+            }
+        })
+        .collect();
+    v.sort_by(|x, y| x.partial_cmp(y).expect("finite coordinates"));
+    v
+}
+
+/// Asserts that `a` and `b` have the same nodes and edges, up to numbering, with every
+/// coordinate within `tol` mm.
+pub fn assert_same_topology(a: &Network, b: &Network, tol: f64) {
+    assert_eq!(a.nodes.len(), b.nodes.len(), "node counts differ");
+    assert_eq!(a.edges.len(), b.edges.len(), "edge counts differ");
+    let (ea, eb) = (canonical_edges(a), canonical_edges(b));
+    for (x, y) in ea.iter().zip(&eb) {
+        for k in 0..2 {
+            for c in 0..3 {
+                assert!(
+                    (x[k][c] - y[k][c]).abs() <= tol,
+                    "edge {x:?} vs {y:?} differ by more than {tol}"
+                );
+            }
+        }
+    }
+    // Degree sequences by position must agree too (catches two nodes merged into one).
+    let degrees = |n: &Network| {
+        let adj = n.adjacency();
+        let mut d: Vec<usize> = (0..n.nodes.len() as u32).map(|i| adj.degree(i)).collect();
+        d.sort();
+        d
+    };
+    assert_eq!(degrees(a), degrees(b), "degree sequences differ");
+}
