@@ -2,6 +2,7 @@
 //! node. Polyline formats (OBJ `l`, DXF) repeat shared endpoints; this is where they meet.
 
 use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::DVec3;
 
@@ -62,7 +63,8 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
         merged: points.len() - nodes.len(),
         ..Default::default()
     };
-    let mut seen = HashSet::with_capacity(segments.len());
+    let mut seen: FastSet<(u32, u32)> = FastSet::default();
+    seen.reserve(segments.len());
     let mut edges = Vec::with_capacity(segments.len());
     for &(a, b) in segments {
         let (a, b) = (map[a as usize], map[b as usize]);
@@ -82,13 +84,46 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
     (network, stats)
 }
 
+/// A multiply-rotate hasher for small integer keys: welding hashes every point read, and the
+/// default SipHash costs a third of a large import. Keys come from the file, but a collision
+/// only slows a lookup; it cannot change which points merge.
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_i64(&mut self, v: i64) {
+        self.write_u64(v as u64);
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(v as u64);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+}
+
+type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<CellHasher>>;
+type FastSet<K> = HashSet<K, BuildHasherDefault<CellHasher>>;
+
 /// Maps each point to a node index. With cells of twice the tolerance, the ball of radius `tol`
 /// around a point touches at most two cells per axis, so eight lookups find every candidate.
 fn merge_points(points: &[DVec3], tol: f64) -> (Vec<u32>, Vec<DVec3>) {
     let mut map = Vec::with_capacity(points.len());
     let mut nodes: Vec<DVec3> = Vec::new();
     if tol == 0.0 {
-        let mut exact: HashMap<[u64; 3], u32> = HashMap::with_capacity(points.len());
+        let mut exact: FastMap<[u64; 3], u32> = FastMap::default();
+        exact.reserve(points.len());
         for p in points {
             let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
             let id = *exact.entry(key).or_insert_with(|| {
@@ -100,7 +135,8 @@ fn merge_points(points: &[DVec3], tol: f64) -> (Vec<u32>, Vec<DVec3>) {
         return (map, nodes);
     }
     let cell = 2.0 * tol;
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(points.len());
+    let mut grid: FastMap<[i64; 3], Vec<u32>> = FastMap::default();
+    grid.reserve(points.len());
     for p in points {
         let q = *p / cell;
         let base = q.floor();

@@ -17,7 +17,6 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
         Err(tobj::LoadError::OpenFileFailed)
