@@ -13,58 +13,91 @@ use dxf::tables::Layer;
 use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
 use glam::DVec3;
 
+use super::dxf_split::Part;
 use super::{Imported, ReadOptions};
 use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
 use crate::network::{weld, Network};
 
 pub const LAYER: &str = "NETWORK";
 
+/// Files at least this large are split and parsed on several cores (see `dxf_split`).
+const SPLIT_MIN_BYTES: usize = 4 << 20;
+
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
     let bytes = read_nonempty(path)?;
-    let drawing = Drawing::load(&mut bytes.as_slice()).map_err(|e| load_error(path, e))?;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let parts = threads.min(bytes.len() / SPLIT_MIN_BYTES);
+    read_bytes(path, &bytes, parts, opts)
+}
+
+/// Reads DXF bytes, in up to `parts` pieces parsed in parallel; the result does not depend on
+/// `parts`.
+pub(super) fn read_bytes(
+    path: &Path,
+    bytes: &[u8],
+    parts: usize,
+    opts: &ReadOptions,
+) -> Result<Imported, ReadError> {
+    let parts = match super::dxf_split::split(bytes, parts) {
+        Some(parts) => parts,
+        None => vec![Part::whole(bytes)],
+    };
+    let pieces: Vec<Result<Collected, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = parts
+            .iter()
+            .map(|part| scope.spawn(|| load_and_collect(path, part)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err((None, ReadError::file(path, "DXF parser thread failed")))
+                })
+            })
+            .collect()
+    });
+    // The whole file fails to parse if any part does, whatever records come before; the
+    // parser stops at the first error in the file, so report the one on the earliest line.
+    let mut all = Vec::with_capacity(pieces.len());
+    let mut first_error: Option<(Option<usize>, ReadError)> = None;
+    for piece in pieces {
+        match piece {
+            Ok(c) => all.push(c),
+            Err((line, e)) => {
+                let earlier = match (&first_error, line) {
+                    (None, _) => true,
+                    (Some((Some(best), _)), Some(l)) => l < *best,
+                    (Some((None, _)), Some(_)) => true,
+                    _ => false,
+                };
+                if earlier {
+                    first_error = Some((line, e));
+                }
+            }
+        }
+    }
+    if let Some((_, e)) = first_error {
+        return Err(e);
+    }
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
-    for (index, entity) in drawing.entities().enumerate() {
-        let record = || {
-            format!(
-                "entity {index} ({}, handle {:X}, layer \"{}\")",
-                type_name(&entity.specific),
-                entity.common.handle.0,
-                entity.common.layer
-            )
-        };
-        if entity.common.is_in_paper_space {
-            *skipped.entry("paper-space entity".into()).or_default() += 1;
-            continue;
-        }
-        let polyline: Vec<DVec3> = match &entity.specific {
-            EntityType::Line(l) => vec![wcs(&l.p1), wcs(&l.p2)],
-            EntityType::LwPolyline(pl) => lw_polyline(pl, entity.common.elevation)
-                .map_err(|msg| ReadError::record(path, record(), msg))?,
-            EntityType::Polyline(pl) if pl.is_polyface_mesh() || pl.is_3d_polygon_mesh() => {
-                *skipped.entry("POLYLINE mesh".into()).or_default() += 1;
-                continue;
-            }
-            EntityType::Polyline(pl) => {
-                polyline(pl).map_err(|msg| ReadError::record(path, record(), msg))?
-            }
-            EntityType::ModelPoint(p) => vec![wcs(&p.location)],
-            other => {
-                *skipped.entry(type_name(other)).or_default() += 1;
-                continue;
-            }
-        };
-        if let Some(bad) = polyline.iter().position(|p| !p.is_finite()) {
+    let mut base = 0usize;
+    for piece in all {
+        if let Some(bad) = piece.bad {
             return Err(ReadError::record(
                 path,
-                record(),
-                format!("vertex {bad} has a non-finite coordinate"),
+                format!("entity {} ({})", base + bad.index, bad.what),
+                bad.msg,
             ));
         }
-        let first = points.len() as u32;
-        segments.extend((1..polyline.len() as u32).map(|k| (first + k - 1, first + k)));
-        points.extend(polyline);
+        let shift = points.len() as u32;
+        segments.extend(piece.segments.iter().map(|&(a, b)| (a + shift, b + shift)));
+        points.extend(piece.points);
+        for (k, n) in piece.skipped {
+            *skipped.entry(k).or_default() += n;
+        }
+        base += piece.entities;
     }
     if points.is_empty() {
         let found = if skipped.is_empty() {
@@ -89,8 +122,110 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
     })
 }
 
-fn load_error(path: &Path, e: DxfError) -> ReadError {
-    let at = |o: usize| o;
+/// What one drawing (or part of one) holds for a network.
+struct Collected {
+    points: Vec<DVec3>,
+    segments: Vec<(u32, u32)>,
+    skipped: BTreeMap<String, usize>,
+    entities: usize,
+    /// The first entity that cannot be read; the rest of the piece is not collected.
+    bad: Option<BadEntity>,
+}
+
+struct BadEntity {
+    index: usize,
+    what: String,
+    msg: String,
+}
+
+fn load_and_collect(path: &Path, part: &Part) -> Result<Collected, (Option<usize>, ReadError)> {
+    let drawing = Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))?;
+    Ok(collect(&drawing))
+}
+
+fn collect(drawing: &Drawing) -> Collected {
+    let mut c = Collected {
+        points: Vec::new(),
+        segments: Vec::new(),
+        skipped: BTreeMap::new(),
+        entities: 0,
+        bad: None,
+    };
+    for (index, entity) in drawing.entities().enumerate() {
+        c.entities = index + 1;
+        let fail = |msg: String| {
+            Some(BadEntity {
+                index,
+                what: format!(
+                    "{}, handle {:X}, layer \"{}\"",
+                    type_name(&entity.specific),
+                    entity.common.handle.0,
+                    entity.common.layer
+                ),
+                msg,
+            })
+        };
+        if entity.common.is_in_paper_space {
+            *c.skipped.entry("paper-space entity".into()).or_default() += 1;
+            continue;
+        }
+        let polyline: Vec<DVec3> = match &entity.specific {
+            EntityType::Line(l) => vec![wcs(&l.p1), wcs(&l.p2)],
+            EntityType::LwPolyline(pl) => match lw_polyline(pl, entity.common.elevation) {
+                Ok(p) => p,
+                Err(msg) => {
+                    c.bad = fail(msg);
+                    return c;
+                }
+            },
+            EntityType::Polyline(pl) if pl.is_polyface_mesh() || pl.is_3d_polygon_mesh() => {
+                *c.skipped.entry("POLYLINE mesh".into()).or_default() += 1;
+                continue;
+            }
+            EntityType::Polyline(pl) => match polyline(pl) {
+                Ok(p) => p,
+                Err(msg) => {
+                    c.bad = fail(msg);
+                    return c;
+                }
+            },
+            EntityType::ModelPoint(p) => vec![wcs(&p.location)],
+            other => {
+                *c.skipped.entry(type_name(other)).or_default() += 1;
+                continue;
+            }
+        };
+        if let Some(bad) = polyline.iter().position(|p| !p.is_finite()) {
+            c.bad = fail(format!("vertex {bad} has a non-finite coordinate"));
+            return c;
+        }
+        let first = c.points.len() as u32;
+        c.segments
+            .extend((1..polyline.len() as u32).map(|k| (first + k - 1, first + k)));
+        c.points.extend(polyline);
+    }
+    c
+}
+
+/// The error for the file, with the file line it is on (when the parser gave one).
+fn load_error(path: &Path, e: DxfError, part: &Part) -> (Option<usize>, ReadError) {
+    let line = match &e {
+        DxfError::ParseFloatError(_, o)
+        | DxfError::ParseIntError(_, o)
+        | DxfError::ParseError(o)
+        | DxfError::UnexpectedCode(_, o)
+        | DxfError::UnexpectedByte(_, o)
+        | DxfError::UnexpectedEnumValue(o)
+        | DxfError::ExpectedTableType(o)
+        | DxfError::WrongValueType(o) => Some(part.file_line(*o)),
+        DxfError::UnexpectedCodePair(pair, _) => Some(part.file_line(pair.offset)),
+        _ => None,
+    };
+    (line, describe_load_error(path, e, part))
+}
+
+fn describe_load_error(path: &Path, e: DxfError, part: &Part) -> ReadError {
+    let at = |o: usize| part.file_line(o);
     match e {
         DxfError::IoError(io) => ReadError::io(path, io),
         DxfError::ParseFloatError(ref err, o) => {
@@ -103,6 +238,11 @@ fn load_error(path: &Path, e: DxfError) -> ReadError {
         DxfError::UnexpectedCode(c, o) => {
             ReadError::line(path, at(o), format!("unexpected group code {c}"))
         }
+        DxfError::UnexpectedCodePair(pair, expected) => ReadError::line(
+            path,
+            at(pair.offset),
+            format!("unexpected group code {} here ({expected})", pair.code),
+        ),
         DxfError::UnexpectedByte(b, o) => {
             ReadError::line(path, at(o), format!("unexpected byte 0x{b:02x}: not DXF"))
         }
@@ -309,5 +449,88 @@ mod tests {
         let axes = ocs_axes(-DVec3::Z)?;
         assert_eq!(from_ocs(&axes, 1.0, 2.0, 3.0), DVec3::new(-1.0, 2.0, -3.0));
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod split_tests {
+    use super::*;
+
+    fn fixture() -> Vec<u8> {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/networks/ezdxf_veins.dxf");
+        std::fs::read(p).expect("fixture present")
+    }
+
+    fn outcome(bytes: &[u8], parts: usize) -> Result<(Network, BTreeMap<String, usize>), String> {
+        read_bytes(Path::new("f.dxf"), bytes, parts, &ReadOptions::default())
+            .map(|i| (i.network, i.skipped))
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn parts_give_the_same_network_as_the_whole_file() {
+        let bytes = fixture();
+        assert!(super::super::dxf_split::split(&bytes, 5).is_some_and(|p| p.len() == 6));
+        let whole = outcome(&bytes, 1);
+        assert!(whole.is_ok(), "{whole:?}");
+        for parts in 2..=7 {
+            assert_eq!(outcome(&bytes, parts), whole, "{parts} parts");
+        }
+    }
+
+    #[test]
+    fn parts_report_the_same_errors_as_the_whole_file() {
+        let text = String::from_utf8(fixture()).expect("ASCII fixture");
+        let lines: Vec<&str> = text.lines().collect();
+        let entities = lines
+            .iter()
+            .position(|l| l.trim() == "ENTITIES")
+            .expect("has ENTITIES");
+        let endsec = (entities..lines.len())
+            .find(|&i| lines[i].trim() == "ENDSEC")
+            .expect("ENTITIES ends");
+        // x coordinates (value lines after a " 10" code line): one in the middle of the
+        // entities, and the last in the file, which lies past them (in OBJECTS).
+        let xs: Vec<usize> = (entities..lines.len())
+            .filter(|&i| i % 2 == 0 && lines[i].trim() == "10")
+            .map(|i| i + 1)
+            .collect();
+        let middle = *xs
+            .iter()
+            .find(|&&i| i > (entities + endsec) / 2)
+            .expect("an x");
+        let last = *xs.last().expect("an x");
+        assert!(last > endsec);
+        let mut broken: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        for victim in [middle, last] {
+            broken[victim] = "abc".into();
+            let bad = broken.join("\n").into_bytes();
+            let whole = outcome(&bad, 1).expect_err("parse error");
+            // The crate notices a few lines on, where the pairs stop making sense.
+            let line: usize = whole
+                .split("line ")
+                .nth(1)
+                .and_then(|r| r.split(':').next())
+                .and_then(|n| n.parse().ok())
+                .expect("the error names a line");
+            assert!(
+                (victim + 1..victim + 12).contains(&line),
+                "line {} broken: {whole}",
+                victim + 1
+            );
+            for parts in 2..=6 {
+                assert_eq!(outcome(&bad, parts).expect_err("parse error"), whole);
+            }
+            broken[victim] = lines[victim].to_string();
+        }
+        let victim = middle;
+        // A non-finite coordinate: a record error naming the same entity however it is split.
+        broken[victim] = "nan".into();
+        let nan = broken.join("\n").into_bytes();
+        let whole = outcome(&nan, 1).expect_err("record error");
+        assert!(whole.contains("non-finite"), "{whole}");
+        for parts in 2..=6 {
+            assert_eq!(outcome(&nan, parts).expect_err("record error"), whole);
+        }
     }
 }

@@ -6,6 +6,7 @@
 //! Writers refuse a network with such hard problems and write through `files::write_atomic`.
 
 mod dxf;
+mod dxf_split;
 mod json;
 mod obj;
 mod png;
