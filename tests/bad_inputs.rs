@@ -13,6 +13,7 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ("empty.stl", &["file is empty"]),
     ("truncated.stl", &["not an STL file", "12 triangles", "259"]),
     ("garbage.stl", &["not an STL file"]),
+    ("ascii_broken.stl", &["line 5", "vertex 1 0"]),
     ("garbage.dxf", &["line"]),
     (
         "obj_index_out_of_range.obj",

@@ -199,3 +199,43 @@ proptest! {
         assert_same_topology(&net, &back, 1e-9);
     }
 }
+
+#[test]
+fn flat_network_off_the_ground_keeps_its_height_through_dxf() -> TestResult {
+    // All nodes at z = 5: written as LWPOLYLINE with an elevation, which must come back.
+    let nodes = [
+        (0.0, 0.0),
+        (10.0, 0.0),
+        (10.0, 10.0),
+        (0.0, 10.0),
+        (20.0, 5.0),
+    ]
+    .iter()
+    .map(|&(x, y)| Node::at(DVec3::new(x, y, 5.0)))
+    .collect();
+    let edges = [(0, 1), (1, 2), (2, 3), (3, 0), (1, 4)]
+        .iter()
+        .map(|&(a, b)| Edge::new(a, b))
+        .collect();
+    let net = Network {
+        nodes,
+        edges,
+        ..Default::default()
+    };
+    let back = roundtrip_json_dxf_obj_json(&net)?;
+    assert_same_topology(&net, &back, 1e-9);
+    Ok(())
+}
+
+#[test]
+fn renders_survive_a_network_with_a_dangling_edge() {
+    // The public render functions draw what they can instead of indexing out of range.
+    let net = Network {
+        nodes: vec![Node::at(DVec3::ZERO), Node::at(DVec3::X)],
+        edges: vec![Edge::new(0, 1), Edge::new(1, 7)],
+        ..Default::default()
+    };
+    let svg = lamina::network::io::render_svg_string(&net);
+    assert_eq!(svg.matches("<line ").count(), 1);
+    assert!(lamina::network::io::render_png_bytes(&net, 64).is_ok());
+}

@@ -34,8 +34,15 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         ));
     }
     let indexed = stl_io::read_stl(&mut Cursor::new(&bytes)).map_err(|e| {
-        let kind = if is_binary { "binary" } else { "ASCII" };
-        ReadError::file(path, format!("cannot read {kind} STL: {e}"))
+        if is_binary {
+            ReadError::file(path, format!("cannot read binary STL: {e}"))
+        } else {
+            // stl_io does not say where; find the first line that is not ASCII STL.
+            match first_bad_ascii_line(&bytes) {
+                Some((line, msg)) => ReadError::line(path, line, msg),
+                None => ReadError::file(path, format!("cannot read ASCII STL: {e}")),
+            }
+        }
     })?;
     let positions = indexed
         .vertices
@@ -57,6 +64,33 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         triangles,
         colors: None,
     })
+}
+
+/// The first line of an ASCII STL that breaks its grammar, with what is wrong.
+fn first_bad_ascii_line(bytes: &[u8]) -> Option<(usize, String)> {
+    let text = String::from_utf8_lossy(bytes);
+    let numbers = |words: &[&str], n: usize| {
+        words.len() == n
+            && words
+                .iter()
+                .all(|w| w.parse::<f32>().is_ok_and(|v| v.is_finite()))
+    };
+    for (i, line) in text.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let ok = match words.as_slice() {
+            [] => true,
+            ["solid", ..] | ["endsolid", ..] | ["endloop"] | ["endfacet"] => true,
+            ["outer", "loop"] => true,
+            ["facet", "normal", rest @ ..] => numbers(rest, 3),
+            ["vertex", rest @ ..] => numbers(rest, 3),
+            _ => false,
+        };
+        if !ok {
+            let shown: String = line.trim().chars().take(40).collect();
+            return Some((i + 1, format!("not ASCII STL: `{shown}`")));
+        }
+    }
+    None
 }
 
 pub fn write(mesh: &TriMesh, path: &Path) -> Result<(), WriteError> {

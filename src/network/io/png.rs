@@ -49,7 +49,9 @@ pub fn render_png_bytes(net: &Network, size: u32) -> Result<Vec<u8>, String> {
     };
     // One path per stroke width (in quarter pixels), so a large network draws in a few calls.
     let mut by_width: BTreeMap<u32, PathBuilder> = BTreeMap::new();
-    for e in &net.edges {
+    // Edges to missing nodes cannot be drawn; writers refuse such networks before this.
+    let n = net.nodes.len() as u32;
+    for e in net.edges.iter().filter(|e| e.a < n && e.b < n) {
         let width = (2.0 * e.radius * scale).max(1.0);
         let key = (width * 4.0).round().min(u32::MAX as f64) as u32;
         let (x1, y1) = to_px(net.nodes[e.a as usize].p);

@@ -41,7 +41,9 @@ pub fn render_svg_string(net: &Network) -> String {
         s,
         r##"<g fill="none" stroke="#1d3b2a" stroke-linecap="round" stroke-width="{hairline:.4}">"##
     );
-    for e in &net.edges {
+    // Edges to missing nodes cannot be drawn; writers refuse such networks before this.
+    let n = net.nodes.len() as u32;
+    for e in net.edges.iter().filter(|e| e.a < n && e.b < n) {
         let [x1, y1] = proj.page(net.nodes[e.a as usize].p);
         let [x2, y2] = proj.page(net.nodes[e.b as usize].p);
         let _ = write!(
