@@ -8,15 +8,17 @@
 //! mapped back to the file's line numbers. Anything unusual makes `split` return `None` and the
 //! caller parses the whole file, so the crate still has the last word on malformed input.
 
+use std::borrow::Cow;
+
 /// A piece of the file, wrapped as a drawing of its own.
-pub(super) struct Part {
-    pub text: Vec<u8>,
+pub(super) struct Part<'a> {
+    pub text: Cow<'a, [u8]>,
     /// `(first text line, shift)`, ascending: a line the crate reports for `text`, plus the
     /// shift of the last entry at or before it, is the line in the file.
     shifts: Vec<(usize, isize)>,
 }
 
-impl Part {
+impl<'a> Part<'a> {
     /// Maps a 1-based line of `text` to the line in the file.
     pub fn file_line(&self, line: usize) -> usize {
         let i = self.shifts.partition_point(|&(from, _)| from <= line);
@@ -25,9 +27,9 @@ impl Part {
     }
 
     /// The whole file as it is: the fallback when it cannot be split.
-    pub fn whole(bytes: &[u8]) -> Part {
+    pub fn whole(bytes: &'a [u8]) -> Part<'a> {
         Part {
-            text: bytes.to_vec(),
+            text: Cow::Borrowed(bytes),
             shifts: Vec::new(),
         }
     }
@@ -39,7 +41,7 @@ const CONTINUATIONS: &[&[u8]] = &[b"VERTEX", b"SEQEND", b"ATTRIB"];
 /// Cuts the ENTITIES section of an ASCII DXF into at most `parts` pieces of similar size. The
 /// first piece returned is the rest of the file (header, tables, blocks, objects) without the
 /// entity list, so that errors there are still found.
-pub(super) fn split(bytes: &[u8], parts: usize) -> Option<Vec<Part>> {
+pub(super) fn split(bytes: &[u8], parts: usize) -> Option<Vec<Part<'static>>> {
     if parts < 2 || bytes.starts_with(b"AutoCAD Binary DXF") || bytes.starts_with(b"AutoCAD DXB") {
         return None;
     }
@@ -78,7 +80,7 @@ pub(super) fn split(bytes: &[u8], parts: usize) -> Option<Vec<Part>> {
     let mut skeleton = bytes[..body_start].to_vec();
     skeleton.extend_from_slice(&bytes[body_end..]);
     out.push(Part {
-        text: skeleton,
+        text: Cow::Owned(skeleton),
         shifts: vec![(
             scan.body_line,
             (scan.body_end_line - scan.body_line) as isize,
@@ -94,7 +96,7 @@ pub(super) fn split(bytes: &[u8], parts: usize) -> Option<Vec<Part>> {
         }
         text.extend_from_slice(suffix);
         out.push(Part {
-            text,
+            text: Cow::Owned(text),
             shifts: vec![(0, line as isize - prefix_lines - 1)],
         });
     }
