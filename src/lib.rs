@@ -5,6 +5,7 @@
 
 pub mod files;
 pub mod geom;
+pub mod grow;
 pub mod mesh;
 pub mod network;
 

@@ -1,0 +1,331 @@
+//! The leaf blade: a simple polygon in the XY plane (mm), convex or concave, with the built-in
+//! shapes the venation command offers. The constructor rejects what growth cannot use.
+
+use glam::DVec2;
+
+/// Length of the built-in shapes from base to tip, in mm.
+pub const SHAPE_LENGTH: f64 = 100.0;
+
+/// Vertices per built-in outline.
+const SHAPE_VERTICES: usize = 160;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    Ovate,
+    Lanceolate,
+    Cordate,
+    Circle,
+    Rect,
+}
+
+impl Shape {
+    pub const ALL: [Shape; 5] = [
+        Shape::Ovate,
+        Shape::Lanceolate,
+        Shape::Cordate,
+        Shape::Circle,
+        Shape::Rect,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shape::Ovate => "ovate",
+            Shape::Lanceolate => "lanceolate",
+            Shape::Cordate => "cordate",
+            Shape::Circle => "circle",
+            Shape::Rect => "rect",
+        }
+    }
+}
+
+/// Why an outline cannot be a leaf blade.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum OutlineError {
+    #[error("outline has {0} points; a blade needs at least 3")]
+    TooFewPoints(usize),
+    #[error("outline point {0} is not finite")]
+    NonFinite(usize),
+    #[error("outline edges {0} and {1} cross: the outline must not intersect itself")]
+    SelfIntersecting(usize, usize),
+    #[error("outline encloses no area")]
+    Degenerate,
+}
+
+/// A simple polygon, counter-clockwise, without a repeated closing point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outline {
+    points: Vec<DVec2>,
+}
+
+impl Outline {
+    /// Validates and normalises: drops a repeated closing point, rejects fewer than 3 points,
+    /// non-finite or self-intersecting outlines, and makes the winding counter-clockwise.
+    pub fn new(mut points: Vec<DVec2>) -> Result<Self, OutlineError> {
+        if points.len() > 1 && points.first() == points.last() {
+            points.pop();
+        }
+        points.dedup();
+        if points.len() < 3 {
+            return Err(OutlineError::TooFewPoints(points.len()));
+        }
+        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+            return Err(OutlineError::NonFinite(i));
+        }
+        let n = points.len();
+        for i in 0..n {
+            for j in i + 1..n {
+                if j == i + 1 || (i == 0 && j == n - 1) {
+                    continue; // neighbours share a corner
+                }
+                if segments_cross(
+                    points[i],
+                    points[(i + 1) % n],
+                    points[j],
+                    points[(j + 1) % n],
+                ) {
+                    return Err(OutlineError::SelfIntersecting(i, j));
+                }
+            }
+        }
+        let mut outline = Outline { points };
+        let area = outline.signed_area();
+        if area.abs() < 1e-12 {
+            return Err(OutlineError::Degenerate);
+        }
+        if area < 0.0 {
+            outline.points.reverse();
+        }
+        Ok(outline)
+    }
+
+    /// A built-in blade, `SHAPE_LENGTH` mm from its base at the origin to its tip on +Y.
+    pub fn shape(shape: Shape) -> Self {
+        let l = SHAPE_LENGTH;
+        let n = SHAPE_VERTICES;
+        let pts: Vec<DVec2> = match shape {
+            // Half-width profiles along the midrib; right side up, left side down.
+            Shape::Ovate | Shape::Lanceolate => {
+                let (width, bias) = match shape {
+                    Shape::Ovate => (0.36 * l, 0.45),
+                    _ => (0.13 * l, 0.25),
+                };
+                let half = n / 2;
+                let profile = |t: f64| {
+                    let s = (std::f64::consts::PI * t).sin().max(0.0);
+                    width * s.powf(0.85) * (1.0 + bias * (0.5 - t))
+                };
+                let mut v = Vec::with_capacity(n);
+                for k in 0..=half {
+                    let t = k as f64 / half as f64;
+                    v.push(DVec2::new(profile(t), l * t));
+                }
+                for k in (1..half).rev() {
+                    let t = k as f64 / half as f64;
+                    v.push(DVec2::new(-profile(t), l * t));
+                }
+                v
+            }
+            Shape::Cordate => {
+                // The classic heart curve, turned so the notch is the base and scaled to l.
+                let raw: Vec<DVec2> = (0..n)
+                    .map(|k| {
+                        let th = std::f64::consts::TAU * k as f64 / n as f64;
+                        let x = 16.0 * th.sin().powi(3);
+                        let y = 13.0 * th.cos()
+                            - 5.0 * (2.0 * th).cos()
+                            - 2.0 * (3.0 * th).cos()
+                            - (4.0 * th).cos();
+                        DVec2::new(x, -y)
+                    })
+                    .collect();
+                let (lo, hi) = raw
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.y), b.max(p.y)));
+                let notch = raw[0].y; // theta = 0 is the notch
+                let s = l / (hi - lo);
+                raw.iter()
+                    .map(|p| DVec2::new(p.x * s, (p.y - notch) * s))
+                    .collect()
+            }
+            Shape::Circle => (0..n)
+                .map(|k| {
+                    let th = std::f64::consts::TAU * k as f64 / n as f64;
+                    DVec2::new(0.5 * l * th.sin(), 0.5 * l * (1.0 - th.cos()))
+                })
+                .collect(),
+            Shape::Rect => vec![
+                DVec2::new(-0.3 * l, 0.0),
+                DVec2::new(0.3 * l, 0.0),
+                DVec2::new(0.3 * l, l),
+                DVec2::new(-0.3 * l, l),
+            ],
+        };
+        Outline::new(pts).expect("built-in shapes are simple polygons")
+    }
+
+    /// Where a built-in shape's petiole meets the blade: just inside the base.
+    pub fn default_root(&self) -> DVec2 {
+        let base = self
+            .points
+            .iter()
+            .copied()
+            .min_by(|a, b| {
+                (a.y, a.x.abs())
+                    .partial_cmp(&(b.y, b.x.abs()))
+                    .expect("finite")
+            })
+            .expect("at least 3 points");
+        // Walk up from the lowest point until inside.
+        let step = 1e-3 * self.size().max_element();
+        (1..1000)
+            .map(|k| DVec2::new(base.x, base.y + step * k as f64))
+            .find(|p| self.contains(*p))
+            .unwrap_or(self.centroid())
+    }
+
+    pub fn points(&self) -> &[DVec2] {
+        &self.points
+    }
+
+    pub fn signed_area(&self) -> f64 {
+        let n = self.points.len();
+        0.5 * (0..n)
+            .map(|i| self.points[i].perp_dot(self.points[(i + 1) % n]))
+            .sum::<f64>()
+    }
+
+    pub fn area(&self) -> f64 {
+        self.signed_area().abs()
+    }
+
+    pub fn centroid(&self) -> DVec2 {
+        let n = self.points.len();
+        let mut c = DVec2::ZERO;
+        for i in 0..n {
+            let (a, b) = (self.points[i], self.points[(i + 1) % n]);
+            c += (a + b) * a.perp_dot(b);
+        }
+        c / (6.0 * self.signed_area())
+    }
+
+    pub fn bounds(&self) -> (DVec2, DVec2) {
+        let lo = self
+            .points
+            .iter()
+            .fold(DVec2::splat(f64::MAX), |a, p| a.min(*p));
+        let hi = self
+            .points
+            .iter()
+            .fold(DVec2::splat(f64::MIN), |a, p| a.max(*p));
+        (lo, hi)
+    }
+
+    pub fn size(&self) -> DVec2 {
+        let (lo, hi) = self.bounds();
+        hi - lo
+    }
+
+    /// Even-odd ray test; points on the boundary may fall either way.
+    pub fn contains(&self, p: DVec2) -> bool {
+        let n = self.points.len();
+        let mut inside = false;
+        let mut j = n - 1;
+        for i in 0..n {
+            let (a, b) = (self.points[i], self.points[j]);
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if p.x < x {
+                    inside = !inside;
+                }
+            }
+            j = i;
+        }
+        inside
+    }
+
+    /// The outline scaled by `factor` about `centre`.
+    pub fn scaled(&self, centre: DVec2, factor: f64) -> Outline {
+        Outline {
+            points: self
+                .points
+                .iter()
+                .map(|p| centre + (*p - centre) * factor)
+                .collect(),
+        }
+    }
+}
+
+/// Proper crossing or touching of segments ab and cd.
+fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |p: DVec2, q: DVec2, r: DVec2| {
+        o(p, q, r) == 0.0
+            && r.x >= p.x.min(q.x)
+            && r.x <= p.x.max(q.x)
+            && r.y >= p.y.min(q.y)
+            && r.y <= p.y.max(q.y)
+    };
+    on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn built_in_shapes_are_valid_and_hold_their_root() {
+        for s in Shape::ALL {
+            let o = Outline::shape(s);
+            assert!(o.area() > 100.0, "{}", s.name());
+            assert!(o.signed_area() > 0.0, "{} is counter-clockwise", s.name());
+            let r = o.default_root();
+            assert!(o.contains(r), "{} root {r} inside", s.name());
+            assert!(
+                r.y < 0.2 * SHAPE_LENGTH + o.bounds().0.y,
+                "{} root near the base",
+                s.name()
+            );
+        }
+    }
+
+    #[test]
+    fn bad_outlines_are_rejected() {
+        let p = |x: f64, y: f64| DVec2::new(x, y);
+        assert_eq!(
+            Outline::new(vec![p(0.0, 0.0), p(1.0, 0.0)]),
+            Err(OutlineError::TooFewPoints(2))
+        );
+        let bowtie = vec![p(0.0, 0.0), p(1.0, 1.0), p(1.0, 0.0), p(0.0, 1.0)];
+        assert!(matches!(
+            Outline::new(bowtie),
+            Err(OutlineError::SelfIntersecting(..))
+        ));
+        let line = vec![p(0.0, 0.0), p(1.0, 0.0), p(2.0, 0.0)];
+        assert!(Outline::new(line).is_err());
+    }
+
+    #[test]
+    fn concave_outline_containment() -> Result<(), OutlineError> {
+        // An L shape, clockwise on input.
+        let p = |x: f64, y: f64| DVec2::new(x, y);
+        let l = Outline::new(vec![
+            p(0.0, 0.0),
+            p(0.0, 2.0),
+            p(1.0, 2.0),
+            p(1.0, 1.0),
+            p(2.0, 1.0),
+            p(2.0, 0.0),
+        ])?;
+        assert!(l.signed_area() > 0.0);
+        assert!((l.area() - 3.0).abs() < 1e-12);
+        assert!(l.contains(p(0.5, 1.5)));
+        assert!(!l.contains(p(1.5, 1.5)));
+        Ok(())
+    }
+}
