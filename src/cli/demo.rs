@@ -12,6 +12,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::info::summary;
 use super::input::{load, Loaded};
 use lamina::files::write_atomic;
+use lamina::grow::outline::{Outline, Shape};
+use lamina::grow::venation::{grow_leaf, LeafOptions};
 use lamina::mesh::io::write_mesh;
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
 
@@ -76,6 +78,8 @@ pub fn run(args: Args) -> Result<()> {
         entries.push(process(out, &input, name, about, args.size)?);
         bar.inc(1);
     }
+    bar.set_message("venation leaf");
+    entries.push(leaf(out, args.size)?);
     bar.finish_and_clear();
     let index = out.join("index.html");
     let html = index_html(&entries);
@@ -152,6 +156,35 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
         outputs,
         preview,
         facts,
+    })
+}
+
+/// Grows an open venation leaf in the ovate blade with the default parameters and seed.
+fn leaf(out: &Path, size: u32) -> Result<Entry> {
+    let outline = Outline::shape(Shape::Ovate);
+    let (net, growth) = grow_leaf(&outline, &[outline.default_root()], &LeafOptions::default())?;
+    std::fs::create_dir_all(out.join("venation"))?;
+    let mut outputs = Vec::new();
+    for ext in ["json", "svg", "png", "dxf"] {
+        let rel = format!("venation/leaf.{ext}");
+        write_network(&net, &out.join(&rel), &RenderOptions { size })?;
+        outputs.push(rel);
+    }
+    Ok(Entry {
+        name: "venation leaf (open)".into(),
+        about: "Grown by `lamina venation --shape ovate`: Runions space colonisation from the \
+                petiole, Poisson-disk auxin sources, Murray widths (n = 3)"
+            .into(),
+        outputs,
+        preview: "venation/leaf.png".into(),
+        facts: format!(
+            "{} nodes, {} edges, {} growth steps, {} of {} sources left unreached",
+            net.nodes.len(),
+            net.edges.len(),
+            growth.iterations,
+            growth.sources_left,
+            growth.sources_placed
+        ),
     })
 }
 

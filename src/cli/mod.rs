@@ -5,3 +5,4 @@ pub mod demo;
 pub mod info;
 pub mod input;
 pub mod render;
+pub mod venation;

@@ -326,3 +326,99 @@ mod tests {
         assert_eq!(a.parent, b.parent);
     }
 }
+
+/// Everything `lamina venation` needs for an open leaf: blade, sources, growth, widths.
+#[derive(Clone, Debug)]
+pub struct LeafOptions {
+    pub growth: VenationOptions,
+    /// Poisson-disk radius of the auxin sources, mm. Default 2.0.
+    pub birth: f64,
+    /// Murray exponent n in r_parent^n = Σ r_child^n. Default 3.
+    pub murray: f64,
+    /// Radius of vein tips, mm. Default 0.1.
+    pub tip_radius: f64,
+    pub seed: u64,
+}
+
+impl Default for LeafOptions {
+    fn default() -> Self {
+        LeafOptions {
+            growth: VenationOptions::default(),
+            birth: 2.0,
+            murray: 3.0,
+            tip_radius: 0.1,
+            seed: 1,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LeafError {
+    #[error("--birth must be a positive distance in mm, got {0}")]
+    Birth(f64),
+    #[error("--murray must be a finite exponent ≥ 1, got {0}")]
+    Murray(f64),
+    #[error("--tip-radius must be a positive distance in mm, got {0}")]
+    TipRadius(f64),
+    #[error(transparent)]
+    Growth(#[from] VenationError),
+}
+
+/// Samples sources, grows open venation from `roots`, and returns the network with Murray
+/// widths (edge radius = radius of its downstream node) and the growth record.
+pub fn grow_leaf(
+    outline: &Outline,
+    roots: &[DVec2],
+    opts: &LeafOptions,
+) -> Result<(crate::network::Network, Growth), LeafError> {
+    use rand::SeedableRng;
+    if !(opts.birth.is_finite() && opts.birth > 0.0) {
+        return Err(LeafError::Birth(opts.birth));
+    }
+    if !(opts.murray.is_finite() && opts.murray >= 1.0) {
+        return Err(LeafError::Murray(opts.murray));
+    }
+    if !(opts.tip_radius.is_finite() && opts.tip_radius > 0.0) {
+        return Err(LeafError::TipRadius(opts.tip_radius));
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
+    let b = opts.birth;
+    let sources = super::poisson::sample(outline, b, b, |_| b, &mut rng);
+    let g = grow_open(outline, roots, &sources, &opts.growth)?;
+    let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
+    let mut net = crate::network::Network {
+        nodes: g
+            .positions
+            .iter()
+            .zip(&radius)
+            .map(|(p, r)| crate::network::Node {
+                p: p.extend(0.0),
+                normal: Some(glam::DVec3::Z),
+                radius: *r,
+            })
+            .collect(),
+        edges: g
+            .edges()
+            .map(|(p, c)| crate::network::Edge {
+                a: p,
+                b: c,
+                radius: radius[c as usize],
+            })
+            .collect(),
+        ..Default::default()
+    };
+    net.meta.generator = Some("venation/open".into());
+    net.meta.seed = Some(opts.seed);
+    let params = [
+        ("step", opts.growth.step),
+        ("kill", opts.growth.kill),
+        ("birth", opts.birth),
+        ("murray", opts.murray),
+        ("tip_radius", opts.tip_radius),
+        ("max_iterations", opts.growth.max_iterations as f64),
+    ];
+    for (k, v) in params {
+        net.meta.parameters.insert(k.into(), serde_json::json!(v));
+    }
+    Ok((net, g))
+}
