@@ -239,3 +239,27 @@ fn renders_survive_a_network_with_a_dangling_edge() {
     assert_eq!(svg.matches("<line ").count(), 1);
     assert!(lamina::network::io::render_png_bytes(&net, 64).is_ok());
 }
+
+#[test]
+fn writers_refuse_networks_no_format_can_hold() -> TestResult {
+    let net = Network {
+        nodes: vec![
+            Node::at(DVec3::ZERO),
+            Node::at(DVec3::new(f64::NAN, 0.0, 0.0)),
+        ],
+        edges: vec![Edge::new(0, 1), Edge::new(0, 5)],
+        ..Default::default()
+    };
+    let dir = tempfile::tempdir()?;
+    for ext in ["json", "obj", "dxf", "svg", "png"] {
+        let path = dir.path().join(format!("bad.{ext}"));
+        let err = write_network(&net, &path, &RenderOptions::default())
+            .expect_err("hard problems are refused")
+            .to_string();
+        assert!(err.contains("node 1: position is not finite"), "{err}");
+        assert!(err.contains("edge 1: joins nodes 0 and 5"), "{err}");
+        assert!(!path.exists());
+    }
+    assert_eq!(std::fs::read_dir(dir.path())?.count(), 0);
+    Ok(())
+}

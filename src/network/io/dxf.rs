@@ -209,19 +209,12 @@ fn collect(drawing: &Drawing) -> Collected {
 
 /// The error for the file, with the file line it is on (when the parser gave one).
 fn load_error(path: &Path, e: DxfError, part: &Part) -> (Option<usize>, ReadError) {
-    let line = match &e {
-        DxfError::ParseFloatError(_, o)
-        | DxfError::ParseIntError(_, o)
-        | DxfError::ParseError(o)
-        | DxfError::UnexpectedCode(_, o)
-        | DxfError::UnexpectedByte(_, o)
-        | DxfError::UnexpectedEnumValue(o)
-        | DxfError::ExpectedTableType(o)
-        | DxfError::WrongValueType(o) => Some(part.file_line(*o)),
-        DxfError::UnexpectedCodePair(pair, _) => Some(part.file_line(pair.offset)),
+    let err = describe_load_error(path, e, part);
+    let line = match &err {
+        ReadError::Line { line, .. } => Some(*line),
         _ => None,
     };
-    (line, describe_load_error(path, e, part))
+    (line, err)
 }
 
 fn describe_load_error(path: &Path, e: DxfError, part: &Part) -> ReadError {

@@ -110,16 +110,27 @@ pub fn write_network(net: &Network, path: &Path, opts: &RenderOptions) -> Result
 
 /// Writers take only networks whose every edge joins two existing nodes at finite positions.
 fn check_writable(net: &Network, path: &Path) -> Result<(), WriteError> {
-    let hard: Vec<String> = net
-        .validate()
-        .problems
+    // Only the two problems no format can hold; the rest of `validate` is not needed here.
+    let nodes = net.nodes.len();
+    let non_finite = net
+        .nodes
         .iter()
-        .filter(|p| {
-            matches!(
-                p,
-                Problem::NonFinitePosition { .. } | Problem::EdgeOutOfRange { .. }
-            )
-        })
+        .enumerate()
+        .filter(|(_, n)| !n.p.is_finite())
+        .map(|(i, _)| Problem::NonFinitePosition { node: i as u32 });
+    let out_of_range = net
+        .edges
+        .iter()
+        .enumerate()
+        .filter(|(_, e)| e.a as usize >= nodes || e.b as usize >= nodes)
+        .map(|(k, e)| Problem::EdgeOutOfRange {
+            edge: k as u32,
+            a: e.a,
+            b: e.b,
+            nodes,
+        });
+    let hard: Vec<String> = non_finite
+        .chain(out_of_range)
         .map(|p| p.to_string())
         .collect();
     if hard.is_empty() {
