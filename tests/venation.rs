@@ -17,6 +17,8 @@ fn same_seed_gives_identical_json_and_murray_holds() -> TestResult {
     for (out, seed) in [(&a, "7"), (&b, "7"), (&c, "8")] {
         let o = lamina(&[
             "venation",
+            "--mode",
+            "open",
             "--shape",
             "cordate",
             "--seed",

@@ -12,8 +12,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::info::summary;
 use super::input::{load, Loaded};
 use lamina::files::write_atomic;
+use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
-use lamina::grow::venation::{grow_leaf, LeafOptions};
+use lamina::grow::venation::Mode;
 use lamina::mesh::io::write_mesh;
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
 
@@ -64,8 +65,10 @@ pub fn run(args: Args) -> Result<()> {
     let inputs = out.join("inputs");
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
-    let bar =
-        ProgressBar::with_draw_target(Some(FIXTURES.len() as u64), ProgressDrawTarget::stderr());
+    let bar = ProgressBar::with_draw_target(
+        Some(FIXTURES.len() as u64 + 2),
+        ProgressDrawTarget::stderr(),
+    );
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -78,8 +81,11 @@ pub fn run(args: Args) -> Result<()> {
         entries.push(process(out, &input, name, about, args.size)?);
         bar.inc(1);
     }
-    bar.set_message("venation leaf");
-    entries.push(leaf(out, args.size)?);
+    for mode in [Mode::Closed, Mode::Open] {
+        bar.set_message("venation leaf");
+        entries.push(leaf(out, args.size, mode)?);
+        bar.inc(1);
+    }
     bar.finish_and_clear();
     let index = out.join("index.html");
     let html = index_html(&entries);
@@ -159,31 +165,38 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
     })
 }
 
-/// Grows an open venation leaf in the ovate blade with the default parameters and seed.
-fn leaf(out: &Path, size: u32) -> Result<Entry> {
+/// Grows a leaf in the ovate blade with the default parameters and seed, in `mode`.
+fn leaf(out: &Path, size: u32, mode: Mode) -> Result<Entry> {
     let outline = Outline::shape(Shape::Ovate);
-    let (net, growth) = grow_leaf(&outline, &[outline.default_root()], &LeafOptions::default())?;
+    let mut opts = LeafOptions::default();
+    opts.growth.mode = mode;
+    let leaf = grow_leaf(&outline, &[outline.default_root()], &opts, None)?;
+    let (net, growth) = (&leaf.network, &leaf.growth);
+    let name = match mode {
+        Mode::Open => "open",
+        Mode::Closed => "closed",
+    };
     std::fs::create_dir_all(out.join("venation"))?;
     let mut outputs = Vec::new();
     for ext in ["json", "svg", "png", "dxf"] {
-        let rel = format!("venation/leaf.{ext}");
-        write_network(&net, &out.join(&rel), &RenderOptions { size })?;
+        let rel = format!("venation/leaf-{name}.{ext}");
+        write_network(net, &out.join(&rel), &RenderOptions { size })?;
         outputs.push(rel);
     }
     Ok(Entry {
-        name: "venation leaf (open)".into(),
-        about: "Grown by `lamina venation --shape ovate`: Runions space colonisation from the \
-                petiole, Poisson-disk auxin sources, Murray widths (n = 3)"
-            .into(),
+        name: format!("venation leaf ({name})"),
+        about: format!(
+            "Grown by `lamina venation --shape ovate --mode {name}`: Runions space colonisation \
+             from the petiole, Poisson-disk auxin sources, Murray widths (n = 3)"
+        ),
         outputs,
-        preview: "venation/leaf.png".into(),
+        preview: format!("venation/leaf-{name}.png"),
         facts: format!(
-            "{} nodes, {} edges, {} growth steps, {} of {} sources left unreached",
-            net.nodes.len(),
-            net.edges.len(),
+            "{} growth steps, {} of {} sources left unreached; {}",
             growth.iterations,
             growth.sources_left,
-            growth.sources_placed
+            growth.sources_placed,
+            leaf.quality.lines().join("; ")
         ),
     })
 }

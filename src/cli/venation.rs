@@ -1,13 +1,20 @@
-//! `lamina venation`: grow an open leaf venation in a built-in blade.
+//! `lamina venation`: grow an open or closed leaf venation in a built-in or given blade, with
+//! optional density map, darts per step, blade growth, a Peele r sweep, and animation frames.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{bail, Context, Result};
 use clap::{Args as ClapArgs, ValueEnum};
+use glam::DVec2;
 use serde_json::json;
 
+use lamina::files::write_atomic;
+use lamina::grow::density::DensityMap;
+use lamina::grow::frames::{render_frame, View};
+use lamina::grow::leaf::{grow_leaf, Leaf, LeafOptions, Placement};
 use lamina::grow::outline::{Outline, Shape};
-use lamina::grow::venation::{grow_leaf, LeafOptions, VenationOptions};
+use lamina::grow::outline_file::read_outline;
+use lamina::grow::venation::{BladeGrowth, Frame, Mode, Observer, VenationOptions};
 use lamina::network::io::{write_network, RenderOptions};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -31,12 +38,41 @@ impl From<ShapeArg> for Shape {
     }
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ModeArg {
+    Open,
+    Closed,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum BladeArg {
+    None,
+    Uniform,
+    Marginal,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum PlacementArg {
+    Poisson,
+    Random,
+}
+
 #[derive(ClapArgs)]
 pub struct Args {
     /// Built-in blade, 100 mm from base to tip; the root is the petiole at its base
-    #[arg(long, value_enum, default_value = "ovate")]
+    #[arg(long, value_enum, default_value = "ovate", conflicts_with = "outline")]
     pub shape: ShapeArg,
-    /// Output network (.json .obj .dxf .svg .png)
+    /// Blade outline from a file: network JSON/OBJ or DXF (a closed polyline), or SVG
+    /// (<polygon>, <path>); the largest closed loop is used
+    #[arg(long, value_name = "FILE")]
+    pub outline: Option<PathBuf>,
+    /// Root node at X,Y in mm (repeat for several) [default: the petiole at the base]
+    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
+    pub root: Vec<DVec2>,
+    /// Open venation grows trees; closed venation joins veins into loops
+    #[arg(long, value_enum, default_value = "closed")]
+    pub mode: ModeArg,
+    /// Output network (.json .obj .dxf .svg .png); with --sweep-r, a folder
     #[arg(short, long)]
     pub output: PathBuf,
     /// Also write an SVG render
@@ -45,6 +81,9 @@ pub struct Args {
     /// Also write a PNG render
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// Write the quality report as JSON here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
     /// Longer side of PNG renders, in pixels
     #[arg(long, default_value_t = 2048)]
     pub size: u32,
@@ -54,71 +93,369 @@ pub struct Args {
     /// D, the length of each vein segment, mm
     #[arg(long, default_value_t = 1.0)]
     pub step: f64,
-    /// Sources closer than this to a vein are removed, mm
+    /// Kill distance: sources this close to a vein are removed, mm
     #[arg(long, default_value_t = 1.5)]
     pub kill: f64,
-    /// Poisson-disk radius of the auxin sources, mm
+    /// Birth distance: Poisson-disk radius of the sources, and the distance darts keep, mm
     #[arg(long, default_value_t = 2.0)]
     pub birth: f64,
+    /// Density map (PNG over the blade's bounding box; dark = dense, from alpha if any pixel is
+    /// transparent, else grey)
+    #[arg(long, value_name = "PNG")]
+    pub density: Option<PathBuf>,
+    /// With --density: the birth distance where the map is darkest [default: --birth]
+    #[arg(long, requires = "density")]
+    pub birth_min: Option<f64>,
+    /// With --density: the birth distance where the map is lightest [default: 2 × --birth]
+    #[arg(long, requires = "density")]
+    pub birth_max: Option<f64>,
+    /// Place about this many initial sources (Poisson radius chosen to fit), or exactly this
+    /// many with --placement random
+    #[arg(long, value_name = "N", conflicts_with = "density")]
+    pub sources: Option<usize>,
+    /// How initial sources are placed
+    #[arg(long, value_enum, default_value = "poisson")]
+    pub placement: PlacementArg,
+    /// Darts thrown each step (Peele §3.1.2) [default: 0, or 20 when the blade grows]
+    #[arg(long, value_name = "N")]
+    pub sources_per_step: Option<usize>,
+    /// Blade growth during the simulation [default: none, or marginal with --r/--sweep-r]
+    #[arg(long, value_enum)]
+    pub blade: Option<BladeArg>,
+    /// Blade size at the first step, as a fraction of the outline
+    #[arg(long, default_value_t = 0.2)]
+    pub initial_scale: f64,
+    /// Blade size added per step, as a fraction of the outline
+    #[arg(long, default_value_t = 0.005, conflicts_with_all = ["r", "sweep_r"])]
+    pub blade_rate: f64,
+    /// Peele's r = vein growth rate / leaf growth rate: sets --blade-rate from --step so the
+    /// farthest margin point moves D / r per step
+    #[arg(long, conflicts_with = "sweep_r")]
+    pub r: Option<f64>,
+    /// Grow one leaf per r (Peele Fig. 1: 0.5,1.5,3.5,5.5) into the folder -o, side by side
+    #[arg(long, value_name = "R,R,…", value_delimiter = ',')]
+    pub sweep_r: Vec<f64>,
+    /// Closed venation: longest loop-closing edge, mm [default: 2 × --kill]
+    #[arg(long)]
+    pub join_distance: Option<f64>,
+    /// Closed venation: an open tip joins a node at most this many degrees off its heading
+    #[arg(long, default_value_t = 60.0)]
+    pub join_angle: f64,
     /// Murray exponent n: r_parent^n = sum of r_child^n
     #[arg(long, default_value_t = 3.0)]
     pub murray: f64,
-    /// Radius of vein tips, mm
+    /// Radius of vein tips (and loop-closing edges), mm
     #[arg(long, default_value_t = 0.1)]
     pub tip_radius: f64,
     /// Stop after this many growth steps
     #[arg(long, default_value_t = 10_000)]
     pub max_iterations: usize,
+    /// Write a PNG frame of the growth into this folder every --every steps
+    #[arg(long, value_name = "DIR")]
+    pub frames: Option<PathBuf>,
+    /// Steps between frames
+    #[arg(long, default_value_t = 10, requires = "frames")]
+    pub every: usize,
+    /// Longer side of frames, in pixels
+    #[arg(long, default_value_t = 720, requires = "frames")]
+    pub frame_size: u32,
     /// Print a machine-readable summary on stdout
     #[arg(long)]
     pub json: bool,
 }
 
-pub fn run(args: Args) -> Result<()> {
-    let outline = Outline::shape(args.shape.into());
-    let opts = LeafOptions {
-        growth: VenationOptions {
-            step: args.step,
-            kill: args.kill,
-            max_iterations: args.max_iterations,
+fn parse_point(s: &str) -> Result<DVec2, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [x, y] = parts[..] else {
+        return Err(format!("expected X,Y in mm, got \"{s}\""));
+    };
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("\"{t}\" is not a finite number"))
+    };
+    Ok(DVec2::new(num(x)?, num(y)?))
+}
+
+/// Everything a run needs, checked.
+struct Setup {
+    outline: Outline,
+    roots: Vec<DVec2>,
+    opts: LeafOptions,
+}
+
+fn setup(args: &Args) -> Result<Setup> {
+    let outline = match &args.outline {
+        Some(path) => read_outline(path)?,
+        None => Outline::shape(args.shape.into()),
+    };
+    let roots = if args.root.is_empty() {
+        vec![outline.default_root()]
+    } else {
+        args.root.clone()
+    };
+    let density = args.density.as_deref().map(DensityMap::read).transpose()?;
+    let sweeping = !args.sweep_r.is_empty();
+    let blade = match args.blade {
+        Some(BladeArg::None) => BladeGrowth::None,
+        Some(BladeArg::Uniform) => BladeGrowth::Uniform,
+        Some(BladeArg::Marginal) => BladeGrowth::Marginal,
+        None if sweeping || args.r.is_some() => BladeGrowth::Marginal,
+        None => BladeGrowth::None,
+    };
+    if (sweeping || args.r.is_some()) && blade == BladeGrowth::None {
+        bail!("--r and --sweep-r need a growing blade: --blade uniform or marginal");
+    }
+    let growth = VenationOptions {
+        mode: match args.mode {
+            ModeArg::Open => Mode::Open,
+            ModeArg::Closed => Mode::Closed,
         },
+        step: args.step,
+        kill: args.kill,
+        max_iterations: args.max_iterations,
+        blade,
+        initial_scale: args.initial_scale,
+        blade_rate: args.blade_rate,
+        sources_per_step: args.sources_per_step.unwrap_or(match blade {
+            BladeGrowth::None => 0,
+            _ => 20,
+        }),
+        join_distance: args.join_distance,
+        join_angle: args.join_angle,
+    };
+    let mut opts = LeafOptions {
+        growth,
         birth: args.birth,
+        birth_min: args.birth_min,
+        birth_max: args.birth_max,
+        density,
+        sources: args.sources,
+        placement: match args.placement {
+            PlacementArg::Poisson => Placement::Poisson,
+            PlacementArg::Random => Placement::Random,
+        },
         murray: args.murray,
         tip_radius: args.tip_radius,
         seed: args.seed,
     };
-    let (net, growth) = grow_leaf(&outline, &[outline.default_root()], &opts)?;
-    let render = RenderOptions { size: args.size };
-    write_network(&net, &args.output, &render)?;
-    for extra in [&args.svg, &args.png].into_iter().flatten() {
-        write_network(&net, extra, &render)?;
+    if let Some(r) = args.r {
+        opts.growth.blade_rate = blade_rate_for(r, args.step, &outline, roots[0])?;
     }
-    let degrees = growth.degrees();
-    let tips = degrees.iter().filter(|&&d| d == 1).count();
-    let summary = json!({
-        "output": args.output,
-        "nodes": net.nodes.len(),
-        "edges": net.edges.len(),
-        "iterations": growth.iterations,
-        "stop": growth.stop,
-        "sources_placed": growth.sources_placed,
-        "sources_left": growth.sources_left,
-        "tips": tips,
-        "root_radius": net.nodes.first().map(|n| n.radius),
-    });
+    Ok(Setup {
+        outline,
+        roots,
+        opts,
+    })
+}
+
+/// The blade rate that makes Peele's r = D / (speed of the farthest margin point).
+fn blade_rate_for(r: f64, step: f64, outline: &Outline, root: DVec2) -> Result<f64> {
+    if !(r.is_finite() && r > 0.0) {
+        bail!("--r must be a positive ratio, got {r}");
+    }
+    let reach = outline
+        .points()
+        .iter()
+        .map(|p| p.distance(root))
+        .fold(0.0, f64::max);
+    Ok(step / (r * reach))
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let s = setup(&args)?;
+    if !args.sweep_r.is_empty() {
+        return sweep(&args, s);
+    }
+    let leaf = grow_with_frames(&args, &s)?;
+    let render = RenderOptions { size: args.size };
+    write_network(&leaf.network, &args.output, &render)?;
+    for extra in [&args.svg, &args.png].into_iter().flatten() {
+        write_network(&leaf.network, extra, &render)?;
+    }
+    let summary = summary(&args.output, &leaf);
+    if let Some(path) = &args.report {
+        write_json(path, &summary)?;
+    }
     if args.json {
         println!("{summary}");
     } else {
-        println!(
-            "wrote {}: {} nodes, {} edges in {} steps ({:?}); {} of {} sources left unreached",
-            args.output.display(),
-            net.nodes.len(),
-            net.edges.len(),
-            growth.iterations,
-            growth.stop,
-            growth.sources_left,
-            growth.sources_placed
-        );
+        print_summary(&args.output, &leaf);
     }
     Ok(())
+}
+
+fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
+    let Some(dir) = &args.frames else {
+        return Ok(grow_leaf(&s.outline, &s.roots, &s.opts, None)?);
+    };
+    if args.every == 0 {
+        bail!("--every must be at least 1");
+    }
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
+    let (lo, hi) = s.outline.bounds();
+    let view = View {
+        lo,
+        hi,
+        size: args.frame_size,
+    };
+    let mut failure: Option<anyhow::Error> = None;
+    let mut write = |f: &Frame| {
+        if failure.is_some() {
+            return;
+        }
+        let path = dir.join(format!("frame-{:05}.png", f.step));
+        let result = render_frame(f, &view, s.opts.murray, s.opts.tip_radius)
+            .map_err(|m| anyhow::anyhow!("--frames: {m}"))
+            .and_then(|bytes| {
+                write_atomic(&path, |w| std::io::Write::write_all(w, &bytes)).map_err(Into::into)
+            });
+        if let Err(e) = result {
+            failure = Some(e);
+        }
+    };
+    let leaf = grow_leaf(
+        &s.outline,
+        &s.roots,
+        &s.opts,
+        Some(Observer {
+            every: args.every,
+            call: &mut write,
+        }),
+    )?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    Ok(leaf)
+}
+
+fn summary(output: &Path, leaf: &Leaf) -> serde_json::Value {
+    let g = &leaf.growth;
+    json!({
+        "output": output,
+        "nodes": leaf.network.nodes.len(),
+        "edges": leaf.network.edges.len(),
+        "iterations": g.iterations,
+        "stop": g.stop,
+        "sources_placed": g.sources_placed,
+        "sources_left": g.sources_left,
+        "loop_edges": g.joins.len(),
+        "root_radius": leaf.network.nodes.first().map(|n| n.radius),
+        "quality": leaf.quality,
+    })
+}
+
+fn print_summary(output: &Path, leaf: &Leaf) {
+    let g = &leaf.growth;
+    println!(
+        "wrote {}: {} steps ({}); {} of {} sources left unreached",
+        output.display(),
+        g.iterations,
+        serde_json::to_value(g.stop)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default(),
+        g.sources_left,
+        g.sources_placed
+    );
+    for line in leaf.quality.lines() {
+        println!("  {line}");
+    }
+}
+
+fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
+    let text = serde_json::to_string_pretty(value)? + "\n";
+    write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    Ok(())
+}
+
+/// Peele Fig. 1: one leaf per r, side by side.
+fn sweep(args: &Args, s: Setup) -> Result<()> {
+    let dir = &args.output;
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("-o {}: cannot create the folder", dir.display()))?;
+    let render = RenderOptions { size: args.size };
+    let mut rows = Vec::new();
+    let mut leaves = Vec::new();
+    for &r in &args.sweep_r {
+        let mut opts = s.opts.clone();
+        opts.growth.blade_rate = blade_rate_for(r, args.step, &s.outline, s.roots[0])?;
+        let leaf = grow_leaf(&s.outline, &s.roots, &opts, None)?;
+        let name = format!("r-{r}");
+        write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;
+        write_network(&leaf.network, &dir.join(format!("{name}.png")), &render)?;
+        let mut row = summary(&dir.join(format!("{name}.json")), &leaf);
+        row["r"] = json!(r);
+        row["blade_rate"] = json!(opts.growth.blade_rate);
+        if !args.json {
+            println!(
+                "r = {r}: {} nodes, {} thick edges (radius > half the root's), {} loops",
+                leaf.network.nodes.len(),
+                leaf.quality.thick_edges,
+                leaf.quality.loops
+            );
+        }
+        rows.push(row);
+        leaves.push((r, leaf));
+    }
+    let table = json!({ "sweep": "peele-r", "leaves": rows });
+    write_json(&dir.join("sweep.json"), &table)?;
+    let svg = contact_sheet(&leaves);
+    write_atomic(&dir.join("sweep.svg"), |w| {
+        std::io::Write::write_all(w, svg.as_bytes())
+    })?;
+    if args.json {
+        println!("{table}");
+    } else {
+        println!("wrote {}/sweep.json and sweep.svg", dir.display());
+    }
+    Ok(())
+}
+
+/// The leaves of a sweep side by side in one SVG, each with its r.
+fn contact_sheet(leaves: &[(f64, Leaf)]) -> String {
+    let mut body = String::new();
+    let mut x = 0.0;
+    let mut height: f64 = 0.0;
+    for (r, leaf) in leaves {
+        let b = leaf.network.bbox();
+        let (w, h) = (b.max.x - b.min.x, b.max.y - b.min.y);
+        body.push_str(&format!(
+            "<g transform=\"translate({:.3} {:.3}) scale(1 -1)\">",
+            x - b.min.x,
+            b.max.y + 12.0
+        ));
+        for e in &leaf.network.edges {
+            let (p, q) = (
+                leaf.network.nodes[e.a as usize].p,
+                leaf.network.nodes[e.b as usize].p,
+            );
+            body.push_str(&format!(
+                "<line x1=\"{:.3}\" y1=\"{:.3}\" x2=\"{:.3}\" y2=\"{:.3}\" stroke-width=\"{:.3}\"/>",
+                p.x,
+                p.y,
+                q.x,
+                q.y,
+                2.0 * e.radius
+            ));
+        }
+        body.push_str("</g>");
+        body.push_str(&format!(
+            "<text x=\"{:.3}\" y=\"8\" font-family=\"sans-serif\" font-size=\"6\">r = {r}</text>",
+            x
+        ));
+        x += w + 10.0;
+        height = height.max(h + 14.0);
+    }
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"-5 0 {:.3} {:.3}\" \
+         width=\"{:.0}mm\" height=\"{:.0}mm\">\n<g stroke=\"#1d3b2a\" stroke-linecap=\"round\">{body}</g>\n</svg>\n",
+        x + 5.0,
+        height,
+        x + 5.0,
+        height
+    )
 }

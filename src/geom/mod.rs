@@ -1,6 +1,6 @@
 //! Small shared geometry on glam's `DVec2`/`DVec3`. Uses nothing else of lamina.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 /// An axis-aligned bounding box. `empty()` holds no point; extending it with one makes it that point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,4 +72,23 @@ mod tests {
         assert!(Aabb::empty().is_empty());
         assert_eq!(Aabb::empty().diagonal(), 0.0);
     }
+}
+
+/// Whether segments ab and cd cross or touch (a shared point counts, collinear overlap too).
+pub fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    let on = |p: DVec2, q: DVec2, r: DVec2| {
+        o(p, q, r) == 0.0
+            && r.x >= p.x.min(q.x)
+            && r.x <= p.x.max(q.x)
+            && r.y >= p.y.min(q.y)
+            && r.y <= p.y.max(q.y)
+    };
+    on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
 }

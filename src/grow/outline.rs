@@ -55,6 +55,65 @@ pub enum OutlineError {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Outline {
     points: Vec<DVec2>,
+    /// Point-in-polygon index: the edges crossing each horizontal band of the bounding box.
+    bands: Bands,
+}
+
+/// Horizontal bands over the outline's height, each listing the edges whose y-range meets it,
+/// so a containment test looks at a few edges instead of all.
+#[derive(Clone, Debug, PartialEq)]
+struct Bands {
+    lo: f64,
+    height: f64,
+    /// Edge i runs from point i to point i + 1; band b holds `edges[start[b]..start[b + 1]]`.
+    start: Vec<u32>,
+    edges: Vec<u32>,
+}
+
+impl Bands {
+    fn new(points: &[DVec2]) -> Bands {
+        let n = points.len();
+        let lo = points.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+        let hi = points.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+        let count = n.clamp(1, 4096);
+        let height = ((hi - lo) / count as f64).max(f64::MIN_POSITIVE);
+        let band = |y: f64| (((y - lo) / height) as usize).min(count - 1);
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); count];
+        for i in 0..n {
+            let (a, b) = (points[i].y, points[(i + 1) % n].y);
+            for l in lists
+                .iter_mut()
+                .take(band(a.max(b)) + 1)
+                .skip(band(a.min(b)))
+            {
+                l.push(i as u32);
+            }
+        }
+        let mut start = Vec::with_capacity(count + 1);
+        let mut edges = Vec::new();
+        for l in lists {
+            start.push(edges.len() as u32);
+            edges.extend(l);
+        }
+        start.push(edges.len() as u32);
+        Bands {
+            lo,
+            height,
+            start,
+            edges,
+        }
+    }
+
+    /// The edges that may cross the horizontal line at y, or None outside the outline's height.
+    fn at(&self, y: f64) -> Option<&[u32]> {
+        let count = self.start.len() - 1;
+        let f = (y - self.lo) / self.height;
+        if !(f >= 0.0 && f <= count as f64) {
+            return None;
+        }
+        let b = (f as usize).min(count - 1);
+        Some(&self.edges[self.start[b] as usize..self.start[b + 1] as usize])
+    }
 }
 
 impl Outline {
@@ -77,7 +136,7 @@ impl Outline {
                 if j == i + 1 || (i == 0 && j == n - 1) {
                     continue; // neighbours share a corner
                 }
-                if segments_cross(
+                if crate::geom::segments_touch(
                     points[i],
                     points[(i + 1) % n],
                     points[j],
@@ -87,13 +146,15 @@ impl Outline {
                 }
             }
         }
-        let mut outline = Outline { points };
+        let bands = Bands::new(&points);
+        let mut outline = Outline { points, bands };
         let area = outline.signed_area();
         if area.abs() < 1e-12 {
             return Err(OutlineError::Degenerate);
         }
         if area < 0.0 {
             outline.points.reverse();
+            outline.bands = Bands::new(&outline.points);
         }
         Ok(outline)
     }
@@ -227,51 +288,35 @@ impl Outline {
 
     /// Even-odd ray test; points on the boundary may fall either way.
     pub fn contains(&self, p: DVec2) -> bool {
+        let Some(edges) = self.bands.at(p.y) else {
+            return false;
+        };
         let n = self.points.len();
         let mut inside = false;
-        let mut j = n - 1;
-        for i in 0..n {
-            let (a, b) = (self.points[i], self.points[j]);
+        for &i in edges {
+            let (a, b) = (self.points[i as usize], self.points[(i as usize + 1) % n]);
             if (a.y > p.y) != (b.y > p.y) {
                 let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
                 if p.x < x {
                     inside = !inside;
                 }
             }
-            j = i;
         }
         inside
     }
 
     /// The outline scaled by `factor` about `centre`.
     pub fn scaled(&self, centre: DVec2, factor: f64) -> Outline {
+        let points: Vec<DVec2> = self
+            .points
+            .iter()
+            .map(|p| centre + (*p - centre) * factor)
+            .collect();
         Outline {
-            points: self
-                .points
-                .iter()
-                .map(|p| centre + (*p - centre) * factor)
-                .collect(),
+            bands: Bands::new(&points),
+            points,
         }
     }
-}
-
-/// Proper crossing or touching of segments ab and cd.
-fn segments_cross(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
-    let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
-    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
-    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
-        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
-    {
-        return true;
-    }
-    let on = |p: DVec2, q: DVec2, r: DVec2| {
-        o(p, q, r) == 0.0
-            && r.x >= p.x.min(q.x)
-            && r.x <= p.x.max(q.x)
-            && r.y >= p.y.min(q.y)
-            && r.y <= p.y.max(q.y)
-    };
-    on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
 }
 
 #[cfg(test)]

@@ -1,18 +1,37 @@
-//! Open leaf venation by space colonisation (Runions et al. 2005, as Gokmen §3.2 and Peele §3.1
-//! use it). Each auxin source pulls on its closest vein node that can still branch; a pulled node
-//! grows one new node at v + D·n/|n|, n the sum of unit vectors to its sources; sources within
-//! the kill distance of a vein node are removed. Growth stops when no source is left, nothing
-//! grows, or the iteration cap is reached.
+//! Leaf venation by space colonisation (Runions et al. 2005, as Gokmen §3.2 and Peele §3.1 use
+//! it), open or closed, in a blade that may grow.
 //!
-//! Guarantees: every node lies inside the blade; every edge has length D; no node has degree
-//! above 3 (a node at degree 3 no longer attracts sources, which then pull on their next-closest
-//! node); no two nodes closer than `CROWDING`·D (a node whose step would land there retires, so
-//! its sources pull on another node); the result is a tree per root. Not guaranteed: that every source is reached (a source
-//! may sit where no node can step without leaving a concave blade); those are counted.
+//! Each step: the blade grows (none, uniform, or marginal); new auxin sources may be thrown as
+//! darts (Peele §3.1.2); every live source picks the vein nodes it influences; every influenced
+//! node grows one new node at v + D·n/|n|, n the sum of unit vectors to its sources; sources
+//! are removed by the kill distance.
 //!
-//! Spatial queries use rstar: one tree of nodes that may still branch, one of live sources.
+//! - Open venation: a source influences its closest node that can still branch, and dies as
+//!   soon as any node is within the kill distance. The result is a tree per root.
+//! - Closed venation: a source influences every node in its relative neighbourhood (a node v
+//!   such that no other node is closer both to the source and to v), so veins converge on it
+//!   from several sides. It dies when every node of its neighbourhood has arrived within the
+//!   kill distance; the arrived veins are then joined by one loop-closing edge (anastomosis).
+//!   When growth ends, each open tip looks ahead within an angle for a node to join, as Gokmen
+//!   §3.2 step g does. Joins only make Y (3-legged) or I (2-legged) joints, never cross an edge,
+//!   and never close a loop shorter than `MIN_LOOP` edges.
+//!
+//! Guarantees: every node lies inside the blade of its time; growth edges have length D (in the
+//! blade's frame; uniform blade growth stretches them later); no node has degree above 3 (a
+//! node at degree 3 stops attracting); no two nodes closer than `CROWDING`·D (a node whose step
+//! would land there retires). Not guaranteed: that every source is reached (a source may sit
+//! where no node can step without leaving a concave blade); those are counted.
+//!
+//! Spatial queries use rstar (a tree of nodes that can still grow, one of all nodes, one of live
+//! sources). Sources are examined in parallel with rayon and their influences applied in source
+//! order, so results do not depend on the thread count. Each source keeps the nodes it found
+//! last time and a lower bound on the distance of every other node (see `Cache`); children of
+//! those nodes are added as they grow, and only when the bound runs out does the source query
+//! the trees again. That keeps the work per step near the growing veins.
 
 use glam::DVec2;
+use rand::Rng;
+use rayon::prelude::*;
 use rstar::primitives::GeomWithData;
 use rstar::RTree;
 
@@ -20,24 +39,73 @@ use super::outline::Outline;
 
 type Indexed = GeomWithData<[f64; 2], u32>;
 
-/// The growth parameters, in mm.
+/// Open venation makes trees; closed venation makes loops.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    Open,
+    Closed,
+}
+
+/// How the blade grows during the simulation (Runions 2005 §3; Peele §3.1.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BladeGrowth {
+    /// The blade is full size from the start.
+    None,
+    /// Everything scales about the first root, veins included: early veins stretch.
+    Uniform,
+    /// The outline scales about the first root; veins stay where they grew.
+    Marginal,
+}
+
+/// The growth parameters; distances in mm.
 #[derive(Clone, Copy, Debug)]
 pub struct VenationOptions {
+    pub mode: Mode,
     /// D, the length of every new vein segment. Default 1.0 mm.
     pub step: f64,
-    /// Sources closer than this to any vein node are removed. Default 1.5 mm.
+    /// The kill distance. Default 1.5 mm.
     pub kill: f64,
     /// Stop after this many growth steps. Default 10,000.
     pub max_iterations: usize,
+    pub blade: BladeGrowth,
+    /// Blade size at step 0 as a fraction of the full outline, when the blade grows. Default 0.2.
+    pub initial_scale: f64,
+    /// Blade size added per step, as a fraction of the full outline (linear growth). With a
+    /// blade of length L the tip moves `blade_rate`·L per step, so Peele's r = D / (rate·L).
+    /// Default 0.005.
+    pub blade_rate: f64,
+    /// Darts thrown per step (Peele §3.1.2), each kept if it lands in the blade at least the
+    /// birth distance from every live source and vein node. Default 0.
+    pub sources_per_step: usize,
+    /// Closed venation: the longest loop-closing edge. Default 2 × kill.
+    pub join_distance: Option<f64>,
+    /// Closed venation: an open tip joins a node at most this many degrees off its heading.
+    /// Default 60.
+    pub join_angle: f64,
 }
 
 impl Default for VenationOptions {
     fn default() -> Self {
         VenationOptions {
+            mode: Mode::Open,
             step: 1.0,
             kill: 1.5,
             max_iterations: 10_000,
+            blade: BladeGrowth::None,
+            initial_scale: 0.2,
+            blade_rate: 0.005,
+            sources_per_step: 0,
+            join_distance: None,
+            join_angle: 60.0,
         }
+    }
+}
+
+impl VenationOptions {
+    pub fn join_distance(&self) -> f64 {
+        self.join_distance.unwrap_or(2.0 * self.kill)
     }
 }
 
@@ -47,45 +115,92 @@ pub const CROWDING: f64 = 0.5;
 /// Joints allowed in a vein network: Y (3 legs) and I (2 legs), Gokmen §3.2 step g.
 pub const MAX_DEGREE: usize = 3;
 
+/// A loop-closing edge never closes a loop of fewer edges than this (itself included).
+pub const MIN_LOOP: usize = 6;
+
+/// A loop-closing edge meets the legs already at its ends at no less than this angle (degrees).
+pub const MIN_JOINT_ANGLE: f64 = 25.0;
+
+/// Closed venation: a source looks at this many of its nearest nodes for its relative
+/// neighbourhood, none farther than `NEIGHBOURHOOD_REACH` times the nearest.
+const NEIGHBOURHOOD_SIZE: usize = 8;
+const NEIGHBOURHOOD_REACH: f64 = 4.0;
+
+/// Darts tried per source wanted, per step.
+const DART_TRIES: usize = 30;
+
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum VenationError {
     #[error("--step must be a positive distance in mm, got {0}")]
     Step(f64),
     #[error("--kill must be a positive distance in mm, got {0}")]
     Kill(f64),
-    #[error("root {0} ({1}, {2}) is not inside the blade outline")]
+    #[error("--join-distance must be a positive distance in mm, got {0}")]
+    JoinDistance(f64),
+    #[error("--join-angle must be between 0 and 180 degrees, got {0}")]
+    JoinAngle(f64),
+    #[error("--initial-scale must be in (0, 1], got {0}")]
+    InitialScale(f64),
+    #[error("--blade-rate must be a positive fraction per step, got {0}")]
+    BladeRate(f64),
+    #[error(
+        "--kill {kill} mm is not below the birth distance {birth} mm: darts thrown at the birth \
+         distance from the veins would be inside the kill distance, so nothing could grow"
+    )]
+    KillNotBelowBirth { kill: f64, birth: f64 },
+    #[error(
+        "--kill {0} mm removes every source from the root(s) at the first step: nothing can grow"
+    )]
+    KillsEverything(f64),
+    #[error("--root {0} ({1}, {2}) is not inside the blade outline")]
     RootOutside(usize, f64, f64),
     #[error("no root given")]
     NoRoot,
 }
 
-/// A grown vein tree.
-#[derive(Clone, Debug)]
+/// A grown venation.
+#[derive(Clone, Debug, Default)]
 pub struct Growth {
+    /// Node positions in mm, in the blade's final frame.
     pub positions: Vec<DVec2>,
-    /// Parent of each node; `None` for roots. Edges are (parent, child) in node order.
+    /// Parent of each node in the growth tree; `None` for roots, which come first.
     pub parent: Vec<Option<u32>>,
+    /// Loop-closing edges (closed venation), in the order they were made.
+    pub joins: Vec<[u32; 2]>,
+    /// The step at which each node grew (0 for roots).
+    pub born: Vec<u32>,
+    pub roots: usize,
     pub iterations: usize,
     pub sources_placed: usize,
     pub sources_left: usize,
+    /// Blade size when growth stopped, as a fraction of the full outline.
+    pub scale: f64,
     /// Why growth stopped.
     pub stop: Stop,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Stop {
     NoSourcesLeft,
+    #[default]
     NothingGrew,
     IterationCap,
 }
 
 impl Growth {
-    pub fn edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+    /// Growth-tree edges (parent, child) in node order.
+    pub fn tree_edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
         self.parent
             .iter()
             .enumerate()
             .filter_map(|(c, p)| p.map(|p| (p, c as u32)))
+    }
+
+    /// Tree edges, then loop-closing edges.
+    pub fn edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        self.tree_edges()
+            .chain(self.joins.iter().map(|&[a, b]| (a, b)))
     }
 
     pub fn degrees(&self) -> Vec<usize> {
@@ -98,327 +213,888 @@ impl Growth {
     }
 }
 
-/// Grows open venation from `roots` towards `sources` inside `outline`.
-pub fn grow_open(
+/// The state shown to an observer every few steps: positions and sources in mm in the blade's
+/// frame of that moment, and the blade itself.
+pub struct Frame<'a> {
+    pub step: usize,
+    pub positions: &'a [DVec2],
+    pub parent: &'a [Option<u32>],
+    pub joins: &'a [[u32; 2]],
+    pub sources: &'a [DVec2],
+    pub blade: &'a Outline,
+}
+
+/// Called every `every` steps (and after the last) with the current state.
+pub struct Observer<'a> {
+    pub every: usize,
+    pub call: &'a mut dyn FnMut(&Frame),
+}
+
+/// The blade at step 0: the outline scaled about the first root, or the outline itself.
+pub fn initial_blade(outline: &Outline, root: DVec2, opts: &VenationOptions) -> Outline {
+    match opts.blade {
+        BladeGrowth::None => outline.clone(),
+        _ => outline.scaled(root, opts.initial_scale),
+    }
+}
+
+/// Grows venation from `roots` towards `sources` (positions in mm inside the initial blade, see
+/// `initial_blade`). `birth(p)` gives the birth distance of darts at blade position `p` of the
+/// full-size outline; `rng` throws them.
+pub fn grow(
     outline: &Outline,
     roots: &[DVec2],
     sources: &[DVec2],
+    birth: &(dyn Fn(DVec2) -> f64 + Sync),
     opts: &VenationOptions,
+    rng: &mut impl Rng,
+    observer: Option<Observer>,
 ) -> Result<Growth, VenationError> {
-    if !(opts.step.is_finite() && opts.step > 0.0) {
-        return Err(VenationError::Step(opts.step));
-    }
-    if !(opts.kill.is_finite() && opts.kill > 0.0) {
-        return Err(VenationError::Kill(opts.kill));
-    }
-    if roots.is_empty() {
-        return Err(VenationError::NoRoot);
-    }
-    if let Some((i, r)) = roots
-        .iter()
-        .enumerate()
-        .find(|(_, r)| !outline.contains(**r))
-    {
-        return Err(VenationError::RootOutside(i, r.x, r.y));
-    }
-    let mut g = Growth {
-        positions: roots.to_vec(),
-        parent: vec![None; roots.len()],
-        iterations: 0,
-        sources_placed: sources.len(),
-        sources_left: 0,
-        stop: Stop::NothingGrew,
-    };
-    let mut degree = vec![0usize; roots.len()];
-    let mut open: RTree<Indexed> = RTree::bulk_load(
-        roots
-            .iter()
-            .enumerate()
-            .map(|(i, r)| Indexed::new(r.to_array(), i as u32))
-            .collect(),
-    );
-    let mut live: RTree<Indexed> = RTree::bulk_load(
-        sources
-            .iter()
-            .enumerate()
-            .map(|(i, s)| Indexed::new(s.to_array(), i as u32))
-            .collect(),
-    );
-    // Every node, to refuse a step onto an existing node: a node whose sources have not moved
-    // would otherwise grow a second child onto its first.
-    let mut all: RTree<[f64; 2]> = RTree::bulk_load(roots.iter().map(|r| r.to_array()).collect());
-    let crowd2 = (CROWDING * opts.step).powi(2);
-    let kill2 = opts.kill * opts.kill;
-    for r in roots {
-        kill_near(&mut live, *r, kill2);
-    }
-    let mut pull = vec![DVec2::ZERO; g.positions.len()];
-    let mut pulled: Vec<u32> = Vec::new();
-    loop {
-        if live.size() == 0 {
-            g.stop = Stop::NoSourcesLeft;
-            break;
+    check(outline, roots, birth, opts)?;
+    let mut g = Grower::new(outline, roots, sources, birth, opts);
+    if g.opts.mode == Mode::Open {
+        for r in 0..roots.len() as u32 {
+            g.kill_near(r);
         }
-        if g.iterations >= opts.max_iterations {
-            g.stop = Stop::IterationCap;
-            break;
-        }
-        g.iterations += 1;
-        // Each source pulls its closest node that may still branch.
-        for s in live.iter() {
-            let sp = DVec2::from_array(*s.geom());
-            let Some(n) = open.nearest_neighbor(s.geom()) else {
-                break;
-            };
-            let v = n.data as usize;
-            let d = sp - g.positions[v];
-            if let Some(u) = d.try_normalize() {
-                if pull[v] == DVec2::ZERO {
-                    pulled.push(v as u32);
-                }
-                pull[v] += u;
-            }
-        }
-        // Grow in node order so the result does not depend on the tree's iteration order.
-        pulled.sort_unstable();
-        let mut grown = 0;
-        for &v in &pulled {
-            let dir = std::mem::take(&mut pull[v as usize]);
-            let Some(dir) = dir.try_normalize() else {
-                continue;
-            };
-            let at = g.positions[v as usize] + dir * opts.step;
-            if !outline.contains(at) || degree[v as usize] >= MAX_DEGREE {
-                continue;
-            }
-            if all
-                .locate_within_distance(at.to_array(), crowd2)
-                .next()
-                .is_some()
-            {
-                // Its sources sit around it with nothing new to reach: retire the node so they
-                // pull on their next-closest node instead.
-                open.remove(&Indexed::new(g.positions[v as usize].to_array(), v));
-                continue;
-            }
-            let child = g.positions.len() as u32;
-            g.positions.push(at);
-            g.parent.push(Some(v));
-            degree.push(1);
-            pull.push(DVec2::ZERO);
-            degree[v as usize] += 1;
-            if degree[v as usize] >= MAX_DEGREE {
-                open.remove(&Indexed::new(g.positions[v as usize].to_array(), v));
-            }
-            open.insert(Indexed::new(at.to_array(), child));
-            all.insert(at.to_array());
-            kill_near(&mut live, at, kill2);
-            grown += 1;
-        }
-        pulled.clear();
-        if grown == 0 {
-            g.stop = Stop::NothingGrew;
-            break;
+        if g.live_count == 0 && !sources.is_empty() && opts.sources_per_step == 0 {
+            return Err(VenationError::KillsEverything(opts.kill));
         }
     }
-    g.sources_left = live.size();
-    Ok(g)
+    g.run(rng, observer);
+    Ok(g.finish())
 }
 
-fn kill_near(live: &mut RTree<Indexed>, p: DVec2, kill2: f64) {
-    let doomed: Vec<Indexed> = live
-        .locate_within_distance(p.to_array(), kill2)
-        .cloned()
-        .collect();
-    for s in doomed {
-        live.remove(&s);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::super::outline::Shape;
-    use super::super::poisson;
-    use super::*;
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
-
-    fn grow(shape: Shape, seed: u64) -> (Outline, Growth) {
-        let o = Outline::shape(shape);
-        let sources = poisson::sample(&o, 2.0, 2.0, |_| 2.0, &mut ChaCha8Rng::seed_from_u64(seed));
-        let g = grow_open(
-            &o,
-            &[o.default_root()],
-            &sources,
-            &VenationOptions::default(),
-        )
-        .expect("valid parameters");
-        (o, g)
-    }
-
-    #[test]
-    fn open_venation_invariants_hold_on_every_shape() {
-        for shape in Shape::ALL {
-            let (o, g) = grow(shape, 11);
-            let n = g.positions.len();
-            assert!(n > 300, "{}: {n} nodes", shape.name());
-            assert!(g.positions.iter().all(|p| o.contains(*p)), "inside");
-            for (p, c) in g.edges() {
-                let l = g.positions[p as usize].distance(g.positions[c as usize]);
-                assert!((l - 1.0).abs() <= 1e-9, "edge length {l}");
-            }
-            assert!(g.degrees().iter().all(|&d| d <= MAX_DEGREE));
-            let tree = RTree::bulk_load(g.positions.iter().map(|p| p.to_array()).collect());
-            for p in &g.positions {
-                let close = tree
-                    .locate_within_distance(p.to_array(), CROWDING * CROWDING * 0.99)
-                    .count();
-                assert_eq!(
-                    close,
-                    1,
-                    "{}: another node within 0.5 D of {p}",
-                    shape.name()
-                );
-            }
-            assert_eq!(g.edges().count(), n - 1, "a tree");
-            assert!(
-                g.sources_left * 20 < g.sources_placed,
-                "{}: {} of {} sources unreached",
-                shape.name(),
-                g.sources_left,
-                g.sources_placed
-            );
-        }
-    }
-
-    #[test]
-    fn bad_parameters_are_named() {
-        let o = Outline::shape(Shape::Circle);
-        let r = [o.default_root()];
-        let bad_step = VenationOptions {
-            step: 0.0,
-            ..Default::default()
-        };
-        assert_eq!(
-            grow_open(&o, &r, &[], &bad_step).err(),
-            Some(VenationError::Step(0.0))
-        );
-        let bad_kill = VenationOptions {
-            kill: -1.0,
-            ..Default::default()
-        };
-        assert_eq!(
-            grow_open(&o, &r, &[], &bad_kill).err(),
-            Some(VenationError::Kill(-1.0))
-        );
-        let outside = [DVec2::new(1e3, 1e3)];
-        assert!(matches!(
-            grow_open(&o, &outside, &[], &VenationOptions::default()),
-            Err(VenationError::RootOutside(0, ..))
-        ));
-    }
-
-    #[test]
-    fn same_seed_same_growth() {
-        let (_, a) = grow(Shape::Ovate, 4);
-        let (_, b) = grow(Shape::Ovate, 4);
-        assert_eq!(a.positions, b.positions);
-        assert_eq!(a.parent, b.parent);
-    }
-}
-
-/// Everything `lamina venation` needs for an open leaf: blade, sources, growth, widths.
-#[derive(Clone, Debug)]
-pub struct LeafOptions {
-    pub growth: VenationOptions,
-    /// Poisson-disk radius of the auxin sources, mm. Default 2.0.
-    pub birth: f64,
-    /// Murray exponent n in r_parent^n = Σ r_child^n. Default 3.
-    pub murray: f64,
-    /// Radius of vein tips, mm. Default 0.1.
-    pub tip_radius: f64,
-    pub seed: u64,
-}
-
-impl Default for LeafOptions {
-    fn default() -> Self {
-        LeafOptions {
-            growth: VenationOptions::default(),
-            birth: 2.0,
-            murray: 3.0,
-            tip_radius: 0.1,
-            seed: 1,
-        }
-    }
-}
-
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum LeafError {
-    #[error("--birth must be a positive distance in mm, got {0}")]
-    Birth(f64),
-    #[error("--murray must be a finite exponent ≥ 1, got {0}")]
-    Murray(f64),
-    #[error("--tip-radius must be a positive distance in mm, got {0}")]
-    TipRadius(f64),
-    #[error(transparent)]
-    Growth(#[from] VenationError),
-}
-
-/// Samples sources, grows open venation from `roots`, and returns the network with Murray
-/// widths (edge radius = radius of its downstream node) and the growth record.
-pub fn grow_leaf(
+fn check(
     outline: &Outline,
     roots: &[DVec2],
-    opts: &LeafOptions,
-) -> Result<(crate::network::Network, Growth), LeafError> {
-    use rand::SeedableRng;
-    if !(opts.birth.is_finite() && opts.birth > 0.0) {
-        return Err(LeafError::Birth(opts.birth));
+    birth: &(dyn Fn(DVec2) -> f64 + Sync),
+    opts: &VenationOptions,
+) -> Result<(), VenationError> {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !positive(opts.step) {
+        return Err(VenationError::Step(opts.step));
     }
-    if !(opts.murray.is_finite() && opts.murray >= 1.0) {
-        return Err(LeafError::Murray(opts.murray));
+    if !positive(opts.kill) {
+        return Err(VenationError::Kill(opts.kill));
     }
-    if !(opts.tip_radius.is_finite() && opts.tip_radius > 0.0) {
-        return Err(LeafError::TipRadius(opts.tip_radius));
+    if !positive(opts.join_distance()) {
+        return Err(VenationError::JoinDistance(opts.join_distance()));
     }
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(opts.seed);
-    let b = opts.birth;
-    let sources = super::poisson::sample(outline, b, b, |_| b, &mut rng);
-    let g = grow_open(outline, roots, &sources, &opts.growth)?;
-    let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
-    let mut net = crate::network::Network {
-        nodes: g
-            .positions
+    if !(opts.join_angle > 0.0 && opts.join_angle <= 180.0) {
+        return Err(VenationError::JoinAngle(opts.join_angle));
+    }
+    if opts.blade != BladeGrowth::None {
+        if !(positive(opts.initial_scale) && opts.initial_scale <= 1.0) {
+            return Err(VenationError::InitialScale(opts.initial_scale));
+        }
+        if !positive(opts.blade_rate) {
+            return Err(VenationError::BladeRate(opts.blade_rate));
+        }
+    }
+    if opts.sources_per_step > 0 {
+        // The smallest birth distance over the blade decides whether any dart can live.
+        let birth_min = outline
+            .points()
             .iter()
-            .zip(&radius)
-            .map(|(p, r)| crate::network::Node {
-                p: p.extend(0.0),
-                normal: Some(glam::DVec3::Z),
-                radius: *r,
-            })
-            .collect(),
-        edges: g
-            .edges()
-            .map(|(p, c)| crate::network::Edge {
-                a: p,
-                b: c,
-                radius: radius[c as usize],
-            })
-            .collect(),
-        ..Default::default()
-    };
-    net.meta.generator = Some("venation/open".into());
-    net.meta.seed = Some(opts.seed);
-    let params = [
-        ("step", opts.growth.step),
-        ("kill", opts.growth.kill),
-        ("birth", opts.birth),
-        ("murray", opts.murray),
-        ("tip_radius", opts.tip_radius),
-        ("max_iterations", opts.growth.max_iterations as f64),
-    ];
-    for (k, v) in params {
-        net.meta.parameters.insert(k.into(), serde_json::json!(v));
+            .copied()
+            .chain([outline.centroid()])
+            .map(birth)
+            .fold(f64::INFINITY, f64::min);
+        if opts.kill >= birth_min {
+            return Err(VenationError::KillNotBelowBirth {
+                kill: opts.kill,
+                birth: birth_min,
+            });
+        }
     }
-    Ok((net, g))
+    let first = *roots.first().ok_or(VenationError::NoRoot)?;
+    let blade = initial_blade(outline, first, opts);
+    if let Some((i, r)) = roots.iter().enumerate().find(|(_, r)| !blade.contains(**r)) {
+        return Err(VenationError::RootOutside(i, r.x, r.y));
+    }
+    Ok(())
+}
+
+/// What one live source does this step.
+#[derive(Clone, Copy)]
+enum Influence {
+    /// Nothing can grow towards it.
+    Idle,
+    /// It pulls these nodes.
+    Pull([u32; NEIGHBOURHOOD_SIZE], u8),
+    /// Closed venation: every node of its neighbourhood has arrived; these ones.
+    Dies([u32; NEIGHBOURHOOD_SIZE], u8),
+}
+
+/// What a source knows about the nodes around it, as of step `seen`: `cand` are its closest
+/// nodes by distance (open venation: the one closest growing node; closed: up to
+/// `NEIGHBOURHOOD_SIZE` of all nodes), and every other node is at least `bound` away. A new
+/// node lands within D of an existing one, so `bound` falls by D per step; children of the
+/// candidates are added to the list as they grow, and a candidate pushed out of the list
+/// lowers the bound to its distance. When the bound no longer covers what the source needs, it
+/// queries the trees again.
+#[derive(Clone, Copy)]
+struct Cache {
+    cand: [u32; NEIGHBOURHOOD_SIZE],
+    n: u8,
+    bound: f64,
+    seen: u32,
+    queried: u32,
+}
+
+const EMPTY: Cache = Cache {
+    cand: [u32::MAX; NEIGHBOURHOOD_SIZE],
+    n: 0,
+    bound: f64::NEG_INFINITY,
+    seen: 0,
+    queried: 0,
+};
+
+/// Closed venation: a source queries afresh at least this often, to see members of its
+/// relative neighbourhood beyond its candidate list.
+const REFRESH: u32 = 16;
+
+struct Grower<'a> {
+    outline: &'a Outline,
+    birth: &'a (dyn Fn(DVec2) -> f64 + Sync),
+    opts: VenationOptions,
+    centre: DVec2,
+    /// Blade size as a fraction of the full outline.
+    scale: f64,
+    positions: Vec<DVec2>,
+    parent: Vec<Option<u32>>,
+    born: Vec<u32>,
+    adj: Vec<[u32; MAX_DEGREE]>,
+    degree: Vec<u8>,
+    can_grow: Vec<bool>,
+    /// The latest child of each node (u32::MAX for none).
+    last_child: Vec<u32>,
+    joins: Vec<[u32; 2]>,
+    roots: usize,
+    open: RTree<Indexed>,
+    all: RTree<Indexed>,
+    live: RTree<Indexed>,
+    source_pos: Vec<DVec2>,
+    alive: Vec<bool>,
+    live_ids: Vec<u32>,
+    live_count: usize,
+    cache: Vec<Cache>,
+    longest_edge: f64,
+    step: usize,
+    stop: Stop,
+}
+
+impl<'a> Grower<'a> {
+    fn new(
+        outline: &'a Outline,
+        roots: &[DVec2],
+        sources: &[DVec2],
+        birth: &'a (dyn Fn(DVec2) -> f64 + Sync),
+        opts: &VenationOptions,
+    ) -> Self {
+        let centre = roots[0];
+        let scale = match opts.blade {
+            BladeGrowth::None => 1.0,
+            _ => opts.initial_scale,
+        };
+        let mut g = Grower {
+            outline,
+            birth,
+            opts: *opts,
+            centre,
+            scale,
+            positions: Vec::new(),
+            parent: Vec::new(),
+            born: Vec::new(),
+            adj: Vec::new(),
+            degree: Vec::new(),
+            can_grow: Vec::new(),
+            last_child: Vec::new(),
+            joins: Vec::new(),
+            roots: roots.len(),
+            open: RTree::new(),
+            all: RTree::new(),
+            live: RTree::new(),
+            source_pos: Vec::new(),
+            alive: Vec::new(),
+            live_ids: Vec::new(),
+            live_count: 0,
+            cache: Vec::new(),
+            longest_edge: 0.0,
+            step: 0,
+            stop: Stop::NothingGrew,
+        };
+        let work: Vec<DVec2> = roots.iter().map(|r| g.to_work(*r)).collect();
+        for p in work {
+            g.push_node(p, None);
+        }
+        let src: Vec<DVec2> = sources.iter().map(|s| g.to_work(*s)).collect();
+        g.live = RTree::bulk_load(
+            src.iter()
+                .enumerate()
+                .map(|(i, s)| Indexed::new(s.to_array(), i as u32))
+                .collect(),
+        );
+        g.alive = vec![true; src.len()];
+        g.cache = vec![EMPTY; src.len()];
+        g.live_ids = (0..src.len() as u32).collect();
+        g.live_count = src.len();
+        g.source_pos = src;
+        g
+    }
+
+    /// Working frame: the full-size blade under uniform growth (so veins stretch with it),
+    /// real millimetres otherwise.
+    fn to_work(&self, real: DVec2) -> DVec2 {
+        match self.opts.blade {
+            BladeGrowth::Uniform => self.centre + (real - self.centre) / self.scale,
+            _ => real,
+        }
+    }
+
+    fn to_real(&self, work: DVec2) -> DVec2 {
+        match self.opts.blade {
+            BladeGrowth::Uniform => self.centre + (work - self.centre) * self.scale,
+            _ => work,
+        }
+    }
+
+    /// A distance in mm, in the working frame.
+    fn eff(&self, d: f64) -> f64 {
+        match self.opts.blade {
+            BladeGrowth::Uniform => d / self.scale,
+            _ => d,
+        }
+    }
+
+    /// Where a working point sits on the full-size outline.
+    fn blade_coord(&self, p: DVec2) -> DVec2 {
+        match self.opts.blade {
+            BladeGrowth::Marginal => self.centre + (p - self.centre) / self.scale,
+            _ => p,
+        }
+    }
+
+    fn in_blade(&self, p: DVec2) -> bool {
+        self.outline.contains(self.blade_coord(p))
+    }
+
+    fn push_node(&mut self, p: DVec2, parent: Option<u32>) -> u32 {
+        let id = self.positions.len() as u32;
+        self.positions.push(p);
+        self.parent.push(parent);
+        self.born.push(self.step as u32);
+        self.adj.push([u32::MAX; MAX_DEGREE]);
+        self.degree.push(0);
+        self.can_grow.push(true);
+        self.last_child.push(u32::MAX);
+        self.open.insert(Indexed::new(p.to_array(), id));
+        self.all.insert(Indexed::new(p.to_array(), id));
+        if let Some(q) = parent {
+            self.link(q, id);
+            self.last_child[q as usize] = id;
+        }
+        id
+    }
+
+    fn link(&mut self, a: u32, b: u32) {
+        for (x, y) in [(a, b), (b, a)] {
+            let d = self.degree[x as usize] as usize;
+            self.adj[x as usize][d] = y;
+            self.degree[x as usize] += 1;
+            if d + 1 >= MAX_DEGREE {
+                self.retire(x);
+            }
+        }
+        let len = self.positions[a as usize].distance(self.positions[b as usize]);
+        self.longest_edge = self.longest_edge.max(len);
+    }
+
+    fn neighbours(&self, v: u32) -> &[u32] {
+        &self.adj[v as usize][..self.degree[v as usize] as usize]
+    }
+
+    /// The node stops growing and attracting.
+    fn retire(&mut self, v: u32) {
+        if std::mem::replace(&mut self.can_grow[v as usize], false) {
+            self.open
+                .remove(&Indexed::new(self.positions[v as usize].to_array(), v));
+        }
+    }
+
+    fn remove_source(&mut self, s: u32) {
+        if std::mem::replace(&mut self.alive[s as usize], false) {
+            self.live
+                .remove(&Indexed::new(self.source_pos[s as usize].to_array(), s));
+            self.live_count -= 1;
+        }
+    }
+
+    /// Open venation: remove the sources within the kill distance of node `v`.
+    fn kill_near(&mut self, v: u32) {
+        let k = self.eff(self.opts.kill);
+        let doomed: Vec<u32> = self
+            .live
+            .locate_within_distance(self.positions[v as usize].to_array(), k * k)
+            .map(|s| s.data)
+            .collect();
+        for s in doomed {
+            self.remove_source(s);
+        }
+    }
+
+    fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer>) {
+        let mut pull = vec![DVec2::ZERO; self.positions.len()];
+        let mut pulled: Vec<u32> = Vec::new();
+        loop {
+            if self.step >= self.opts.max_iterations {
+                self.stop = Stop::IterationCap;
+                break;
+            }
+            self.step += 1;
+            let grew_blade = self.grow_blade();
+            let thrown = self.throw_darts(rng);
+            if self.live_count == 0 && !grew_blade && thrown == 0 {
+                self.step -= 1;
+                self.stop = Stop::NoSourcesLeft;
+                break;
+            }
+            self.live_ids.retain(|&s| self.alive[s as usize]);
+            let influence = self.influences();
+            // Apply in source order, so the sums do not depend on threads.
+            let mut died = 0;
+            for (&s, inf) in self.live_ids.iter().zip(&influence) {
+                let sp = self.source_pos[s as usize];
+                match *inf {
+                    Influence::Idle => {}
+                    Influence::Pull(nodes, n) => {
+                        for &v in &nodes[..n as usize] {
+                            if let Some(u) = (sp - self.positions[v as usize]).try_normalize() {
+                                if pull[v as usize] == DVec2::ZERO {
+                                    pulled.push(v);
+                                }
+                                pull[v as usize] += u;
+                            }
+                        }
+                    }
+                    Influence::Dies(..) => died += 1,
+                }
+            }
+            if died > 0 {
+                let deaths: Vec<(u32, Influence)> = self
+                    .live_ids
+                    .iter()
+                    .copied()
+                    .zip(influence)
+                    .filter(|(_, i)| matches!(i, Influence::Dies(..)))
+                    .collect();
+                for (s, inf) in deaths {
+                    self.remove_source(s);
+                    if let Influence::Dies(nodes, n) = inf {
+                        self.join_arrivals(&nodes[..n as usize]);
+                    }
+                }
+            }
+            // Grow in node order so the result does not depend on the trees' iteration order.
+            pulled.sort_unstable();
+            let mut grown = 0;
+            let step = self.eff(self.opts.step);
+            let crowd2 = (CROWDING * step).powi(2);
+            for &v in &pulled {
+                let dir = std::mem::take(&mut pull[v as usize]);
+                let Some(dir) = dir.try_normalize() else {
+                    continue;
+                };
+                if !self.can_grow[v as usize] {
+                    continue;
+                }
+                let at = self.positions[v as usize] + dir * step;
+                if !self.in_blade(at) {
+                    continue;
+                }
+                if self
+                    .all
+                    .locate_within_distance(at.to_array(), crowd2)
+                    .next()
+                    .is_some()
+                {
+                    // Its sources sit around it with nothing new to reach: retire the node so
+                    // they pull on another one instead.
+                    self.retire(v);
+                    continue;
+                }
+                let child = self.push_node(at, Some(v));
+                pull.push(DVec2::ZERO);
+                if self.opts.mode == Mode::Open {
+                    self.kill_near(child);
+                }
+                grown += 1;
+            }
+            pulled.clear();
+            if let Some(o) = observer.as_mut() {
+                if self.step % o.every.max(1) == 0 {
+                    self.show(o);
+                }
+            }
+            if grown == 0 && died == 0 && !grew_blade && thrown == 0 {
+                self.stop = if self.live_count == 0 {
+                    Stop::NoSourcesLeft
+                } else {
+                    Stop::NothingGrew
+                };
+                break;
+            }
+        }
+        if self.opts.mode == Mode::Closed {
+            self.join_tips();
+        }
+        if let Some(o) = observer.as_mut() {
+            self.show(o);
+        }
+    }
+
+    /// Scales the blade for this step; true while it is still growing.
+    fn grow_blade(&mut self) -> bool {
+        if self.opts.blade == BladeGrowth::None || self.scale >= 1.0 {
+            return false;
+        }
+        let next = (self.opts.initial_scale + self.opts.blade_rate * self.step as f64).min(1.0);
+        self.scale = next;
+        true
+    }
+
+    /// Throws this step's darts; returns how many were kept.
+    fn throw_darts(&mut self, rng: &mut impl Rng) -> usize {
+        let want = self.opts.sources_per_step;
+        if want == 0 {
+            return 0;
+        }
+        let (lo, hi) = self.outline.bounds();
+        let (lo, hi) = match self.opts.blade {
+            BladeGrowth::Marginal => (
+                self.centre + (lo - self.centre) * self.scale,
+                self.centre + (hi - self.centre) * self.scale,
+            ),
+            _ => (lo, hi),
+        };
+        let mut kept = 0;
+        for _ in 0..want * DART_TRIES {
+            if kept == want {
+                break;
+            }
+            let p = DVec2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
+            if !self.in_blade(p) {
+                continue;
+            }
+            let b = self.eff((self.birth)(self.blade_coord(p)));
+            let b2 = b * b;
+            if self
+                .live
+                .locate_within_distance(p.to_array(), b2)
+                .next()
+                .is_some()
+                || self
+                    .all
+                    .locate_within_distance(p.to_array(), b2)
+                    .next()
+                    .is_some()
+            {
+                continue;
+            }
+            let id = self.source_pos.len() as u32;
+            self.source_pos.push(p);
+            self.alive.push(true);
+            self.cache.push(EMPTY);
+            self.live.insert(Indexed::new(p.to_array(), id));
+            self.live_ids.push(id);
+            self.live_count += 1;
+            kept += 1;
+        }
+        kept
+    }
+
+    /// What every live source does this step, in `live_ids` order.
+    fn influences(&mut self) -> Vec<Influence> {
+        let kill2 = self.eff(self.opts.kill).powi(2);
+        let d = self.eff(self.opts.step);
+        let this = &*self;
+        let out: Vec<(Cache, Influence)> = this
+            .live_ids
+            .par_iter()
+            .map(|&s| {
+                let sp = this.source_pos[s as usize];
+                let mut c = this.update(this.cache[s as usize], sp, d);
+                let inf = match this.opts.mode {
+                    Mode::Open => this.closest(&mut c, sp),
+                    Mode::Closed => this.neighbourhood(&mut c, sp, kill2),
+                };
+                c.seen = this.step as u32;
+                (c, inf)
+            })
+            .collect();
+        let mut infl = Vec::with_capacity(out.len());
+        for (&s, (c, i)) in self.live_ids.iter().zip(out) {
+            self.cache[s as usize] = c;
+            infl.push(i);
+        }
+        infl
+    }
+
+    /// Brings a cache up to this step: the bound falls by D per step since it was seen, and
+    /// children grown since then join the candidates (the closest `NEIGHBOURHOOD_SIZE`, or the
+    /// closest one in open venation; one pushed out lowers the bound).
+    fn update(&self, mut c: Cache, sp: DVec2, d: f64) -> Cache {
+        if c.n == 0 {
+            return c;
+        }
+        let steps = (self.step as u32).saturating_sub(c.seen);
+        c.bound -= d * steps as f64;
+        let keep = match self.opts.mode {
+            Mode::Open => 1,
+            Mode::Closed => NEIGHBOURHOOD_SIZE,
+        };
+        let dist = |v: u32| self.positions[v as usize].distance_squared(sp);
+        let mut fresh = [u32::MAX; NEIGHBOURHOOD_SIZE];
+        let mut nf = 0;
+        for &v in &c.cand[..c.n as usize] {
+            let child = self.last_child[v as usize];
+            if child != u32::MAX && self.born[child as usize] >= c.seen {
+                fresh[nf] = child;
+                nf += 1;
+            }
+        }
+        for &child in &fresh[..nf] {
+            // Insert by distance; the one that falls off the end becomes a bound.
+            let dc = dist(child);
+            let mut at = c.n as usize;
+            while at > 0 && dist(c.cand[at - 1]) > dc {
+                at -= 1;
+            }
+            if at >= keep {
+                c.bound = c.bound.min(dc.sqrt());
+                continue;
+            }
+            if c.n as usize == keep {
+                let out = c.cand[keep - 1];
+                c.bound = c.bound.min(dist(out).sqrt());
+            } else {
+                c.n += 1;
+            }
+            for k in (at + 1..c.n as usize).rev() {
+                c.cand[k] = c.cand[k - 1];
+            }
+            c.cand[at] = child;
+        }
+        c
+    }
+
+    /// Open venation: the closest node that can still grow.
+    fn closest(&self, c: &mut Cache, sp: DVec2) -> Influence {
+        let valid = c.n == 1 && self.can_grow[c.cand[0] as usize] && {
+            let d1 = self.positions[c.cand[0] as usize].distance(sp);
+            c.bound > d1
+        };
+        if !valid {
+            let mut near = self
+                .open
+                .nearest_neighbor_iter_with_distance_2(&sp.to_array());
+            *c = EMPTY;
+            c.queried = self.step as u32;
+            if let Some((first, _)) = near.next() {
+                c.cand[0] = first.data;
+                c.n = 1;
+                c.bound = near.next().map_or(f64::INFINITY, |(_, d2)| d2.sqrt());
+            }
+        }
+        if c.n == 0 {
+            return Influence::Idle;
+        }
+        let mut nodes = [0; NEIGHBOURHOOD_SIZE];
+        nodes[0] = c.cand[0];
+        Influence::Pull(nodes, 1)
+    }
+
+    /// Closed venation: the relative neighbourhood of a source among all nodes, and what it
+    /// does with it.
+    fn neighbourhood(&self, c: &mut Cache, sp: DVec2, kill2: f64) -> Influence {
+        if let Some(inf) = self.neighbourhood_from(c, sp, kill2, false) {
+            return inf;
+        }
+        *c = EMPTY;
+        c.queried = self.step as u32;
+        let mut near = self
+            .all
+            .nearest_neighbor_iter_with_distance_2(&sp.to_array());
+        c.bound = f64::INFINITY;
+        for (node, _) in near.by_ref().take(NEIGHBOURHOOD_SIZE) {
+            c.cand[c.n as usize] = node.data;
+            c.n += 1;
+        }
+        if let Some((_, d2)) = near.next() {
+            c.bound = d2.sqrt();
+        }
+        self.neighbourhood_from(c, sp, kill2, true)
+            .unwrap_or(Influence::Idle)
+    }
+
+    /// The neighbourhood from the candidates, or None when the cache cannot tell it exactly
+    /// (unless `fresh`, after a query, when it is as exact as it gets).
+    fn neighbourhood_from(
+        &self,
+        c: &Cache,
+        sp: DVec2,
+        kill2: f64,
+        fresh: bool,
+    ) -> Option<Influence> {
+        if !fresh && (c.n == 0 || self.step as u32 >= c.queried + REFRESH) {
+            return None;
+        }
+        let n = c.n as usize;
+        let mut pos = [(0.0f64, DVec2::ZERO); NEIGHBOURHOOD_SIZE];
+        for k in 0..n {
+            let p = self.positions[c.cand[k] as usize];
+            pos[k] = (p.distance_squared(sp), p);
+        }
+        let reach2 = pos[0].0 * NEIGHBOURHOOD_REACH * NEIGHBOURHOOD_REACH;
+        let bound2 = if c.bound > 0.0 {
+            c.bound * c.bound
+        } else {
+            0.0
+        };
+        let mut pulls = [0u32; NEIGHBOURHOOD_SIZE];
+        let mut np = 0u8;
+        let mut arrived = [0u32; NEIGHBOURHOOD_SIZE];
+        let mut na = 0u8;
+        let mut members = 0;
+        let mut farthest = 0.0f64;
+        for i in 0..n {
+            let (d2, p) = pos[i];
+            if d2 > reach2 {
+                break;
+            }
+            // v is a relative neighbour unless a closer node is also closer to v.
+            if pos[..i].iter().any(|&(_, q)| q.distance_squared(p) < d2) {
+                continue;
+            }
+            members += 1;
+            farthest = farthest.max(d2);
+            let v = c.cand[i];
+            if d2 < kill2 {
+                arrived[na as usize] = v;
+                na += 1;
+            } else if self.can_grow[v as usize] {
+                pulls[np as usize] = v;
+                np += 1;
+            }
+        }
+        // Every node closer than a member is a candidate, so the members are exact.
+        if !fresh && (members == 0 || farthest >= bound2) {
+            return None;
+        }
+        if na as usize == members && members > 0 {
+            return Some(Influence::Dies(arrived, na));
+        }
+        if np > 0 {
+            return Some(Influence::Pull(pulls, np));
+        }
+        if na > 0 {
+            // The rest of its neighbourhood cannot grow: the veins that could have reached it.
+            return Some(Influence::Dies(arrived, na));
+        }
+        Some(match self.open.nearest_neighbor(&sp.to_array()) {
+            Some(v) => {
+                pulls[0] = v.data;
+                Influence::Pull(pulls, 1)
+            }
+            None => Influence::Idle,
+        })
+    }
+
+    /// Closed venation: the veins that arrived at a dying source are joined, closest pair first.
+    fn join_arrivals(&mut self, arrived: &[u32]) {
+        if arrived.len() < 2 {
+            return;
+        }
+        let mut pairs: Vec<(f64, u32, u32)> = Vec::new();
+        for (i, &a) in arrived.iter().enumerate() {
+            for &b in &arrived[i + 1..] {
+                let d = self.positions[a as usize].distance(self.positions[b as usize]);
+                pairs.push((d, a.min(b), a.max(b)));
+            }
+        }
+        pairs.sort_by(|x, y| x.partial_cmp(y).expect("finite distances"));
+        let mut used: Vec<u32> = Vec::new();
+        for (_, a, b) in pairs {
+            if used.contains(&a) || used.contains(&b) {
+                continue;
+            }
+            if self.may_join(a, b) {
+                self.join(a, b);
+                used.extend([a, b]);
+            }
+        }
+    }
+
+    /// Gokmen §3.2 step g: every open tip looks ahead for a node to join.
+    fn join_tips(&mut self) {
+        let reach = self.eff(self.opts.join_distance());
+        let cos_max = self.opts.join_angle.to_radians().cos();
+        for t in self.roots as u32..self.positions.len() as u32 {
+            if self.degree[t as usize] != 1 {
+                continue;
+            }
+            let Some(p) = self.parent[t as usize] else {
+                continue;
+            };
+            let tp = self.positions[t as usize];
+            let Some(heading) = (tp - self.positions[p as usize]).try_normalize() else {
+                continue;
+            };
+            let mut best: Option<(f64, u32)> = None;
+            for c in self
+                .all
+                .locate_within_distance(tp.to_array(), reach * reach)
+            {
+                let u = c.data;
+                let to = DVec2::from_array(*c.geom()) - tp;
+                let d = to.length();
+                if u == t || self.degree[u as usize] as usize >= MAX_DEGREE || d == 0.0 {
+                    continue;
+                }
+                if to.dot(heading) < cos_max * d {
+                    continue;
+                }
+                if best.is_none_or(|(bd, bu)| (d, u) < (bd, bu)) && self.may_join(t, u) {
+                    best = Some((d, u));
+                }
+            }
+            if let Some((_, u)) = best {
+                self.join(t, u);
+            }
+        }
+    }
+
+    fn join(&mut self, a: u32, b: u32) {
+        self.link(a, b);
+        self.joins.push([a.min(b), a.max(b)]);
+        // Joined veins are vascular: they stop growing (Gokmen §3.2).
+        self.retire(a);
+        self.retire(b);
+    }
+
+    /// A join keeps Y/I joints, makes a loop of at least `MIN_LOOP` edges, leaves no sharp
+    /// joint, and crosses no edge.
+    fn may_join(&self, a: u32, b: u32) -> bool {
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let len = pa.distance(pb);
+        if a == b
+            || self.degree[a as usize] as usize >= MAX_DEGREE
+            || self.degree[b as usize] as usize >= MAX_DEGREE
+            || len == 0.0
+            || len > self.eff(self.opts.join_distance()) * (1.0 + 1e-9)
+        {
+            return false;
+        }
+        if self.tree_hops_below(a, b, MIN_LOOP - 1) {
+            return false;
+        }
+        let cos_min = MIN_JOINT_ANGLE.to_radians().cos();
+        for (x, y) in [(a, b), (b, a)] {
+            let px = self.positions[x as usize];
+            let dir = (self.positions[y as usize] - px) / len;
+            for &w in self.neighbours(x) {
+                if w == y {
+                    return false;
+                }
+                if let Some(leg) = (self.positions[w as usize] - px).try_normalize() {
+                    if leg.dot(dir) > cos_min {
+                        return false;
+                    }
+                }
+            }
+        }
+        let mid = (pa + pb) * 0.5;
+        let r = 0.5 * len + self.longest_edge;
+        for c in self.all.locate_within_distance(mid.to_array(), r * r) {
+            let u = c.data;
+            if u == a || u == b {
+                continue;
+            }
+            let pu = self.positions[u as usize];
+            for &w in self.neighbours(u) {
+                if w != a
+                    && w != b
+                    && crate::geom::segments_touch(pa, pb, pu, self.positions[w as usize])
+                {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Whether a and b are fewer than `limit` edges apart along the growth tree.
+    fn tree_hops_below(&self, a: u32, b: u32, limit: usize) -> bool {
+        let mut up: Vec<(u32, usize)> = Vec::with_capacity(limit);
+        let mut x = Some(a);
+        let mut k = 0;
+        while let Some(v) = x {
+            if k >= limit {
+                break;
+            }
+            up.push((v, k));
+            x = self.parent[v as usize];
+            k += 1;
+        }
+        let mut y = Some(b);
+        let mut j = 0;
+        while let Some(v) = y {
+            if j >= limit {
+                break;
+            }
+            if let Some(&(_, i)) = up.iter().find(|(u, _)| *u == v) {
+                return i + j < limit;
+            }
+            y = self.parent[v as usize];
+            j += 1;
+        }
+        false
+    }
+
+    fn show(&self, o: &mut Observer) {
+        let positions: Vec<DVec2> = self.positions.iter().map(|p| self.to_real(*p)).collect();
+        let sources: Vec<DVec2> = self
+            .live_ids
+            .iter()
+            .filter(|&&s| self.alive[s as usize])
+            .map(|&s| self.to_real(self.source_pos[s as usize]))
+            .collect();
+        let blade = match self.opts.blade {
+            BladeGrowth::None => self.outline.clone(),
+            _ => self.outline.scaled(self.centre, self.scale),
+        };
+        (o.call)(&Frame {
+            step: self.step,
+            positions: &positions,
+            parent: &self.parent,
+            joins: &self.joins,
+            sources: &sources,
+            blade: &blade,
+        });
+    }
+
+    fn finish(self) -> Growth {
+        Growth {
+            positions: self.positions.iter().map(|p| self.to_real(*p)).collect(),
+            parent: self.parent,
+            joins: self.joins,
+            born: self.born,
+            roots: self.roots,
+            iterations: self.step,
+            sources_placed: self.source_pos.len(),
+            sources_left: self.live_count,
+            scale: self.scale,
+            stop: self.stop,
+        }
+    }
 }

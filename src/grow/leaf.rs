@@ -1,0 +1,279 @@
+//! A whole leaf: auxin sources (Poisson disks from a uniform radius or a density map, or
+//! uniform random points), venation growth, Murray widths, and the result as a `Network` with
+//! its quality report.
+
+use glam::{DVec2, DVec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::density::DensityMap;
+use super::outline::Outline;
+use super::report::Quality;
+use super::venation::{self, Growth, Mode, Observer, VenationError, VenationOptions};
+use crate::network::{Edge, Network, Node};
+
+/// How the initial sources are placed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Placement {
+    /// Bridson Poisson-disk sampling at the birth distance (from the density map if given).
+    Poisson,
+    /// `count` points uniformly at random (needs a count).
+    Random,
+}
+
+/// Bridson's samples fill a blade of area A with about `POISSON_FILL`·A / r² points; used to
+/// turn a wanted source count into a radius.
+pub const POISSON_FILL: f64 = 0.69;
+
+#[derive(Clone, Debug)]
+pub struct LeafOptions {
+    pub growth: VenationOptions,
+    /// Birth distance, mm: the Poisson-disk radius of the sources and of darts. Default 2.0.
+    pub birth: f64,
+    /// With a density map: the radius where it is darkest and lightest. Default birth, 2 × birth.
+    pub birth_min: Option<f64>,
+    pub birth_max: Option<f64>,
+    pub density: Option<DensityMap>,
+    /// How many initial sources: Poisson picks its radius to give about this many; random
+    /// places exactly this many. None: Poisson at the birth distance.
+    pub sources: Option<usize>,
+    pub placement: Placement,
+    /// Murray exponent n in r_parent^n = Σ r_child^n. Default 3.
+    pub murray: f64,
+    /// Radius of vein tips and of loop-closing edges, mm. Default 0.1.
+    pub tip_radius: f64,
+    pub seed: u64,
+}
+
+impl Default for LeafOptions {
+    fn default() -> Self {
+        LeafOptions {
+            growth: VenationOptions {
+                mode: Mode::Closed,
+                ..Default::default()
+            },
+            birth: 2.0,
+            birth_min: None,
+            birth_max: None,
+            density: None,
+            sources: None,
+            placement: Placement::Poisson,
+            murray: 3.0,
+            tip_radius: 0.1,
+            seed: 1,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum LeafError {
+    #[error("--birth must be a positive distance in mm, got {0}")]
+    Birth(f64),
+    #[error("--birth-min and --birth-max must be positive with min ≤ max, got {0} and {1}")]
+    BirthRange(f64, f64),
+    #[error("--sources must be at least 1, got {0}")]
+    Sources(usize),
+    #[error("--placement random needs --sources N")]
+    RandomNeedsCount,
+    #[error("--murray must be a finite exponent ≥ 1, got {0}")]
+    Murray(f64),
+    #[error("--tip-radius must be a positive distance in mm, got {0}")]
+    TipRadius(f64),
+    #[error(transparent)]
+    Growth(#[from] VenationError),
+}
+
+/// A grown leaf.
+pub struct Leaf {
+    pub network: Network,
+    pub growth: Growth,
+    pub quality: Quality,
+}
+
+impl LeafOptions {
+    /// The birth distance at blade point `p` of the full-size outline.
+    fn birth_fn<'a>(&'a self, outline: &Outline) -> Box<dyn Fn(DVec2) -> f64 + Sync + 'a> {
+        match &self.density {
+            None => {
+                let b = self.birth;
+                Box::new(move |_| b)
+            }
+            Some(map) => {
+                let (lo, hi) = outline.bounds();
+                let (min, max) = self.birth_range();
+                Box::new(move |p| map.radius(p, lo, hi, min, max))
+            }
+        }
+    }
+
+    fn birth_range(&self) -> (f64, f64) {
+        match &self.density {
+            None => (self.birth, self.birth),
+            Some(_) => (
+                self.birth_min.unwrap_or(self.birth),
+                self.birth_max.unwrap_or(2.0 * self.birth),
+            ),
+        }
+    }
+
+    fn check(&self) -> Result<(), LeafError> {
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(self.birth) {
+            return Err(LeafError::Birth(self.birth));
+        }
+        let (min, max) = self.birth_range();
+        if !(positive(min) && positive(max) && min <= max) {
+            return Err(LeafError::BirthRange(min, max));
+        }
+        if self.sources == Some(0) {
+            return Err(LeafError::Sources(0));
+        }
+        if self.placement == Placement::Random && self.sources.is_none() {
+            return Err(LeafError::RandomNeedsCount);
+        }
+        if !(self.murray.is_finite() && self.murray >= 1.0) {
+            return Err(LeafError::Murray(self.murray));
+        }
+        if !positive(self.tip_radius) {
+            return Err(LeafError::TipRadius(self.tip_radius));
+        }
+        Ok(())
+    }
+}
+
+/// The initial sources in `blade`, in mm.
+pub fn place_sources(
+    blade: &Outline,
+    full: &Outline,
+    opts: &LeafOptions,
+    rng: &mut impl Rng,
+) -> Vec<DVec2> {
+    match (opts.placement, opts.sources) {
+        (Placement::Random, Some(n)) => {
+            let (lo, hi) = blade.bounds();
+            let mut out = Vec::with_capacity(n);
+            // A blade has positive area, so this ends.
+            while out.len() < n {
+                let p = DVec2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
+                if blade.contains(p) {
+                    out.push(p);
+                }
+            }
+            out
+        }
+        (_, Some(n)) => {
+            let r = (POISSON_FILL * blade.area() / n as f64).sqrt();
+            super::poisson::sample(blade, r, r, |_| r, rng)
+        }
+        (_, None) => {
+            // The blade may be the full outline scaled about a root: read the density map at
+            // the matching point of the full outline.
+            let birth = opts.birth_fn(full);
+            let (min, max) = opts.birth_range();
+            let (blo, bhi) = blade.bounds();
+            let (flo, fhi) = full.bounds();
+            let to_full = |p: DVec2| flo + (p - blo) / (bhi - blo) * (fhi - flo);
+            super::poisson::sample(blade, min, max, |p| birth(to_full(p)), rng)
+        }
+    }
+}
+
+/// Places sources, grows venation from `roots`, and returns the network with Murray widths
+/// (edge radius = radius of its downstream node; loop-closing edges take the tip radius).
+pub fn grow_leaf(
+    outline: &Outline,
+    roots: &[DVec2],
+    opts: &LeafOptions,
+    observer: Option<Observer>,
+) -> Result<Leaf, LeafError> {
+    opts.check()?;
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    let first = *roots.first().ok_or(VenationError::NoRoot)?;
+    let blade = venation::initial_blade(outline, first, &opts.growth);
+    let sources = place_sources(&blade, outline, opts, &mut rng);
+    let birth = opts.birth_fn(outline);
+    let growth = venation::grow(
+        outline,
+        roots,
+        &sources,
+        &*birth,
+        &opts.growth,
+        &mut rng,
+        observer,
+    )?;
+    let network = to_network(&growth, opts);
+    let quality = Quality::of(&network, growth.roots);
+    Ok(Leaf {
+        network,
+        growth,
+        quality,
+    })
+}
+
+/// The growth as a network: tree edges (parent → child) first, then the loop-closing edges,
+/// whose count is `meta.parameters["loop_edges"]`.
+pub fn to_network(g: &Growth, opts: &LeafOptions) -> Network {
+    let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
+    let mut net = Network {
+        nodes: g
+            .positions
+            .iter()
+            .zip(&radius)
+            .map(|(p, r)| Node {
+                p: p.extend(0.0),
+                normal: Some(DVec3::Z),
+                radius: *r,
+            })
+            .collect(),
+        edges: g
+            .tree_edges()
+            .map(|(p, c)| Edge {
+                a: p,
+                b: c,
+                radius: radius[c as usize],
+            })
+            .chain(g.joins.iter().map(|&[a, b]| Edge {
+                a,
+                b,
+                radius: opts.tip_radius,
+            }))
+            .collect(),
+        ..Default::default()
+    };
+    let o = &opts.growth;
+    net.meta.generator = Some(
+        match o.mode {
+            Mode::Open => "venation/open",
+            Mode::Closed => "venation/closed",
+        }
+        .into(),
+    );
+    net.meta.seed = Some(opts.seed);
+    let (bmin, bmax) = opts.birth_range();
+    let p = &mut net.meta.parameters;
+    let mut put = |k: &str, v: serde_json::Value| {
+        p.insert(k.into(), v);
+    };
+    put("mode", serde_json::json!(o.mode));
+    put("step", o.step.into());
+    put("kill", o.kill.into());
+    put("birth_min", bmin.into());
+    put("birth_max", bmax.into());
+    put("blade", serde_json::json!(o.blade));
+    if o.blade != venation::BladeGrowth::None {
+        put("initial_scale", o.initial_scale.into());
+        put("blade_rate", o.blade_rate.into());
+    }
+    put("sources_per_step", o.sources_per_step.into());
+    put("murray", opts.murray.into());
+    put("tip_radius", opts.tip_radius.into());
+    put("max_iterations", o.max_iterations.into());
+    put("roots", g.roots.into());
+    put("loop_edges", g.joins.len().into());
+    if o.mode == Mode::Closed {
+        put("join_distance", o.join_distance().into());
+        put("join_angle", o.join_angle.into());
+    }
+    net
+}

@@ -1,0 +1,248 @@
+//! The quality report of a grown vein network: the failure modes Gokmen Fig. 8 names made
+//! countable. Zigzag behaviour is the mean turning angle along veins; incomplete growth shows as
+//! sources left unreached and open tips; incorrect anastomosis as joints that are not Y or I,
+//! sharp joints, and crossing edges.
+
+use std::collections::BTreeMap;
+
+use glam::DVec2;
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{RTree, AABB};
+
+use crate::network::Network;
+
+/// A joint whose legs meet at less than this angle (degrees) is sharp.
+pub const SHARP_JOINT: f64 = 20.0;
+
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Quality {
+    pub nodes: usize,
+    pub edges: usize,
+    pub components: usize,
+    /// Independent loops, E − V + C.
+    pub loops: usize,
+    /// Node count by degree, keyed "0", "1", "2", "3", …
+    pub nodes_by_degree: BTreeMap<String, usize>,
+    /// Degree-1 nodes that are not roots: veins that ended without joining.
+    pub open_tips: usize,
+    /// Joints with more than 3 legs; Y and I joints only is the rule.
+    pub not_y_or_i: usize,
+    /// Joints where two legs meet at less than `SHARP_JOINT` degrees.
+    pub sharp_joints: usize,
+    /// Mean turning angle at degree-2 nodes, degrees: the zigzag index.
+    pub zigzag_deg: f64,
+    /// The largest turning angle at a degree-2 node, degrees.
+    pub max_turn_deg: f64,
+    /// Edges whose radius exceeds half the largest root radius: the thick veins Peele counts.
+    pub thick_edges: usize,
+    /// Pairs of edges that cross or touch away from a shared node (in the XY projection).
+    pub crossings: usize,
+}
+
+impl Quality {
+    /// Measures `net`; its first `roots` nodes are roots.
+    pub fn of(net: &Network, roots: usize) -> Quality {
+        let n = net.nodes.len();
+        let adj = net.adjacency();
+        let mut by_degree: BTreeMap<usize, usize> = BTreeMap::new();
+        let (mut turns, mut turn_sum, mut max_turn) = (0usize, 0.0f64, 0.0f64);
+        let mut sharp = 0;
+        let cos_sharp = SHARP_JOINT.to_radians().cos();
+        for v in 0..n {
+            let legs: Vec<DVec2> = adj
+                .neighbours(v as u32)
+                .iter()
+                .filter_map(|&(w, _)| {
+                    (net.nodes[w as usize].p - net.nodes[v].p)
+                        .truncate()
+                        .try_normalize()
+                })
+                .collect();
+            *by_degree.entry(adj.degree(v as u32)).or_default() += 1;
+            if legs.len() == 2 {
+                // Turning angle: 0 for a straight vein.
+                let turn = (-legs[0].dot(legs[1])).clamp(-1.0, 1.0).acos().to_degrees();
+                turns += 1;
+                turn_sum += turn;
+                max_turn = max_turn.max(turn);
+            }
+            if legs.len() >= 2 {
+                let any_sharp = legs
+                    .iter()
+                    .enumerate()
+                    .any(|(i, a)| legs[i + 1..].iter().any(|b| a.dot(*b) > cos_sharp));
+                sharp += usize::from(any_sharp);
+            }
+        }
+        let open_tips = (roots.min(n)..n)
+            .filter(|&v| adj.degree(v as u32) == 1)
+            .count();
+        let components = net.component_labels().1;
+        let root_radius = net.nodes[..roots.min(n)]
+            .iter()
+            .map(|v| v.radius)
+            .fold(0.0, f64::max);
+        let thick_edges = net
+            .edges
+            .iter()
+            .filter(|e| e.radius > 0.5 * root_radius)
+            .count();
+        Quality {
+            nodes: n,
+            edges: net.edges.len(),
+            components,
+            loops: (net.edges.len() + components).saturating_sub(n),
+            not_y_or_i: by_degree.range(4..).map(|(_, c)| c).sum(),
+            nodes_by_degree: by_degree
+                .into_iter()
+                .map(|(d, c)| (d.to_string(), c))
+                .collect(),
+            open_tips,
+            sharp_joints: sharp,
+            zigzag_deg: if turns > 0 {
+                turn_sum / turns as f64
+            } else {
+                0.0
+            },
+            max_turn_deg: max_turn,
+            thick_edges,
+            crossings: crossings(net),
+        }
+    }
+
+    /// One line per figure, for people.
+    pub fn lines(&self) -> Vec<String> {
+        let degrees: Vec<String> = self
+            .nodes_by_degree
+            .iter()
+            .map(|(d, c)| format!("{c} of degree {d}"))
+            .collect();
+        vec![
+            format!(
+                "{} nodes, {} edges, {} component(s), {} loop(s)",
+                self.nodes, self.edges, self.components, self.loops
+            ),
+            format!("nodes: {}", degrees.join(", ")),
+            format!("open tips: {}", self.open_tips),
+            format!(
+                "joints other than Y or I: {}; sharp joints (< {SHARP_JOINT}°): {}; crossing edges: {}",
+                self.not_y_or_i, self.sharp_joints, self.crossings
+            ),
+            format!(
+                "zigzag index: {:.2}° mean turn along veins (max {:.1}°)",
+                self.zigzag_deg, self.max_turn_deg
+            ),
+        ]
+    }
+}
+
+type EdgeBox = GeomWithData<Rectangle<[f64; 2]>, u32>;
+
+/// Edge pairs that cross or touch other than at a shared node, in the XY projection.
+fn crossings(net: &Network) -> usize {
+    let n = net.nodes.len() as u32;
+    let seg = |i: u32| {
+        let e = &net.edges[i as usize];
+        (
+            net.nodes[e.a as usize].p.truncate(),
+            net.nodes[e.b as usize].p.truncate(),
+        )
+    };
+    let valid = |i: &u32| {
+        let e = &net.edges[*i as usize];
+        e.a < n && e.b < n && e.a != e.b
+    };
+    let ids: Vec<u32> = (0..net.edges.len() as u32).filter(valid).collect();
+    let tree: RTree<EdgeBox> = RTree::bulk_load(
+        ids.iter()
+            .map(|&i| {
+                let (a, b) = seg(i);
+                EdgeBox::new(Rectangle::from_corners(a.to_array(), b.to_array()), i)
+            })
+            .collect(),
+    );
+    let mut count = 0;
+    for &i in &ids {
+        let (a, b) = seg(i);
+        let ei = &net.edges[i as usize];
+        let bx = AABB::from_corners(a.to_array(), b.to_array());
+        for other in tree.locate_in_envelope_intersecting(&bx) {
+            let j = other.data;
+            if j <= i {
+                continue;
+            }
+            let ej = &net.edges[j as usize];
+            let shared = [ej.a, ej.b].iter().any(|x| *x == ei.a || *x == ei.b);
+            let (c, d) = seg(j);
+            if shared {
+                // Legs of one node overlap only if collinear and pointing the same way.
+                continue;
+            }
+            if crate::geom::segments_touch(a, b, c, d) {
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::network::{Edge, Node};
+    use glam::DVec3;
+
+    fn net(points: &[(f64, f64)], edges: &[(u32, u32)]) -> Network {
+        Network {
+            nodes: points
+                .iter()
+                .map(|&(x, y)| Node::at(DVec3::new(x, y, 0.0)))
+                .collect(),
+            edges: edges.iter().map(|&(a, b)| Edge::new(a, b)).collect(),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_square_has_one_loop_and_right_angle_turns() {
+        let q = Quality::of(
+            &net(
+                &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],
+                &[(0, 1), (1, 2), (2, 3), (3, 0)],
+            ),
+            1,
+        );
+        assert_eq!(
+            (q.loops, q.open_tips, q.crossings, q.not_y_or_i),
+            (1, 0, 0, 0)
+        );
+        assert!((q.zigzag_deg - 90.0).abs() < 1e-9);
+        assert_eq!(q.nodes_by_degree.get("2"), Some(&4));
+    }
+
+    #[test]
+    fn crossings_sharp_joints_and_a_four_legged_joint_are_counted() {
+        // An X of two edges that cross, and a star of four legs at node 4.
+        let q = Quality::of(
+            &net(
+                &[
+                    (0.0, 0.0),
+                    (2.0, 2.0),
+                    (0.0, 2.0),
+                    (2.0, 0.0),
+                    (10.0, 0.0),
+                    (11.0, 0.0),
+                    (9.0, 0.0),
+                    (10.0, 1.0),
+                    (11.0, 0.1),
+                ],
+                &[(0, 1), (2, 3), (4, 5), (4, 6), (4, 7), (4, 8)],
+            ),
+            0,
+        );
+        assert_eq!(q.crossings, 1);
+        assert_eq!(q.not_y_or_i, 1);
+        assert_eq!(q.sharp_joints, 1, "legs to (11, 0) and (11, 0.1)");
+        assert_eq!(q.open_tips, 8);
+    }
+}
