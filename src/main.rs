@@ -27,8 +27,8 @@ enum Command {
     Convert(cli::convert::Args),
     /// Render a network (SVG or PNG) or a mesh (PNG).
     Render(cli::render::Args),
-    /// Grow an open leaf venation in a built-in blade (Runions et al. 2005)
-    Venation(cli::venation::Args),
+    /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005)
+    Venation(Box<cli::venation::Args>),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
 }
@@ -39,7 +39,7 @@ fn main() -> ExitCode {
         Command::Info(args) => cli::info::run(args),
         Command::Convert(args) => cli::convert::run(args),
         Command::Render(args) => cli::render::run(args),
-        Command::Venation(args) => cli::venation::run(args),
+        Command::Venation(args) => cli::venation::run(*args),
         Command::Demo(args) => cli::demo::run(args),
     };
     match result {

@@ -59,21 +59,6 @@ pub fn approx_eq3(a: DVec3, b: DVec3, tol: f64) -> bool {
     (a - b).abs().max_element() <= tol
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn aabb_of_points() {
-        let b = Aabb::from_points(&[DVec3::new(1.0, 2.0, 3.0), DVec3::new(-1.0, 5.0, 3.0)]);
-        assert_eq!(b.min, DVec3::new(-1.0, 2.0, 3.0));
-        assert_eq!(b.max, DVec3::new(1.0, 5.0, 3.0));
-        assert!(approx_eq(b.diagonal(), 13f64.sqrt(), 1e-12));
-        assert!(Aabb::empty().is_empty());
-        assert_eq!(Aabb::empty().diagonal(), 0.0);
-    }
-}
-
 /// Whether segments ab and cd cross or touch (a shared point counts, collinear overlap too).
 pub fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     let o = |p: DVec2, q: DVec2, r: DVec2| (q - p).perp_dot(r - p);
@@ -91,4 +76,19 @@ pub fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
             && r.y <= p.y.max(q.y)
     };
     on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aabb_of_points() {
+        let b = Aabb::from_points(&[DVec3::new(1.0, 2.0, 3.0), DVec3::new(-1.0, 5.0, 3.0)]);
+        assert_eq!(b.min, DVec3::new(-1.0, 2.0, 3.0));
+        assert_eq!(b.max, DVec3::new(1.0, 5.0, 3.0));
+        assert!(approx_eq(b.diagonal(), 13f64.sqrt(), 1e-12));
+        assert!(Aabb::empty().is_empty());
+        assert_eq!(Aabb::empty().diagonal(), 0.0);
+    }
 }

@@ -31,7 +31,7 @@ impl View {
         )
     }
 
-    fn to_px(&self, p: DVec2) -> (f32, f32) {
+    fn px(&self, p: DVec2) -> (f32, f32) {
         let s = self.scale();
         let m = self.size as f64 * 0.02;
         (
@@ -58,7 +58,7 @@ pub fn render_frame(
     // Blade.
     let mut pb = PathBuilder::new();
     for (i, p) in frame.blade.points().iter().enumerate() {
-        let (x, y) = view.to_px(*p);
+        let (x, y) = view.px(*p);
         if i == 0 {
             pb.move_to(x, y);
         } else {
@@ -86,7 +86,7 @@ pub fn render_frame(
     let dot = (view.size as f32 / 600.0).max(1.0);
     let mut pb = PathBuilder::new();
     for s in frame.sources {
-        let (x, y) = view.to_px(*s);
+        let (x, y) = view.px(*s);
         pb.push_circle(x, y, dot);
     }
     if let Some(path) = pb.finish() {
@@ -122,8 +122,8 @@ pub fn render_frame(
     for chunk in edges.chunk_by(|a, b| (a.0 * scale * 4.0).round() == (b.0 * scale * 4.0).round()) {
         let mut pb = PathBuilder::new();
         for (_, a, b) in chunk {
-            let (x1, y1) = view.to_px(*a);
-            let (x2, y2) = view.to_px(*b);
+            let (x1, y1) = view.px(*a);
+            let (x2, y2) = view.px(*b);
             pb.move_to(x1, y1);
             pb.line_to(x2, y2);
         }

@@ -77,15 +77,15 @@ fn network_loops(net: &crate::network::Network) -> Vec<Vec<DVec2>> {
     let (labels, count) = net.component_labels();
     let mut all_two = vec![true; count];
     let mut size = vec![0usize; count];
-    for v in 0..net.nodes.len() {
-        let c = labels[v] as usize;
+    for (v, &label) in labels.iter().enumerate() {
+        let c = label as usize;
         size[c] += 1;
         all_two[c] &= adj.degree(v as u32) == 2;
     }
     let mut seen = vec![false; count];
     let mut loops = Vec::new();
-    for start in 0..net.nodes.len() {
-        let c = labels[start] as usize;
+    for (start, &label) in labels.iter().enumerate() {
+        let c = label as usize;
         if seen[c] || !all_two[c] || size[c] < 3 {
             continue;
         }

@@ -350,6 +350,23 @@ const EMPTY: Cache = Cache {
     queried: 0,
 };
 
+/// A live source and its cache.
+struct Active {
+    pos: DVec2,
+    id: u32,
+    cache: Cache,
+}
+
+/// The node data sources read every step.
+#[derive(Clone, Copy)]
+struct Hot {
+    p: DVec2,
+    /// The latest child and the step it grew (u32::MAX: none yet).
+    last_child: u32,
+    child_born: u32,
+    can_grow: bool,
+}
+
 /// Closed venation: a source queries afresh at least this often, to see members of its
 /// relative neighbourhood beyond its candidate list.
 const REFRESH: u32 = 16;
@@ -366,9 +383,8 @@ struct Grower<'a> {
     born: Vec<u32>,
     adj: Vec<[u32; MAX_DEGREE]>,
     degree: Vec<u8>,
-    can_grow: Vec<bool>,
-    /// The latest child of each node (u32::MAX for none).
-    last_child: Vec<u32>,
+    /// What sources read of each node every step, packed together.
+    hot: Vec<Hot>,
     joins: Vec<[u32; 2]>,
     roots: usize,
     open: RTree<Indexed>,
@@ -376,12 +392,15 @@ struct Grower<'a> {
     live: RTree<Indexed>,
     source_pos: Vec<DVec2>,
     alive: Vec<bool>,
-    live_ids: Vec<u32>,
+    /// Live sources in id order with their caches, packed for the per-step pass.
+    active: Vec<Active>,
+    influence: Vec<Influence>,
     live_count: usize,
-    cache: Vec<Cache>,
     longest_edge: f64,
     step: usize,
     stop: Stop,
+    /// Tests only: forget every cache each step, so each source queries the trees afresh.
+    uncached: bool,
 }
 
 impl<'a> Grower<'a> {
@@ -408,8 +427,7 @@ impl<'a> Grower<'a> {
             born: Vec::new(),
             adj: Vec::new(),
             degree: Vec::new(),
-            can_grow: Vec::new(),
-            last_child: Vec::new(),
+            hot: Vec::new(),
             joins: Vec::new(),
             roots: roots.len(),
             open: RTree::new(),
@@ -417,18 +435,22 @@ impl<'a> Grower<'a> {
             live: RTree::new(),
             source_pos: Vec::new(),
             alive: Vec::new(),
-            live_ids: Vec::new(),
+            active: Vec::new(),
+            influence: Vec::new(),
             live_count: 0,
-            cache: Vec::new(),
             longest_edge: 0.0,
             step: 0,
             stop: Stop::NothingGrew,
+            uncached: false,
         };
         let work: Vec<DVec2> = roots.iter().map(|r| g.to_work(*r)).collect();
         for p in work {
             g.push_node(p, None);
         }
-        let src: Vec<DVec2> = sources.iter().map(|s| g.to_work(*s)).collect();
+        let mut src: Vec<DVec2> = sources.iter().map(|s| g.to_work(*s)).collect();
+        // In space-filling-curve order, neighbouring sources read neighbouring nodes: the
+        // per-step pass over all sources then mostly hits the cache.
+        morton_sort(&mut src);
         g.live = RTree::bulk_load(
             src.iter()
                 .enumerate()
@@ -436,8 +458,15 @@ impl<'a> Grower<'a> {
                 .collect(),
         );
         g.alive = vec![true; src.len()];
-        g.cache = vec![EMPTY; src.len()];
-        g.live_ids = (0..src.len() as u32).collect();
+        g.active = src
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Active {
+                pos: *p,
+                id: i as u32,
+                cache: EMPTY,
+            })
+            .collect();
         g.live_count = src.len();
         g.source_pos = src;
         g
@@ -486,13 +515,19 @@ impl<'a> Grower<'a> {
         self.born.push(self.step as u32);
         self.adj.push([u32::MAX; MAX_DEGREE]);
         self.degree.push(0);
-        self.can_grow.push(true);
-        self.last_child.push(u32::MAX);
+        self.hot.push(Hot {
+            p,
+            last_child: u32::MAX,
+            child_born: 0,
+            can_grow: true,
+        });
         self.open.insert(Indexed::new(p.to_array(), id));
         self.all.insert(Indexed::new(p.to_array(), id));
         if let Some(q) = parent {
             self.link(q, id);
-            self.last_child[q as usize] = id;
+            let h = &mut self.hot[q as usize];
+            h.last_child = id;
+            h.child_born = self.step as u32;
         }
         id
     }
@@ -516,7 +551,7 @@ impl<'a> Grower<'a> {
 
     /// The node stops growing and attracting.
     fn retire(&mut self, v: u32) {
-        if std::mem::replace(&mut self.can_grow[v as usize], false) {
+        if std::mem::replace(&mut self.hot[v as usize].can_grow, false) {
             self.open
                 .remove(&Indexed::new(self.positions[v as usize].to_array(), v));
         }
@@ -559,12 +594,13 @@ impl<'a> Grower<'a> {
                 self.stop = Stop::NoSourcesLeft;
                 break;
             }
-            self.live_ids.retain(|&s| self.alive[s as usize]);
-            let influence = self.influences();
+            let alive = &self.alive;
+            self.active.retain(|a| alive[a.id as usize]);
+            self.influences();
             // Apply in source order, so the sums do not depend on threads.
             let mut died = 0;
-            for (&s, inf) in self.live_ids.iter().zip(&influence) {
-                let sp = self.source_pos[s as usize];
+            for (a, inf) in self.active.iter().zip(&self.influence) {
+                let sp = a.pos;
                 match *inf {
                     Influence::Idle => {}
                     Influence::Pull(nodes, n) => {
@@ -582,11 +618,11 @@ impl<'a> Grower<'a> {
             }
             if died > 0 {
                 let deaths: Vec<(u32, Influence)> = self
-                    .live_ids
+                    .active
                     .iter()
-                    .copied()
-                    .zip(influence)
+                    .zip(&self.influence)
                     .filter(|(_, i)| matches!(i, Influence::Dies(..)))
+                    .map(|(a, i)| (a.id, *i))
                     .collect();
                 for (s, inf) in deaths {
                     self.remove_source(s);
@@ -605,7 +641,7 @@ impl<'a> Grower<'a> {
                 let Some(dir) = dir.try_normalize() else {
                     continue;
                 };
-                if !self.can_grow[v as usize] {
+                if !self.hot[v as usize].can_grow {
                     continue;
                 }
                 let at = self.positions[v as usize] + dir * step;
@@ -620,6 +656,11 @@ impl<'a> Grower<'a> {
                 {
                     // Its sources sit around it with nothing new to reach: retire the node so
                     // they pull on another one instead.
+                    self.retire(v);
+                    continue;
+                }
+                if self.crosses(self.positions[v as usize], at, v, u32::MAX) {
+                    // A vein in the way: veins do not cross, so this one ends here.
                     self.retire(v);
                     continue;
                 }
@@ -704,40 +745,42 @@ impl<'a> Grower<'a> {
             let id = self.source_pos.len() as u32;
             self.source_pos.push(p);
             self.alive.push(true);
-            self.cache.push(EMPTY);
             self.live.insert(Indexed::new(p.to_array(), id));
-            self.live_ids.push(id);
+            self.active.push(Active {
+                pos: p,
+                id,
+                cache: EMPTY,
+            });
             self.live_count += 1;
             kept += 1;
         }
         kept
     }
 
-    /// What every live source does this step, in `live_ids` order.
-    fn influences(&mut self) -> Vec<Influence> {
+    /// What every live source does this step, into `influence` in `active` order.
+    fn influences(&mut self) {
         let kill2 = self.eff(self.opts.kill).powi(2);
         let d = self.eff(self.opts.step);
+        let mut active = std::mem::take(&mut self.active);
+        let mut influence = std::mem::take(&mut self.influence);
+        influence.resize(active.len(), Influence::Idle);
         let this = &*self;
-        let out: Vec<(Cache, Influence)> = this
-            .live_ids
-            .par_iter()
-            .map(|&s| {
-                let sp = this.source_pos[s as usize];
-                let mut c = this.update(this.cache[s as usize], sp, d);
-                let inf = match this.opts.mode {
-                    Mode::Open => this.closest(&mut c, sp),
-                    Mode::Closed => this.neighbourhood(&mut c, sp, kill2),
+        active
+            .par_iter_mut()
+            .zip(influence.par_iter_mut())
+            .with_min_len(1024)
+            .for_each(|(a, inf)| {
+                let cache = if this.uncached { EMPTY } else { a.cache };
+                let mut c = this.update(cache, a.pos, d);
+                *inf = match this.opts.mode {
+                    Mode::Open => this.closest(&mut c, a.pos),
+                    Mode::Closed => this.neighbourhood(&mut c, a.pos, kill2),
                 };
                 c.seen = this.step as u32;
-                (c, inf)
-            })
-            .collect();
-        let mut infl = Vec::with_capacity(out.len());
-        for (&s, (c, i)) in self.live_ids.iter().zip(out) {
-            self.cache[s as usize] = c;
-            infl.push(i);
-        }
-        infl
+                a.cache = c;
+            });
+        self.active = active;
+        self.influence = influence;
     }
 
     /// Brings a cache up to this step: the bound falls by D per step since it was seen, and
@@ -753,13 +796,13 @@ impl<'a> Grower<'a> {
             Mode::Open => 1,
             Mode::Closed => NEIGHBOURHOOD_SIZE,
         };
-        let dist = |v: u32| self.positions[v as usize].distance_squared(sp);
+        let dist = |v: u32| self.hot[v as usize].p.distance_squared(sp);
         let mut fresh = [u32::MAX; NEIGHBOURHOOD_SIZE];
         let mut nf = 0;
         for &v in &c.cand[..c.n as usize] {
-            let child = self.last_child[v as usize];
-            if child != u32::MAX && self.born[child as usize] >= c.seen {
-                fresh[nf] = child;
+            let h = &self.hot[v as usize];
+            if h.last_child != u32::MAX && h.child_born >= c.seen {
+                fresh[nf] = h.last_child;
                 nf += 1;
             }
         }
@@ -790,9 +833,9 @@ impl<'a> Grower<'a> {
 
     /// Open venation: the closest node that can still grow.
     fn closest(&self, c: &mut Cache, sp: DVec2) -> Influence {
-        let valid = c.n == 1 && self.can_grow[c.cand[0] as usize] && {
-            let d1 = self.positions[c.cand[0] as usize].distance(sp);
-            c.bound > d1
+        let valid = c.n == 1 && {
+            let h = &self.hot[c.cand[0] as usize];
+            h.can_grow && c.bound > h.p.distance(sp)
         };
         if !valid {
             let mut near = self
@@ -851,9 +894,9 @@ impl<'a> Grower<'a> {
         }
         let n = c.n as usize;
         let mut pos = [(0.0f64, DVec2::ZERO); NEIGHBOURHOOD_SIZE];
-        for k in 0..n {
-            let p = self.positions[c.cand[k] as usize];
-            pos[k] = (p.distance_squared(sp), p);
+        for (slot, &v) in pos.iter_mut().zip(&c.cand[..n]) {
+            let p = self.hot[v as usize].p;
+            *slot = (p.distance_squared(sp), p);
         }
         let reach2 = pos[0].0 * NEIGHBOURHOOD_REACH * NEIGHBOURHOOD_REACH;
         let bound2 = if c.bound > 0.0 {
@@ -882,7 +925,7 @@ impl<'a> Grower<'a> {
             if d2 < kill2 {
                 arrived[na as usize] = v;
                 na += 1;
-            } else if self.can_grow[v as usize] {
+            } else if self.hot[v as usize].can_grow {
                 pulls[np as usize] = v;
                 np += 1;
             }
@@ -964,7 +1007,7 @@ impl<'a> Grower<'a> {
                 if to.dot(heading) < cos_max * d {
                     continue;
                 }
-                if best.is_none_or(|(bd, bu)| (d, u) < (bd, bu)) && self.may_join(t, u) {
+                if best.map_or(true, |(bd, bu)| (d, u) < (bd, bu)) && self.may_join(t, u) {
                     best = Some((d, u));
                 }
             }
@@ -1013,8 +1056,14 @@ impl<'a> Grower<'a> {
                 }
             }
         }
+        !self.crosses(pa, pb, a, b)
+    }
+
+    /// Whether segment pa–pb would cross or touch an edge that has neither `a` nor `b` as an
+    /// end (`b` may be u32::MAX for a node not made yet).
+    fn crosses(&self, pa: DVec2, pb: DVec2, a: u32, b: u32) -> bool {
         let mid = (pa + pb) * 0.5;
-        let r = 0.5 * len + self.longest_edge;
+        let r = 0.5 * pa.distance(pb) + self.longest_edge;
         for c in self.all.locate_within_distance(mid.to_array(), r * r) {
             let u = c.data;
             if u == a || u == b {
@@ -1026,11 +1075,11 @@ impl<'a> Grower<'a> {
                     && w != b
                     && crate::geom::segments_touch(pa, pb, pu, self.positions[w as usize])
                 {
-                    return false;
+                    return true;
                 }
             }
         }
-        true
+        false
     }
 
     /// Whether a and b are fewer than `limit` edges apart along the growth tree.
@@ -1064,10 +1113,10 @@ impl<'a> Grower<'a> {
     fn show(&self, o: &mut Observer) {
         let positions: Vec<DVec2> = self.positions.iter().map(|p| self.to_real(*p)).collect();
         let sources: Vec<DVec2> = self
-            .live_ids
+            .active
             .iter()
-            .filter(|&&s| self.alive[s as usize])
-            .map(|&s| self.to_real(self.source_pos[s as usize]))
+            .filter(|a| self.alive[a.id as usize])
+            .map(|a| self.to_real(a.pos))
             .collect();
         let blade = match self.opts.blade {
             BladeGrowth::None => self.outline.clone(),
@@ -1096,5 +1145,290 @@ impl<'a> Grower<'a> {
             scale: self.scale,
             stop: self.stop,
         }
+    }
+}
+
+/// Sorts points along a Z-order curve over their bounding box (stable, so ties keep order).
+fn morton_sort(points: &mut [DVec2]) {
+    let lo = points
+        .iter()
+        .fold(DVec2::splat(f64::INFINITY), |a, p| a.min(*p));
+    let hi = points
+        .iter()
+        .fold(DVec2::splat(f64::NEG_INFINITY), |a, p| a.max(*p));
+    let span = (hi - lo).max(DVec2::splat(f64::MIN_POSITIVE));
+    let spread = |v: u32| {
+        let mut x = v as u64;
+        x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
+        x = (x | (x << 8)) & 0x00ff_00ff_00ff_00ff;
+        x = (x | (x << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
+        x = (x | (x << 2)) & 0x3333_3333_3333_3333;
+        (x | (x << 1)) & 0x5555_5555_5555_5555
+    };
+    let key = |p: &DVec2| {
+        let q = ((*p - lo) / span * 65535.0).clamp(DVec2::ZERO, DVec2::splat(65535.0));
+        spread(q.x as u32) | (spread(q.y as u32) << 1)
+    };
+    points.sort_by_cached_key(key);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::outline::Shape;
+    use super::super::poisson;
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn sources(o: &Outline, seed: u64) -> Vec<DVec2> {
+        poisson::sample(o, 2.0, 2.0, |_| 2.0, &mut ChaCha8Rng::seed_from_u64(seed))
+    }
+
+    fn grow_with(shape: Shape, seed: u64, opts: &VenationOptions) -> (Outline, Growth) {
+        let o = Outline::shape(shape);
+        let root = o.default_root();
+        let blade = initial_blade(&o, root, opts);
+        let src = sources(&blade, seed);
+        let g = grow(
+            &o,
+            &[root],
+            &src,
+            &|_| 2.0,
+            opts,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+            None,
+        )
+        .expect("valid parameters");
+        (o, g)
+    }
+
+    fn mode(mode: Mode) -> VenationOptions {
+        VenationOptions {
+            mode,
+            ..Default::default()
+        }
+    }
+
+    /// Every tree edge is D long; no node is within CROWDING·D of another; degree ≤ 3.
+    fn check_growth_rules(name: &str, g: &Growth, d: f64) {
+        for (p, c) in g.tree_edges() {
+            let l = g.positions[p as usize].distance(g.positions[c as usize]);
+            assert!((l - d).abs() <= 1e-9, "{name}: edge length {l}");
+        }
+        assert!(g.degrees().iter().all(|&k| k <= MAX_DEGREE), "{name}");
+        let tree = RTree::bulk_load(g.positions.iter().map(|p| p.to_array()).collect());
+        for p in &g.positions {
+            let r = CROWDING * d * 0.999;
+            let close = tree.locate_within_distance(p.to_array(), r * r).count();
+            assert_eq!(close, 1, "{name}: another node within 0.5 D of {p}");
+        }
+    }
+
+    fn network(g: &Growth) -> crate::network::Network {
+        crate::network::Network {
+            nodes: g
+                .positions
+                .iter()
+                .map(|p| crate::network::Node::at(p.extend(0.0)))
+                .collect(),
+            edges: g
+                .edges()
+                .map(|(a, b)| crate::network::Edge::new(a, b))
+                .collect(),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn open_venation_invariants_hold_on_every_shape() {
+        for shape in Shape::ALL {
+            let (o, g) = grow_with(shape, 11, &mode(Mode::Open));
+            let n = g.positions.len();
+            let name = shape.name();
+            assert!(n > 300, "{name}: {n} nodes");
+            assert!(g.positions.iter().all(|p| o.contains(*p)), "{name}: inside");
+            check_growth_rules(name, &g, 1.0);
+            assert!(g.joins.is_empty());
+            assert_eq!(g.tree_edges().count(), n - 1, "{name}: a tree");
+            let q = super::super::report::Quality::of(&network(&g), 1);
+            assert_eq!((q.components, q.crossings), (1, 0), "{name}");
+            assert!(
+                g.sources_left * 20 < g.sources_placed,
+                "{name}: {} of {} sources unreached",
+                g.sources_left,
+                g.sources_placed
+            );
+        }
+    }
+
+    #[test]
+    fn closed_venation_makes_loops_with_y_and_i_joints_only() {
+        let opts = mode(Mode::Closed);
+        for shape in Shape::ALL {
+            let (o, g) = grow_with(shape, 5, &opts);
+            let name = shape.name();
+            assert!(g.positions.iter().all(|p| o.contains(*p)), "{name}: inside");
+            check_growth_rules(name, &g, 1.0);
+            let q = super::super::report::Quality::of(&network(&g), 1);
+            assert!(q.loops >= 10, "{name}: {} loops", q.loops);
+            assert_eq!(q.loops, g.joins.len(), "{name}: each join closes one loop");
+            assert_eq!(
+                (q.components, q.crossings, q.not_y_or_i),
+                (1, 0, 0),
+                "{name}"
+            );
+            for &[a, b] in &g.joins {
+                let l = g.positions[a as usize].distance(g.positions[b as usize]);
+                assert!(l <= opts.join_distance() + 1e-9, "{name}: join {l} mm");
+            }
+            assert!(g.sources_left * 50 < g.sources_placed, "{name}: unreached");
+        }
+    }
+
+    #[test]
+    fn caches_give_the_same_growth_as_fresh_queries() {
+        let o = Outline::shape(Shape::Cordate);
+        let root = o.default_root();
+        let src = sources(&o, 3);
+        let opts = mode(Mode::Open);
+        let run = |uncached: bool| {
+            let mut g = Grower::new(&o, &[root], &src, &|_| 2.0, &opts);
+            g.uncached = uncached;
+            g.kill_near(0);
+            g.run(&mut ChaCha8Rng::seed_from_u64(1), None);
+            g.finish()
+        };
+        let (a, b) = (run(false), run(true));
+        assert!(a.positions.len() > 500);
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.parent, b.parent);
+    }
+
+    #[test]
+    fn results_do_not_depend_on_the_thread_count() {
+        let grow_in = |threads: usize, m: Mode| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| grow_with(Shape::Ovate, 4, &mode(m)).1)
+        };
+        for m in [Mode::Open, Mode::Closed] {
+            let (a, b) = (grow_in(1, m), grow_in(3, m));
+            assert_eq!(a.positions, b.positions);
+            assert_eq!(a.parent, b.parent);
+            assert_eq!(a.joins, b.joins);
+        }
+    }
+
+    #[test]
+    fn marginal_growth_keeps_every_node_in_the_blade_of_its_time() {
+        let opts = VenationOptions {
+            blade: BladeGrowth::Marginal,
+            sources_per_step: 20,
+            ..mode(Mode::Open)
+        };
+        let (o, g) = grow_with(Shape::Ovate, 2, &opts);
+        let root = o.default_root();
+        assert_eq!(g.scale, 1.0, "grew to full size");
+        check_growth_rules("marginal", &g, 1.0);
+        for (p, &born) in g.positions.iter().zip(&g.born) {
+            let s = (opts.initial_scale + opts.blade_rate * born as f64).min(1.0);
+            assert!(
+                o.contains(root + (*p - root) / s),
+                "{p} outside the blade at {born}"
+            );
+        }
+        assert!(g.sources_placed > sources(&initial_blade(&o, root, &opts), 2).len());
+    }
+
+    #[test]
+    fn uniform_growth_stretches_early_veins() {
+        let opts = VenationOptions {
+            blade: BladeGrowth::Uniform,
+            sources_per_step: 20,
+            ..mode(Mode::Open)
+        };
+        let (o, g) = grow_with(Shape::Ovate, 2, &opts);
+        assert!(g.positions.iter().all(|p| o.contains(*p)));
+        let lengths: Vec<f64> = g
+            .tree_edges()
+            .map(|(a, b)| g.positions[a as usize].distance(g.positions[b as usize]))
+            .collect();
+        let longest = lengths.iter().copied().fold(0.0, f64::max);
+        let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(shortest >= 1.0 - 1e-9, "no vein shrinks: {shortest}");
+        assert!(
+            longest > 2.0,
+            "the first veins stretched with the blade: {longest}"
+        );
+    }
+
+    #[test]
+    fn bad_parameters_are_named() {
+        let o = Outline::shape(Shape::Circle);
+        let r = [o.default_root()];
+        let src = sources(&o, 1);
+        let try_grow = |opts: VenationOptions, roots: &[DVec2]| {
+            grow(
+                &o,
+                roots,
+                &src,
+                &|_| 2.0,
+                &opts,
+                &mut ChaCha8Rng::seed_from_u64(1),
+                None,
+            )
+            .err()
+        };
+        let d = VenationOptions::default();
+        assert_eq!(
+            try_grow(VenationOptions { step: 0.0, ..d }, &r),
+            Some(VenationError::Step(0.0))
+        );
+        assert_eq!(
+            try_grow(VenationOptions { kill: -1.0, ..d }, &r),
+            Some(VenationError::Kill(-1.0))
+        );
+        assert_eq!(
+            try_grow(VenationOptions { kill: 1e4, ..d }, &r),
+            Some(VenationError::KillsEverything(1e4))
+        );
+        assert!(matches!(
+            try_grow(
+                VenationOptions {
+                    kill: 2.0,
+                    sources_per_step: 5,
+                    ..d
+                },
+                &r
+            ),
+            Some(VenationError::KillNotBelowBirth { .. })
+        ));
+        assert!(matches!(
+            try_grow(d, &[DVec2::new(1e3, 1e3)]),
+            Some(VenationError::RootOutside(0, ..))
+        ));
+        assert_eq!(try_grow(d, &[]), Some(VenationError::NoRoot));
+        assert_eq!(
+            try_grow(
+                VenationOptions {
+                    join_angle: 0.0,
+                    ..d
+                },
+                &r
+            ),
+            Some(VenationError::JoinAngle(0.0))
+        );
+    }
+
+    #[test]
+    fn same_seed_same_growth() {
+        let opts = mode(Mode::Closed);
+        let (_, a) = grow_with(Shape::Ovate, 4, &opts);
+        let (_, b) = grow_with(Shape::Ovate, 4, &opts);
+        assert_eq!(a.positions, b.positions);
+        assert_eq!(a.parent, b.parent);
+        assert_eq!(a.joins, b.joins);
     }
 }
