@@ -24,7 +24,7 @@ pub enum Placement {
 
 /// Bridson's samples fill a blade of area A with about `POISSON_FILL`·A / r² points; used to
 /// turn a wanted source count into a radius.
-pub const POISSON_FILL: f64 = 0.69;
+pub const POISSON_FILL: f64 = 0.628;
 
 #[derive(Clone, Debug)]
 pub struct LeafOptions {

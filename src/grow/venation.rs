@@ -252,12 +252,24 @@ pub fn grow(
 ) -> Result<Growth, VenationError> {
     check(outline, roots, birth, opts)?;
     let mut g = Grower::new(outline, roots, sources, birth, opts);
+    // Sources within the kill distance of a root die before anything grows (in closed
+    // venation too: a root is all such a source's neighbourhood holds at the first step).
+    let kill2 = g.eff(opts.kill).powi(2);
+    let doomed = g
+        .active
+        .iter()
+        .filter(|a| {
+            g.positions
+                .iter()
+                .any(|r| r.distance_squared(a.pos) < kill2)
+        })
+        .count();
+    if doomed == g.active.len() && doomed > 0 && opts.sources_per_step == 0 {
+        return Err(VenationError::KillsEverything(opts.kill));
+    }
     if g.opts.mode == Mode::Open {
         for r in 0..roots.len() as u32 {
             g.kill_near(r);
-        }
-        if g.live_count == 0 && !sources.is_empty() && opts.sources_per_step == 0 {
-            return Err(VenationError::KillsEverything(opts.kill));
         }
     }
     g.run(rng, observer);
