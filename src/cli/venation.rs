@@ -91,13 +91,13 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// D, the length of each vein segment, mm
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 0.75)]
     pub step: f64,
     /// Kill distance: sources this close to a vein are removed, mm
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = 1.1)]
     pub kill: f64,
     /// Birth distance: Poisson-disk radius of the sources, and the distance darts keep, mm
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 1.5)]
     pub birth: f64,
     /// Density map (PNG over the blade's bounding box; dark = dense, from alpha if any pixel is
     /// transparent, else grey)

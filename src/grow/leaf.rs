@@ -29,7 +29,7 @@ pub const POISSON_FILL: f64 = 0.628;
 #[derive(Clone, Debug)]
 pub struct LeafOptions {
     pub growth: VenationOptions,
-    /// Birth distance, mm: the Poisson-disk radius of the sources and of darts. Default 2.0.
+    /// Birth distance, mm: the Poisson-disk radius of the sources and of darts. Default 1.5.
     pub birth: f64,
     /// With a density map: the radius where it is darkest and lightest. Default birth, 2 × birth.
     pub birth_min: Option<f64>,
@@ -53,7 +53,7 @@ impl Default for LeafOptions {
                 mode: Mode::Closed,
                 ..Default::default()
             },
-            birth: 2.0,
+            birth: 1.5,
             birth_min: None,
             birth_max: None,
             density: None,

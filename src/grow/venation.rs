@@ -63,9 +63,9 @@ pub enum BladeGrowth {
 #[derive(Clone, Copy, Debug)]
 pub struct VenationOptions {
     pub mode: Mode,
-    /// D, the length of every new vein segment. Default 1.0 mm.
+    /// D, the length of every new vein segment. Default 0.75 mm.
     pub step: f64,
-    /// The kill distance. Default 1.5 mm.
+    /// The kill distance. Default 1.1 mm.
     pub kill: f64,
     /// Stop after this many growth steps. Default 10,000.
     pub max_iterations: usize,
@@ -90,8 +90,8 @@ impl Default for VenationOptions {
     fn default() -> Self {
         VenationOptions {
             mode: Mode::Open,
-            step: 1.0,
-            kill: 1.5,
+            step: 0.75,
+            kill: 1.1,
             max_iterations: 10_000,
             blade: BladeGrowth::None,
             initial_scale: 0.2,
@@ -1259,7 +1259,7 @@ mod tests {
             let name = shape.name();
             assert!(n > 300, "{name}: {n} nodes");
             assert!(g.positions.iter().all(|p| o.contains(*p)), "{name}: inside");
-            check_growth_rules(name, &g, 1.0);
+            check_growth_rules(name, &g, 0.75);
             assert!(g.joins.is_empty());
             assert_eq!(g.tree_edges().count(), n - 1, "{name}: a tree");
             let q = super::super::report::Quality::of(&network(&g), 1);
@@ -1280,7 +1280,7 @@ mod tests {
             let (o, g) = grow_with(shape, 5, &opts);
             let name = shape.name();
             assert!(g.positions.iter().all(|p| o.contains(*p)), "{name}: inside");
-            check_growth_rules(name, &g, 1.0);
+            check_growth_rules(name, &g, 0.75);
             let q = super::super::report::Quality::of(&network(&g), 1);
             assert!(q.loops >= 10, "{name}: {} loops", q.loops);
             assert_eq!(q.loops, g.joins.len(), "{name}: each join closes one loop");
@@ -1343,7 +1343,7 @@ mod tests {
         let (o, g) = grow_with(Shape::Ovate, 2, &opts);
         let root = o.default_root();
         assert_eq!(g.scale, 1.0, "grew to full size");
-        check_growth_rules("marginal", &g, 1.0);
+        check_growth_rules("marginal", &g, opts.step);
         for (p, &born) in g.positions.iter().zip(&g.born) {
             let s = (opts.initial_scale + opts.blade_rate * born as f64).min(1.0);
             assert!(
@@ -1369,9 +1369,9 @@ mod tests {
             .collect();
         let longest = lengths.iter().copied().fold(0.0, f64::max);
         let shortest = lengths.iter().copied().fold(f64::INFINITY, f64::min);
-        assert!(shortest >= 1.0 - 1e-9, "no vein shrinks: {shortest}");
+        assert!(shortest >= opts.step - 1e-9, "no vein shrinks: {shortest}");
         assert!(
-            longest > 2.0,
+            longest > 2.0 * opts.step,
             "the first veins stretched with the blade: {longest}"
         );
     }
