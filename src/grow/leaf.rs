@@ -202,7 +202,7 @@ pub fn grow_leaf(
         &mut rng,
         observer,
     )?;
-    let network = to_network(&growth, opts);
+    let network = to_network(&growth, opts, outline);
     let quality = Quality::of(&network, growth.roots);
     Ok(Leaf {
         network,
@@ -212,8 +212,10 @@ pub fn grow_leaf(
 }
 
 /// The growth as a network: tree edges (parent → child) first, then the loop-closing edges,
-/// whose count is `meta.parameters["loop_edges"]`.
-pub fn to_network(g: &Growth, opts: &LeafOptions) -> Network {
+/// whose count is `meta.parameters["loop_edges"]`. The full-size blade is kept as
+/// `meta.parameters["outline"]` ([[x, y], …], counter-clockwise) for later stages (the leaf
+/// lamina of a print) and for checks.
+pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network {
     let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
     let mut net = Network {
         nodes: g
@@ -271,6 +273,14 @@ pub fn to_network(g: &Growth, opts: &LeafOptions) -> Network {
     put("max_iterations", o.max_iterations.into());
     put("roots", g.roots.into());
     put("loop_edges", g.joins.len().into());
+    put(
+        "outline",
+        serde_json::json!(outline
+            .points()
+            .iter()
+            .map(|p| [p.x, p.y])
+            .collect::<Vec<_>>()),
+    );
     if o.mode == Mode::Closed {
         put("join_distance", o.join_distance().into());
         put("join_angle", o.join_angle.into());

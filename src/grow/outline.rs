@@ -104,6 +104,16 @@ impl Bands {
         }
     }
 
+    /// The band holding height y, clamped to the outline's height.
+    fn band(&self, y: f64) -> usize {
+        let count = self.start.len() - 1;
+        (((y - self.lo) / self.height).max(0.0) as usize).min(count - 1)
+    }
+
+    fn edges_of(&self, band: usize) -> &[u32] {
+        &self.edges[self.start[band] as usize..self.start[band + 1] as usize]
+    }
+
     /// The edges that may cross the horizontal line at y, or None outside the outline's height.
     fn at(&self, y: f64) -> Option<&[u32]> {
         let count = self.start.len() - 1;
@@ -224,22 +234,26 @@ impl Outline {
         Outline::new(pts).expect("built-in shapes are simple polygons")
     }
 
-    /// Where a built-in shape's petiole meets the blade: just inside the base.
+    /// Where a built-in shape's petiole meets the blade: just inside the base, the middle of
+    /// the lowest vertices (one for a pointed base, the bottom edge for a flat one).
     pub fn default_root(&self) -> DVec2 {
-        let base = self
+        let size = self.size().max_element();
+        let low = self
             .points
             .iter()
-            .copied()
-            .min_by(|a, b| {
-                (a.y, a.x.abs())
-                    .partial_cmp(&(b.y, b.x.abs()))
-                    .expect("finite")
-            })
-            .expect("at least 3 points");
-        // Walk up from the lowest point until inside.
-        let step = 1e-3 * self.size().max_element();
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        let bottom: Vec<f64> = self
+            .points
+            .iter()
+            .filter(|p| p.y - low <= 1e-9 * size)
+            .map(|p| p.x)
+            .collect();
+        let x = bottom.iter().sum::<f64>() / bottom.len() as f64;
+        // Walk up from the base until inside.
+        let step = 1e-3 * size;
         (1..1000)
-            .map(|k| DVec2::new(base.x, base.y + step * k as f64))
+            .map(|k| DVec2::new(x, low + step * k as f64))
             .find(|p| self.contains(*p))
             .unwrap_or(self.centroid())
     }
@@ -305,6 +319,26 @@ impl Outline {
         inside
     }
 
+    /// Whether segment ab lies inside: both ends inside and no outline edge crossed or touched.
+    pub fn contains_segment(&self, a: DVec2, b: DVec2) -> bool {
+        if !(self.contains(a) && self.contains(b)) {
+            return false;
+        }
+        let n = self.points.len();
+        let (lo, hi) = (a.y.min(b.y), a.y.max(b.y));
+        let first = self.bands.band(lo);
+        let last = self.bands.band(hi);
+        for band in first..=last {
+            for &i in self.bands.edges_of(band) {
+                let (p, q) = (self.points[i as usize], self.points[(i as usize + 1) % n]);
+                if crate::geom::segments_touch(a, b, p, q) {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     /// The outline scaled by `factor` about `centre`.
     pub fn scaled(&self, centre: DVec2, factor: f64) -> Outline {
         let points: Vec<DVec2> = self
@@ -331,11 +365,14 @@ mod tests {
             assert!(o.signed_area() > 0.0, "{} is counter-clockwise", s.name());
             let r = o.default_root();
             assert!(o.contains(r), "{} root {r} inside", s.name());
+            // The cordate base is its notch, a quarter of the length above the lobes.
             assert!(
-                r.y < 0.2 * SHAPE_LENGTH + o.bounds().0.y,
+                r.y < 0.3 * SHAPE_LENGTH + o.bounds().0.y,
                 "{} root near the base",
                 s.name()
             );
+            let mid = 0.5 * (o.bounds().0.x + o.bounds().1.x);
+            assert!((r.x - mid).abs() < 1e-9, "{} root on the midline", s.name());
         }
     }
 

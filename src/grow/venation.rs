@@ -16,7 +16,7 @@
 //!   §3.2 step g does. Joins only make Y (3-legged) or I (2-legged) joints, never cross an edge,
 //!   and never close a loop shorter than `MIN_LOOP` edges.
 //!
-//! Guarantees: every node lies inside the blade of its time; growth edges have length D (in the
+//! Guarantees: every node and growth edge lies inside the blade of its time; growth edges have length D (in the
 //! blade's frame; uniform blade growth stretches them later); no node has degree above 3 (a
 //! node at degree 3 stops attracting); no two nodes closer than `CROWDING`·D (a node whose step
 //! would land there retires). Not guaranteed: that every source is reached (a source may sit
@@ -657,7 +657,8 @@ impl<'a> Grower<'a> {
                     continue;
                 }
                 let at = self.positions[v as usize] + dir * step;
-                if !self.in_blade(at) {
+                let from = self.blade_coord(self.positions[v as usize]);
+                if !self.outline.contains_segment(from, self.blade_coord(at)) {
                     continue;
                 }
                 if self
@@ -1050,7 +1051,11 @@ impl<'a> Grower<'a> {
         {
             return false;
         }
-        if self.tree_hops_below(a, b, MIN_LOOP - 1) {
+        if self.tree_hops_below(a, b, MIN_LOOP - 1)
+            || !self
+                .outline
+                .contains_segment(self.blade_coord(pa), self.blade_coord(pb))
+        {
             return false;
         }
         let cos_min = MIN_JOINT_ANGLE.to_radians().cos();
