@@ -45,7 +45,15 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("lamina: error: {e:#}");
+            // The chain of causes, each once: library errors already quote their source.
+            let mut msg = e.to_string();
+            for cause in e.chain().skip(1) {
+                let c = cause.to_string();
+                if !msg.contains(&c) {
+                    msg = format!("{msg}: {c}");
+                }
+            }
+            eprintln!("lamina: error: {msg}");
             // Bad input and failed writes alike: 2, as clap uses for bad arguments.
             ExitCode::from(2)
         }

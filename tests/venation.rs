@@ -286,6 +286,42 @@ fn outlines_from_json_dxf_and_svg_grow_the_same_leaf() -> TestResult {
 }
 
 #[test]
+fn closed_venation_loops_on_the_outline_fixtures() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    // The maple's petiole is at the centre of its lobes; the oak's at its base (the default).
+    for (name, root) in [("oak.dxf", None), ("maple.svg", Some("--root=0,15"))] {
+        let input = common::fixture(&format!("outlines/{name}"));
+        let out = dir.path().join(format!("{name}.json"));
+        let mut args = vec![
+            "venation",
+            "--outline",
+            input.to_str().ok_or("path")?,
+            "-o",
+            out.to_str().ok_or("path")?,
+        ];
+        args.extend(root);
+        run_ok(&args)?;
+        let net = read(&out)?;
+        let v = net.validate();
+        assert!(v.is_ok(), "{name}: {:?}", v.problems);
+        assert_eq!(v.components, 1, "{name}");
+        assert!(v.cycles > 10, "{name}: {} loops", v.cycles);
+        assert!(v.degree_histogram.len() <= 4, "{name}: degree ≤ 3");
+        let outline: Vec<DVec2> = net.meta.parameters["outline"]
+            .as_array()
+            .ok_or("outline")?
+            .iter()
+            .filter_map(|p| Some(DVec2::new(p[0].as_f64()?, p[1].as_f64()?)))
+            .collect();
+        let blade = Outline::new(outline)?;
+        assert!(blade.area() > 3000.0, "{name}: {} mm²", blade.area());
+        assert!(net.nodes.iter().all(|n| blade.contains(n.p.truncate())));
+        assert_murray(&net);
+    }
+    Ok(())
+}
+
+#[test]
 fn frames_are_written_every_k_steps() -> TestResult {
     let dir = tempfile::tempdir()?;
     let frames = dir.path().join("frames");
@@ -368,6 +404,7 @@ fn bad_input_exits_2_naming_the_parameter_and_writes_nothing() -> TestResult {
             &["--density", "/no/such/map.png"],
         ),
         (vec!["--r=0.5", "--blade=none"], &["--r"]),
+        (vec!["--birth=1e-6"], &["--birth", "sources"]),
     ];
     for (args, words) in cases {
         let mut all = vec!["venation", "-o", o];

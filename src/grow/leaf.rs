@@ -22,6 +22,9 @@ pub enum Placement {
     Random,
 }
 
+/// More initial sources than this is an error, not an attempt to allocate for them.
+pub const MAX_SOURCES: usize = 10_000_000;
+
 /// Bridson's samples fill a blade of area A with about `POISSON_FILL`·A / r² points; used to
 /// turn a wanted source count into a radius.
 pub const POISSON_FILL: f64 = 0.628;
@@ -74,6 +77,11 @@ pub enum LeafError {
     BirthRange(f64, f64),
     #[error("--sources must be at least 1, got {0}")]
     Sources(usize),
+    #[error(
+        "{what} would place about {count} sources, more than {MAX_SOURCES}: use a larger \
+         distance or fewer sources"
+    )]
+    TooManySources { what: String, count: u64 },
     #[error("--placement random needs --sources N")]
     RandomNeedsCount,
     #[error("--murray must be a finite exponent ≥ 1, got {0}")]
@@ -117,7 +125,7 @@ impl LeafOptions {
         }
     }
 
-    fn check(&self) -> Result<(), LeafError> {
+    fn check(&self, outline: &Outline) -> Result<(), LeafError> {
         let positive = |x: f64| x.is_finite() && x > 0.0;
         if !positive(self.birth) {
             return Err(LeafError::Birth(self.birth));
@@ -128,6 +136,20 @@ impl LeafOptions {
         }
         if self.sources == Some(0) {
             return Err(LeafError::Sources(0));
+        }
+        let count = match self.sources {
+            Some(n) => n as f64,
+            None => POISSON_FILL * outline.area() / (min * min),
+        };
+        if count > MAX_SOURCES as f64 {
+            return Err(LeafError::TooManySources {
+                what: match self.sources {
+                    Some(_) => "--sources".into(),
+                    None if self.density.is_some() => format!("--birth-min {min}"),
+                    None => format!("--birth {min}"),
+                },
+                count: count as u64,
+            });
         }
         if self.placement == Placement::Random && self.sources.is_none() {
             return Err(LeafError::RandomNeedsCount);
@@ -187,7 +209,7 @@ pub fn grow_leaf(
     opts: &LeafOptions,
     observer: Option<Observer>,
 ) -> Result<Leaf, LeafError> {
-    opts.check()?;
+    opts.check(outline)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let first = *roots.first().ok_or(VenationError::NoRoot)?;
     let blade = venation::initial_blade(outline, first, &opts.growth);
