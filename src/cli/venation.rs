@@ -133,7 +133,12 @@ pub struct Args {
     #[arg(long, conflicts_with = "sweep_r")]
     pub r: Option<f64>,
     /// Grow one leaf per r (Peele Fig. 1: 0.5,1.5,3.5,5.5) into the folder -o, side by side
-    #[arg(long, value_name = "R,R,…", value_delimiter = ',')]
+    #[arg(
+        long,
+        value_name = "R,R,…",
+        value_delimiter = ',',
+        conflicts_with_all = ["frames", "svg", "png", "report"]
+    )]
     pub sweep_r: Vec<f64>,
     /// Closed venation: longest loop-closing edge, mm [default: 2 × --kill]
     #[arg(long)]

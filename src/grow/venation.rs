@@ -144,8 +144,9 @@ pub enum VenationError {
     #[error("--blade-rate must be a positive fraction per step, got {0}")]
     BladeRate(f64),
     #[error(
-        "--kill {kill} mm is not below the birth distance {birth} mm: darts thrown at the birth \
-         distance from the veins would be inside the kill distance, so nothing could grow"
+        "--kill {kill} mm is not below the birth distance (at most {birth} mm): darts thrown at \
+         the birth distance from the veins would be inside the kill distance, so nothing could \
+         grow"
     )]
     KillNotBelowBirth { kill: f64, birth: f64 },
     #[error(
@@ -304,18 +305,24 @@ fn check(
         }
     }
     if opts.sources_per_step > 0 {
-        // The smallest birth distance over the blade decides whether any dart can live.
-        let birth_min = outline
+        // Darts keep the birth distance from the veins; if the kill distance reaches past it
+        // everywhere, every dart is born dying. Sampled at the corners and a 16 × 16 grid.
+        let (lo, hi) = outline.bounds();
+        let grid = (0..=16 * 16).map(|k| {
+            let (i, j) = ((k % 17) as f64 / 16.0, (k / 17) as f64 / 16.0);
+            lo + (hi - lo) * DVec2::new(i, j)
+        });
+        let birth_max = outline
             .points()
             .iter()
             .copied()
-            .chain([outline.centroid()])
+            .chain(grid.filter(|p| outline.contains(*p)))
             .map(birth)
-            .fold(f64::INFINITY, f64::min);
-        if opts.kill >= birth_min {
+            .fold(0.0, f64::max);
+        if opts.kill >= birth_max {
             return Err(VenationError::KillNotBelowBirth {
                 kill: opts.kill,
-                birth: birth_min,
+                birth: birth_max,
             });
         }
     }
