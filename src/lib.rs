@@ -8,6 +8,7 @@ pub mod geom;
 pub mod grow;
 pub mod mesh;
 pub mod network;
+pub mod rationalize;
 
 pub use files::{ReadError, WriteError};
 pub use mesh::TriMesh;

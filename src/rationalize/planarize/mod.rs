@@ -1,0 +1,466 @@
+//! Node axes for torsion-free nodes with planar panels (Gokmen §4.3–4.4): find a unit axis d_i
+//! per node, near its reference direction d⁰_i, such that every edge's panel
+//! (v_i, v_j, v_j + h_j d_j, v_i + h_i d_i) is planar: det(ê_ij, d_i, d_j) = 0. One equation per
+//! network edge against two unknowns per node, so with degree ≤ 3 exact solutions near d⁰
+//! exist; nodes of degree > 3 are over-constrained and reported.
+//!
+//! Two solvers behind one interface: L-BFGS (argmin) on the objective in `objective.rs`, and
+//! the paper's iterative projection (`projection.rs`). Both keep α, the weight of closeness to
+//! d⁰, only as long as the tolerance allows: when a solve ends above the tolerance, α is cut by
+//! ten and the solve resumes from where it stopped (continuation), until the tolerance holds or
+//! α is negligible. The α finally used is reported, and so is a tolerance not reached.
+//!
+//! Overrides: edges with a fixed panel normal n hold both end axes in the plane ⊥ n (Calyx's
+//! base plates); nodes with a fixed axis do not move. A node on two fixed planes keeps the
+//! axis along their intersection.
+
+mod lbfgs;
+pub mod objective;
+mod projection;
+
+use glam::DVec3;
+
+use super::panels::{panel_quad, quad_metrics, QuadMetrics};
+use objective::{Frame, Objective};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    Lbfgs,
+    Projection,
+}
+
+/// Which nodes or edges an override applies to: `x<V`, `y>=V`, `z<=V`, … (an edge when both its
+/// ends match), `node=N`, or `all`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Selector {
+    All,
+    Node(u32),
+    Coord { axis: usize, op: Cmp, value: f64 },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cmp {
+    Lt,
+    Le,
+    Gt,
+    Ge,
+}
+
+impl Selector {
+    pub fn parse(s: &str) -> Result<Selector, String> {
+        let s = s.trim();
+        if s == "all" {
+            return Ok(Selector::All);
+        }
+        if let Some(n) = s.strip_prefix("node=") {
+            return n
+                .trim()
+                .parse()
+                .map(Selector::Node)
+                .map_err(|_| format!("\"{n}\" is not a node number"));
+        }
+        let axis =
+            match s.chars().next() {
+                Some('x') => 0,
+                Some('y') => 1,
+                Some('z') => 2,
+                _ => return Err(format!(
+                    "\"{s}\": expected all, node=N, or x|y|z followed by < <= > >= and a number"
+                )),
+            };
+        let rest = &s[1..];
+        let (op, num) = if let Some(r) = rest.strip_prefix("<=") {
+            (Cmp::Le, r)
+        } else if let Some(r) = rest.strip_prefix(">=") {
+            (Cmp::Ge, r)
+        } else if let Some(r) = rest.strip_prefix('<') {
+            (Cmp::Lt, r)
+        } else if let Some(r) = rest.strip_prefix('>') {
+            (Cmp::Gt, r)
+        } else {
+            return Err(format!("\"{s}\": expected < <= > or >= after the axis"));
+        };
+        let value: f64 = num
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| format!("\"{num}\" is not a finite number"))?;
+        Ok(Selector::Coord { axis, op, value })
+    }
+
+    pub fn matches(&self, id: u32, p: DVec3) -> bool {
+        match *self {
+            Selector::All => true,
+            Selector::Node(n) => n == id,
+            Selector::Coord { axis, op, value } => {
+                let c = p.to_array()[axis];
+                match op {
+                    Cmp::Lt => c < value,
+                    Cmp::Le => c <= value,
+                    Cmp::Gt => c > value,
+                    Cmp::Ge => c >= value,
+                }
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct PlanarizeOptions {
+    pub method: Method,
+    /// Weight of closeness to the reference directions. Default 0.01 (Calyx's value).
+    pub alpha: f64,
+    /// Largest panel deviation accepted, mm. Default 0.01.
+    pub tolerance: f64,
+    /// Iteration cap over all continuation rounds. Default 10,000.
+    pub max_iterations: usize,
+    /// Projection: how far each axis moves toward the average of its projections. Default 0.5.
+    pub step: f64,
+    /// Edges (both ends selected) whose panels lie in planes with this normal.
+    pub fix_normals: Vec<(Selector, DVec3)>,
+    /// Nodes whose axis is given.
+    pub fix_axes: Vec<(Selector, DVec3)>,
+}
+
+impl Default for PlanarizeOptions {
+    fn default() -> Self {
+        PlanarizeOptions {
+            method: Method::Lbfgs,
+            alpha: 0.01,
+            tolerance: 0.01,
+            max_iterations: 10_000,
+            step: 0.5,
+            fix_normals: Vec::new(),
+            fix_axes: Vec::new(),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PlanarizeError {
+    #[error("node {0} has a position that is not finite")]
+    NonFinite(u32),
+    #[error("edge {0} joins node {1} to itself or to a node at the same place: a zero-length edge has no panel")]
+    ZeroLength(usize, u32),
+    #[error("edge {0} refers to node {1}, which does not exist")]
+    MissingNode(usize, u32),
+    #[error("node {0} has no reference direction (no stored normal): give --surface")]
+    NoReference(u32),
+    #[error("node {0} has a reference direction that is not a finite non-zero vector")]
+    BadReference(u32),
+    #[error("node {0} has height {1}; heights must be positive mm")]
+    Height(u32, f64),
+    #[error("--alpha must be ≥ 0, got {0}")]
+    Alpha(f64),
+    #[error("--tolerance must be a positive distance in mm, got {0}")]
+    Tolerance(f64),
+    #[error("--step must be in (0, 1], got {0}")]
+    Step(f64),
+    #[error("a fixed direction must be a finite non-zero vector, got {0}")]
+    Direction(DVec3),
+    #[error("node {0} lies on edges with three or more different fixed panel normals: no axis fits them all")]
+    ConflictingNormals(u32),
+}
+
+/// What planarize needs: positions, edges, reference directions d⁰ (unit), heights.
+#[derive(Clone, Debug)]
+pub struct Input {
+    pub positions: Vec<DVec3>,
+    pub edges: Vec<[u32; 2]>,
+    pub reference: Vec<DVec3>,
+    pub heights: Vec<f64>,
+}
+
+/// One panel of the result.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Panel {
+    pub edge: usize,
+    pub a: u32,
+    pub b: u32,
+    #[serde(flatten)]
+    pub metrics: QuadMetrics,
+    /// The panel's fixed normal, if any, and the angle of its actual normal from it, degrees.
+    pub fixed_normal: Option<[f64; 3]>,
+    pub fixed_normal_error_deg: Option<f64>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Solution {
+    pub method: Method,
+    pub axes: Vec<DVec3>,
+    pub panels: Vec<Panel>,
+    /// Angle of each axis from its reference, degrees.
+    pub axis_deviation_deg: Vec<f64>,
+    pub alpha_requested: f64,
+    pub alpha_used: f64,
+    pub iterations: usize,
+    /// Objective (L-BFGS) or largest deviation in mm (projection) after each iteration.
+    pub history: Vec<f64>,
+    pub max_deviation: f64,
+    pub tolerance: f64,
+    pub converged: bool,
+    /// Nodes of degree > 3: over-constrained, may keep the tolerance from being reached.
+    pub over_constrained: Vec<u32>,
+    /// Fixed-normal edges that are not perpendicular to their normal: no panel through them can
+    /// have it.
+    pub impossible_normals: Vec<usize>,
+}
+
+/// α is not cut below this fraction of the requested value.
+const ALPHA_FLOOR: f64 = 1e-10;
+
+pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, PlanarizeError> {
+    check(input, opts)?;
+    let n = input.positions.len();
+    let (frames, dims, edge_normal) = frames(input, opts)?;
+    let edges: Vec<(u32, u32, DVec3, f64)> = input
+        .edges
+        .iter()
+        .map(|&[a, b]| {
+            let e = (input.positions[b as usize] - input.positions[a as usize]).normalize();
+            (a, b, e, 1.0)
+        })
+        .collect();
+    let max_dev = |axes: &[DVec3]| {
+        input
+            .edges
+            .iter()
+            .map(|&[a, b]| panel(input, axes, a, b).deviation)
+            .fold(0.0, f64::max)
+    };
+    let mut alpha = opts.alpha;
+    let mut history = Vec::new();
+    let mut iterations = 0;
+    let mut x = vec![0.0; dims];
+    let mut axes: Vec<DVec3> = frames.iter().map(|f| f.base).collect();
+    loop {
+        let budget = opts.max_iterations.saturating_sub(iterations);
+        if budget == 0 {
+            break;
+        }
+        let obj = Objective {
+            frames: &frames,
+            edges: &edges,
+            alpha,
+            dims,
+        };
+        let used = match opts.method {
+            Method::Lbfgs => {
+                let run = lbfgs::solve(&obj, x.clone(), budget, opts.tolerance, &max_dev);
+                x = run.x;
+                axes = obj.axes(&x);
+                history.extend(run.history);
+                run.iterations
+            }
+            Method::Projection => {
+                let run = projection::solve(
+                    &frames,
+                    &edges,
+                    &edge_normal,
+                    &mut axes,
+                    alpha,
+                    opts.step,
+                    budget,
+                    opts.tolerance,
+                    &max_dev,
+                );
+                history.extend(run.history);
+                run.iterations
+            }
+        };
+        iterations += used;
+        if max_dev(&axes) <= opts.tolerance || alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
+            break;
+        }
+        alpha *= 0.1;
+    }
+    let max_deviation = max_dev(&axes);
+    let mut degree = vec![0usize; n];
+    for &[a, b] in &input.edges {
+        degree[a as usize] += 1;
+        degree[b as usize] += 1;
+    }
+    let panels: Vec<Panel> = input
+        .edges
+        .iter()
+        .enumerate()
+        .map(|(k, &[a, b])| {
+            let metrics = panel(input, &axes, a, b);
+            let fixed = edge_normal[k];
+            let err = fixed.map(|nrm| {
+                let e = input.positions[b as usize] - input.positions[a as usize];
+                let actual = e.cross(axes[a as usize]).normalize_or_zero();
+                actual.dot(nrm).abs().clamp(0.0, 1.0).acos().to_degrees()
+            });
+            Panel {
+                edge: k,
+                a,
+                b,
+                metrics,
+                fixed_normal: fixed.map(|v| v.to_array()),
+                fixed_normal_error_deg: err,
+            }
+        })
+        .collect();
+    let impossible_normals = input
+        .edges
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &[a, b])| {
+            let nrm = edge_normal[k]?;
+            let e = (input.positions[b as usize] - input.positions[a as usize]).normalize();
+            (e.dot(nrm).abs() > 1e-9).then_some(k)
+        })
+        .collect();
+    Ok(Solution {
+        method: opts.method,
+        axis_deviation_deg: axes
+            .iter()
+            .zip(&input.reference)
+            .map(|(d, r)| d.dot(*r).clamp(-1.0, 1.0).acos().to_degrees())
+            .collect(),
+        axes,
+        panels,
+        alpha_requested: opts.alpha,
+        alpha_used: alpha,
+        iterations,
+        history,
+        max_deviation,
+        tolerance: opts.tolerance,
+        converged: max_deviation <= opts.tolerance,
+        over_constrained: (0..n as u32).filter(|&v| degree[v as usize] > 3).collect(),
+        impossible_normals,
+    })
+}
+
+fn panel(input: &Input, axes: &[DVec3], a: u32, b: u32) -> QuadMetrics {
+    let (a, b) = (a as usize, b as usize);
+    quad_metrics(panel_quad(
+        input.positions[a],
+        input.positions[b],
+        axes[a],
+        axes[b],
+        input.heights[a],
+        input.heights[b],
+    ))
+}
+
+fn check(input: &Input, opts: &PlanarizeOptions) -> Result<(), PlanarizeError> {
+    let n = input.positions.len() as u32;
+    if let Some(i) = input.positions.iter().position(|p| !p.is_finite()) {
+        return Err(PlanarizeError::NonFinite(i as u32));
+    }
+    for (k, &[a, b]) in input.edges.iter().enumerate() {
+        for v in [a, b] {
+            if v >= n {
+                return Err(PlanarizeError::MissingNode(k, v));
+            }
+        }
+        if input.positions[a as usize] == input.positions[b as usize] {
+            return Err(PlanarizeError::ZeroLength(k, a));
+        }
+    }
+    if let Some(i) = input
+        .reference
+        .iter()
+        .position(|r| !(r.is_finite() && r.length() > 1e-12))
+    {
+        return Err(PlanarizeError::BadReference(i as u32));
+    }
+    if let Some(i) = input
+        .heights
+        .iter()
+        .position(|h| !(h.is_finite() && *h > 0.0))
+    {
+        return Err(PlanarizeError::Height(i as u32, input.heights[i]));
+    }
+    if !(opts.alpha.is_finite() && opts.alpha >= 0.0) {
+        return Err(PlanarizeError::Alpha(opts.alpha));
+    }
+    if !(opts.tolerance.is_finite() && opts.tolerance > 0.0) {
+        return Err(PlanarizeError::Tolerance(opts.tolerance));
+    }
+    if !(opts.step > 0.0 && opts.step <= 1.0) {
+        return Err(PlanarizeError::Step(opts.step));
+    }
+    for (_, d) in opts.fix_normals.iter().chain(&opts.fix_axes) {
+        if !(d.is_finite() && d.length() > 1e-12) {
+            return Err(PlanarizeError::Direction(*d));
+        }
+    }
+    Ok(())
+}
+
+/// Each node's frame (how its axis may move), the number of coordinates, and each edge's fixed
+/// normal if it has one.
+#[allow(clippy::type_complexity)]
+fn frames(
+    input: &Input,
+    opts: &PlanarizeOptions,
+) -> Result<(Vec<Frame>, usize, Vec<Option<DVec3>>), PlanarizeError> {
+    let n = input.positions.len();
+    let edge_normal: Vec<Option<DVec3>> = input
+        .edges
+        .iter()
+        .map(|&[a, b]| {
+            opts.fix_normals.iter().find_map(|(sel, nrm)| {
+                (sel.matches(a, input.positions[a as usize])
+                    && sel.matches(b, input.positions[b as usize]))
+                .then(|| nrm.normalize())
+            })
+        })
+        .collect();
+    let mut planes: Vec<Vec<DVec3>> = vec![Vec::new(); n];
+    for (k, &[a, b]) in input.edges.iter().enumerate() {
+        if let Some(nrm) = edge_normal[k] {
+            for v in [a, b] {
+                let p = &mut planes[v as usize];
+                if !p.iter().any(|q| q.cross(nrm).length() < 1e-9) {
+                    p.push(nrm);
+                }
+            }
+        }
+    }
+    let mut frames = Vec::with_capacity(n);
+    let mut offset = 0;
+    for (i, on) in planes.iter().enumerate() {
+        let r = input.reference[i].normalize();
+        let fixed = opts
+            .fix_axes
+            .iter()
+            .find(|(sel, _)| sel.matches(i as u32, input.positions[i]))
+            .map(|(_, d)| d.normalize());
+        let (base, t, dof) = match (fixed, on.as_slice()) {
+            (Some(d), _) => (d, [DVec3::ZERO; 2], 0),
+            (None, []) => {
+                let (t0, t1) = r.any_orthonormal_pair();
+                (r, [t0, t1], 2)
+            }
+            (None, [nrm]) => {
+                let in_plane = (r - *nrm * r.dot(*nrm))
+                    .try_normalize()
+                    .unwrap_or_else(|| nrm.any_orthonormal_vector());
+                (in_plane, [nrm.cross(in_plane), DVec3::ZERO], 1)
+            }
+            (None, [n1, n2]) => {
+                let line = n1.cross(*n2).normalize();
+                let d = if line.dot(r) < 0.0 { -line } else { line };
+                (d, [DVec3::ZERO; 2], 0)
+            }
+            (None, _) => return Err(PlanarizeError::ConflictingNormals(i as u32)),
+        };
+        frames.push(Frame {
+            base,
+            t,
+            dof,
+            offset,
+        });
+        offset += dof;
+    }
+    Ok((frames, offset, edge_normal))
+}
+
+#[cfg(test)]
+mod tests;
