@@ -9,6 +9,7 @@ pub mod grow;
 pub mod mesh;
 pub mod network;
 pub mod rationalize;
+pub mod report;
 
 pub use files::{ReadError, WriteError};
 pub use mesh::TriMesh;

@@ -29,21 +29,44 @@ enum Command {
     Render(cli::render::Args),
     /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005)
     Venation(Box<cli::venation::Args>),
+    /// Node axes that make every panel of a network planar (L-BFGS or iterative projection),
+    /// with the panels and a planarity report.
+    Planarize(Box<cli::planarize::Args>),
+    /// Check the planarity of panels made elsewhere (.obj faces, .dxf 3DFACE/closed polylines):
+    /// exit 0 when all are within the tolerance, 1 when some are not.
+    Audit(cli::planarize::AuditArgs),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
+}
+
+/// Whether a command's result met its tolerance (commands without one always do).
+struct Within(bool);
+
+fn within(ok: bool) -> Within {
+    Within(ok)
+}
+
+impl From<()> for Within {
+    fn from(_: ()) -> Within {
+        Within(true)
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info(args) => cli::info::run(args),
-        Command::Convert(args) => cli::convert::run(args),
-        Command::Render(args) => cli::render::run(args),
-        Command::Venation(args) => cli::venation::run(*args),
-        Command::Demo(args) => cli::demo::run(args),
+        Command::Info(args) => cli::info::run(args).map(Within::from),
+        Command::Convert(args) => cli::convert::run(args).map(Within::from),
+        Command::Render(args) => cli::render::run(args).map(Within::from),
+        Command::Venation(args) => cli::venation::run(*args).map(Within::from),
+        Command::Demo(args) => cli::demo::run(args).map(Within::from),
+        Command::Planarize(args) => cli::planarize::run(*args).map(within),
+        Command::Audit(args) => cli::planarize::audit_run(args).map(within),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Within(true)) => ExitCode::SUCCESS,
+        // Outputs are written, but the tolerance was not met: 1, for scripts.
+        Ok(Within(false)) => ExitCode::from(1),
         Err(e) => {
             // The chain of causes, each once: library errors already quote their source.
             let mut msg = e.to_string();

@@ -4,5 +4,6 @@ pub mod convert;
 pub mod demo;
 pub mod info;
 pub mod input;
+pub mod planarize;
 pub mod render;
 pub mod venation;

@@ -2,6 +2,7 @@
 //! colours (density maps painted on surfaces). `check_manifold` reports its topology.
 
 mod check;
+pub mod closest;
 pub mod io;
 
 use glam::DVec3;

@@ -1,5 +1,7 @@
 //! From a network to things that can be built. So far: panels and their planarity metrics, and
 //! node axes that make every panel planar (`planarize`).
 
+pub mod audit;
+pub mod axes;
 pub mod panels;
 pub mod planarize;

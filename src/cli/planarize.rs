@@ -1,0 +1,359 @@
+//! `lamina planarize` and `lamina audit`: node axes that make every panel planar, and a check of
+//! panels made elsewhere; both write the planarity report.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args as ClapArgs, ValueEnum};
+use glam::DVec3;
+use serde_json::json;
+
+use lamina::files::write_atomic;
+use lamina::mesh::closest::SurfaceIndex;
+use lamina::mesh::io::read_mesh;
+use lamina::network::io::read_network;
+use lamina::rationalize::audit::{audit, read_polygons};
+use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
+use lamina::rationalize::planarize::{
+    planarize, Input, Method, PlanarizeError, PlanarizeOptions, Selector, Solution,
+};
+use lamina::report::planarity::{Context, PanelRow, Report};
+use lamina::Network;
+
+use super::input::WeldArgs;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum MethodArg {
+    Lbfgs,
+    Projection,
+}
+
+#[derive(ClapArgs)]
+pub struct Args {
+    /// The network (.json .obj .dxf)
+    pub input: PathBuf,
+    /// Guide surface (.obj .stl): reference directions are its normals at the nodes
+    #[arg(long)]
+    pub surface: Option<PathBuf>,
+    #[arg(long, value_enum, default_value = "lbfgs")]
+    pub method: MethodArg,
+    /// Panel height at every node, mm
+    #[arg(long, default_value_t = 100.0)]
+    pub height: f64,
+    /// Heights from the node radii times this factor, instead of --height
+    #[arg(long, value_name = "FACTOR")]
+    pub height_from_radius: Option<f64>,
+    /// Largest panel deviation accepted, mm
+    #[arg(long, default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// Weight of closeness to the reference directions (lowered as needed to reach the tolerance)
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Projection method: how far axes move toward their projections each iteration
+    #[arg(long, default_value_t = 0.5)]
+    pub step: f64,
+    /// Iteration cap over all rounds
+    #[arg(long, default_value_t = 10_000)]
+    pub max_iterations: usize,
+    /// Panels of edges whose ends both match SELECTOR lie in planes with normal X,Y,Z (repeat);
+    /// SELECTOR: all, node=N, or x|y|z with < <= > >= and a number, e.g. 'z<50:0,0,1'
+    #[arg(long, value_name = "SELECTOR:X,Y,Z")]
+    pub fix_normal: Vec<String>,
+    /// Nodes matching SELECTOR keep the axis X,Y,Z (repeat), e.g. 'node=0:0,0,1'
+    #[arg(long, value_name = "SELECTOR:X,Y,Z")]
+    pub fix_axis: Vec<String>,
+    /// The axes file (lamina-axes JSON: positions, axes, heights, edges)
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write the panels as OBJ quads
+    #[arg(long)]
+    pub panels: Option<PathBuf>,
+    /// Write the planarity report as JSON
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the planarity report as one HTML page
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// Print a machine-readable summary on stdout
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub weld: WeldArgs,
+}
+
+fn parse_override(s: &str, what: &str) -> Result<(Selector, DVec3)> {
+    let Some((sel, dir)) = s.rsplit_once(':') else {
+        bail!("{what} \"{s}\": expected SELECTOR:X,Y,Z");
+    };
+    let sel = Selector::parse(sel).map_err(|e| anyhow::anyhow!("{what} \"{s}\": {e}"))?;
+    let v: Vec<f64> = dir
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow::anyhow!("{what} \"{s}\": \"{dir}\" is not X,Y,Z"))?;
+    let [x, y, z] = v[..] else {
+        bail!("{what} \"{s}\": \"{dir}\" is not X,Y,Z");
+    };
+    Ok((sel, DVec3::new(x, y, z)))
+}
+
+/// Reference directions: the guide surface's normals (turned to agree with stored normals), or
+/// the stored normals.
+fn references(net: &Network, surface: Option<&Path>) -> Result<Vec<DVec3>> {
+    let Some(path) = surface else {
+        return net
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                n.normal.ok_or_else(|| {
+                    anyhow::Error::new(PlanarizeError::NoReference(i as u32))
+                })
+            })
+            .collect();
+    };
+    let mesh = read_mesh(path)?;
+    let index = SurfaceIndex::new(&mesh);
+    net.nodes
+        .iter()
+        .map(|n| {
+            let c = index
+                .closest(n.p)
+                .with_context(|| format!("--surface {}: has no triangles", path.display()))?;
+            let d = index.normal(&c);
+            Ok(match n.normal {
+                Some(stored) if stored.dot(d) < 0.0 => -d,
+                _ => d,
+            })
+        })
+        .collect()
+}
+
+pub fn run(args: Args) -> Result<bool> {
+    let net = read_network(&args.input, &args.weld.options()?)?.network;
+    let reference = references(&net, args.surface.as_deref())?;
+    let heights: Vec<f64> = match args.height_from_radius {
+        Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),
+        None => vec![args.height; net.nodes.len()],
+    };
+    let input = Input {
+        positions: net.nodes.iter().map(|n| n.p).collect(),
+        edges: net.edges.iter().map(|e| [e.a, e.b]).collect(),
+        reference,
+        heights,
+    };
+    let opts = PlanarizeOptions {
+        method: match args.method {
+            MethodArg::Lbfgs => Method::Lbfgs,
+            MethodArg::Projection => Method::Projection,
+        },
+        alpha: args.alpha,
+        tolerance: args.tolerance,
+        max_iterations: args.max_iterations,
+        step: args.step,
+        fix_normals: args
+            .fix_normal
+            .iter()
+            .map(|s| parse_override(s, "--fix-normal"))
+            .collect::<Result<_>>()?,
+        fix_axes: args
+            .fix_axis
+            .iter()
+            .map(|s| parse_override(s, "--fix-axis"))
+            .collect::<Result<_>>()?,
+    };
+    let start = Instant::now();
+    let sol = planarize(&input, &opts)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let axes = Axes {
+        positions: input.positions.clone(),
+        edges: input.edges.clone(),
+        axes: sol.axes.clone(),
+        heights: input.heights.clone(),
+        reference: input.reference.clone(),
+        fixed_normals: sol
+            .panels
+            .iter()
+            .map(|p| p.fixed_normal.map(DVec3::from_array))
+            .collect(),
+    };
+    let summary = summary(&sol);
+    write_axes(&axes, &summary, &args.output)?;
+    let quads = axes.quads();
+    if let Some(p) = &args.panels {
+        write_panels_obj(&quads, p)?;
+    }
+    let report = report_of(&args, &sol, &quads, seconds);
+    write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
+    if args.json {
+        println!("{}", json!({ "output": args.output, "summary": summary, "seconds": seconds }));
+    } else {
+        println!(
+            "{} {}: max panel deviation {:.6} mm (tolerance {} mm) after {} iterations, α {:e}{}",
+            if sol.converged { "planar:" } else { "NOT within tolerance:" },
+            args.output.display(),
+            sol.max_deviation,
+            sol.tolerance,
+            sol.iterations,
+            sol.alpha_used,
+            if sol.alpha_used < sol.alpha_requested {
+                format!(" (lowered from {:e} to reach the tolerance)", sol.alpha_requested)
+            } else {
+                String::new()
+            }
+        );
+        for n in notes(&sol) {
+            println!("  {n}");
+        }
+    }
+    Ok(sol.converged)
+}
+
+fn summary(sol: &Solution) -> serde_json::Value {
+    let worst_axis = sol.axis_deviation_deg.iter().copied().fold(0.0, f64::max);
+    json!({
+        "method": sol.method,
+        "converged": sol.converged,
+        "max_deviation": sol.max_deviation,
+        "tolerance": sol.tolerance,
+        "iterations": sol.iterations,
+        "alpha_requested": sol.alpha_requested,
+        "alpha_used": sol.alpha_used,
+        "max_axis_deviation_deg": worst_axis,
+        "over_constrained": sol.over_constrained,
+        "impossible_normals": sol.impossible_normals,
+    })
+}
+
+fn notes(sol: &Solution) -> Vec<String> {
+    let mut out = Vec::new();
+    if !sol.converged {
+        out.push(format!(
+            "the tolerance of {} mm was NOT reached: the worst panel is {:.6} mm off plane",
+            sol.tolerance, sol.max_deviation
+        ));
+    }
+    if !sol.over_constrained.is_empty() {
+        out.push(format!(
+            "{} node(s) of degree > 3 are over-constrained: {:?}",
+            sol.over_constrained.len(),
+            sol.over_constrained
+        ));
+    }
+    if !sol.impossible_normals.is_empty() {
+        out.push(format!(
+            "{} edge(s) are not perpendicular to their fixed normal, so no panel through them can have it: {:?}",
+            sol.impossible_normals.len(),
+            sol.impossible_normals
+        ));
+    }
+    let worst = sol.axis_deviation_deg.iter().copied().fold(0.0, f64::max);
+    out.push(format!("axes moved at most {worst:.3}° from their references"));
+    out
+}
+
+fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) -> Report {
+    let rows = sol
+        .panels
+        .iter()
+        .map(|p| PanelRow {
+            index: p.edge,
+            nodes: Some([p.a, p.b]),
+            metrics: p.metrics,
+        })
+        .collect();
+    Report::new(
+        Context {
+            title: format!("Planarity of {}", args.input.display()),
+            source: args.input.display().to_string(),
+            method: Some(
+                match sol.method {
+                    Method::Lbfgs => "L-BFGS (argmin)",
+                    Method::Projection => "iterative projection",
+                }
+                .into(),
+            ),
+            iterations: Some(sol.iterations),
+            seconds: Some(seconds),
+            alpha_requested: Some(sol.alpha_requested),
+            alpha_used: Some(sol.alpha_used),
+            history: sol.history.clone(),
+            notes: notes(sol),
+        },
+        rows,
+        quads.iter().map(|q| q.to_vec()).collect(),
+        sol.tolerance,
+    )
+}
+
+fn write_reports(report: &Report, json: Option<&Path>, html: Option<&Path>) -> Result<()> {
+    if let Some(p) = json {
+        let text = report.json();
+        write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
+    if let Some(p) = html {
+        let text = report.html();
+        write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
+    Ok(())
+}
+
+#[derive(ClapArgs)]
+pub struct AuditArgs {
+    /// Panels: .obj faces or .dxf 3DFACE / closed polylines
+    pub input: PathBuf,
+    /// Largest deviation accepted, mm
+    #[arg(long)]
+    pub tolerance: f64,
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// Print a machine-readable summary on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Ok(true) when every panel is within the tolerance.
+pub fn audit_run(args: AuditArgs) -> Result<bool> {
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
+        bail!("--tolerance must be a positive distance in mm, got {}", args.tolerance);
+    }
+    let polygons = read_polygons(&args.input)?;
+    let audited = audit(&polygons);
+    let rows = audited
+        .iter()
+        .enumerate()
+        .map(|(k, a)| PanelRow {
+            index: k,
+            nodes: None,
+            metrics: a.metrics,
+        })
+        .collect();
+    let report = Report::new(
+        Context {
+            title: format!("Planarity audit of {}", args.input.display()),
+            source: args.input.display().to_string(),
+            ..Default::default()
+        },
+        rows,
+        audited.into_iter().map(|a| a.corners).collect(),
+        args.tolerance,
+    );
+    write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
+    let s = &report.summary;
+    if args.json {
+        println!("{}", serde_json::to_string(s)?);
+    } else {
+        println!(
+            "{}: {} panels, max deviation {:.9} mm, {} above {} mm",
+            args.input.display(),
+            s.panels,
+            s.max_deviation,
+            s.above_tolerance,
+            s.tolerance
+        );
+    }
+    Ok(s.within_tolerance)
+}

@@ -1,0 +1,424 @@
+//! The planarity report of a set of panels, from `planarize` or `audit`: a summary (maximum,
+//! mean and 95th-percentile deviation, panels above the tolerance, the solver's convergence
+//! curve), the worst panels, a histogram, and three views (top, front, isometric) of the panels
+//! coloured by deviation. As JSON, and as one self-contained HTML page with inline SVG.
+
+use std::fmt::Write as _;
+
+use glam::DVec3;
+
+use crate::rationalize::panels::QuadMetrics;
+
+/// How many panels the worst-panel table lists.
+pub const WORST: usize = 20;
+/// Histogram bins.
+pub const BINS: usize = 20;
+
+/// What the report is about: where the panels came from and how they were solved.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Context {
+    pub title: String,
+    pub source: String,
+    pub method: Option<String>,
+    pub iterations: Option<usize>,
+    pub seconds: Option<f64>,
+    pub alpha_requested: Option<f64>,
+    pub alpha_used: Option<f64>,
+    /// The objective (or deviation) after each iteration.
+    pub history: Vec<f64>,
+    pub notes: Vec<String>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PanelRow {
+    pub index: usize,
+    /// The network edge's nodes, when the panels came from a network.
+    pub nodes: Option<[u32; 2]>,
+    #[serde(flatten)]
+    pub metrics: QuadMetrics,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Summary {
+    pub panels: usize,
+    pub tolerance: f64,
+    pub max_deviation: f64,
+    pub mean_deviation: f64,
+    pub p95_deviation: f64,
+    pub above_tolerance: usize,
+    pub within_tolerance: bool,
+    pub max_diagonal_distance: f64,
+    pub max_torsion_deg: f64,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Histogram {
+    /// Bin edges in mm, BINS + 1 of them.
+    pub edges: Vec<f64>,
+    pub counts: Vec<usize>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Report {
+    #[serde(flatten)]
+    pub context: Context,
+    pub summary: Summary,
+    pub worst: Vec<PanelRow>,
+    pub histogram: Histogram,
+    pub panels: Vec<PanelRow>,
+    /// Panel corners for the views; not written to JSON (the panels file has them).
+    #[serde(skip)]
+    pub quads: Vec<Vec<DVec3>>,
+}
+
+impl Report {
+    pub fn new(
+        context: Context,
+        rows: Vec<PanelRow>,
+        quads: Vec<Vec<DVec3>>,
+        tolerance: f64,
+    ) -> Report {
+        let n = rows.len();
+        let mut devs: Vec<f64> = rows.iter().map(|r| r.metrics.deviation).collect();
+        devs.sort_by(f64::total_cmp);
+        let max = devs.last().copied().unwrap_or(0.0);
+        let p95 = if n > 0 {
+            devs[((n as f64 * 0.95).ceil() as usize).clamp(1, n) - 1]
+        } else {
+            0.0
+        };
+        let above = rows
+            .iter()
+            .filter(|r| r.metrics.deviation > tolerance)
+            .count();
+        let summary = Summary {
+            panels: n,
+            tolerance,
+            max_deviation: max,
+            mean_deviation: if n > 0 {
+                devs.iter().sum::<f64>() / n as f64
+            } else {
+                0.0
+            },
+            p95_deviation: p95,
+            above_tolerance: above,
+            within_tolerance: above == 0,
+            max_diagonal_distance: rows
+                .iter()
+                .map(|r| r.metrics.diagonal_distance)
+                .fold(0.0, f64::max),
+            max_torsion_deg: rows
+                .iter()
+                .map(|r| r.metrics.torsion_deg)
+                .fold(0.0, f64::max),
+        };
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| {
+            rows[b]
+                .metrics
+                .deviation
+                .total_cmp(&rows[a].metrics.deviation)
+                .then(a.cmp(&b))
+        });
+        let worst = order.iter().take(WORST).map(|&k| rows[k].clone()).collect();
+        let top = if max > 0.0 { max } else { tolerance };
+        let edges: Vec<f64> = (0..=BINS).map(|k| top * k as f64 / BINS as f64).collect();
+        let mut counts = vec![0usize; BINS];
+        for d in &devs {
+            let k = ((d / top) * BINS as f64) as usize;
+            counts[k.min(BINS - 1)] += 1;
+        }
+        Report {
+            context,
+            summary,
+            worst,
+            histogram: Histogram { edges, counts },
+            panels: rows,
+            quads,
+        }
+    }
+
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("reports serialise") + "\n"
+    }
+
+    /// One self-contained HTML page.
+    pub fn html(&self) -> String {
+        let s = &self.summary;
+        let c = &self.context;
+        let mut h = String::new();
+        let _ = write!(
+            h,
+            "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>{}</title>\n\
+             <style>body{{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:72em;color:#222}}\
+             table{{border-collapse:collapse}}td,th{{padding:2px 10px;border-bottom:1px solid #ddd;text-align:right}}\
+             .views{{display:flex;flex-wrap:wrap;gap:1em}}.views figure{{margin:0}}\
+             .ok{{color:#186a1e}}.bad{{color:#a3161a}}</style></head><body>\n<h1>{}</h1>\n",
+            esc(&c.title),
+            esc(&c.title)
+        );
+        let verdict = if s.within_tolerance {
+            format!("<p class=\"ok\">All {} panels are within {} mm.</p>", s.panels, s.tolerance)
+        } else {
+            format!(
+                "<p class=\"bad\">{} of {} panels exceed the tolerance of {} mm.</p>",
+                s.above_tolerance, s.panels, s.tolerance
+            )
+        };
+        h.push_str(&verdict);
+        h.push_str("<table>\n");
+        let mut row = |k: &str, v: String| {
+            let _ = writeln!(h, "<tr><th style=\"text-align:left\">{k}</th><td>{v}</td></tr>");
+        };
+        row("source", esc(&c.source));
+        if let Some(m) = &c.method {
+            row("method", esc(m));
+        }
+        if let Some(i) = c.iterations {
+            row("iterations", i.to_string());
+        }
+        if let Some(t) = c.seconds {
+            row("time", format!("{:.3} ms", t * 1e3));
+        }
+        if let (Some(a), Some(u)) = (c.alpha_requested, c.alpha_used) {
+            row("α requested / used", format!("{a:e} / {u:e}"));
+        }
+        row("max deviation", format!("{:.6} mm", s.max_deviation));
+        row("mean deviation", format!("{:.6} mm", s.mean_deviation));
+        row("95th percentile", format!("{:.6} mm", s.p95_deviation));
+        row("max diagonal distance", format!("{:.6} mm", s.max_diagonal_distance));
+        row("max torsion", format!("{:.4}°", s.max_torsion_deg));
+        h.push_str("</table>\n");
+        for note in &c.notes {
+            let _ = writeln!(h, "<p>{}</p>", esc(note));
+        }
+        h.push_str("<h2>Panels by deviation</h2>\n<div class=\"views\">\n");
+        for (name, view) in [
+            ("top", View::Top),
+            ("front", View::Front),
+            ("isometric", View::Iso),
+        ] {
+            let _ = writeln!(
+                h,
+                "<figure>{}<figcaption>{name}</figcaption></figure>",
+                self.view_svg(view)
+            );
+        }
+        h.push_str("</div>\n<p>Colour: green at 0, red at the tolerance or above.</p>\n");
+        h.push_str("<h2>Histogram</h2>\n");
+        h.push_str(&self.histogram_svg());
+        if !c.history.is_empty() {
+            h.push_str("<h2>Convergence</h2>\n");
+            h.push_str(&curve_svg(&c.history));
+        }
+        h.push_str("<h2>Worst panels</h2>\n<table><tr><th>panel</th><th>nodes</th><th>deviation mm</th>\
+                    <th>diagonals mm</th><th>diag / edge</th><th>diag / diag</th><th>torsion °</th></tr>\n");
+        for r in &self.worst {
+            let m = &r.metrics;
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td>{:.6}</td><td>{:.6}</td><td>{:.2e}</td><td>{:.2e}</td><td>{:.4}</td></tr>",
+                r.index,
+                r.nodes.map_or(String::new(), |[a, b]| format!("{a}–{b}")),
+                m.deviation,
+                m.diagonal_distance,
+                m.diagonal_rel_edge,
+                m.diagonal_rel_diagonal,
+                m.torsion_deg
+            );
+        }
+        h.push_str("</table>\n</body></html>\n");
+        h
+    }
+
+    fn view_svg(&self, view: View) -> String {
+        let project = |p: DVec3| -> (f64, f64) {
+            match view {
+                View::Top => (p.x, -p.y),
+                View::Front => (p.x, -p.z),
+                View::Iso => {
+                    // Looking down (1, 1, 1): x right-down, y left-down, z up.
+                    let c = std::f64::consts::FRAC_PI_6.cos();
+                    ((p.x - p.y) * c, (p.x + p.y) * 0.5 - p.z)
+                }
+            }
+        };
+        let pts: Vec<(f64, f64)> = self.quads.iter().flatten().map(|p| project(*p)).collect();
+        let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+        for &(x, y) in &pts {
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        if pts.is_empty() {
+            return String::new();
+        }
+        let (w, hgt) = ((hi.0 - lo.0).max(1e-9), (hi.1 - lo.1).max(1e-9));
+        let size = 360.0;
+        let k = size / w.max(hgt);
+        let mut s = format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0}\" height=\"{:.0}\" viewBox=\"-4 -4 {:.1} {:.1}\">",
+            w * k + 8.0,
+            hgt * k + 8.0,
+            w * k + 8.0,
+            hgt * k + 8.0
+        );
+        let tol = self.summary.tolerance;
+        for (q, row) in self.quads.iter().zip(&self.panels) {
+            let t = (row.metrics.deviation / tol).clamp(0.0, 1.0);
+            let (r, g) = ((40.0 + 200.0 * t) as u8, (160.0 - 130.0 * t) as u8);
+            let mut d = String::new();
+            for (i, p) in q.iter().enumerate() {
+                let (x, y) = project(*p);
+                let _ = write!(
+                    d,
+                    "{}{:.2} {:.2}",
+                    if i == 0 { "M" } else { " L" },
+                    (x - lo.0) * k,
+                    (y - lo.1) * k
+                );
+            }
+            let _ = write!(
+                s,
+                "<path d=\"{d} Z\" fill=\"rgb({r},{g},60)\" fill-opacity=\"0.55\" stroke=\"#333\" stroke-width=\"0.3\"/>"
+            );
+        }
+        s.push_str("</svg>");
+        s
+    }
+
+    fn histogram_svg(&self) -> String {
+        let hgm = &self.histogram;
+        let max = hgm.counts.iter().copied().max().unwrap_or(1).max(1) as f64;
+        let (bw, hh) = (24.0, 160.0);
+        let mut s = format!(
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\">",
+            bw * BINS as f64 + 80.0,
+            hh + 40.0
+        );
+        for (k, &c) in hgm.counts.iter().enumerate() {
+            let bh = hh * c as f64 / max;
+            let _ = write!(
+                s,
+                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"#5a8f4e\"><title>{:.4}–{:.4} mm: {c}</title></rect>",
+                k as f64 * bw + 40.0,
+                hh - bh + 10.0,
+                bw - 2.0,
+                bh,
+                hgm.edges[k],
+                hgm.edges[k + 1]
+            );
+        }
+        let _ = write!(
+            s,
+            "<text x=\"40\" y=\"{:.0}\" font-size=\"11\">0</text><text x=\"{:.0}\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">{:.4} mm</text>\
+             <text x=\"34\" y=\"18\" font-size=\"11\" text-anchor=\"end\">{}</text></svg>",
+            hh + 26.0,
+            bw * BINS as f64 + 40.0,
+            hh + 26.0,
+            hgm.edges[BINS],
+            max as usize
+        );
+        s
+    }
+}
+
+#[derive(Clone, Copy)]
+enum View {
+    Top,
+    Front,
+    Iso,
+}
+
+/// The convergence curve on a log scale.
+fn curve_svg(history: &[f64]) -> String {
+    let vals: Vec<f64> = history
+        .iter()
+        .map(|v| v.max(1e-300).log10())
+        .collect();
+    let (lo, hi) = vals
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+    let span = (hi - lo).max(1e-9);
+    let (w, h) = (560.0, 200.0);
+    let n = (vals.len().max(2) - 1) as f64;
+    let mut d = String::new();
+    for (i, v) in vals.iter().enumerate() {
+        let _ = write!(
+            d,
+            "{}{:.1} {:.1}",
+            if i == 0 { "M" } else { " L" },
+            50.0 + w * i as f64 / n,
+            10.0 + h * (hi - v) / span
+        );
+    }
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\">\
+         <path d=\"{d}\" fill=\"none\" stroke=\"#2b5d8a\" stroke-width=\"1.5\"/>\
+         <text x=\"46\" y=\"16\" font-size=\"11\" text-anchor=\"end\">1e{hi:.1}</text>\
+         <text x=\"46\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">1e{lo:.1}</text>\
+         <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">{} iterations</text></svg>",
+        w + 60.0,
+        h + 40.0,
+        h + 12.0,
+        w + 50.0,
+        h + 32.0,
+        history.len()
+    )
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rationalize::panels::quad_metrics;
+
+    #[test]
+    fn summary_figures_and_a_self_contained_page() {
+        let quads: Vec<Vec<DVec3>> = (0..10)
+            .map(|k| {
+                let lift = k as f64 * 0.001;
+                vec![
+                    DVec3::new(k as f64, 0.0, 0.0),
+                    DVec3::new(k as f64 + 1.0, 0.0, 0.0),
+                    DVec3::new(k as f64 + 1.0, lift, 1.0),
+                    DVec3::new(k as f64, 0.0, 1.0),
+                ]
+            })
+            .collect();
+        let rows: Vec<PanelRow> = quads
+            .iter()
+            .enumerate()
+            .map(|(k, q)| PanelRow {
+                index: k,
+                nodes: None,
+                metrics: quad_metrics([q[0], q[1], q[2], q[3]]),
+            })
+            .collect();
+        let r = Report::new(
+            Context {
+                title: "test".into(),
+                history: vec![1.0, 0.1, 0.01],
+                ..Default::default()
+            },
+            rows,
+            quads,
+            0.005,
+        );
+        assert!((r.summary.max_deviation - 0.009).abs() < 1e-12);
+        assert_eq!(r.summary.above_tolerance, 4);
+        assert!(!r.summary.within_tolerance);
+        assert_eq!(r.worst[0].index, 9);
+        assert_eq!(r.histogram.counts.iter().sum::<usize>(), 10);
+        let html = r.html();
+        assert_eq!(html.matches("<svg").count(), 5, "3 views, histogram, curve");
+        assert!(!html.contains("http://") || !html.contains("src=\"http"), "no outside resources");
+        let json: serde_json::Value = serde_json::from_str(&r.json()).expect("valid JSON");
+        assert_eq!(json["summary"]["panels"], 10);
+    }
+}
