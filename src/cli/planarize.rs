@@ -107,9 +107,8 @@ fn references(net: &Network, surface: Option<&Path>) -> Result<Vec<DVec3>> {
             .iter()
             .enumerate()
             .map(|(i, n)| {
-                n.normal.ok_or_else(|| {
-                    anyhow::Error::new(PlanarizeError::NoReference(i as u32))
-                })
+                n.normal
+                    .ok_or_else(|| anyhow::Error::new(PlanarizeError::NoReference(i as u32)))
             })
             .collect();
     };
@@ -131,18 +130,6 @@ fn references(net: &Network, surface: Option<&Path>) -> Result<Vec<DVec3>> {
 }
 
 pub fn run(args: Args) -> Result<bool> {
-    let net = read_network(&args.input, &args.weld.options()?)?.network;
-    let reference = references(&net, args.surface.as_deref())?;
-    let heights: Vec<f64> = match args.height_from_radius {
-        Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),
-        None => vec![args.height; net.nodes.len()],
-    };
-    let input = Input {
-        positions: net.nodes.iter().map(|n| n.p).collect(),
-        edges: net.edges.iter().map(|e| [e.a, e.b]).collect(),
-        reference,
-        heights,
-    };
     let opts = PlanarizeOptions {
         method: match args.method {
             MethodArg::Lbfgs => Method::Lbfgs,
@@ -162,6 +149,18 @@ pub fn run(args: Args) -> Result<bool> {
             .iter()
             .map(|s| parse_override(s, "--fix-axis"))
             .collect::<Result<_>>()?,
+    };
+    let net = read_network(&args.input, &args.weld.options()?)?.network;
+    let reference = references(&net, args.surface.as_deref())?;
+    let heights: Vec<f64> = match args.height_from_radius {
+        Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),
+        None => vec![args.height; net.nodes.len()],
+    };
+    let input = Input {
+        positions: net.nodes.iter().map(|n| n.p).collect(),
+        edges: net.edges.iter().map(|e| [e.a, e.b]).collect(),
+        reference,
+        heights,
     };
     let start = Instant::now();
     let sol = planarize(&input, &opts)?;
@@ -187,18 +186,28 @@ pub fn run(args: Args) -> Result<bool> {
     let report = report_of(&args, &sol, &quads, seconds);
     write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
     if args.json {
-        println!("{}", json!({ "output": args.output, "summary": summary, "seconds": seconds }));
+        println!(
+            "{}",
+            json!({ "output": args.output, "summary": summary, "seconds": seconds })
+        );
     } else {
         println!(
             "{} {}: max panel deviation {:.6} mm (tolerance {} mm) after {} iterations, α {:e}{}",
-            if sol.converged { "planar:" } else { "NOT within tolerance:" },
+            if sol.converged {
+                "planar:"
+            } else {
+                "NOT within tolerance:"
+            },
             args.output.display(),
             sol.max_deviation,
             sol.tolerance,
             sol.iterations,
             sol.alpha_used,
             if sol.alpha_used < sol.alpha_requested {
-                format!(" (lowered from {:e} to reach the tolerance)", sol.alpha_requested)
+                format!(
+                    " (lowered from {:e} to reach the tolerance)",
+                    sol.alpha_requested
+                )
             } else {
                 String::new()
             }
@@ -249,7 +258,9 @@ fn notes(sol: &Solution) -> Vec<String> {
         ));
     }
     let worst = sol.axis_deviation_deg.iter().copied().fold(0.0, f64::max);
-    out.push(format!("axes moved at most {worst:.3}° from their references"));
+    out.push(format!(
+        "axes moved at most {worst:.3}° from their references"
+    ));
     out
 }
 
@@ -318,7 +329,10 @@ pub struct AuditArgs {
 /// Ok(true) when every panel is within the tolerance.
 pub fn audit_run(args: AuditArgs) -> Result<bool> {
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        bail!("--tolerance must be a positive distance in mm, got {}", args.tolerance);
+        bail!(
+            "--tolerance must be a positive distance in mm, got {}",
+            args.tolerance
+        );
     }
     let polygons = read_polygons(&args.input)?;
     let audited = audit(&polygons);

@@ -68,7 +68,10 @@ impl<'a> SurfaceIndex<'a> {
     /// None for a mesh without triangles.
     pub fn closest(&self, p: DVec3) -> Option<Closest> {
         let mut best: Option<Closest> = None;
-        for (cand, box_d2) in self.tree.nearest_neighbor_iter_with_distance_2(&p.to_array()) {
+        for (cand, box_d2) in self
+            .tree
+            .nearest_neighbor_iter_with_distance_2(&p.to_array())
+        {
             if let Some(b) = best {
                 if box_d2 > b.distance * b.distance {
                     break;
@@ -148,12 +151,7 @@ mod tests {
 
     fn square() -> TriMesh {
         TriMesh {
-            positions: vec![
-                DVec3::ZERO,
-                DVec3::X,
-                DVec3::new(1.0, 1.0, 0.0),
-                DVec3::Y,
-            ],
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             colors: None,
         }
@@ -163,7 +161,9 @@ mod tests {
     fn closest_points_and_normals_on_a_square() {
         let m = square();
         let idx = SurfaceIndex::new(&m);
-        let c = idx.closest(DVec3::new(0.25, 0.75, 2.0)).expect("a triangle");
+        let c = idx
+            .closest(DVec3::new(0.25, 0.75, 2.0))
+            .expect("a triangle");
         assert!(c.point.distance(DVec3::new(0.25, 0.75, 0.0)) < 1e-12);
         assert!((c.distance - 2.0).abs() < 1e-12);
         assert!(idx.normal(&c).distance(DVec3::Z) < 1e-12);

@@ -31,7 +31,10 @@ pub fn read_polygons(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
         }
     };
     if polygons.is_empty() {
-        return Err(ReadError::file(path, "holds no panels (faces or closed polylines)"));
+        return Err(ReadError::file(
+            path,
+            "holds no panels (faces or closed polylines)",
+        ));
     }
     for (k, p) in polygons.iter().enumerate() {
         if let Some(c) = p.iter().position(|c| !c.is_finite()) {

@@ -95,7 +95,11 @@ pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Resu
                 height: axes.heights[i],
                 reference: axes.reference[i].to_array(),
             };
-            let sep = if i + 1 < axes.positions.len() { "," } else { "" };
+            let sep = if i + 1 < axes.positions.len() {
+                ","
+            } else {
+                ""
+            };
             writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
         }
         writeln!(w, "  ],")?;

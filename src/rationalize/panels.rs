@@ -27,13 +27,17 @@ pub fn panel_quad(va: DVec3, vb: DVec3, da: DVec3, db: DVec3, ha: f64, hb: f64) 
     [va, vb, vb + db * hb, va + da * ha]
 }
 
-pub fn quad_metrics(q: [DVec3; 4]) -> QuadMetrics {
-    let n = (q[1] - q[0]).cross(q[3] - q[0]);
-    let deviation = match n.try_normalize() {
+/// The deviation alone (the distance of q2 from the plane of q0, q1, q3), for tolerance checks.
+pub fn quad_deviation(q: [DVec3; 4]) -> f64 {
+    match (q[1] - q[0]).cross(q[3] - q[0]).try_normalize() {
         Some(n) => (q[2] - q[0]).dot(n).abs(),
-        // Degenerate: the three corners are collinear, so any fourth corner fits a plane.
         None => 0.0,
-    };
+    }
+}
+
+pub fn quad_metrics(q: [DVec3; 4]) -> QuadMetrics {
+    // Degenerate (three corners collinear): any fourth corner fits a plane, deviation 0.
+    let deviation = quad_deviation(q);
     let diagonal_distance = line_distance(q[0], q[2], q[1], q[3]);
     let edges: f64 = (0..4).map(|k| q[k].distance(q[(k + 1) % 4])).sum::<f64>() / 4.0;
     let diagonals = 0.5 * (q[0].distance(q[2]) + q[1].distance(q[3]));

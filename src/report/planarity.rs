@@ -158,7 +158,10 @@ impl Report {
             esc(&c.title)
         );
         let verdict = if s.within_tolerance {
-            format!("<p class=\"ok\">All {} panels are within {} mm.</p>", s.panels, s.tolerance)
+            format!(
+                "<p class=\"ok\">All {} panels are within {} mm.</p>",
+                s.panels, s.tolerance
+            )
         } else {
             format!(
                 "<p class=\"bad\">{} of {} panels exceed the tolerance of {} mm.</p>",
@@ -168,7 +171,10 @@ impl Report {
         h.push_str(&verdict);
         h.push_str("<table>\n");
         let mut row = |k: &str, v: String| {
-            let _ = writeln!(h, "<tr><th style=\"text-align:left\">{k}</th><td>{v}</td></tr>");
+            let _ = writeln!(
+                h,
+                "<tr><th style=\"text-align:left\">{k}</th><td>{v}</td></tr>"
+            );
         };
         row("source", esc(&c.source));
         if let Some(m) = &c.method {
@@ -186,7 +192,10 @@ impl Report {
         row("max deviation", format!("{:.6} mm", s.max_deviation));
         row("mean deviation", format!("{:.6} mm", s.mean_deviation));
         row("95th percentile", format!("{:.6} mm", s.p95_deviation));
-        row("max diagonal distance", format!("{:.6} mm", s.max_diagonal_distance));
+        row(
+            "max diagonal distance",
+            format!("{:.6} mm", s.max_diagonal_distance),
+        );
         row("max torsion", format!("{:.4}°", s.max_torsion_deg));
         h.push_str("</table>\n");
         for note in &c.notes {
@@ -331,10 +340,7 @@ enum View {
 
 /// The convergence curve on a log scale.
 fn curve_svg(history: &[f64]) -> String {
-    let vals: Vec<f64> = history
-        .iter()
-        .map(|v| v.max(1e-300).log10())
-        .collect();
+    let vals: Vec<f64> = history.iter().map(|v| v.max(1e-300).log10()).collect();
     let (lo, hi) = vals
         .iter()
         .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
@@ -417,7 +423,10 @@ mod tests {
         assert_eq!(r.histogram.counts.iter().sum::<usize>(), 10);
         let html = r.html();
         assert_eq!(html.matches("<svg").count(), 5, "3 views, histogram, curve");
-        assert!(!html.contains("http://") || !html.contains("src=\"http"), "no outside resources");
+        assert!(
+            !html.contains("http://") || !html.contains("src=\"http"),
+            "no outside resources"
+        );
         let json: serde_json::Value = serde_json::from_str(&r.json()).expect("valid JSON");
         assert_eq!(json["summary"]["panels"], 10);
     }

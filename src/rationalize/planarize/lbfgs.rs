@@ -20,7 +20,7 @@ use glam::DVec3;
 use super::objective::Objective;
 
 /// Iterations per round between tolerance checks.
-const ROUND: usize = 200;
+const ROUND: usize = 25;
 /// L-BFGS memory.
 const MEMORY: usize = 7;
 /// Cost evaluations allowed per iteration, on average over a round.
@@ -162,7 +162,7 @@ where
 {
     let solver = LBFGS::new(linesearch, MEMORY)
         .with_tolerance_grad(1e-12)
-        .and_then(|s| s.with_tolerance_cost(0.0))
+        .and_then(|s| s.with_tolerance_cost(1e-14))
         .map_err(|_| ())?;
     let res = Executor::new(problem, solver)
         .configure(|s| s.param(x).max_iters(iters))

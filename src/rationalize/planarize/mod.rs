@@ -6,9 +6,10 @@
 //!
 //! Two solvers behind one interface: L-BFGS (argmin) on the objective in `objective.rs`, and
 //! the paper's iterative projection (`projection.rs`). Both keep α, the weight of closeness to
-//! d⁰, only as long as the tolerance allows: when a solve ends above the tolerance, α is cut by
-//! ten and the solve resumes from where it stopped (continuation), until the tolerance holds or
-//! α is negligible. The α finally used is reported, and so is a tolerance not reached.
+//! d⁰, only as long as the tolerance allows: when a solve ends above the tolerance, α is cut
+//! (by the ratio of deviation to tolerance, since the deviation left falls about in proportion
+//! to α) and the solve resumes from where it stopped (continuation), until the tolerance holds
+//! or α is negligible. The α finally used is reported, and so is a tolerance not reached.
 //!
 //! Overrides: edges with a fixed panel normal n hold both end axes in the plane ⊥ n (Calyx's
 //! base plates); nodes with a fixed axis do not move. A node on two fixed planes keeps the
@@ -20,7 +21,7 @@ mod projection;
 
 use glam::DVec3;
 
-use super::panels::{panel_quad, quad_metrics, QuadMetrics};
+use super::panels::{panel_quad, quad_deviation, quad_metrics, QuadMetrics};
 use objective::{Frame, Objective};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -60,15 +61,16 @@ impl Selector {
                 .map(Selector::Node)
                 .map_err(|_| format!("\"{n}\" is not a node number"));
         }
-        let axis =
-            match s.chars().next() {
-                Some('x') => 0,
-                Some('y') => 1,
-                Some('z') => 2,
-                _ => return Err(format!(
+        let axis = match s.chars().next() {
+            Some('x') => 0,
+            Some('y') => 1,
+            Some('z') => 2,
+            _ => {
+                return Err(format!(
                     "\"{s}\": expected all, node=N, or x|y|z followed by < <= > >= and a number"
-                )),
-            };
+                ))
+            }
+        };
         let rest = &s[1..];
         let (op, num) = if let Some(r) = rest.strip_prefix("<=") {
             (Cmp::Le, r)
@@ -227,7 +229,17 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
         input
             .edges
             .iter()
-            .map(|&[a, b]| panel(input, axes, a, b).deviation)
+            .map(|&[a, b]| {
+                let (a, b) = (a as usize, b as usize);
+                quad_deviation(panel_quad(
+                    input.positions[a],
+                    input.positions[b],
+                    axes[a],
+                    axes[b],
+                    input.heights[a],
+                    input.heights[b],
+                ))
+            })
             .fold(0.0, f64::max)
     };
     let mut alpha = opts.alpha;
@@ -271,10 +283,13 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
             }
         };
         iterations += used;
-        if max_dev(&axes) <= opts.tolerance || alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
+        let dev = max_dev(&axes);
+        if dev <= opts.tolerance || alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
             break;
         }
-        alpha *= 0.1;
+        // The deviation left at a converged α falls about in proportion to α: aim at half the
+        // tolerance, cutting α by 10 to 10,000 times.
+        alpha *= (0.5 * opts.tolerance / dev).clamp(1e-4, 0.1);
     }
     let max_deviation = max_dev(&axes);
     let mut degree = vec![0usize; n];

@@ -1,0 +1,217 @@
+//! `lamina planarize` and `lamina audit` end to end on the Calyx-like venation fixture.
+
+mod common;
+
+use std::path::Path;
+
+use common::{fixture, lamina, stderr, stdout, TestResult};
+use glam::DVec3;
+use lamina::rationalize::axes::read_axes;
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn report(path: &Path) -> Result<serde_json::Value, Box<dyn std::error::Error>> {
+    Ok(serde_json::from_str(&std::fs::read_to_string(path)?)?)
+}
+
+#[test]
+fn both_methods_planarize_the_calyx_fixture_with_flat_base_plates() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let net = fixture("networks/calyx_veins.json");
+    let mut axes = Vec::new();
+    for method in ["lbfgs", "projection"] {
+        let out = dir.path().join(format!("{method}.json"));
+        let rep = dir.path().join(format!("{method}.report.json"));
+        let html = dir.path().join(format!("{method}.html"));
+        let o = lamina(&[
+            "planarize",
+            s(&net),
+            "--method",
+            method,
+            "--height",
+            "100",
+            "--tolerance",
+            "0.01",
+            "--fix-normal",
+            "z<1:0,0,1",
+            "-o",
+            s(&out),
+            "--report",
+            s(&rep),
+            "--html",
+            s(&html),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{method}: {}", stderr(&o));
+        let r = report(&rep)?;
+        let max = r["summary"]["max_deviation"].as_f64().ok_or("max")?;
+        assert!(max < 0.01, "{method}: {max} mm");
+        assert_eq!(r["summary"]["panels"], 273);
+        let a = read_axes(&out)?;
+        // Base plates: edges with both ends on z = 0 hold panels whose normal is +Z.
+        let mut base = 0;
+        for (k, &[i, j]) in a.edges.iter().enumerate() {
+            if a.fixed_normals[k].is_none() {
+                continue;
+            }
+            base += 1;
+            let e = a.positions[j as usize] - a.positions[i as usize];
+            let n = e.cross(a.axes[i as usize]).normalize();
+            let off = n.dot(DVec3::Z).abs().min(1.0).acos().to_degrees();
+            assert!(off < 0.01, "{method}: base panel {k} is {off}° off +Z");
+        }
+        assert_eq!(base, 4, "the base ring");
+        let page = std::fs::read_to_string(&html)?;
+        assert!(page.contains("<svg") && page.contains("All 273 panels are within"));
+        axes.push(a.axes);
+    }
+    // The two methods land on nearby, not identical, planar configurations (measured: ~1.5°).
+    let worst = axes[0]
+        .iter()
+        .zip(&axes[1])
+        .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
+        .fold(0.0, f64::max);
+    assert!(worst < 2.0, "the methods' axes differ by {worst}°");
+    Ok(())
+}
+
+#[test]
+fn audit_reproduces_the_deviation_and_sets_the_exit_status() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let net = fixture("networks/calyx_veins.json");
+    let (out, panels, rep) = (
+        dir.path().join("axes.json"),
+        dir.path().join("panels.obj"),
+        dir.path().join("report.json"),
+    );
+    let o = lamina(&[
+        "planarize",
+        s(&net),
+        "-o",
+        s(&out),
+        "--panels",
+        s(&panels),
+        "--report",
+        s(&rep),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let planarized = report(&rep)?["summary"]["max_deviation"]
+        .as_f64()
+        .ok_or("max")?;
+    let audit_rep = dir.path().join("audit.json");
+    let o = lamina(&[
+        "audit",
+        s(&panels),
+        "--tolerance",
+        "0.01",
+        "--report",
+        s(&audit_rep),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let audited = report(&audit_rep)?["summary"]["max_deviation"]
+        .as_f64()
+        .ok_or("max")?;
+    assert!(
+        (audited - planarized).abs() <= 1e-9,
+        "{audited} vs {planarized}"
+    );
+    // A tighter tolerance than the panels meet: exit 1, with the report still written.
+    let o = lamina(&["audit", s(&panels), "--tolerance", "0.0001", "--json"]);
+    assert_eq!(o.status.code(), Some(1));
+    let summary: serde_json::Value = serde_json::from_str(&stdout(&o))?;
+    assert!(summary["above_tolerance"].as_u64().ok_or("count")? > 0);
+    // Not a panels file: exit 2.
+    let o = lamina(&["audit", s(&fixture("bad/garbage.dxf")), "--tolerance", "1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("garbage.dxf"));
+    Ok(())
+}
+
+#[test]
+fn a_guide_surface_gives_the_references() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("axes.json");
+    let o = lamina(&[
+        "planarize",
+        s(&fixture("networks/calyx_veins.json")),
+        "--surface",
+        s(&fixture("surfaces/calyx.obj")),
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let a = read_axes(&out)?;
+    // The mesh's normals are close to the analytic ones the fixture stores (25 × 100 facets).
+    let net = lamina::network::io::read_network(
+        &fixture("networks/calyx_veins.json"),
+        &Default::default(),
+    )?
+    .network;
+    for (r, n) in a.reference.iter().zip(&net.nodes) {
+        let stored = n.normal.ok_or("normal")?;
+        assert!(r.dot(stored) > 0.99, "reference {r} vs stored {stored}");
+    }
+    Ok(())
+}
+
+#[test]
+fn bad_networks_exit_2_naming_the_problem() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let write = |name: &str, text: &str| -> std::io::Result<std::path::PathBuf> {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text)?;
+        Ok(p)
+    };
+    let head = "{\"format\": \"lamina-network\", \"version\": 1, ";
+    let zero = write(
+        "zero.json",
+        &format!("{head}\"nodes\": [{{\"p\": [0,0,0], \"normal\": [0,0,1]}}, {{\"p\": [0,0,0], \"normal\": [0,0,1]}}], \"edges\": [{{\"a\": 0, \"b\": 1}}]}}"),
+    )?;
+    let bare = write(
+        "bare.json",
+        &format!("{head}\"nodes\": [{{\"p\": [0,0,0]}}, {{\"p\": [1,0,0]}}], \"edges\": [{{\"a\": 0, \"b\": 1}}]}}"),
+    )?;
+    let ok = write(
+        "ok.json",
+        &format!("{head}\"nodes\": [{{\"p\": [0,0,0], \"normal\": [0,0,1]}}, {{\"p\": [1,0,0], \"normal\": [0,0,1]}}], \"edges\": [{{\"a\": 0, \"b\": 1}}]}}"),
+    )?;
+    let out = dir.path().join("never.json");
+    for (input, args, words) in [
+        (&zero, vec![], vec!["edge 0", "zero-length"]),
+        (&bare, vec![], vec!["node 0", "--surface"]),
+        (&ok, vec!["--fix-normal", "z<:0,0,1"], vec!["--fix-normal"]),
+        (&ok, vec!["--fix-axis", "node=0:0,0"], vec!["--fix-axis"]),
+        (&ok, vec!["--tolerance", "0"], vec!["--tolerance"]),
+        (&ok, vec!["--height=-5"], vec!["height"]),
+    ] {
+        let mut all = vec!["planarize", s(input), "-o", s(&out)];
+        all.extend(args.iter().copied());
+        let o = lamina(&all);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        for w in words {
+            assert!(e.contains(w), "expected \"{w}\" in: {e}");
+        }
+        assert!(!out.exists());
+    }
+    Ok(())
+}
+
+#[test]
+fn a_degree_four_node_is_reported() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    // A star: node 0 with four legs.
+    let text = "{\"format\": \"lamina-network\", \"version\": 1, \"nodes\": [\
+        {\"p\": [0,0,0], \"normal\": [0,0,1]}, {\"p\": [10,0,1], \"normal\": [0,0,1]},\
+        {\"p\": [0,10,-1], \"normal\": [0,0,1]}, {\"p\": [-10,0,2], \"normal\": [0,0,1]},\
+        {\"p\": [0,-10,0.5], \"normal\": [0,0,1]}], \"edges\": [\
+        {\"a\": 0, \"b\": 1}, {\"a\": 0, \"b\": 2}, {\"a\": 0, \"b\": 3}, {\"a\": 0, \"b\": 4}]}";
+    let input = dir.path().join("star.json");
+    std::fs::write(&input, text)?;
+    let out = dir.path().join("axes.json");
+    let o = lamina(&["planarize", s(&input), "-o", s(&out), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o))?;
+    assert_eq!(v["summary"]["over_constrained"], serde_json::json!([0]));
+    Ok(())
+}
