@@ -29,6 +29,9 @@ enum Command {
     Render(cli::render::Args),
     /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005)
     Venation(Box<cli::venation::Args>),
+    /// The closed cells of a network on a surface (faces of its rotation system), triangulated
+    /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
+    Cells(cli::cells::Args),
     /// Node axes that make every panel of a network planar (L-BFGS or iterative projection),
     /// with the panels and a planarity report.
     Planarize(Box<cli::planarize::Args>),
@@ -60,6 +63,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render::run(args).map(Within::from),
         Command::Venation(args) => cli::venation::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
+        Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
         Command::Audit(args) => cli::planarize::audit_run(args).map(within),
     };

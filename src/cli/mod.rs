@@ -1,5 +1,6 @@
 //! One module per subcommand: an argument struct and a `run` that calls the library.
 
+pub mod cells;
 pub mod convert;
 pub mod demo;
 pub mod info;

@@ -4,24 +4,21 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use clap::{Args as ClapArgs, ValueEnum};
 use glam::DVec3;
 use serde_json::json;
 
 use lamina::files::write_atomic;
-use lamina::mesh::closest::SurfaceIndex;
-use lamina::mesh::io::read_mesh;
 use lamina::network::io::read_network;
 use lamina::rationalize::audit::{audit, read_polygons};
 use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
 use lamina::rationalize::planarize::{
-    planarize, Input, Method, PlanarizeError, PlanarizeOptions, Selector, Solution,
+    planarize, Input, Method, PlanarizeOptions, Selector, Solution,
 };
 use lamina::report::planarity::{Context, PanelRow, Report};
-use lamina::Network;
 
-use super::input::WeldArgs;
+use super::input::{reference_normals, WeldArgs};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum MethodArg {
@@ -98,37 +95,6 @@ fn parse_override(s: &str, what: &str) -> Result<(Selector, DVec3)> {
     Ok((sel, DVec3::new(x, y, z)))
 }
 
-/// Reference directions: the guide surface's normals (turned to agree with stored normals), or
-/// the stored normals.
-fn references(net: &Network, surface: Option<&Path>) -> Result<Vec<DVec3>> {
-    let Some(path) = surface else {
-        return net
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| {
-                n.normal
-                    .ok_or_else(|| anyhow::Error::new(PlanarizeError::NoReference(i as u32)))
-            })
-            .collect();
-    };
-    let mesh = read_mesh(path)?;
-    let index = SurfaceIndex::new(&mesh);
-    net.nodes
-        .iter()
-        .map(|n| {
-            let c = index
-                .closest(n.p)
-                .with_context(|| format!("--surface {}: has no triangles", path.display()))?;
-            let d = index.normal(&c);
-            Ok(match n.normal {
-                Some(stored) if stored.dot(d) < 0.0 => -d,
-                _ => d,
-            })
-        })
-        .collect()
-}
-
 pub fn run(args: Args) -> Result<bool> {
     let opts = PlanarizeOptions {
         method: match args.method {
@@ -151,7 +117,7 @@ pub fn run(args: Args) -> Result<bool> {
             .collect::<Result<_>>()?,
     };
     let net = read_network(&args.input, &args.weld.options()?)?.network;
-    let reference = references(&net, args.surface.as_deref())?;
+    let reference = reference_normals(&net, args.surface.as_deref())?;
     let heights: Vec<f64> = match args.height_from_radius {
         Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),
         None => vec![args.height; net.nodes.len()],

@@ -3,5 +3,6 @@
 
 pub mod audit;
 pub mod axes;
+pub mod cells;
 pub mod panels;
 pub mod planarize;

@@ -7,6 +7,8 @@ mod stl;
 
 use std::path::Path;
 
+use glam::DVec3;
+
 use super::TriMesh;
 use crate::files::{extension, ReadError, WriteError};
 
@@ -58,6 +60,34 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
 
 /// Writes a mesh, choosing the format by extension (`size` is the PNG render's longer side).
 pub fn write_mesh(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
+    write_checked(mesh, None, path, size)
+}
+
+/// Writes an OBJ mesh with one normal per vertex.
+pub fn write_obj_with_normals(
+    mesh: &TriMesh,
+    normals: &[DVec3],
+    path: &Path,
+) -> Result<(), WriteError> {
+    if normals.len() != mesh.positions.len() || normals.iter().any(|n| !n.is_finite()) {
+        return Err(WriteError::Content {
+            path: path.to_path_buf(),
+            msg: format!(
+                "{} finite normals needed for {} vertices",
+                mesh.positions.len(),
+                mesh.positions.len()
+            ),
+        });
+    }
+    write_checked(mesh, Some(normals), path, 0)
+}
+
+fn write_checked(
+    mesh: &TriMesh,
+    normals: Option<&[DVec3]>,
+    path: &Path,
+    size: u32,
+) -> Result<(), WriteError> {
     let nv = mesh.positions.len();
     let bad_index = mesh
         .triangles
@@ -83,7 +113,8 @@ pub fn write_mesh(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteErr
         return Err(content(format!("vertex {v} is not finite")));
     }
     match MeshFormat::from_path(path) {
-        Some(MeshFormat::Obj) => obj::write(mesh, path),
+        Some(MeshFormat::Obj) => obj::write_with_normals(mesh, normals, path),
+        _ if normals.is_some() => Err(content("normals are written to .obj only".into())),
         Some(MeshFormat::Stl) => stl::write(mesh, path),
         Some(MeshFormat::Png) => png::write(mesh, path, size),
         None => Err(content(

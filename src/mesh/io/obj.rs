@@ -107,7 +107,12 @@ fn locate(path: &Path, text: &str, e: tobj::LoadError) -> ReadError {
     ReadError::file(path, format!("not a readable OBJ mesh: {e}"))
 }
 
-pub fn write(mesh: &TriMesh, path: &Path) -> Result<(), WriteError> {
+/// Writes the mesh with one normal per vertex (`vn`, faces as `f a//a b//b c//c`) when given.
+pub fn write_with_normals(
+    mesh: &TriMesh,
+    normals: Option<&[DVec3]>,
+    path: &Path,
+) -> Result<(), WriteError> {
     write_atomic(path, |w| {
         writeln!(
             w,
@@ -124,8 +129,18 @@ pub fn write(mesh: &TriMesh, path: &Path) -> Result<(), WriteError> {
                 None => writeln!(w, "v {} {} {}", p.x, p.y, p.z)?,
             }
         }
-        for t in &mesh.triangles {
-            writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+        if let Some(normals) = normals {
+            for n in normals {
+                writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
+            }
+            for t in &mesh.triangles {
+                let [a, b, c] = t.map(|i| i + 1);
+                writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
+            }
+        } else {
+            for t in &mesh.triangles {
+                writeln!(w, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1)?;
+            }
         }
         Ok(())
     })
