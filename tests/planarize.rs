@@ -66,13 +66,14 @@ fn both_methods_planarize_the_calyx_fixture_with_flat_base_plates() -> TestResul
         assert!(page.contains("<svg") && page.contains("All 273 panels are within"));
         axes.push(a.axes);
     }
-    // The two methods land on nearby, not identical, planar configurations (measured: ~1.5°).
+    // Both land on the planar configuration nearest the references (measured: 0.08° apart; the
+    // paper's plain sweep, moving to the mean of the projections, lands 1.5° away).
     let worst = axes[0]
         .iter()
         .zip(&axes[1])
         .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
         .fold(0.0, f64::max);
-    assert!(worst < 2.0, "the methods' axes differ by {worst}°");
+    assert!(worst < 1.0, "the methods' axes differ by {worst}°");
     Ok(())
 }
 

@@ -50,6 +50,10 @@ pub struct Args {
     /// Projection method: how far axes move toward their projections each iteration
     #[arg(long, default_value_t = 0.5)]
     pub step: f64,
+    /// Projection method: the sweep as published (toward the mean of the projections, no
+    /// Anderson acceleration); slower, and lands on a different planar configuration
+    #[arg(long)]
+    pub plain_projection: bool,
     /// Iteration cap over all rounds
     #[arg(long, default_value_t = 10_000)]
     pub max_iterations: usize,
@@ -105,6 +109,7 @@ pub fn run(args: Args) -> Result<bool> {
         tolerance: args.tolerance,
         max_iterations: args.max_iterations,
         step: args.step,
+        plain_projection: args.plain_projection,
         fix_normals: args
             .fix_normal
             .iter()

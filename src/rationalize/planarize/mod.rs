@@ -120,6 +120,10 @@ pub struct PlanarizeOptions {
     pub max_iterations: usize,
     /// Projection: how far each axis moves toward the average of its projections. Default 0.5.
     pub step: f64,
+    /// Projection: the sweep as published (each axis moves toward the mean of its projections,
+    /// no acceleration) instead of equal pulls with Anderson acceleration. Slower, and it lands
+    /// on a different planar configuration than L-BFGS; kept to compare with the paper.
+    pub plain_projection: bool,
     /// Edges (both ends selected) whose panels lie in planes with this normal.
     pub fix_normals: Vec<(Selector, DVec3)>,
     /// Nodes whose axis is given.
@@ -134,6 +138,7 @@ impl Default for PlanarizeOptions {
             tolerance: 0.01,
             max_iterations: 10_000,
             step: 0.5,
+            plain_projection: false,
             fix_normals: Vec::new(),
             fix_axes: Vec::new(),
         }
@@ -242,6 +247,23 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
             })
             .fold(0.0, f64::max)
     };
+    let mut degree = vec![0usize; n];
+    for &[a, b] in &input.edges {
+        degree[a as usize] += 1;
+        degree[b as usize] += 1;
+    }
+    let plain = opts.plain_projection;
+    let top = degree.iter().copied().max().unwrap_or(1).max(1);
+    let scale: Vec<f64> = degree
+        .iter()
+        .map(|&d| {
+            if plain {
+                1.0 / d.max(1) as f64
+            } else {
+                1.0 / top as f64
+            }
+        })
+        .collect();
     let mut alpha = opts.alpha;
     let mut history = Vec::new();
     let mut iterations = 0;
@@ -267,17 +289,16 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
                 run.iterations
             }
             Method::Projection => {
-                let run = projection::solve(
-                    &frames,
-                    &edges,
-                    &edge_normal,
-                    &mut axes,
+                let sweep = projection::Sweep {
+                    frames: &frames,
+                    edges: &edges,
+                    edge_normal: &edge_normal,
                     alpha,
-                    opts.step,
-                    budget,
-                    opts.tolerance,
-                    &max_dev,
-                );
+                    step: opts.step,
+                    scale: &scale,
+                    accelerate: !plain,
+                };
+                let run = projection::solve(&sweep, &mut axes, budget, opts.tolerance, &max_dev);
                 history.extend(run.history);
                 run.iterations
             }
@@ -292,11 +313,6 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
         alpha *= (0.5 * opts.tolerance / dev).clamp(1e-4, 0.1);
     }
     let max_deviation = max_dev(&axes);
-    let mut degree = vec![0usize; n];
-    for &[a, b] in &input.edges {
-        degree[a as usize] += 1;
-        degree[b as usize] += 1;
-    }
     let panels: Vec<Panel> = input
         .edges
         .iter()

@@ -117,6 +117,28 @@ fn random_networks_of_degree_at_most_three_converge() {
 }
 
 #[test]
+fn the_plain_published_sweep_also_converges_but_needs_more_iterations() {
+    let input = honeycomb_on(10, 100.0, 5, true);
+    let plain = planarize(
+        &input,
+        &PlanarizeOptions {
+            method: Method::Projection,
+            plain_projection: true,
+            ..Default::default()
+        },
+    )
+    .expect("valid");
+    let fast = solve(&input, Method::Projection);
+    assert!(plain.converged && fast.converged);
+    assert!(
+        fast.iterations < plain.iterations,
+        "accelerated {} vs plain {}",
+        fast.iterations,
+        plain.iterations
+    );
+}
+
+#[test]
 fn fixed_normals_make_flat_base_plates() {
     // Row 0 of the Calyx-like band is a horizontal arc at z = 0.
     let input = honeycomb_on(10, 100.0, 4, true);
