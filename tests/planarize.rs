@@ -171,7 +171,7 @@ fn bad_networks_exit_2_naming_the_problem() -> TestResult {
     )?;
     let bare = write(
         "bare.json",
-        &format!("{head}\"nodes\": [{{\"p\": [0,0,0]}}, {{\"p\": [1,0,0]}}], \"edges\": [{{\"a\": 0, \"b\": 1}}]}}"),
+        &format!("{head}\"nodes\": [{{\"p\": [0,0,0]}}, {{\"p\": [1,0,0]}}, {{\"p\": [0,1,0]}}, {{\"p\": [0,0,1]}}], \"edges\": [{{\"a\": 0, \"b\": 1}}, {{\"a\": 1, \"b\": 2}}, {{\"a\": 2, \"b\": 3}}]}}"),
     )?;
     let ok = write(
         "ok.json",
@@ -180,7 +180,8 @@ fn bad_networks_exit_2_naming_the_problem() -> TestResult {
     let out = dir.path().join("never.json");
     for (input, args, words) in [
         (&zero, vec![], vec!["edge 0", "zero-length"]),
-        (&bare, vec![], vec!["node 0", "--surface"]),
+        // No normals and not flat (a flat network takes its plane's normal).
+        (&bare, vec![], vec!["node 0", "not flat", "--surface"]),
         (&ok, vec!["--fix-normal", "z<:0,0,1"], vec!["--fix-normal"]),
         (&ok, vec!["--fix-axis", "node=0:0,0"], vec!["--fix-axis"]),
         (&ok, vec!["--tolerance", "0"], vec!["--tolerance"]),

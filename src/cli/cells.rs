@@ -37,13 +37,21 @@ pub struct Args {
 
 /// What the network's V − E + F should be, and how many faces should be holes, if it covers
 /// its surface with disk-shaped cells.
-struct Expected {
-    chi: i64,
-    holes: usize,
-    from: String,
+pub struct Expected {
+    pub chi: i64,
+    pub holes: usize,
+    pub from: String,
 }
 
-pub fn run(args: Args) -> Result<()> {
+/// What `cells` found, for the caller to print.
+pub struct Outcome {
+    pub cells: Cells,
+    pub expected: Expected,
+    pub notes: Vec<String>,
+}
+
+/// Finds and triangulates the cells and writes the outputs; prints nothing.
+pub fn execute(args: &Args) -> Result<Outcome> {
     if extension(&args.output) != "obj" {
         bail!(
             "{}: the cells are written as .obj (with vertex normals)",
@@ -63,7 +71,7 @@ pub fn run(args: Args) -> Result<()> {
                 holes: topo.boundary_loops,
                 from: format!(
                     "{}: χ = {} with {} boundary loop(s), {} capped",
-                    path.display(),
+                    path.file_name().unwrap_or_default().to_string_lossy(),
                     topo.euler,
                     topo.boundary_loops,
                     topo.euler + topo.boundary_loops as i64
@@ -85,6 +93,19 @@ pub fn run(args: Args) -> Result<()> {
         let text = serde_json::to_string_pretty(&table(&c, &expected, &notes))? + "\n";
         write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     }
+    Ok(Outcome {
+        cells: c,
+        expected,
+        notes,
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let Outcome {
+        cells: c,
+        expected,
+        notes,
+    } = execute(&args)?;
     if args.json {
         println!(
             "{}",

@@ -1,6 +1,7 @@
-//! `lamina demo [--out DIR]`: the whole way on the embedded fixtures. For now: read each fixture,
-//! check it, convert it to every format, render it, and write an index.html linking everything.
-//! Later stages add their steps here.
+//! `lamina demo [--out DIR]`: the whole way on the embedded fixtures: read each fixture, check
+//! it, convert it to every format and render it; grow two leaves; run the Calyx network through
+//! cells and node axes with planarity reports; write an index.html linking everything. Later
+//! stages add their steps here.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -10,12 +11,13 @@ use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::info::summary;
-use super::input::{load, Loaded};
+use super::input::{load, Loaded, WeldArgs};
+use super::planarize::MethodArg;
 use lamina::files::write_atomic;
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::venation::Mode;
-use lamina::mesh::io::write_mesh;
+use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
 
 #[derive(ClapArgs)]
@@ -39,6 +41,12 @@ const FIXTURES: &[(&str, &[u8], &str)] = &[
         "calyx.obj",
         include_bytes!("../../fixtures/surfaces/calyx.obj"),
         "Calyx-like surface: an arc revolved about Z, a 2 m open hyperbolic band",
+    ),
+    (
+        "calyx_veins.json",
+        include_bytes!("../../fixtures/networks/calyx_veins.json"),
+        "Closed venation on the Calyx-like surface (grown by lamina venation in the unrolled \
+         band, mapped onto the surface by scripts/fixtures/calyx_veins.py), with a base ring at z = 0",
     ),
     (
         "colored_patch.obj",
@@ -66,7 +74,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 2),
+        Some(FIXTURES.len() as u64 + 3),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -86,6 +94,9 @@ pub fn run(args: Args) -> Result<()> {
         entries.push(leaf(out, args.size, mode)?);
         bar.inc(1);
     }
+    bar.set_message("calyx: cells, node axes, reports");
+    entries.push(calyx(out, &inputs, args.size)?);
+    bar.inc(1);
     bar.finish_and_clear();
     let index = out.join("index.html");
     let html = index_html(&entries);
@@ -198,6 +209,98 @@ fn leaf(out: &Path, size: u32, mode: Mode) -> Result<Entry> {
             growth.sources_placed,
             leaf.quality.lines().join("; ")
         ),
+    })
+}
+
+/// The optimizer path on the Calyx-like fixture: cells on the guide surface, then node axes by
+/// both methods with the cells' vertex normals as references and the base plates held to +Z,
+/// each with its planarity report.
+fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
+    let dir = out.join("calyx");
+    std::fs::create_dir_all(&dir)?;
+    let net = inputs.join("calyx_veins.json");
+    let weld = WeldArgs {
+        weld: None,
+        weld_rel: None,
+    };
+    let cells_obj = dir.join("cells.obj");
+    let cells = super::cells::execute(&super::cells::Args {
+        input: net.clone(),
+        surface: Some(inputs.join("calyx.obj")),
+        output: cells_obj.clone(),
+        table: Some(dir.join("cells.json")),
+        json: false,
+        weld,
+    })?;
+    let mut outputs = vec![
+        "calyx/cells.obj".to_string(),
+        "calyx/cells.json".to_string(),
+    ];
+    let mut facts = format!(
+        "{} cells in {} triangles; {}. ",
+        cells.cells.cells.len(),
+        cells.cells.mesh.triangles.len(),
+        cells.notes[1..].join("; ")
+    );
+    let mut axes = Vec::new();
+    for (method, name) in [
+        (MethodArg::Lbfgs, "lbfgs"),
+        (MethodArg::Projection, "projection"),
+    ] {
+        let file = |ext: &str| dir.join(format!("{name}{ext}"));
+        let done = super::planarize::execute(&super::planarize::Args {
+            input: net.clone(),
+            surface: Some(cells_obj.clone()),
+            method,
+            height: 100.0,
+            height_from_radius: None,
+            tolerance: 0.01,
+            alpha: 0.01,
+            step: 0.5,
+            plain_projection: false,
+            max_iterations: 10_000,
+            fix_normal: vec!["z<1:0,0,1".into()],
+            fix_axis: Vec::new(),
+            output: file("-axes.json"),
+            panels: Some(file("-panels.obj")),
+            report: Some(file("-report.json")),
+            html: Some(file("-report.html")),
+            json: false,
+            weld,
+        })?;
+        let s = &done.solution;
+        let _ = write!(
+            facts,
+            "{name}: max panel deviation {:.4} mm after {} iterations (α {:.1e}), \
+             <a href=\"calyx/{name}-report.html\">report</a>. ",
+            s.max_deviation, s.iterations, s.alpha_used
+        );
+        for ext in ["-axes.json", "-panels.obj", "-report.json", "-report.html"] {
+            outputs.push(format!("calyx/{name}{ext}"));
+        }
+        axes.push(s.axes.clone());
+    }
+    let apart = axes[0]
+        .iter()
+        .zip(&axes[1])
+        .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
+        .fold(0.0, f64::max);
+    let _ = write!(
+        facts,
+        "The two methods' axes differ by at most {apart:.3}°."
+    );
+    let panels = read_mesh(&dir.join("lbfgs-panels.obj"))?;
+    write_mesh(&panels, &dir.join("panels.png"), size)?;
+    outputs.push("calyx/panels.png".into());
+    Ok(Entry {
+        name: "Calyx: cells and planar panels".into(),
+        about: "`lamina cells` on the venation network and its guide surface, then `lamina \
+                planarize` by L-BFGS and by iterative projection: 100 mm panels on every vein, \
+                tolerance 0.01 mm, base plates held to +Z (`--fix-normal 'z<1:0,0,1'`)"
+            .into(),
+        outputs,
+        preview: "calyx/panels.png".into(),
+        facts,
     })
 }
 

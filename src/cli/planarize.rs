@@ -99,7 +99,15 @@ fn parse_override(s: &str, what: &str) -> Result<(Selector, DVec3)> {
     Ok((sel, DVec3::new(x, y, z)))
 }
 
-pub fn run(args: Args) -> Result<bool> {
+/// What `planarize` did, for the caller to print.
+pub struct Outcome {
+    pub solution: Solution,
+    pub summary: serde_json::Value,
+    pub seconds: f64,
+}
+
+/// Solves and writes every output the arguments ask for; prints nothing.
+pub fn execute(args: &Args) -> Result<Outcome> {
     let opts = PlanarizeOptions {
         method: match args.method {
             MethodArg::Lbfgs => Method::Lbfgs,
@@ -154,8 +162,21 @@ pub fn run(args: Args) -> Result<bool> {
     if let Some(p) = &args.panels {
         write_panels_obj(&quads, p)?;
     }
-    let report = report_of(&args, &sol, &quads, seconds);
+    let report = report_of(args, &sol, &quads, seconds);
     write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
+    Ok(Outcome {
+        solution: sol,
+        summary,
+        seconds,
+    })
+}
+
+pub fn run(args: Args) -> Result<bool> {
+    let Outcome {
+        solution: sol,
+        summary,
+        seconds,
+    } = execute(&args)?;
     if args.json {
         println!(
             "{}",

@@ -18,6 +18,7 @@
 mod lbfgs;
 pub mod objective;
 mod projection;
+pub mod synthetic;
 
 use glam::DVec3;
 
