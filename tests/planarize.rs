@@ -217,3 +217,88 @@ fn a_degree_four_node_is_reported() -> TestResult {
     assert_eq!(v["summary"]["over_constrained"], serde_json::json!([0]));
     Ok(())
 }
+
+/// DXF panels as other programs draw them: a 3DFACE, a closed 3D POLYLINE, and a closed
+/// LWPOLYLINE in a tilted object coordinate system (a planar quad, so deviation 0, whose corners
+/// must come out in world coordinates).
+#[test]
+fn audit_reads_dxf_faces_and_closed_polylines() -> TestResult {
+    use dxf::entities::{Entity, EntityType, Face3D, LwPolyline, Polyline, Vertex};
+    use dxf::{LwPolylineVertex, Point, Vector};
+    let dir = tempfile::tempdir()?;
+    let path = dir.path().join("panels.dxf");
+    let warped = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(10.0, 0.0, 0.0),
+        Point::new(10.0, 10.0, 0.5),
+        Point::new(0.0, 10.0, 0.0),
+    ];
+    let mut drawing = dxf::Drawing::new();
+    drawing.header.version = dxf::enums::AcadVersion::R2000;
+    drawing.add_entity(Entity::new(EntityType::Face3D(Face3D::new(
+        warped[0].clone(),
+        warped[1].clone(),
+        warped[2].clone(),
+        warped[3].clone(),
+    ))));
+    let mut pl = Polyline::default();
+    pl.set_is_3d_polyline(true);
+    pl.set_is_closed(true);
+    for p in &warped {
+        pl.add_vertex(&mut drawing, Vertex::new(p.clone()));
+    }
+    drawing.add_entity(Entity::new(EntityType::Polyline(pl)));
+    let mut lw = LwPolyline::default();
+    lw.set_is_closed(true);
+    lw.extrusion_direction = Vector::new(1.0, 1.0, 1.0);
+    for (x, y) in [(0.0, 0.0), (20.0, 0.0), (20.0, 5.0), (0.0, 5.0)] {
+        lw.vertices.push(LwPolylineVertex {
+            x,
+            y,
+            ..Default::default()
+        });
+    }
+    let mut e = Entity::new(EntityType::LwPolyline(lw));
+    e.common.elevation = 3.0;
+    drawing.add_entity(e);
+    drawing.save_file(&path)?;
+
+    let rep = dir.path().join("audit.json");
+    let o = lamina(&[
+        "audit",
+        s(&path),
+        "--tolerance",
+        "0.01",
+        "--report",
+        s(&rep),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "the warped quads exceed 0.01 mm: {}",
+        stderr(&o)
+    );
+    let r = report(&rep)?;
+    let panels = r["panels"].as_array().ok_or("panels")?;
+    assert_eq!(panels.len(), 3);
+    // The fourth corner's distance from the plane of the other three (q0, q1, q3 span z = 0).
+    for p in &panels[..2] {
+        let d = p["deviation"].as_f64().ok_or("deviation")?;
+        assert!((d - 0.5).abs() < 1e-12, "{d}");
+    }
+    assert!(panels[2]["deviation"].as_f64().ok_or("deviation")? < 1e-12);
+    // The LWPOLYLINE's corners lie 3 mm along its extrusion direction from the origin.
+    let n = DVec3::ONE.normalize();
+    let html = dir.path().join("audit.html");
+    let o = lamina(&["audit", s(&path), "--tolerance", "1", "--html", s(&html)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let polygons = lamina::rationalize::audit::read_polygons(&path)?;
+    for c in &polygons[2] {
+        assert!(
+            (c.dot(n) - 3.0).abs() < 1e-12,
+            "{c} is not on the plane 3 mm along n"
+        );
+    }
+    assert!(((polygons[2][1] - polygons[2][0]).length() - 20.0).abs() < 1e-12);
+    Ok(())
+}

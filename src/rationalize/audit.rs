@@ -11,6 +11,7 @@ use glam::DVec3;
 
 use super::panels::{polygon_deviation, quad_metrics, QuadMetrics};
 use crate::files::{extension, ReadError};
+use crate::network::io::dxf::{lw_polyline, polyline};
 
 /// One audited polygon.
 #[derive(Clone, Debug)]
@@ -130,24 +131,34 @@ fn read_dxf(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
                 }
                 out.push(c);
             }
-            EntityType::Polyline(pl) if pl.is_closed() => {
-                let mut c: Vec<DVec3> = pl.vertices().map(|x| v(&x.location)).collect();
-                if c.len() > 1 && c.first() == c.last() {
-                    c.pop();
-                }
-                out.push(c);
+            EntityType::Polyline(pl) if pl.is_closed() && !pl.is_polyface_mesh() => {
+                out.push(closed_loop(path, e, polyline(pl))?);
             }
             EntityType::LwPolyline(pl) if pl.is_closed() => {
-                let z = e.common.elevation;
-                out.push(
-                    pl.vertices
-                        .iter()
-                        .map(|x| DVec3::new(x.x, x.y, z))
-                        .collect(),
-                );
+                out.push(closed_loop(path, e, lw_polyline(pl, e.common.elevation))?);
             }
             _ => {}
         }
     }
     Ok(out)
+}
+
+/// A closed polyline's corners in world coordinates (2D polylines through their object
+/// coordinate system), without the first corner repeated at the end.
+fn closed_loop(
+    path: &Path,
+    e: &dxf::entities::Entity,
+    pts: Result<Vec<DVec3>, String>,
+) -> Result<Vec<DVec3>, ReadError> {
+    let mut c = pts.map_err(|msg| {
+        ReadError::record(
+            path,
+            format!("polyline with handle {:X}", e.common.handle.0),
+            msg,
+        )
+    })?;
+    if c.len() > 1 && c.first() == c.last() {
+        c.pop();
+    }
+    Ok(c)
 }

@@ -291,7 +291,7 @@ fn from_ocs(axes: &[DVec3; 3], x: f64, y: f64, z: f64) -> DVec3 {
     axes[0] * x + axes[1] * y + axes[2] * z
 }
 
-fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>, String> {
+pub(crate) fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>, String> {
     let ex = &pl.extrusion_direction;
     let axes = ocs_axes(DVec3::new(ex.x, ex.y, ex.z))?;
     check_bulges(pl.vertices.iter().map(|v| v.bulge))?;
@@ -304,7 +304,7 @@ fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>, String> {
     Ok(pts)
 }
 
-fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
+pub(crate) fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
     // Spline-fit polylines list their frame control points too; the curve is the other vertices.
     let vertices: Vec<&Vertex> = pl
         .vertices()

@@ -5,7 +5,7 @@
 //! Softer problems (repeated edges, self-loops) are kept for `Network::validate` to report.
 //! Writers refuse a network with such hard problems and write through `files::write_atomic`.
 
-mod dxf;
+pub(crate) mod dxf;
 mod dxf_split;
 mod json;
 mod obj;
