@@ -17,18 +17,11 @@ import sys
 import ezdxf
 import numpy as np
 
+from obj_records import read_obj
+
 
 def polylines_from_obj(path):
-    verts, lines = [], []
-    with open(path) as f:
-        for raw in f:
-            w = raw.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                verts.append(tuple(float(x) for x in w[1:4]))
-            elif w[0] == "l":
-                lines.append([int(i.split("/")[0]) - 1 for i in w[1:]])
+    verts, lines = read_obj(path, "l")
     return verts, [[i, j] for l in lines for i, j in zip(l, l[1:])]
 
 

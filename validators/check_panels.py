@@ -13,18 +13,11 @@ import sys
 
 import numpy as np
 
+from obj_records import read_obj
+
 
 def read_quads(path):
-    verts, faces = [], []
-    with open(path) as f:
-        for raw in f:
-            w = raw.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                verts.append([float(x) for x in w[1:4]])
-            elif w[0] == "f":
-                faces.append([int(t.split("/")[0]) - 1 for t in w[1:]])
+    verts, faces = read_obj(path, "f")
     v = np.array(verts, dtype=np.float64)
     return [v[f] for f in faces]
 

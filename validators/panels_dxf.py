@@ -8,19 +8,12 @@ import sys
 
 import ezdxf
 
+from obj_records import read_obj
+
 
 def main():
     src, dst = sys.argv[1], sys.argv[2]
-    verts, faces = [], []
-    with open(src) as f:
-        for raw in f:
-            w = raw.split()
-            if not w:
-                continue
-            if w[0] == "v":
-                verts.append(tuple(float(x) for x in w[1:4]))
-            elif w[0] == "f":
-                faces.append([int(t.split("/")[0]) - 1 for t in w[1:]])
+    verts, faces = read_obj(src, "f")
     doc = ezdxf.new("R2000")
     msp = doc.modelspace()
     for k, face in enumerate(faces):
