@@ -1,7 +1,8 @@
 //! Node axes on the Calyx-like fixture (248 nodes, 273 edges, base plates held to +Z) by
 //! L-BFGS, by the accelerated projection and by the paper's plain sweep; and L-BFGS on a
 //! 100,489-node brick-wall network on a paraboloid. Each job prints its iterations and result
-//! once before timing. `scripts/bench` then runs the numpy peer (the paper's Python iterative
+//! once before timing, and the large network is written to `target/bench-data` for the
+//! whole-process runs. `scripts/bench` then runs the numpy peer (the paper's Python iterative
 //! method, `scripts/peers/planarize_iterative.py`) on the Calyx job this writes to
 //! `target/bench-data/planarize-calyx.json`.
 
@@ -9,7 +10,8 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
-use lamina::network::io::{read_network, ReadOptions};
+use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};
+use lamina::network::{Edge, Network, Node};
 use lamina::rationalize::planarize::synthetic::honeycomb;
 use lamina::rationalize::planarize::{planarize, Input, Method, PlanarizeOptions, Selector};
 
@@ -47,6 +49,27 @@ fn write_peer_job(input: &Input) {
     std::fs::write(dir.join("planarize-calyx.json"), job.to_string()).expect("peer job");
 }
 
+/// A synthetic input as network JSON (positions, normals), for the whole-process runs.
+fn write_network_file(input: &Input, name: &str) {
+    let net = Network {
+        nodes: input
+            .positions
+            .iter()
+            .zip(&input.reference)
+            .map(|(p, n)| Node {
+                p: *p,
+                normal: Some(*n),
+                radius: 0.0,
+            })
+            .collect(),
+        edges: input.edges.iter().map(|&[a, b]| Edge::new(a, b)).collect(),
+        ..Default::default()
+    };
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
+    std::fs::create_dir_all(&dir).expect("bench-data folder");
+    write_network(&net, &dir.join(name), &RenderOptions::default()).expect("network file");
+}
+
 fn bench(c: &mut Criterion) {
     let input = calyx();
     write_peer_job(&input);
@@ -81,6 +104,7 @@ fn bench(c: &mut Criterion) {
     group.finish();
 
     let big = honeycomb(317, 100.0, 1);
+    write_network_file(&big, "planarize-paraboloid-100k.json");
     let mut group = c.benchmark_group("planarize-large");
     group.sample_size(10);
     for (name, method) in [

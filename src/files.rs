@@ -87,11 +87,16 @@ where
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let tmp = tempfile::Builder::new()
-        .prefix(".lamina-")
-        .suffix(".part")
-        .tempfile_in(dir)
-        .map_err(io_err)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".lamina-").suffix(".part");
+    // Temporary files are private (0600); an output should get the permissions any new file
+    // gets (0666 less the umask), as if it had been created in place.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder.tempfile_in(dir).map_err(io_err)?;
     {
         let mut w = BufWriter::new(tmp.as_file());
         fill(&mut w).map_err(io_err)?;
@@ -156,6 +161,20 @@ mod tests {
         std::fs::write(&target, "old")?;
         write_atomic(&target, |w| w.write_all(b"new"))?;
         assert_eq!(std::fs::read_to_string(&target)?, "new");
+        Ok(())
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn outputs_get_the_permissions_of_a_plain_new_file() -> Result<(), Box<dyn std::error::Error>> {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir()?;
+        let (ours, plain) = (dir.path().join("ours.txt"), dir.path().join("plain.txt"));
+        write_atomic(&ours, |w| w.write_all(b"x"))?;
+        std::fs::write(&plain, b"x")?;
+        let mode =
+            |p: &Path| -> std::io::Result<u32> { Ok(p.metadata()?.permissions().mode() & 0o777) };
+        assert_eq!(mode(&ours)?, mode(&plain)?);
         Ok(())
     }
 }
