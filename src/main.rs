@@ -35,6 +35,10 @@ enum Command {
     /// Node axes that make every panel of a network planar (L-BFGS or iterative projection),
     /// with the panels and a planarity report.
     Planarize(Box<cli::planarize::Args>),
+    /// Steel plates from node axes: one flat plate per edge in its panel plane, thickness from a
+    /// gauge list, cut back at the nodes so plates do not interpenetrate (plates.json,
+    /// assembly.stl).
+    Plates(cli::plates::Args),
     /// Check the planarity of panels made elsewhere (.obj faces, .dxf 3DFACE/closed polylines):
     /// exit 0 when all are within the tolerance, 1 when some are not.
     Audit(cli::planarize::AuditArgs),
@@ -65,6 +69,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
+        Command::Plates(args) => cli::plates::run(args).map(Within::from),
         Command::Audit(args) => cli::planarize::audit_run(args).map(within),
     };
     match result {

@@ -6,5 +6,6 @@ pub mod demo;
 pub mod info;
 pub mod input;
 pub mod planarize;
+pub mod plates;
 pub mod render;
 pub mod venation;

@@ -155,6 +155,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             .iter()
             .map(|p| p.fixed_normal.map(DVec3::from_array))
             .collect(),
+        edge_radii: net.edges.iter().map(|e| e.radius).collect(),
     };
     let summary = summary(&sol);
     write_axes(&axes, &summary, &args.output)?;

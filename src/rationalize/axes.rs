@@ -27,6 +27,9 @@ pub struct Axes {
     pub reference: Vec<DVec3>,
     /// Per edge: the panel normal it was held to, if any.
     pub fixed_normals: Vec<Option<DVec3>>,
+    /// Per edge: the vein radius in mm from the network (0 when unknown); plates can take
+    /// their thickness from it.
+    pub edge_radii: Vec<f64>,
 }
 
 impl Axes {
@@ -65,12 +68,21 @@ struct EdgeRecord {
     b: u32,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     fixed_normal: Option<[f64; 3]>,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    radius: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FileRecord {
+    /// Checked through `Header` before the rest is read.
+    #[allow(dead_code)]
     format: String,
+    #[allow(dead_code)]
     version: u32,
     /// Read so that files carrying it parse; the figures in it are not needed to rebuild.
     #[serde(default)]
@@ -109,6 +121,7 @@ pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Resu
                 a,
                 b,
                 fixed_normal: axes.fixed_normals[k].map(|n| n.to_array()),
+                radius: axes.edge_radii[k],
             };
             let sep = if k + 1 < axes.edges.len() { "," } else { "" };
             writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
@@ -122,17 +135,27 @@ pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Resu
 pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
     let bytes = read_nonempty(path)?;
     let text = utf8_text(path, bytes)?;
-    let rec: FileRecord =
+    // The format first, so that another lamina file is named as such rather than as a schema
+    // error.
+    #[derive(Deserialize)]
+    struct Header {
+        format: Option<String>,
+        version: Option<u32>,
+    }
+    let header: Header =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
-    if rec.format != FORMAT || rec.version != VERSION {
+    if header.format.as_deref() != Some(FORMAT) || header.version != Some(VERSION) {
         return Err(ReadError::file(
             path,
             format!(
-                "format \"{}\" version {} is not {FORMAT} version {VERSION}",
-                rec.format, rec.version
+                "format {} version {} is not {FORMAT} version {VERSION} (the axes file `lamina planarize` writes)",
+                header.format.map_or("(none)".into(), |f| format!("\"{f}\"")),
+                header.version.map_or("(none)".into(), |v| v.to_string())
             ),
         ));
     }
+    let rec: FileRecord =
+        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     let n = rec.nodes.len() as u32;
     for (k, e) in rec.edges.iter().enumerate() {
         if e.a >= n || e.b >= n {
@@ -143,6 +166,17 @@ pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
             ));
         }
     }
+    if let Some(k) = rec
+        .edges
+        .iter()
+        .position(|e| !(e.radius.is_finite() && e.radius >= 0.0))
+    {
+        return Err(ReadError::record(
+            path,
+            format!("edge {k}"),
+            "radius must be a finite number ≥ 0",
+        ));
+    }
     let v = |a: [f64; 3]| DVec3::from_array(a);
     Ok(Axes {
         positions: rec.nodes.iter().map(|r| v(r.p)).collect(),
@@ -151,6 +185,7 @@ pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
         reference: rec.nodes.iter().map(|r| v(r.reference)).collect(),
         edges: rec.edges.iter().map(|e| [e.a, e.b]).collect(),
         fixed_normals: rec.edges.iter().map(|e| e.fixed_normal.map(v)).collect(),
+        edge_radii: rec.edges.iter().map(|e| e.radius).collect(),
     })
 }
 
@@ -183,6 +218,7 @@ mod tests {
             heights: vec![100.0, 0.7],
             reference: vec![DVec3::Z, DVec3::Y],
             fixed_normals: vec![Some(DVec3::X)],
+            edge_radii: vec![0.25],
         };
         let dir = tempfile::tempdir()?;
         let path = dir.path().join("axes.json");

@@ -6,3 +6,4 @@ pub mod axes;
 pub mod cells;
 pub mod panels;
 pub mod planarize;
+pub mod plates;

@@ -1,0 +1,86 @@
+//! `lamina plates` end to end on the Calyx-like fixture's axes.
+
+mod common;
+
+use std::path::Path;
+
+use common::{fixture, lamina, stderr, TestResult};
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+#[test]
+fn calyx_axes_become_closed_non_overlapping_plates() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = dir.path().join("axes.json");
+    let o = lamina(&[
+        "planarize",
+        s(&fixture("networks/calyx_veins.json")),
+        "--fix-normal",
+        "z<1:0,0,1",
+        "-o",
+        s(&axes),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = dir.path().join("plates");
+    let o = lamina(&["plates", s(&axes), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let plates = doc["plates"].as_array().ok_or("plates")?;
+    assert_eq!(plates.len(), 273);
+    // Thicker veins get thicker gauges: more than one gauge is used, all from the list.
+    let mut gauges: Vec<f64> = plates
+        .iter()
+        .filter_map(|p| p["thickness"].as_f64())
+        .collect();
+    gauges.sort_by(f64::total_cmp);
+    gauges.dedup();
+    assert!(gauges.len() > 2, "{gauges:?}");
+    assert!(gauges
+        .iter()
+        .all(|g| [1.5, 2.0, 3.0, 4.0, 5.0, 6.0].contains(g)));
+    let mesh = lamina::mesh::io::read_mesh(&out.join("assembly.stl"))?;
+    let topo = mesh.check_manifold();
+    assert!(topo.closed && topo.is_manifold(), "{:?}", topo.problems);
+    assert_eq!(topo.components, 273);
+    let volume: f64 = plates
+        .iter()
+        .map(|p| p["area_mm2"].as_f64().unwrap_or(0.0) * p["thickness"].as_f64().unwrap_or(0.0))
+        .sum();
+    let stl = topo.volume.ok_or("volume")?;
+    assert!((stl - volume).abs() < 1e-4 * volume, "{stl} vs {volume}");
+    Ok(())
+}
+
+#[test]
+fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = dir.path().join("axes.json");
+    let o = lamina(&[
+        "planarize",
+        s(&fixture("networks/calyx_veins.json")),
+        "-o",
+        s(&axes),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = dir.path().join("plates");
+    for (args, words) in [
+        (vec!["--gauges", "3,2"], "ascending"),
+        (vec!["--weld-gap=-1"], "--weld-gap"),
+        (vec!["--thickness", "0"], "--thickness"),
+    ] {
+        let mut all = vec!["plates", s(&axes), "-o", s(&out)];
+        all.extend(args.iter().copied());
+        let o = lamina(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(words), "{}", stderr(&o));
+        assert!(!out.join("plates.json").exists());
+    }
+    let network = fixture("networks/calyx_veins.json");
+    let o = lamina(&["plates", s(&network), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("lamina-axes"), "{}", stderr(&o));
+    Ok(())
+}
