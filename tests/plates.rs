@@ -84,3 +84,55 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
     assert!(stderr(&o).contains("lamina-axes"), "{}", stderr(&o));
     Ok(())
 }
+
+#[test]
+fn seven_groups_tag_every_plate_and_split_seams_in_half() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = dir.path().join("axes.json");
+    let o = lamina(&[
+        "planarize",
+        s(&fixture("networks/calyx_veins.json")),
+        "-o",
+        s(&axes),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = dir.path().join("plates");
+    let o = lamina(&["plates", s(&axes), "--groups", "7", "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let plates = doc["plates"].as_array().ok_or("plates")?;
+    let id = |p: &serde_json::Value| p["id"].as_str().unwrap_or("").to_string();
+    let mut ids: Vec<String> = plates.iter().map(id).collect();
+    ids.sort();
+    ids.dedup();
+    assert_eq!(ids.len(), plates.len(), "tags are not unique");
+    let mut per_group = [0usize; 7];
+    let mut halves = 0;
+    for p in plates {
+        let g = p["group"].as_u64().ok_or("group")? as usize;
+        assert!(
+            id(p).starts_with(&format!("{g}-")),
+            "{} in group {g}",
+            id(p)
+        );
+        per_group[g - 1] += 1;
+        if let Some(other) = p["bolted_to"].as_str() {
+            halves += 1;
+            let q = plates.iter().find(|q| id(q) == other).ok_or("partner")?;
+            assert_eq!(q["bolted_to"].as_str(), Some(id(p).as_str()));
+            assert_eq!(q["edge"], p["edge"]);
+            assert_ne!(q["group"], p["group"]);
+        }
+    }
+    assert_eq!(plates.len(), 273 + halves / 2);
+    let mean = plates.len() as f64 / 7.0;
+    for (g, &n) in per_group.iter().enumerate() {
+        assert!(
+            (n as f64 - mean).abs() <= 0.25 * mean,
+            "group {}: {n} plates, mean {mean:.1}",
+            g + 1
+        );
+    }
+    Ok(())
+}

@@ -4,10 +4,11 @@ thickness about the mid-plane, placed by its matrix; shares no code with lamina)
 - each plate's volume is its outline area times its thickness;
 - plates meeting at a node do not interpenetrate: the intersection volume of any two is below
   1e-3 of the smaller one's volume;
-- the plates' total volume matches assembly.stl (read by trimesh) to 1e-6, and the STL has one
-  closed shell per plate.
+- the plates' total volume matches assembly.stl (read by trimesh) to 1e-6;
+- assembly.obj has one object per plate, named by its tag, each closed (every edge used once in
+  each direction) with the plate's volume.
 
-    check_plates.py plates.json assembly.stl
+    check_plates.py plates.json assembly.stl assembly.obj
 """
 import json
 import sys
@@ -26,8 +27,26 @@ def plate_solid(p):
     return solid.transform(rows)
 
 
+def read_objects(path):
+    """(name, vertices, triangles with object-local indices) per `o` record."""
+    objects, verts, offset = [], [], 0
+    for raw in open(path):
+        w = raw.split()
+        if not w:
+            continue
+        if w[0] == "o":
+            objects.append((w[1], [], []))
+            offset = len(verts)
+        elif w[0] == "v":
+            verts.append(np.array([float(x) for x in w[1:4]]))
+            objects[-1][1].append(verts[-1])
+        elif w[0] == "f":
+            objects[-1][2].append([int(x) - 1 - offset for x in w[1:4]])
+    return objects
+
+
 def main():
-    plates_path, stl_path = sys.argv[1], sys.argv[2]
+    plates_path, stl_path, obj_path = sys.argv[1], sys.argv[2], sys.argv[3]
     doc = json.load(open(plates_path))
     plates = doc["plates"]
     problems = []
@@ -53,17 +72,20 @@ def main():
                 pairs += 1
                 if ratio > 1e-3:
                     problems.append(f"node {v}: plates {ks[i]} and {ks[j]} overlap by {inter:.3f} mm³")
-    mesh = trimesh.load(stl_path, force="mesh")
+    mesh = trimesh.load(stl_path, force="mesh", process=False)
     total = sum(s.volume() for s in solids)
-    stl = m3d.Manifold(m3d.Mesh(np.asarray(mesh.vertices, dtype=np.float32),
-                                np.asarray(mesh.faces, dtype=np.uint32)))
-    shells = len(stl.decompose())
-    if shells != len(plates):
-        problems.append(f"{shells} shells in the STL for {len(plates)} plates")
-    if not mesh.is_watertight:
-        problems.append("the STL is not watertight")
     if abs(mesh.volume - total) > 1e-6 * total:
         problems.append(f"STL volume {mesh.volume} vs plates {total}")
+    objects = read_objects(obj_path)
+    if [name for name, _, _ in objects] != [p["id"] for p in plates]:
+        problems.append("the OBJ's objects are not the plates, by tag, in order")
+    for (name, v, f), s in zip(objects, solids):
+        directed = {(a, b) for t in f for a, b in zip(t, t[1:] + t[:1])}
+        if len(directed) != 3 * len(f) or any((b, a) not in directed for a, b in directed):
+            problems.append(f"OBJ object {name} is not closed")
+        vol = sum(np.dot(v[a], np.cross(v[b], v[c])) for a, b, c in f) / 6.0
+        if abs(vol - s.volume()) > 1e-6 * s.volume():
+            problems.append(f"OBJ object {name}: volume {vol} vs {s.volume()}")
     if problems:
         for p in problems[:20]:
             print(f"{plates_path}: {p}", file=sys.stderr)

@@ -26,7 +26,12 @@ pub struct Args {
     /// Gap left between plates meeting at a node, for the weld, mm
     #[arg(long, default_value_t = 1.0)]
     pub weld_gap: f64,
-    /// Output folder (made if missing): plates.json, assembly.stl
+    /// Assembly groups: connected, balanced by plate count, few seams; a seam plate becomes two
+    /// half-thickness plates bolted face to face
+    #[arg(long, default_value_t = 1)]
+    pub groups: usize,
+    /// Output folder (made if missing): plates.json, assembly.stl, assembly.obj (one object per
+    /// plate)
     #[arg(short, long)]
     pub output: PathBuf,
     /// Print a machine-readable summary on stdout
@@ -47,6 +52,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             None => Thickness::FromRadius,
         },
         weld_gap: args.weld_gap,
+        groups: args.groups,
     };
     let plates = plates(&axes, &opts).with_context(|| format!("{}", args.input.display()))?;
     if args.output.exists() && !args.output.is_dir() {
@@ -56,6 +62,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
     write_plates_json(&plates, &opts, &args.output.join("plates.json"))?;
     write_mesh(&assembly(&plates), &args.output.join("assembly.stl"), 0)?;
+    write_assembly_obj(&plates, &args.output.join("assembly.obj"))?;
     Ok(Outcome { plates })
 }
 
@@ -64,6 +71,8 @@ pub fn run(args: Args) -> Result<()> {
     let area: f64 = plates.iter().map(|p| p.area()).sum();
     let volume: f64 = plates.iter().map(|p| p.area() * p.thickness).sum();
     let flattening = plates.iter().map(|p| p.flattening).fold(0.0, f64::max);
+    let seams = plates.iter().filter(|p| p.bolted_to.is_some()).count() / 2;
+    let groups = plates.iter().map(|p| p.group + 1).max().unwrap_or(0);
     if args.json {
         println!(
             "{}",
@@ -73,11 +82,13 @@ pub fn run(args: Args) -> Result<()> {
                 "area_mm2": area,
                 "volume_mm3": volume,
                 "max_flattening_mm": flattening,
+                "groups": groups,
+                "seams": seams,
             })
         );
     } else {
         println!(
-            "{}: {} plates, {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
+            "{}: {} plates in {groups} group(s), {seams} seam(s) split in half-thickness pairs, {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
             args.output.display(),
             plates.len(),
             area * 1e-6,
@@ -101,6 +112,28 @@ pub fn assembly(plates: &[Plate]) -> TriMesh {
     mesh
 }
 
+/// Every plate as its own closed object `o ID` (the halves of a seam plate touch face to face,
+/// so in the STL they share a face; here they stay apart).
+fn write_assembly_obj(plates: &[Plate], path: &Path) -> Result<()> {
+    write_atomic(path, |w| {
+        writeln!(w, "# lamina plates: one closed prism per plate, units mm")?;
+        let mut base = 1;
+        for p in plates {
+            let (v, t) = p.prism();
+            writeln!(w, "o {}", p.id)?;
+            for q in &v {
+                writeln!(w, "v {:?} {:?} {:?}", q.x, q.y, q.z)?;
+            }
+            for tri in &t {
+                writeln!(w, "f {} {} {}", tri[0] + base, tri[1] + base, tri[2] + base)?;
+            }
+            base += v.len() as u32;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}
+
 fn write_plates_json(plates: &[Plate], opts: &PlateOptions, path: &Path) -> Result<()> {
     write_atomic(path, |w| {
         writeln!(w, "{{")?;
@@ -111,12 +144,23 @@ fn write_plates_json(plates: &[Plate], opts: &PlateOptions, path: &Path) -> Resu
         writeln!(w, "  \"weld_gap\": {},", json!(opts.weld_gap))?;
         writeln!(w, "  \"plates\": [")?;
         for (k, p) in plates.iter().enumerate() {
+            let ends: Vec<_> = (0..2)
+                .map(|e| {
+                    json!({
+                        "node": p.nodes[e],
+                        "setback": p.setback[e],
+                        "welded_to": p.partners[e].iter().map(|&j| &plates[j].id).collect::<Vec<_>>(),
+                    })
+                })
+                .collect();
             let rec = json!({
+                "id": p.id,
+                "group": p.group + 1,
                 "edge": p.edge,
                 "nodes": p.nodes,
                 "thickness": p.thickness,
-                "setback": p.setback,
-                "partners": p.partners,
+                "ends": ends,
+                "bolted_to": p.bolted_to.map(|j| &plates[j].id),
                 "area_mm2": p.area(),
                 "flattening_mm": p.flattening,
                 "matrix": p.placement.matrix(),

@@ -4,6 +4,7 @@
 pub mod audit;
 pub mod axes;
 pub mod cells;
+pub mod groups;
 pub mod panels;
 pub mod planarize;
 pub mod plates;

@@ -35,6 +35,8 @@ pub struct PlateOptions {
     pub thickness: Thickness,
     /// Gap left between plates meeting at a node, mm.
     pub weld_gap: f64,
+    /// Assembly groups (see `groups.rs`); seam plates are split in two of half thickness.
+    pub groups: usize,
 }
 
 impl Default for PlateOptions {
@@ -43,6 +45,7 @@ impl Default for PlateOptions {
             gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
             thickness: Thickness::FromRadius,
             weld_gap: 1.0,
+            groups: 1,
         }
     }
 }
@@ -71,6 +74,8 @@ pub enum PlateError {
     TooShort(usize, f64, f64),
     #[error("edge {0}: its panel is twisted or self-crossing (the axes cross within the height)")]
     Twisted(usize),
+    #[error(transparent)]
+    Groups(#[from] super::groups::GroupError),
 }
 
 /// Where a plate sits: world = origin + x·X + y·Y + z·Z for plate coordinates (x, y, z), with z
@@ -102,6 +107,10 @@ impl Placement {
 
 #[derive(Clone, Debug)]
 pub struct Plate {
+    /// Tag `G-NNN`: assembly group (from 1) and number within it, in edge order.
+    pub id: String,
+    /// Assembly group, from 0.
+    pub group: u32,
     pub edge: usize,
     pub nodes: [u32; 2],
     pub thickness: f64,
@@ -110,8 +119,11 @@ pub struct Plate {
     pub placement: Placement,
     /// Cut back from each node's axis, mm.
     pub setback: [f64; 2],
-    /// Plates (by edge) meeting this one at each node.
+    /// Plates (by index) welded to this one at each node: every other plate there except its
+    /// own other half.
     pub partners: [Vec<usize>; 2],
+    /// On a seam between groups: the other half-thickness plate, bolted face to face.
+    pub bolted_to: Option<usize>,
     /// Distance of the panel's fourth corner from the plate's plane, mm.
     pub flattening: f64,
 }
@@ -226,13 +238,11 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<Vec<Plate>, PlateError
     let mut out = Vec::with_capacity(axes.edges.len());
     for (k, &[a, b]) in axes.edges.iter().enumerate() {
         let mut setback = [0.0; 2];
-        let mut partners = [Vec::new(), Vec::new()];
         for (end, v) in [a, b].into_iter().enumerate() {
             for &(m, m_end) in &at[v as usize] {
                 if m == k {
                     continue;
                 }
-                partners[end].push(m);
                 let cos = dir[k][end].dot(dir[m][m_end]).clamp(-1.0, 1.0);
                 let theta = cos.acos();
                 let half = 0.5 * theta;
@@ -246,20 +256,66 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<Vec<Plate>, PlateError
                 let s = 0.5 * t[k] / half.tan() + opts.weld_gap / (2.0 * half.sin());
                 setback[end] = f64::max(setback[end], s);
             }
-            partners[end].sort_unstable();
         }
-        out.push(plate(axes, k, t[k], setback, partners)?);
+        out.push(plate(axes, k, t[k], setback)?);
     }
-    Ok(out)
+    let group = super::groups::partition(&axes.positions, &axes.edges, opts.groups)?;
+    Ok(split_and_tag(out, &group))
 }
 
-fn plate(
-    axes: &Axes,
-    k: usize,
-    thickness: f64,
-    setback: [f64; 2],
-    partners: [Vec<usize>; 2],
-) -> Result<Plate, PlateError> {
+/// Seam plates into two halves, one per group, offset ±t/4 across the plate so that they lie
+/// face to face within the original thickness; then partners by plate and tags.
+fn split_and_tag(per_edge: Vec<Plate>, group: &[u32]) -> Vec<Plate> {
+    let mut out: Vec<Plate> = Vec::with_capacity(per_edge.len());
+    for mut p in per_edge {
+        let [ga, gb] = p.nodes.map(|v| group[v as usize]);
+        if ga == gb {
+            p.group = ga;
+            out.push(p);
+            continue;
+        }
+        let quarter = p.thickness / 4.0;
+        let first = out.len();
+        for (g, side) in [(ga, -1.0), (gb, 1.0)] {
+            let mut half = p.clone();
+            half.thickness = p.thickness / 2.0;
+            half.placement.origin += p.placement.z * (side * quarter);
+            half.group = g;
+            half.bolted_to = Some(if side < 0.0 { first + 1 } else { first });
+            out.push(half);
+        }
+    }
+    let mut at: std::collections::HashMap<u32, Vec<usize>> = Default::default();
+    for (i, p) in out.iter().enumerate() {
+        for v in p.nodes {
+            at.entry(v).or_default().push(i);
+        }
+    }
+    let mut count: std::collections::BTreeMap<u32, usize> = Default::default();
+    let tagged: Vec<([Vec<usize>; 2], String)> = out
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let partners = p.nodes.map(|v| {
+                at[&v]
+                    .iter()
+                    .copied()
+                    .filter(|&j| j != i && Some(j) != p.bolted_to)
+                    .collect::<Vec<_>>()
+            });
+            let n = count.entry(p.group).or_default();
+            *n += 1;
+            (partners, format!("{}-{:03}", p.group + 1, n))
+        })
+        .collect();
+    for (p, (partners, id)) in out.iter_mut().zip(tagged) {
+        p.partners = partners;
+        p.id = id;
+    }
+    out
+}
+
+fn plate(axes: &Axes, k: usize, thickness: f64, setback: [f64; 2]) -> Result<Plate, PlateError> {
     let [a, b] = axes.edges[k];
     let (a, b) = (a as usize, b as usize);
     let (va, vb) = (axes.positions[a], axes.positions[b]);
@@ -302,13 +358,16 @@ fn plate(
         return Err(PlateError::TooShort(k, setback[0], setback[1]));
     }
     Ok(Plate {
+        id: String::new(),
+        group: 0,
+        bolted_to: None,
         edge: k,
         nodes: [a as u32, b as u32],
         thickness,
         outline: poly,
         placement,
         setback,
-        partners,
+        partners: [Vec::new(), Vec::new()],
         flattening,
     })
 }
