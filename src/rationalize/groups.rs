@@ -152,15 +152,7 @@ pub fn partition(
                 if !helps {
                     continue;
                 }
-                let same = adj[v]
-                    .iter()
-                    .filter(|(u, _)| group[*u] as usize == from)
-                    .count();
-                let there = adj[v]
-                    .iter()
-                    .filter(|(u, _)| group[*u] as usize == to)
-                    .count();
-                let gain = there as i64 - same as i64;
+                let gain = seams_removed(&adj, &group, v, to);
                 if !best.is_some_and(|(g, bv, bt)| {
                     (gain, Reverse(v), Reverse(to)) <= (g, Reverse(bv), Reverse(bt))
                 }) {
@@ -190,15 +182,7 @@ pub fn partition(
                 if to == from {
                     continue;
                 }
-                let same = adj[v]
-                    .iter()
-                    .filter(|(u, _)| group[*u] as usize == from)
-                    .count();
-                let there = adj[v]
-                    .iter()
-                    .filter(|(u, _)| group[*u] as usize == to)
-                    .count();
-                let gain = there as i64 - same as i64;
+                let gain = seams_removed(&adj, &group, v, to);
                 if gain > 0 && !best.is_some_and(|(g, t)| gain < g || (gain == g && to >= t)) {
                     best = Some((gain, to));
                 }
@@ -222,6 +206,19 @@ pub fn partition(
         }
     }
     Ok(group)
+}
+
+/// How many seams moving node `v` to group `to` removes (negative: adds).
+fn seams_removed(adj: &[Vec<(usize, f64)>], group: &[u32], v: usize, to: usize) -> i64 {
+    let from = group[v];
+    adj[v]
+        .iter()
+        .map(|&(u, _)| match group[u] {
+            g if g as usize == to => 1,
+            g if g == from => -1,
+            _ => 0,
+        })
+        .sum()
 }
 
 /// Whether the nodes of group `g` form one connected piece (or none).
