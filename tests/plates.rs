@@ -51,6 +51,33 @@ fn calyx_axes_become_closed_non_overlapping_plates() -> TestResult {
         .sum();
     let stl = topo.volume.ok_or("volume")?;
     assert!((stl - volume).abs() < 1e-4 * volume, "{stl} vs {volume}");
+    // One cut DXF per plate, in mm, its tag etched inside its outline; the OpenSCAD program
+    // places every one of them.
+    let scad = std::fs::read_to_string(out.join("assembly.scad"))?;
+    assert_eq!(scad.matches("\npart(").count(), 273);
+    let first = &plates[0];
+    let id = first["id"].as_str().ok_or("id")?;
+    let drawing = dxf::Drawing::load_file(out.join(format!("parts/{id}.dxf")))?;
+    assert_eq!(
+        drawing.header.default_drawing_units,
+        dxf::enums::Units::Millimeters
+    );
+    let outline: Vec<[f64; 2]> = serde_json::from_value(first["outline"].clone())?;
+    let inside = |x: f64, y: f64| {
+        (0..outline.len()).all(|k| {
+            let (a, b) = (outline[k], outline[(k + 1) % outline.len()]);
+            (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]) > 0.0
+        })
+    };
+    let mut etched = 0;
+    for e in drawing.entities() {
+        if let dxf::entities::EntityType::Line(l) = &e.specific {
+            assert_eq!(e.common.layer, "ETCH");
+            assert!(inside(l.p1.x, l.p1.y) && inside(l.p2.x, l.p2.y));
+            etched += 1;
+        }
+    }
+    assert!(etched > 5, "{etched} tag strokes");
     Ok(())
 }
 

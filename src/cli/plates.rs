@@ -7,6 +7,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
 use serde_json::json;
 
+use glam::DVec2;
+use lamina::fabricate::assembly::{write_scad, ScadPart};
+use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn};
+use lamina::fabricate::tags::{fit, strokes};
 use lamina::files::write_atomic;
 use lamina::mesh::io::write_mesh;
 use lamina::rationalize::axes::read_axes;
@@ -31,7 +35,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub groups: usize,
     /// Output folder (made if missing): plates.json, assembly.stl, assembly.obj (one object per
-    /// plate)
+    /// plate), parts/ID.dxf (outline on CUT, etched tag on ETCH), assembly.scad
     #[arg(short, long)]
     pub output: PathBuf,
     /// Print a machine-readable summary on stdout
@@ -41,6 +45,50 @@ pub struct Args {
 
 pub struct Outcome {
     pub plates: Vec<Plate>,
+    /// Per plate: the etched tag's character height and lower-left corner, if it fits.
+    pub tags: Vec<Option<(f64, DVec2)>>,
+}
+
+/// Tags stay this far inside a plate's outline, mm.
+const TAG_MARGIN: f64 = 5.0;
+/// Tag character heights tried, mm.
+const TAG_HEIGHT: (f64, f64) = (3.0, 25.0);
+
+/// One DXF per plate in `parts/` (outline on CUT, tag on ETCH, in the plate's own frame) and
+/// `assembly.scad` placing them.
+fn write_parts(plates: &[Plate], dir: &Path) -> Result<Vec<Option<(f64, DVec2)>>> {
+    let parts = dir.join("parts");
+    std::fs::create_dir_all(&parts)
+        .with_context(|| format!("{}: cannot create folder", parts.display()))?;
+    let mut tags = Vec::with_capacity(plates.len());
+    let mut names = Vec::with_capacity(plates.len());
+    for p in plates {
+        let tag = fit(&p.id, &p.outline, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
+        let lines = tag.map(|(h, o)| strokes(&p.id, o, h)).unwrap_or_default();
+        let name = format!("parts/{}.dxf", p.id);
+        write_cut_dxf(
+            &[Drawn {
+                outline: &p.outline,
+                strokes: &lines,
+            }],
+            None,
+            &dir.join(&name),
+        )?;
+        tags.push(tag);
+        names.push(name);
+    }
+    let scad: Vec<ScadPart> = plates
+        .iter()
+        .zip(&names)
+        .map(|(p, name)| ScadPart {
+            id: &p.id,
+            dxf: name,
+            thickness: p.thickness,
+            matrix: p.placement.matrix(),
+        })
+        .collect();
+    write_scad(&scad, &dir.join("assembly.scad"))?;
+    Ok(tags)
 }
 
 pub fn execute(args: &Args) -> Result<Outcome> {
@@ -63,11 +111,13 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     write_plates_json(&plates, &opts, &args.output.join("plates.json"))?;
     write_mesh(&assembly(&plates), &args.output.join("assembly.stl"), 0)?;
     write_assembly_obj(&plates, &args.output.join("assembly.obj"))?;
-    Ok(Outcome { plates })
+    let tags = write_parts(&plates, &args.output)?;
+    Ok(Outcome { plates, tags })
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let Outcome { plates } = execute(&args)?;
+    let Outcome { plates, tags } = execute(&args)?;
+    let untagged = tags.iter().filter(|t| t.is_none()).count();
     let area: f64 = plates.iter().map(|p| p.area()).sum();
     let volume: f64 = plates.iter().map(|p| p.area() * p.thickness).sum();
     let flattening = plates.iter().map(|p| p.flattening).fold(0.0, f64::max);
@@ -84,6 +134,7 @@ pub fn run(args: Args) -> Result<()> {
                 "max_flattening_mm": flattening,
                 "groups": groups,
                 "seams": seams,
+                "untagged": untagged,
             })
         );
     } else {
@@ -95,6 +146,12 @@ pub fn run(args: Args) -> Result<()> {
             volume * 7.9e-6,
             flattening
         );
+        if untagged > 0 {
+            println!(
+                "  {untagged} plate(s) too small for a {} mm tag {} mm inside the outline: not etched",
+                TAG_HEIGHT.0, TAG_MARGIN
+            );
+        }
     }
     Ok(())
 }

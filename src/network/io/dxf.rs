@@ -345,17 +345,42 @@ fn close_if(pts: &mut Vec<DVec3>, closed: bool) {
     }
 }
 
-pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
+/// An empty R2000 drawing whose header holds no clock and no random GUIDs (the crate stamps
+/// both; they are set to the epoch and the nil GUID) so the same content gives the same bytes.
+pub(crate) fn fixed_drawing() -> Drawing {
     let mut drawing = Drawing::new();
     drawing.header.version = AcadVersion::R2000;
-    // The crate stamps the clock and random GUIDs into the header; fix them (the epoch and the
-    // nil GUID) so the same network always gives the same bytes.
     drawing.header.creation_date = Default::default();
     drawing.header.creation_date_universal = Default::default();
     drawing.header.update_date = Default::default();
     drawing.header.update_date_universal = Default::default();
     drawing.header.fingerprint_guid = Default::default();
     drawing.header.version_guid = Default::default();
+    drawing
+}
+
+/// A flat LWPOLYLINE through (x, y) points on `layer`.
+pub(crate) fn lw_polyline_entity(
+    pts: impl Iterator<Item = (f64, f64)>,
+    closed: bool,
+    layer: &str,
+) -> Entity {
+    let mut pl = LwPolyline::default();
+    pl.set_is_closed(closed);
+    pl.vertices = pts
+        .map(|(x, y)| LwPolylineVertex {
+            x,
+            y,
+            ..Default::default()
+        })
+        .collect();
+    let mut e = Entity::new(EntityType::LwPolyline(pl));
+    e.common.layer = layer.into();
+    e
+}
+
+pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
+    let mut drawing = fixed_drawing();
     drawing.add_layer(Layer {
         name: LAYER.into(),
         ..Default::default()
@@ -386,19 +411,8 @@ pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
                 EntityType::Line(Line::new(point(pts[0]), point(pts[1]))),
             );
         } else if pts.iter().all(|p| p.z == pts[0].z) {
-            let mut pl = LwPolyline::default();
-            pl.set_is_closed(closed);
-            pl.vertices = pts
-                .iter()
-                .map(|p| LwPolylineVertex {
-                    x: p.x,
-                    y: p.y,
-                    ..Default::default()
-                })
-                .collect();
-            let mut e = Entity::new(EntityType::LwPolyline(pl));
+            let mut e = lw_polyline_entity(pts.iter().map(|p| (p.x, p.y)), closed, LAYER);
             e.common.elevation = pts[0].z;
-            e.common.layer = LAYER.into();
             drawing.add_entity(e);
         } else {
             let mut pl = Polyline::default();
