@@ -693,7 +693,7 @@ impl<'a> Grower<'a> {
             }
             pulled.clear();
             if let Some(o) = observer.as_mut() {
-                if self.step % o.every.max(1) == 0 {
+                if self.step.is_multiple_of(o.every.max(1)) {
                     self.show(o);
                 }
             }
@@ -1027,7 +1027,7 @@ impl<'a> Grower<'a> {
                 if to.dot(heading) < cos_max * d {
                     continue;
                 }
-                if best.map_or(true, |(bd, bu)| (d, u) < (bd, bu)) && self.may_join(t, u) {
+                if best.is_none_or(|(bd, bu)| (d, u) < (bd, bu)) && self.may_join(t, u) {
                     best = Some((d, u));
                 }
             }

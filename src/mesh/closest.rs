@@ -81,7 +81,7 @@ impl<'a> SurfaceIndex<'a> {
             let [a, b, c] = self.mesh.corners(&self.mesh.triangles[t as usize]);
             let (q, bary) = closest_on_triangle(p, a, b, c);
             let d = q.distance(p);
-            if best.map_or(true, |b| d < b.distance) {
+            if best.is_none_or(|b| d < b.distance) {
                 best = Some(Closest {
                     point: q,
                     distance: d,

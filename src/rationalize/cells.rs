@@ -109,7 +109,7 @@ pub fn cells(
     // Trace faces: half-edge 2k runs a→b along edge k, 2k + 1 runs b→a.
     let from = |h: usize| {
         let [a, b] = edges[h / 2];
-        if h % 2 == 0 {
+        if h.is_multiple_of(2) {
             a
         } else {
             b
@@ -253,7 +253,7 @@ fn rotation_system(positions: &[DVec3], edges: &[[u32; 2]], normals: &[DVec3]) -
     }
     let to = |h: usize| {
         let [a, b] = edges[h / 2];
-        if h % 2 == 0 {
+        if h.is_multiple_of(2) {
             b
         } else {
             a
