@@ -76,6 +76,10 @@ pub enum PlateError {
     Twisted(usize),
     #[error(transparent)]
     Groups(#[from] super::groups::GroupError),
+    #[error("the axes hold {0} nodes but {1} axes, {2} heights; {3} edges but {4} radii")]
+    Lengths(usize, usize, usize, usize, usize),
+    #[error("edge {0} refers to node {1}, which does not exist")]
+    MissingNode(usize, u32),
 }
 
 /// Where a plate sits: world = origin + x·X + y·Y + z·Z for plate coordinates (x, y, z), with z
@@ -182,6 +186,22 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     }
     if !(opts.weld_gap.is_finite() && opts.weld_gap >= 0.0) {
         return Err(PlateError::WeldGap(opts.weld_gap));
+    }
+    let n = axes.positions.len();
+    if axes.axes.len() != n || axes.heights.len() != n || axes.edge_radii.len() != axes.edges.len()
+    {
+        return Err(PlateError::Lengths(
+            n,
+            axes.axes.len(),
+            axes.heights.len(),
+            axes.edges.len(),
+            axes.edge_radii.len(),
+        ));
+    }
+    for (k, e) in axes.edges.iter().enumerate() {
+        if let Some(&v) = e.iter().find(|&&v| v as usize >= n) {
+            return Err(PlateError::MissingNode(k, v));
+        }
     }
     for i in 0..axes.positions.len() {
         let ok = axes.positions[i].is_finite()
@@ -487,6 +507,12 @@ mod tests {
             }),
             Some(PlateError::Gauges(_))
         ));
+        let mut missing = y_joint();
+        missing.edges[2] = [0, 9];
+        assert_eq!(
+            plates(&missing, &PlateOptions::default()).err(),
+            Some(PlateError::MissingNode(2, 9))
+        );
         let mut twisted = y_joint();
         // Node 1's axis leans back over node 0 so far that the panel's sides cross.
         twisted.axes[1] = DVec3::new(-0.99, 0.0, 0.141).normalize();
