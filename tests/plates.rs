@@ -10,24 +10,40 @@ fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
 }
 
+/// The Calyx fixture's axes (planarize with `extra` arguments) in `dir`/axes.json.
+fn calyx_axes(
+    dir: &Path,
+    extra: &[&str],
+) -> Result<std::path::PathBuf, Box<dyn std::error::Error>> {
+    let axes = dir.join("axes.json");
+    let net = fixture("networks/calyx_veins.json");
+    let mut args = vec!["planarize", s(&net), "-o", s(&axes)];
+    args.extend_from_slice(extra);
+    let o = lamina(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    Ok(axes)
+}
+
+/// Runs `lamina plates` on `axes` into `dir`/plates and reads its plates.json.
+fn plates_of(
+    dir: &Path,
+    axes: &Path,
+    extra: &[&str],
+) -> Result<(std::path::PathBuf, serde_json::Value), Box<dyn std::error::Error>> {
+    let out = dir.join("plates");
+    let mut args = vec!["plates", s(axes), "-o", s(&out)];
+    args.extend_from_slice(extra);
+    let o = lamina(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc = serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    Ok((out, doc))
+}
+
 #[test]
 fn calyx_axes_become_closed_non_overlapping_plates() -> TestResult {
     let dir = tempfile::tempdir()?;
-    let axes = dir.path().join("axes.json");
-    let o = lamina(&[
-        "planarize",
-        s(&fixture("networks/calyx_veins.json")),
-        "--fix-normal",
-        "z<1:0,0,1",
-        "-o",
-        s(&axes),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let out = dir.path().join("plates");
-    let o = lamina(&["plates", s(&axes), "-o", s(&out)]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (out, doc) = plates_of(dir.path(), &axes, &[])?;
     let plates = doc["plates"].as_array().ok_or("plates")?;
     assert_eq!(plates.len(), 273);
     // Thicker veins get thicker gauges: more than one gauge is used, all from the list.
@@ -84,14 +100,7 @@ fn calyx_axes_become_closed_non_overlapping_plates() -> TestResult {
 #[test]
 fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
     let dir = tempfile::tempdir()?;
-    let axes = dir.path().join("axes.json");
-    let o = lamina(&[
-        "planarize",
-        s(&fixture("networks/calyx_veins.json")),
-        "-o",
-        s(&axes),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let axes = calyx_axes(dir.path(), &[])?;
     let out = dir.path().join("plates");
     for (args, words) in [
         (vec!["--gauges", "3,2"], "ascending"),
@@ -115,19 +124,8 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
 #[test]
 fn seven_groups_tag_every_plate_and_split_seams_in_half() -> TestResult {
     let dir = tempfile::tempdir()?;
-    let axes = dir.path().join("axes.json");
-    let o = lamina(&[
-        "planarize",
-        s(&fixture("networks/calyx_veins.json")),
-        "-o",
-        s(&axes),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let out = dir.path().join("plates");
-    let o = lamina(&["plates", s(&axes), "--groups", "7", "-o", s(&out)]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let axes = calyx_axes(dir.path(), &[])?;
+    let (_, doc) = plates_of(dir.path(), &axes, &["--groups", "7"])?;
     let plates = doc["plates"].as_array().ok_or("plates")?;
     let id = |p: &serde_json::Value| p["id"].as_str().unwrap_or("").to_string();
     let mut ids: Vec<String> = plates.iter().map(id).collect();

@@ -12,7 +12,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::info::summary;
 use super::input::{load, Loaded, WeldArgs};
-use super::planarize::MethodArg;
+use super::planarize::{MethodArg, ReportArgs};
 use lamina::files::write_atomic;
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
@@ -263,9 +263,11 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
             fix_axis: Vec::new(),
             output: file("-axes.json"),
             panels: Some(file("-panels.obj")),
-            report: Some(file("-report.json")),
-            html: Some(file("-report.html")),
-            json: false,
+            reports: ReportArgs {
+                report: Some(file("-report.json")),
+                html: Some(file("-report.html")),
+                json: false,
+            },
             weld,
         })?;
         let s = &done.solution;

@@ -1,7 +1,7 @@
 //! `lamina planarize` and `lamina audit`: node axes that make every panel planar, and a check of
 //! panels made elsewhere; both write the planarity report.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
@@ -70,6 +70,15 @@ pub struct Args {
     /// Also write the panels as OBJ quads
     #[arg(long)]
     pub panels: Option<PathBuf>,
+    #[command(flatten)]
+    pub reports: ReportArgs,
+    #[command(flatten)]
+    pub weld: WeldArgs,
+}
+
+/// Where the planarity report goes, for `planarize` and `audit` alike.
+#[derive(ClapArgs)]
+pub struct ReportArgs {
     /// Write the planarity report as JSON
     #[arg(long)]
     pub report: Option<PathBuf>,
@@ -79,8 +88,20 @@ pub struct Args {
     /// Print a machine-readable summary on stdout
     #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub weld: WeldArgs,
+}
+
+impl ReportArgs {
+    fn write(&self, report: &Report) -> Result<()> {
+        if let Some(p) = &self.report {
+            let text = report.json();
+            write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+        }
+        if let Some(p) = &self.html {
+            let text = report.html();
+            write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+        }
+        Ok(())
+    }
 }
 
 fn parse_override(s: &str, what: &str) -> Result<(Selector, DVec3)> {
@@ -164,7 +185,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         write_panels_obj(&quads, p)?;
     }
     let report = report_of(args, &sol, &quads, seconds);
-    write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
+    args.reports.write(&report)?;
     Ok(Outcome {
         solution: sol,
         summary,
@@ -178,7 +199,7 @@ pub fn run(args: Args) -> Result<bool> {
         summary,
         seconds,
     } = execute(&args)?;
-    if args.json {
+    if args.reports.json {
         println!(
             "{}",
             json!({ "output": args.output, "summary": summary, "seconds": seconds })
@@ -291,18 +312,6 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
     )
 }
 
-fn write_reports(report: &Report, json: Option<&Path>, html: Option<&Path>) -> Result<()> {
-    if let Some(p) = json {
-        let text = report.json();
-        write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
-    }
-    if let Some(p) = html {
-        let text = report.html();
-        write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
-    }
-    Ok(())
-}
-
 #[derive(ClapArgs)]
 pub struct AuditArgs {
     /// Panels: .obj faces or .dxf 3DFACE / closed polylines
@@ -310,13 +319,8 @@ pub struct AuditArgs {
     /// Largest deviation accepted, mm
     #[arg(long)]
     pub tolerance: f64,
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    #[arg(long)]
-    pub html: Option<PathBuf>,
-    /// Print a machine-readable summary on stdout
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub reports: ReportArgs,
 }
 
 /// Ok(true) when every panel is within the tolerance.
@@ -348,9 +352,9 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
         audited.into_iter().map(|a| a.corners).collect(),
         args.tolerance,
     );
-    write_reports(&report, args.report.as_deref(), args.html.as_deref())?;
+    args.reports.write(&report)?;
     let s = &report.summary;
-    if args.json {
+    if args.reports.json {
         println!("{}", serde_json::to_string(s)?);
     } else {
         println!(

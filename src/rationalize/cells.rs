@@ -459,27 +459,7 @@ fn inside(p: Point2<f64>, segments: &[(Point2<f64>, Point2<f64>)]) -> bool {
 mod tests {
     use super::*;
 
-    fn grid(nx: usize, ny: usize) -> (Vec<DVec3>, Vec<[u32; 2]>) {
-        let mut p = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                p.push(DVec3::new(i as f64 * 10.0, j as f64 * 10.0, 0.0));
-            }
-        }
-        let mut e = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                let v = (j * nx + i) as u32;
-                if i + 1 < nx {
-                    e.push([v, v + 1]);
-                }
-                if j + 1 < ny {
-                    e.push([v, v + nx as u32]);
-                }
-            }
-        }
-        (p, e)
-    }
+    use crate::rationalize::planarize::synthetic::square_grid as grid;
 
     #[test]
     fn a_flat_grid_has_its_squares_as_cells_and_one_hole() {

@@ -55,22 +55,21 @@ pub fn partition(
     }
     let weight = |v: usize| adj[v].len() as f64 / 2.0;
 
-    // 1. Seeds.
-    let mut seeds = Vec::with_capacity(k);
-    let mut nearest = dijkstra(&adj, &[used[0]]);
-    for _ in 0..k {
-        let next = *used
+    // 1. Seeds: the node farthest from the first used node, then each time the node farthest
+    // from all seeds so far (ties to the lower index).
+    let farthest = |d: &[f64]| {
+        *used
             .iter()
-            .max_by(|&&a, &&b| nearest[a].total_cmp(&nearest[b]).then(b.cmp(&a)))
-            .unwrap_or(&used[0]);
-        if seeds.is_empty() {
-            // The first seed is the node farthest from node `used[0]`.
-            nearest = vec![f64::INFINITY; n];
-        }
+            .max_by(|&&a, &&b| d[a].total_cmp(&d[b]).then(b.cmp(&a)))
+            .unwrap_or(&used[0])
+    };
+    let mut seeds = vec![farthest(&dijkstra(&adj, &[used[0]]))];
+    let mut nearest = dijkstra(&adj, &seeds);
+    while seeds.len() < k {
+        let next = farthest(&nearest);
         seeds.push(next);
-        let d = dijkstra(&adj, &[next]);
-        for v in 0..n {
-            nearest[v] = nearest[v].min(d[v]);
+        for (v, d) in dijkstra(&adj, &[next]).into_iter().enumerate() {
+            nearest[v] = nearest[v].min(d);
         }
     }
 
@@ -292,27 +291,7 @@ impl Ord for Ordered {
 mod tests {
     use super::*;
 
-    fn grid(nx: usize, ny: usize) -> (Vec<DVec3>, Vec<[u32; 2]>) {
-        let mut p = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                p.push(DVec3::new(i as f64, j as f64, 0.0) * 10.0);
-            }
-        }
-        let mut e = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                let v = (j * nx + i) as u32;
-                if i + 1 < nx {
-                    e.push([v, v + 1]);
-                }
-                if j + 1 < ny {
-                    e.push([v, v + nx as u32]);
-                }
-            }
-        }
-        (p, e)
-    }
+    use crate::rationalize::planarize::synthetic::square_grid as grid;
 
     #[test]
     fn groups_are_connected_balanced_and_cut_few_edges() {

@@ -235,17 +235,7 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
         input
             .edges
             .iter()
-            .map(|&[a, b]| {
-                let (a, b) = (a as usize, b as usize);
-                quad_deviation(panel_quad(
-                    input.positions[a],
-                    input.positions[b],
-                    axes[a],
-                    axes[b],
-                    input.heights[a],
-                    input.heights[b],
-                ))
-            })
+            .map(|&[a, b]| quad_deviation(quad(input, axes, a, b)))
             .fold(0.0, f64::max)
     };
     let mut degree = vec![0usize; n];
@@ -368,15 +358,20 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
 }
 
 fn panel(input: &Input, axes: &[DVec3], a: u32, b: u32) -> QuadMetrics {
+    quad_metrics(quad(input, axes, a, b))
+}
+
+/// The panel of edge (a, b) with these axes.
+fn quad(input: &Input, axes: &[DVec3], a: u32, b: u32) -> [DVec3; 4] {
     let (a, b) = (a as usize, b as usize);
-    quad_metrics(panel_quad(
+    panel_quad(
         input.positions[a],
         input.positions[b],
         axes[a],
         axes[b],
         input.heights[a],
         input.heights[b],
-    ))
+    )
 }
 
 fn check(input: &Input, opts: &PlanarizeOptions) -> Result<(), PlanarizeError> {

@@ -56,6 +56,29 @@ pub fn honeycomb_on(n: usize, h: f64, seed: u64, calyx: bool) -> Input {
     }
 }
 
+/// A flat `nx` × `ny` square grid, 10 mm apart in the plane z = 0, with its grid edges.
+pub fn square_grid(nx: usize, ny: usize) -> (Vec<DVec3>, Vec<[u32; 2]>) {
+    let mut p = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            p.push(DVec3::new(i as f64, j as f64, 0.0) * 10.0);
+        }
+    }
+    let mut e = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let v = (j * nx + i) as u32;
+            if i + 1 < nx {
+                e.push([v, v + 1]);
+            }
+            if j + 1 < ny {
+                e.push([v, v + nx as u32]);
+            }
+        }
+    }
+    (p, e)
+}
+
 pub fn honeycomb(n: usize, h: f64, seed: u64) -> Input {
     honeycomb_on(n, h, seed, false)
 }
