@@ -39,6 +39,9 @@ enum Command {
     /// gauge list, cut back at the nodes so plates do not interpenetrate (plates.json,
     /// assembly.stl).
     Plates(cli::plates::Args),
+    /// Nest plates on stock sheets, one sheet family per thickness: a cut DXF per sheet,
+    /// bom.csv, nest.json, assembly.scad rebuilt from the sheets, and sheets.svg.
+    Nest(Box<cli::nest::Args>),
     /// Check the planarity of panels made elsewhere (.obj faces, .dxf 3DFACE/closed polylines):
     /// exit 0 when all are within the tolerance, 1 when some are not.
     Audit(cli::planarize::AuditArgs),
@@ -70,6 +73,7 @@ fn main() -> ExitCode {
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
         Command::Plates(args) => cli::plates::run(args).map(Within::from),
+        Command::Nest(args) => cli::nest::run(*args).map(Within::from),
         Command::Audit(args) => cli::planarize::audit_run(args).map(within),
     };
     match result {

@@ -161,3 +161,136 @@ fn seven_groups_tag_every_plate_and_split_seams_in_half() -> TestResult {
     }
     Ok(())
 }
+
+/// `lamina nest` on `plates` into `dir`/`name`; returns the folder and nest.json.
+fn nest_of(
+    dir: &Path,
+    plates: &Path,
+    name: &str,
+    extra: &[&str],
+) -> Result<(std::path::PathBuf, serde_json::Value), Box<dyn std::error::Error>> {
+    let out = dir.join(name);
+    let mut args = vec!["nest", s(plates), "-o", s(&out)];
+    args.extend_from_slice(extra);
+    let o = lamina(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc = serde_json::from_str(&std::fs::read_to_string(out.join("nest.json"))?)?;
+    Ok((out, doc))
+}
+
+#[test]
+fn nesting_puts_each_thickness_on_its_own_sheets_and_repeats_exactly() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (plates_dir, plates) = plates_of(dir.path(), &axes, &["--groups", "7"])?;
+    let file = plates_dir.join("plates.json");
+    let (cut, nest) = nest_of(dir.path(), &file, "cut", &["--tries", "2"])?;
+    let list = plates["plates"].as_array().ok_or("plates")?;
+    let thickness: std::collections::HashMap<&str, f64> = list
+        .iter()
+        .map(|p| {
+            (
+                p["id"].as_str().unwrap_or(""),
+                p["thickness"].as_f64().unwrap_or(0.0),
+            )
+        })
+        .collect();
+    let mut gauges: Vec<f64> = thickness.values().copied().collect();
+    gauges.sort_by(f64::total_cmp);
+    gauges.dedup();
+    let sheets = nest["sheets"].as_array().ok_or("sheets")?;
+    // Calyx fits one sheet per thickness.
+    assert_eq!(sheets.len(), gauges.len());
+    let mut count = 0;
+    for sheet in sheets {
+        let t = sheet["thickness"].as_f64().ok_or("thickness")?;
+        for id in sheet["parts"].as_array().ok_or("parts")? {
+            assert_eq!(thickness[id.as_str().ok_or("id")?], t);
+            count += 1;
+        }
+        assert!(cut.join(sheet["file"].as_str().ok_or("file")?).exists());
+    }
+    assert_eq!(count, list.len());
+    let bom = std::fs::read_to_string(cut.join("bom.csv"))?;
+    assert_eq!(bom.lines().count(), list.len() + 1);
+    let scad = std::fs::read_to_string(cut.join("assembly.scad"))?;
+    assert_eq!(scad.matches("\npart(").count(), list.len());
+    // The same input and seed give the same bytes.
+    let (again, _) = nest_of(dir.path(), &file, "again", &["--tries", "2"])?;
+    for name in ["nest.json", "bom.csv", "assembly.scad", "sheets.svg"] {
+        assert_eq!(
+            std::fs::read(cut.join(name))?,
+            std::fs::read(again.join(name))?,
+            "{name}"
+        );
+    }
+    for sheet in sheets {
+        let f = sheet["file"].as_str().ok_or("file")?;
+        assert_eq!(
+            std::fs::read(cut.join(f))?,
+            std::fs::read(again.join(f))?,
+            "{f}"
+        );
+    }
+    // Groups kept together: every sheet holds one group.
+    let (_, grouped) = nest_of(
+        dir.path(),
+        &file,
+        "grouped",
+        &["--keep-groups", "--tries", "1"],
+    )?;
+    for sheet in grouped["sheets"].as_array().ok_or("sheets")? {
+        let g = sheet["group"].as_u64().ok_or("group")?;
+        for id in sheet["parts"].as_array().ok_or("parts")? {
+            assert!(id.as_str().ok_or("id")?.starts_with(&format!("{g}-")));
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (plates_dir, plates) = plates_of(dir.path(), &axes, &[])?;
+    let file = plates_dir.join("plates.json");
+    let out = dir.path().join("cut");
+    // The longest plate is over 600 mm: a 500 × 400 sheet cannot take it.
+    let o = lamina(&["nest", s(&file), "--sheet", "500x400", "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("fit no 500 × 400 mm sheet"), "{err}");
+    let long = plates["plates"]
+        .as_array()
+        .ok_or("plates")?
+        .iter()
+        .find(|p| {
+            let xs: Vec<f64> = p["outline"]
+                .as_array()
+                .map(|o| o.iter().filter_map(|q| q[0].as_f64()).collect())
+                .unwrap_or_default();
+            xs.iter().cloned().fold(f64::MIN, f64::max)
+                - xs.iter().cloned().fold(f64::MAX, f64::min)
+                > 500.0
+        })
+        .ok_or("a long plate")?;
+    assert!(err.contains(long["id"].as_str().ok_or("id")?), "{err}");
+    assert!(!out.exists(), "nothing is written");
+    for bad in [
+        vec!["--spacing", "-1"],
+        vec!["--sheet", "3000"],
+        vec!["--margin", "800"],
+        vec!["--rotations", "0,ninety"],
+    ] {
+        let mut args = vec!["nest", s(&file), "-o", s(&out)];
+        args.extend_from_slice(&bad);
+        let o = lamina(&args);
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+        assert!(!out.exists(), "{bad:?}: nothing is written");
+    }
+    // Not a plates file: named as such.
+    let o = lamina(&["nest", s(&axes), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("not lamina-plates"), "{}", stderr(&o));
+    Ok(())
+}

@@ -5,6 +5,7 @@ pub mod convert;
 pub mod demo;
 pub mod info;
 pub mod input;
+pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod render;

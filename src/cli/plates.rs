@@ -10,7 +10,7 @@ use serde_json::json;
 use glam::DVec2;
 use lamina::fabricate::assembly::{write_scad, ScadPart};
 use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn};
-use lamina::fabricate::tags::{fit, strokes};
+use lamina::fabricate::tags::{fit, strokes, TAG_HEIGHT, TAG_MARGIN};
 use lamina::files::write_atomic;
 use lamina::mesh::io::write_mesh;
 use lamina::rationalize::axes::read_axes;
@@ -48,11 +48,6 @@ pub struct Outcome {
     /// Per plate: the etched tag's character height and lower-left corner, if it fits.
     pub tags: Vec<Option<(f64, DVec2)>>,
 }
-
-/// Tags stay this far inside a plate's outline, mm.
-const TAG_MARGIN: f64 = 5.0;
-/// Tag character heights tried, mm.
-const TAG_HEIGHT: (f64, f64) = (3.0, 25.0);
 
 /// One DXF per plate in `parts/` (outline on CUT, tag on ETCH, in the plate's own frame) and
 /// `assembly.scad` placing them.

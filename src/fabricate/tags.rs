@@ -100,6 +100,18 @@ pub fn strokes(text: &str, origin: DVec2, height: f64) -> Vec<[DVec2; 2]> {
     out
 }
 
+/// Tags stay this far inside a plate's outline, mm.
+pub const TAG_MARGIN: f64 = 5.0;
+/// Tag character heights tried, mm.
+pub const TAG_HEIGHT: (f64, f64) = (3.0, 25.0);
+
+/// A plate's etched tag in the plate's frame: character height and strokes, or None when the
+/// plate is too small for the smallest tag.
+pub fn etch(id: &str, outline: &[DVec2]) -> Option<(f64, Vec<[DVec2; 2]>)> {
+    let (h, origin) = fit(id, outline, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1)?;
+    Some((h, strokes(id, origin, h)))
+}
+
 /// The largest character height, up to `max_height`, at which `text` (left to right along +x)
 /// fits inside the convex counter-clockwise `outline` with `margin` to every edge, centred on
 /// the outline's centroid; with the box's lower-left corner. None when not even

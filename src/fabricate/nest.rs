@@ -1,0 +1,1204 @@
+//! Nesting parts on stock sheets, fewest sheets first.
+//!
+//! [`Nester`] is the interface: parts (outlines in their own frames) in, a sheet, rotation and
+//! offset per part out. [`BottomLeft`] is our heuristic on top of jagua-rs's collision engine
+//! (jagua-rs detects collisions; it does not decide where anything goes):
+//!
+//! - Each part is nested as its convex hull (always safe), grown by half the spacing (plus
+//!   [`SLACK`]) with bevelled corners, so that grown hulls that do not overlap keep the parts at
+//!   least the spacing apart. The sheet, less the margin, grown by half the spacing, is the
+//!   container.
+//! - Congruent quads are paired first: two copies, the second turned 180°, joined along the edge
+//!   that leaves the least waste (a trapezoid and its turned copy make a parallelogram). A pair
+//!   is kept only if its hull wastes under [`PAIR_WASTE`] of its area.
+//! - Items go largest first onto the first sheet that takes them (first fit decreasing). On a
+//!   sheet, each allowed rotation is tried from sampled starts: dropped from the top edge, pushed
+//!   in from the right edge, and at random free points. From each start the item slides down,
+//!   then left, and again, until it rests; the resting place with the lowest top (then the
+//!   leftmost) wins. A slide's length is exact: the nearest wall, or the nearest contact with a
+//!   placed item along the direction (vertex-to-edge ray casts between convex polygons, the
+//!   items found by an rstar query on the swept box). jagua-rs's quadtree confirms that every
+//!   start and every resting place is free.
+//! - Several seeded tries (the first in plain area order, the others with the order perturbed)
+//!   keep the nesting with the fewest sheets, then the emptiest last sheet.
+//!
+//! Rotations are a list of angles or `Any`, which tries the angles that lay one of the item's
+//! two longest hull edges along a sheet side.
+
+use std::sync::Arc;
+
+use glam::DVec2;
+use jagua_rs::collision_detection::hazards::filter::NoFilter;
+use jagua_rs::collision_detection::hazards::{Hazard, HazardEntity};
+use jagua_rs::collision_detection::{CDEConfig, CDEngine};
+use jagua_rs::geometry::fail_fast::SPSurrogateConfig;
+use jagua_rs::geometry::geo_enums::GeoPosition;
+use jagua_rs::geometry::geo_traits::Transformable;
+use jagua_rs::geometry::primitives::{Point, Rect, SPolygon};
+use jagua_rs::geometry::Transformation;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::{RTree, AABB};
+
+/// Extra clearance added to half the spacing, mm: it absorbs jagua-rs's f32 arithmetic, so parts
+/// end up at least the spacing apart in exact arithmetic.
+pub const SLACK: f64 = 0.01;
+/// A slide stops this short of contact, mm.
+const BACKOFF: f64 = 0.005;
+/// A pair of quads is kept if its hull wastes less than this fraction of its area.
+const PAIR_WASTE: f64 = 0.04;
+/// Congruent: side lengths and diagonals equal within this, mm.
+const CONGRUENT: f64 = 0.05;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Rotations {
+    /// These angles, degrees counter-clockwise.
+    Listed(Vec<f64>),
+    /// Any angle: the ones that lay one of the item's two longest hull edges along a sheet side.
+    Any,
+}
+
+#[derive(Clone, Debug)]
+pub struct NestOptions {
+    /// Sheet width (x) and height (y), mm.
+    pub sheet: DVec2,
+    /// Kept clear along every sheet edge, mm.
+    pub margin: f64,
+    /// Least distance between two parts (kerf plus clearance), mm.
+    pub spacing: f64,
+    pub rotations: Rotations,
+    /// Seeded tries; the best is kept.
+    pub tries: usize,
+    pub seed: u64,
+    /// Pair congruent quads turned 180°.
+    pub pair: bool,
+}
+
+impl NestOptions {
+    /// Tries worth their time for this many parts: several for a few hundred, one for thousands.
+    pub fn tries_for(parts: usize) -> usize {
+        (2000 / parts.max(1)).clamp(1, 8)
+    }
+}
+
+impl Default for NestOptions {
+    fn default() -> Self {
+        NestOptions {
+            sheet: DVec2::new(3000.0, 1500.0),
+            margin: 10.0,
+            spacing: 5.0,
+            rotations: Rotations::Listed(vec![0.0, 90.0, 180.0, 270.0]),
+            tries: 4,
+            seed: 1,
+            pair: true,
+        }
+    }
+}
+
+/// Where a part goes: sheet point = R(angle)·p + offset for a point p of its outline.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Place {
+    pub sheet: usize,
+    /// Radians, counter-clockwise.
+    pub angle: f64,
+    pub offset: DVec2,
+}
+
+impl Place {
+    pub fn apply(&self, p: DVec2) -> DVec2 {
+        DVec2::from_angle(self.angle).rotate(p) + self.offset
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Nesting {
+    /// One per part, in input order.
+    pub places: Vec<Place>,
+    pub sheets: usize,
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum NestError {
+    #[error("the sheet must be a positive size, got {0} × {1} mm")]
+    Sheet(f64, f64),
+    #[error("--margin must be ≥ 0 mm, got {0}")]
+    Margin(f64),
+    #[error("--spacing must be ≥ 0 mm, got {0}")]
+    Spacing(f64),
+    #[error("a margin of {0} mm leaves nothing of the sheet")]
+    NoRoom(f64),
+    #[error("rotation {0}° is not a finite angle")]
+    Rotation(f64),
+    #[error("the rotation list is empty")]
+    NoRotations,
+    #[error("part {0} has no area (fewer than 3 distinct points, or all on a line)")]
+    Degenerate(usize),
+    #[error("part {0}: a coordinate is not a finite number")]
+    NotFinite(usize),
+    /// Parts (index, size of the hull at the best allowed rotation) that fit no sheet.
+    #[error("{} part(s) fit no sheet at any allowed rotation, the first is part {} ({:.1} × {:.1} mm)", .0.len(), .0[0].0, .0[0].1.x, .0[0].1.y)]
+    TooLarge(Vec<(usize, DVec2)>),
+    #[error("part {0}: jagua-rs refused its shape: {1}")]
+    Engine(usize, String),
+}
+
+pub trait Nester {
+    /// Places every part on sheets of one family (same stock); sheets are numbered from 0.
+    fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError>;
+}
+
+/// Sheets per family: parts with equal keys share sheets (one stock thickness, or one
+/// assembly group), families take sheets in key order. Returns the nesting and each sheet's key.
+pub fn nest_families<K: Ord + Clone>(
+    nester: &dyn Nester,
+    parts: &[Vec<DVec2>],
+    keys: &[K],
+    opts: &NestOptions,
+) -> Result<(Nesting, Vec<K>), NestError> {
+    let mut order: Vec<usize> = (0..parts.len()).collect();
+    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
+    let mut places = vec![
+        Place {
+            sheet: 0,
+            angle: 0.0,
+            offset: DVec2::ZERO,
+        };
+        parts.len()
+    ];
+    let mut sheet_keys = Vec::new();
+    let mut too_large = Vec::new();
+    for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
+        let these: Vec<Vec<DVec2>> = family.iter().map(|&i| parts[i].clone()).collect();
+        match nester.nest(&these, opts) {
+            Ok(n) => {
+                for (&i, p) in family.iter().zip(n.places) {
+                    places[i] = Place {
+                        sheet: p.sheet + sheet_keys.len(),
+                        ..p
+                    };
+                }
+                sheet_keys.extend(std::iter::repeat_n(keys[family[0]].clone(), n.sheets));
+            }
+            Err(NestError::TooLarge(list)) => {
+                too_large.extend(list.into_iter().map(|(k, s)| (family[k], s)));
+            }
+            Err(NestError::Degenerate(k)) => return Err(NestError::Degenerate(family[k])),
+            Err(NestError::NotFinite(k)) => return Err(NestError::NotFinite(family[k])),
+            Err(NestError::Engine(k, m)) => return Err(NestError::Engine(family[k], m)),
+            Err(e) => return Err(e),
+        }
+    }
+    if !too_large.is_empty() {
+        too_large.sort_by_key(|t| t.0);
+        return Err(NestError::TooLarge(too_large));
+    }
+    Ok((
+        Nesting {
+            places,
+            sheets: sheet_keys.len(),
+        },
+        sheet_keys,
+    ))
+}
+
+/// Told the number of parts just placed (every try places all of them).
+pub type Progress = Arc<dyn Fn(usize) + Send + Sync>;
+
+/// Sampled bottom-left fill with sliding on jagua-rs's collision engine (see the module doc).
+#[derive(Clone)]
+pub struct BottomLeft {
+    /// Starts dropped from the top edge per rotation; half as many come in from the right edge
+    /// and half as many at random free points.
+    pub drops: usize,
+    pub progress: Option<Progress>,
+}
+
+impl Default for BottomLeft {
+    fn default() -> Self {
+        BottomLeft {
+            drops: 10,
+            progress: None,
+        }
+    }
+}
+
+/// The convex hull of `outline` grown by `d` (bevelled corners): every point within `d` of the
+/// outline is inside.
+pub fn grown_hull(outline: &[DVec2], d: f64) -> Vec<DVec2> {
+    grow(&convex_hull(outline), d)
+}
+
+fn check(opts: &NestOptions) -> Result<(), NestError> {
+    let s = opts.sheet;
+    if !(s.x.is_finite() && s.y.is_finite() && s.x > 0.0 && s.y > 0.0) {
+        return Err(NestError::Sheet(s.x, s.y));
+    }
+    if !(opts.margin.is_finite() && opts.margin >= 0.0) {
+        return Err(NestError::Margin(opts.margin));
+    }
+    if !(opts.spacing.is_finite() && opts.spacing >= 0.0) {
+        return Err(NestError::Spacing(opts.spacing));
+    }
+    if 2.0 * opts.margin >= s.x.min(s.y) {
+        return Err(NestError::NoRoom(opts.margin));
+    }
+    if let Rotations::Listed(r) = &opts.rotations {
+        if r.is_empty() {
+            return Err(NestError::NoRotations);
+        }
+        if let Some(bad) = r.iter().find(|a| !a.is_finite()) {
+            return Err(NestError::Rotation(*bad));
+        }
+    }
+    Ok(())
+}
+
+/// A part as placed within an item: item point = R(angle)·p + offset.
+#[derive(Clone, Copy, Debug)]
+struct Member {
+    part: usize,
+    angle: f64,
+    offset: DVec2,
+}
+
+/// What is placed: one part, or a pair of congruent quads.
+struct Item {
+    members: Vec<Member>,
+    /// The members' hulls' area, mm².
+    area: f64,
+    /// The item's hull grown by half the spacing, in the item frame.
+    grown: Vec<DVec2>,
+    shapes: Vec<Shape>,
+}
+
+/// An item at one rotation, its grown hull moved so that its bounding box starts at the origin.
+struct Shape {
+    angle: f64,
+    /// Container point = R(angle)·item point − shift + position.
+    shift: DVec2,
+    pts: Vec<DVec2>,
+    size: DVec2,
+    poly: SPolygon,
+}
+
+/// Per item: sheet, shape (rotation) and position in the container.
+type Spots = Vec<(usize, usize, DVec2)>;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Occupant {
+    Item(u32),
+    Outside,
+}
+
+impl HazardEntity for Occupant {
+    fn scope(&self) -> GeoPosition {
+        match self {
+            Occupant::Item(_) => GeoPosition::Interior,
+            Occupant::Outside => GeoPosition::Exterior,
+        }
+    }
+
+    fn is_dynamic(&self) -> bool {
+        matches!(self, Occupant::Item(_))
+    }
+}
+
+/// One sheet being filled, in container coordinates (origin at the container's corner).
+struct Sheet {
+    cde: CDEngine<Occupant>,
+    boxes: RTree<GeomWithData<Rectangle<[f64; 2]>, u32>>,
+    placed: Vec<Vec<DVec2>>,
+    free: f64,
+    /// Sorted bounding-box sizes of items this sheet refused: anything at least as large in both
+    /// is not tried again.
+    refused: Vec<DVec2>,
+    /// Bounding-box corners (right-bottom and left-top) of placed items that no placed box
+    /// covers: starts next to what is there.
+    corners: Vec<DVec2>,
+}
+
+/// The usable area for grown hulls, and where its corner sits on the sheet.
+struct Container {
+    size: DVec2,
+    corner: DVec2,
+    config: CDEConfig,
+}
+
+impl Container {
+    fn new(opts: &NestOptions) -> Self {
+        let inset = opts.margin - 0.5 * opts.spacing;
+        Container {
+            size: opts.sheet - DVec2::splat(2.0 * inset),
+            corner: DVec2::splat(inset),
+            config: CDEConfig {
+                quadtree_depth: 6,
+                cd_threshold: 16,
+                item_surrogate_config: SPSurrogateConfig::none(),
+            },
+        }
+    }
+
+    fn sheet(&self) -> Sheet {
+        let outline = polygon(&[
+            DVec2::ZERO,
+            DVec2::new(self.size.x, 0.0),
+            self.size,
+            DVec2::new(0.0, self.size.y),
+        ])
+        .expect("a positive rectangle is a polygon");
+        let bbox = Rect::try_new(
+            -1.0,
+            -1.0,
+            self.size.x as f32 + 1.0,
+            self.size.y as f32 + 1.0,
+        )
+        .expect("a positive rectangle")
+        .inflate_to_square();
+        let cde = CDEngine::new(
+            bbox,
+            vec![Hazard::new(Occupant::Outside, Arc::new(outline))],
+            self.config,
+        );
+        Sheet {
+            cde,
+            boxes: RTree::new(),
+            placed: Vec::new(),
+            free: self.size.x * self.size.y,
+            refused: Vec::new(),
+            corners: Vec::new(),
+        }
+    }
+}
+
+fn polygon(pts: &[DVec2]) -> Result<SPolygon, String> {
+    SPolygon::new(pts.iter().map(|p| Point(p.x as f32, p.y as f32)).collect())
+        .map_err(|e| e.to_string())
+}
+
+impl Sheet {
+    fn collides(&self, shape: &Shape, at: DVec2) -> bool {
+        let t = Transformation::from_translation((at.x as f32, at.y as f32));
+        self.cde
+            .detect_poly_collision(&shape.poly.transform_clone(&t), &NoFilter)
+    }
+
+    /// How far the shape at `at` can move along `dir` (−x or −y) before it meets a wall or a
+    /// placed item.
+    fn slide(&self, shape: &Shape, at: DVec2, dir: DVec2) -> f64 {
+        let wall = if dir.x < 0.0 { at.x } else { at.y };
+        if wall <= BACKOFF {
+            return 0.0;
+        }
+        let lo = at + dir * wall;
+        let swept = AABB::from_corners([lo.x, lo.y], [at.x + shape.size.x, at.y + shape.size.y]);
+        let moved: Vec<DVec2> = shape.pts.iter().map(|p| *p + at).collect();
+        let mut reach = wall;
+        for b in self.boxes.locate_in_envelope_intersecting(&swept) {
+            reach = reach.min(contact(&moved, &self.placed[b.data as usize], dir));
+            if reach <= BACKOFF {
+                return 0.0;
+            }
+        }
+        reach - BACKOFF
+    }
+
+    /// Slides down and left in turn until the shape rests; each resting place is confirmed free.
+    fn settle(&self, shape: &Shape, start: DVec2) -> DVec2 {
+        let mut at = start;
+        for _ in 0..16 {
+            let mut moved = 0.0;
+            for dir in [DVec2::NEG_Y, DVec2::NEG_X] {
+                let d = self.slide(shape, at, dir);
+                if d > 0.0 {
+                    // The exact slide is checked in jagua-rs's f32 arithmetic; on a (rare)
+                    // disagreement the move is shortened, or dropped.
+                    for step in [d, d - 0.05, 0.5 * d] {
+                        let next = at + dir * step;
+                        if step > 0.0 && !self.collides(shape, next) {
+                            at = next;
+                            moved += step;
+                            break;
+                        }
+                    }
+                }
+            }
+            if moved < 0.05 {
+                break;
+            }
+        }
+        at
+    }
+
+    fn place(&mut self, shape: &Shape, at: DVec2, id: u32) -> Result<(), String> {
+        let pts: Vec<DVec2> = shape.pts.iter().map(|p| *p + at).collect();
+        let poly = polygon(&pts)?;
+        self.cde
+            .register_hazard(Hazard::new(Occupant::Item(id), Arc::new(poly)));
+        let hi = at + shape.size;
+        let inside = |c: DVec2, lo: DVec2, hi: DVec2| {
+            c.x > lo.x + 1e-6 && c.x < hi.x - 1e-6 && c.y > lo.y + 1e-6 && c.y < hi.y - 1e-6
+        };
+        self.corners.retain(|c| !inside(*c, at, hi));
+        // Just clear of the item, so that a start there does not touch it.
+        let clear = 2.0 * BACKOFF;
+        for c in [
+            DVec2::new(hi.x + clear, at.y),
+            DVec2::new(at.x, hi.y + clear),
+        ] {
+            let covered = self
+                .boxes
+                .locate_in_envelope_intersecting(&AABB::from_point([c.x, c.y]))
+                .any(|b| {
+                    let (lo, hi) = (b.geom().lower(), b.geom().upper());
+                    inside(c, DVec2::from(lo), DVec2::from(hi))
+                });
+            if !covered {
+                self.corners.push(c);
+            }
+        }
+        self.boxes.insert(GeomWithData::new(
+            Rectangle::from_corners([at.x, at.y], [hi.x, hi.y]),
+            self.placed.len() as u32,
+        ));
+        self.free -= area(&pts);
+        self.placed.push(pts);
+        Ok(())
+    }
+}
+
+/// Distance `a` can travel along `dir` before touching `b` (both convex, counter-clockwise):
+/// the nearest hit of a ray from a vertex of one entering an edge of the other. Infinite if
+/// they never meet.
+fn contact(a: &[DVec2], b: &[DVec2], dir: DVec2) -> f64 {
+    let mut best = f64::INFINITY;
+    let mut cast = |from: &[DVec2], into: &[DVec2], u: DVec2| {
+        for (k, &q) in into.iter().enumerate() {
+            let e = into[(k + 1) % into.len()] - q;
+            let denom = u.perp_dot(e);
+            // Counter-clockwise: the outward normal is (e.y, −e.x); the ray enters only
+            // against it, where u·normal = denom < 0.
+            if denom >= -1e-12 {
+                continue;
+            }
+            for &p in from {
+                let w = q - p;
+                let s = w.perp_dot(u) / denom;
+                if !(-1e-9..=1.0 + 1e-9).contains(&s) {
+                    continue;
+                }
+                let t = w.perp_dot(e) / denom;
+                if t >= -1e-6 {
+                    best = best.min(t.max(0.0));
+                }
+            }
+        }
+    };
+    cast(a, b, dir);
+    cast(b, a, -dir);
+    best
+}
+
+fn area(p: &[DVec2]) -> f64 {
+    0.5 * (0..p.len())
+        .map(|k| p[k].perp_dot(p[(k + 1) % p.len()]))
+        .sum::<f64>()
+}
+
+/// Convex hull, counter-clockwise, without collinear points (monotone chain).
+pub fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
+    let mut p: Vec<DVec2> = points.to_vec();
+    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
+    p.dedup_by(|a, b| a.distance(*b) < 1e-9);
+    if p.len() < 3 {
+        return p;
+    }
+    let mut hull: Vec<DVec2> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let it: Box<dyn Iterator<Item = &DVec2>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &q in it {
+            while hull.len() >= start + 2 {
+                let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
+                if (b - a).perp_dot(q - b) > 1e-12 {
+                    break;
+                }
+                hull.pop();
+            }
+            hull.push(q);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+/// A convex counter-clockwise polygon grown by `d`: each edge moves out by d; a corner sharper
+/// than about 83° is bevelled by the line tangent to the circle of radius d about it, so the
+/// result still holds every point within d of the polygon.
+fn grow(hull: &[DVec2], d: f64) -> Vec<DVec2> {
+    let n = hull.len();
+    let mut out = Vec::with_capacity(2 * n);
+    for k in 0..n {
+        let prev = hull[(k + n - 1) % n];
+        let p = hull[k];
+        let next = hull[(k + 1) % n];
+        let n1 = outward(p - prev);
+        let n2 = outward(next - p);
+        let bisector = (n1 + n2).normalize();
+        let cos_half = bisector.dot(n1);
+        if cos_half > 0.75 {
+            out.push(p + bisector * (d / cos_half));
+        } else {
+            // The bevel line: points x with (x − p)·bisector = d; meet each moved edge.
+            for (nrm, along) in [(n1, (p - prev).normalize()), (n2, (next - p).normalize())] {
+                let base = p + nrm * d;
+                let t = (d - (base - p).dot(bisector)) / along.dot(bisector);
+                out.push(base + along * t);
+            }
+        }
+    }
+    out.dedup_by(|a, b| a.distance(*b) < 1e-3);
+    if out.len() > 1 && out[0].distance(out[out.len() - 1]) < 1e-3 {
+        out.pop();
+    }
+    out
+}
+
+fn outward(e: DVec2) -> DVec2 {
+    DVec2::new(e.y, -e.x).normalize()
+}
+
+/// The angles (radians) tried for an item.
+fn angles(grown: &[DVec2], rotations: &Rotations) -> Vec<f64> {
+    let mut out: Vec<f64> = match rotations {
+        Rotations::Listed(r) => r.iter().map(|a| a.to_radians()).collect(),
+        Rotations::Any => {
+            let mut edges: Vec<(f64, f64)> = (0..grown.len())
+                .map(|k| {
+                    let e = grown[(k + 1) % grown.len()] - grown[k];
+                    (e.length(), e.y.atan2(e.x))
+                })
+                .collect();
+            edges.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let mut a = vec![0.0];
+            for &(_, phi) in edges.iter().take(2) {
+                for k in 0..4 {
+                    a.push(-phi + k as f64 * std::f64::consts::FRAC_PI_2);
+                }
+            }
+            a
+        }
+    };
+    for a in &mut out {
+        *a = a.rem_euclid(std::f64::consts::TAU);
+    }
+    out.sort_by(f64::total_cmp);
+    out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    out
+}
+
+fn shape(grown: &[DVec2], angle: f64) -> Result<Shape, String> {
+    let r = DVec2::from_angle(angle);
+    let turned: Vec<DVec2> = grown.iter().map(|p| r.rotate(*p)).collect();
+    let lo = turned.iter().fold(DVec2::INFINITY, |m, p| m.min(*p));
+    let hi = turned.iter().fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
+    let pts: Vec<DVec2> = turned.iter().map(|p| *p - lo).collect();
+    let poly = polygon(&pts)?;
+    Ok(Shape {
+        angle,
+        shift: lo,
+        size: hi - lo,
+        pts,
+        poly,
+    })
+}
+
+/// Side lengths and both diagonals of a quad, starting at corner `k`.
+fn quad_key(q: &[DVec2], k: usize) -> [f64; 6] {
+    let v = |i: usize| q[(k + i) % 4];
+    [
+        v(0).distance(v(1)),
+        v(1).distance(v(2)),
+        v(2).distance(v(3)),
+        v(3).distance(v(0)),
+        v(0).distance(v(2)),
+        v(1).distance(v(3)),
+    ]
+}
+
+/// The same quad up to a rotation (not a reflection): the corner of `b` that matches corner 0
+/// of `a`.
+fn congruent(a: &[DVec2], b: &[DVec2]) -> Option<usize> {
+    let ka = quad_key(a, 0);
+    (0..4).find(|&k| {
+        quad_key(b, k)
+            .iter()
+            .zip(&ka)
+            .all(|(x, y)| (x - y).abs() < CONGRUENT)
+    })
+}
+
+/// Two congruent quads, the second turned 180° and set against the edge of the first that
+/// wastes least, `gap` apart. Returns the members and the pair's hull, if it wastes little.
+fn pair(
+    i: usize,
+    a: &[DVec2],
+    j: usize,
+    b: &[DVec2],
+    gap: f64,
+) -> Option<(Vec<Member>, Vec<DVec2>)> {
+    let k = congruent(a, b)?;
+    // Rigid motion taking b's corner k.. onto a's corners 0..: rotation by the edge angles.
+    let ea = a[1] - a[0];
+    let eb = b[(k + 1) % 4] - b[k];
+    let rot = eb.y.atan2(eb.x);
+    let to_a = ea.y.atan2(ea.x) - rot;
+    let onto = |p: DVec2| DVec2::from_angle(to_a).rotate(p - b[k]) + a[0];
+    let mut best: Option<(f64, Vec<Member>, Vec<DVec2>)> = None;
+    for e in 0..4 {
+        // Turn the copy 180° about the midpoint of edge e, then push it out by the gap.
+        let (p, q) = (a[e], a[(e + 1) % 4]);
+        let mid = 0.5 * (p + q);
+        let push = outward(q - p) * gap;
+        // b point → a frame (onto) → half turn about mid → pushed.
+        let angle = to_a + std::f64::consts::PI;
+        let offset = 2.0 * mid - onto(DVec2::ZERO) + push;
+        let member = Member {
+            part: j,
+            angle,
+            offset,
+        };
+        let placed: Vec<DVec2> = b
+            .iter()
+            .map(|p| DVec2::from_angle(angle).rotate(*p) + offset)
+            .collect();
+        let mut all = a.to_vec();
+        all.extend(&placed);
+        let hull = convex_hull(&all);
+        let waste = area(&hull) / (area(a) + area(&placed)) - 1.0;
+        if best.as_ref().is_none_or(|b| waste < b.0) {
+            let first = Member {
+                part: i,
+                angle: 0.0,
+                offset: DVec2::ZERO,
+            };
+            best = Some((waste, vec![first, member], hull));
+        }
+    }
+    let (waste, members, hull) = best?;
+    (waste < PAIR_WASTE).then_some((members, hull))
+}
+
+impl BottomLeft {
+    fn items(&self, hulls: &[Vec<DVec2>], opts: &NestOptions) -> Vec<(Vec<Member>, Vec<DVec2>)> {
+        let single = |i: usize| {
+            (
+                vec![Member {
+                    part: i,
+                    angle: 0.0,
+                    offset: DVec2::ZERO,
+                }],
+                hulls[i].clone(),
+            )
+        };
+        if !opts.pair {
+            return (0..hulls.len()).map(single).collect();
+        }
+        // Quads bucketed by rounded perimeter; each pairs with the next congruent one.
+        let mut waiting: std::collections::BTreeMap<i64, Vec<usize>> = Default::default();
+        let mut out = Vec::new();
+        for (i, h) in hulls.iter().enumerate() {
+            if h.len() != 4 {
+                out.push(single(i));
+                continue;
+            }
+            let key = (quad_key(h, 0)[..4].iter().sum::<f64>() / (4.0 * CONGRUENT)).round() as i64;
+            let mut paired = None;
+            for bucket in [key - 1, key, key + 1] {
+                if let Some(list) = waiting.get_mut(&bucket) {
+                    if let Some(pos) = list.iter().position(|&j| {
+                        pair(j, &hulls[j], i, h, opts.spacing + 2.0 * SLACK).is_some()
+                    }) {
+                        let j = list.remove(pos);
+                        paired = pair(j, &hulls[j], i, h, opts.spacing + 2.0 * SLACK);
+                        break;
+                    }
+                }
+            }
+            match paired {
+                Some(p) => out.push(p),
+                None => waiting.entry(key).or_default().push(i),
+            }
+        }
+        for list in waiting.into_values() {
+            out.extend(list.into_iter().map(single));
+        }
+        out
+    }
+
+    fn fill(
+        &self,
+        items: &[Item],
+        order: &[usize],
+        container: &Container,
+        seed: u64,
+    ) -> Result<(Spots, Vec<Sheet>), NestError> {
+        let mut sheets: Vec<Sheet> = Vec::new();
+        let mut at = vec![(0, 0, DVec2::ZERO); items.len()];
+        for (n, &i) in order.iter().enumerate() {
+            let item = &items[i];
+            if let Some(tick) = &self.progress {
+                tick(item.members.len());
+            }
+            let grown_area = area(&item.grown);
+            let dims = {
+                let s = item.shapes[0].size;
+                DVec2::new(s.x.min(s.y), s.x.max(s.y))
+            };
+            let mut done = false;
+            for (k, sheet) in sheets.iter_mut().enumerate() {
+                if sheet.free < grown_area
+                    || sheet
+                        .refused
+                        .iter()
+                        .any(|r| r.x <= dims.x + 1e-9 && r.y <= dims.y + 1e-9)
+                {
+                    continue;
+                }
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((n as u64) << 20) ^ k as u64);
+                match self.best(sheet, item, container, &mut rng) {
+                    Some((s, pos)) => {
+                        sheet
+                            .place(&item.shapes[s], pos, i as u32)
+                            .map_err(|m| NestError::Engine(item.members[0].part, m))?;
+                        at[i] = (k, s, pos);
+                        done = true;
+                        break;
+                    }
+                    None => sheet.refused.push(dims),
+                }
+            }
+            if !done {
+                let mut sheet = container.sheet();
+                let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((n as u64) << 20));
+                let (s, pos) = self
+                    .best(&sheet, item, container, &mut rng)
+                    .expect("an item that fits the container fits an empty sheet");
+                sheet
+                    .place(&item.shapes[s], pos, i as u32)
+                    .map_err(|m| NestError::Engine(item.members[0].part, m))?;
+                at[i] = (sheets.len(), s, pos);
+                sheets.push(sheet);
+            }
+        }
+        Ok((at, sheets))
+    }
+
+    /// The best resting place on this sheet over rotations and starts: (shape, position).
+    fn best(
+        &self,
+        sheet: &Sheet,
+        item: &Item,
+        container: &Container,
+        rng: &mut ChaCha8Rng,
+    ) -> Option<(usize, DVec2)> {
+        let c = container.size;
+        let mut starts: Vec<(usize, DVec2)> = Vec::new();
+        for (s, shape) in item.shapes.iter().enumerate() {
+            let room = c - shape.size;
+            if room.x < 0.0 || room.y < 0.0 {
+                continue;
+            }
+            starts.push((s, DVec2::ZERO));
+            starts.extend(sheet.corners.iter().map(|c| (s, c.min(room))));
+            let k = self.drops.max(1);
+            for j in 0..k {
+                let u = (j as f64 + rng.random::<f64>()) / k as f64;
+                starts.push((s, DVec2::new(room.x * u, room.y)));
+            }
+            for j in 0..k.div_ceil(2) {
+                let u = (j as f64 + rng.random::<f64>()) / k.div_ceil(2) as f64;
+                starts.push((s, DVec2::new(room.x, room.y * u)));
+            }
+            for _ in 0..k.div_ceil(2) {
+                starts.push((
+                    s,
+                    DVec2::new(room.x * rng.random::<f64>(), room.y * rng.random::<f64>()),
+                ));
+            }
+        }
+        starts
+            .par_iter()
+            .enumerate()
+            .filter_map(|(n, &(s, start))| {
+                let shape = &item.shapes[s];
+                if sheet.collides(shape, start) {
+                    return None;
+                }
+                let at = sheet.settle(shape, start);
+                let top = at.y + shape.size.y;
+                let right = at.x + shape.size.x;
+                Some(((top, right, n), (s, at)))
+            })
+            .min_by(|a, b| {
+                a.0 .0
+                    .total_cmp(&b.0 .0)
+                    .then(a.0 .1.total_cmp(&b.0 .1))
+                    .then(a.0 .2.cmp(&b.0 .2))
+            })
+            .map(|x| x.1)
+    }
+}
+
+impl Nester for BottomLeft {
+    fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError> {
+        check(opts)?;
+        let container = Container::new(opts);
+        let mut hulls = Vec::with_capacity(parts.len());
+        for (i, p) in parts.iter().enumerate() {
+            if p.iter().any(|q| !q.is_finite()) {
+                return Err(NestError::NotFinite(i));
+            }
+            let h = convex_hull(p);
+            if h.len() < 3 || area(&h) < 1e-9 {
+                return Err(NestError::Degenerate(i));
+            }
+            hulls.push(h);
+        }
+        let d = 0.5 * opts.spacing + SLACK;
+        let mut items = Vec::new();
+        let mut too_large = Vec::new();
+        for (members, hull) in self.items(&hulls, opts) {
+            let grown = grow(&hull, d);
+            let sum: f64 = members.iter().map(|m| area(&hulls[m.part])).sum();
+            let mut shapes = Vec::new();
+            for a in angles(&grown, &opts.rotations) {
+                shapes.push(shape(&grown, a).map_err(|m| NestError::Engine(members[0].part, m))?);
+            }
+            let fits = |s: &Shape| s.size.x <= container.size.x && s.size.y <= container.size.y;
+            shapes.retain(fits);
+            if shapes.is_empty() {
+                if members.len() > 1 {
+                    // The pair is too big: its parts go alone.
+                    for m in members {
+                        let grown = grow(&hulls[m.part], d);
+                        let mut shapes = Vec::new();
+                        for a in angles(&grown, &opts.rotations) {
+                            shapes
+                                .push(shape(&grown, a).map_err(|e| NestError::Engine(m.part, e))?);
+                        }
+                        shapes.retain(fits);
+                        let single = Member {
+                            angle: 0.0,
+                            offset: DVec2::ZERO,
+                            ..m
+                        };
+                        if shapes.is_empty() {
+                            too_large.push((m.part, smallest(&hulls[m.part], &opts.rotations)));
+                        } else {
+                            items.push(Item {
+                                members: vec![single],
+                                area: area(&hulls[m.part]),
+                                grown,
+                                shapes,
+                            });
+                        }
+                    }
+                } else {
+                    too_large.push((members[0].part, smallest(&hull, &opts.rotations)));
+                }
+                continue;
+            }
+            items.push(Item {
+                members,
+                area: sum,
+                grown,
+                shapes,
+            });
+        }
+        if !too_large.is_empty() {
+            too_large.sort_by_key(|t| t.0);
+            return Err(NestError::TooLarge(too_large));
+        }
+        let mut best: Option<(usize, f64, Spots)> = None;
+        for t in 0..opts.tries.max(1) {
+            let mut rng = ChaCha8Rng::seed_from_u64(opts.seed.wrapping_add(t as u64));
+            let keys: Vec<f64> = items
+                .iter()
+                .map(|it| {
+                    let noise = if t == 0 {
+                        0.0
+                    } else {
+                        0.4 * rng.random::<f64>()
+                    };
+                    it.area * (1.0 + noise)
+                })
+                .collect();
+            let mut order: Vec<usize> = (0..items.len()).collect();
+            order.sort_by(|&a, &b| keys[b].total_cmp(&keys[a]).then(a.cmp(&b)));
+            let (at, sheets) =
+                self.fill(&items, &order, &container, opts.seed ^ (t as u64) << 40)?;
+            let last = sheets
+                .iter()
+                .map(|s| container.size.x * container.size.y - s.free)
+                .fold(f64::INFINITY, f64::min);
+            let better = match &best {
+                None => true,
+                Some((n, l, _)) => sheets.len() < *n || (sheets.len() == *n && last < *l - 1e-6),
+            };
+            if better {
+                best = Some((sheets.len(), last, at));
+            }
+        }
+        let (sheets, _, at) = best.expect("at least one try");
+        let mut places = vec![
+            Place {
+                sheet: 0,
+                angle: 0.0,
+                offset: DVec2::ZERO,
+            };
+            parts.len()
+        ];
+        for (item, &(sheet, s, pos)) in items.iter().zip(&at) {
+            let shape = &item.shapes[s];
+            let r = DVec2::from_angle(shape.angle);
+            for m in &item.members {
+                places[m.part] = Place {
+                    sheet,
+                    angle: (shape.angle + m.angle).rem_euclid(std::f64::consts::TAU),
+                    offset: r.rotate(m.offset) - shape.shift + pos + container.corner,
+                };
+            }
+        }
+        Ok(Nesting { places, sheets })
+    }
+}
+
+/// The hull's bounding box at the allowed rotation that makes it smallest (for messages).
+fn smallest(hull: &[DVec2], rotations: &Rotations) -> DVec2 {
+    angles(hull, rotations)
+        .into_iter()
+        .filter_map(|a| shape(hull, a).ok())
+        .map(|s| s.size)
+        .min_by(|a, b| a.max_element().total_cmp(&b.max_element()))
+        .unwrap_or(DVec2::ZERO)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(w: f64, h: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::ZERO,
+            DVec2::new(w, 0.0),
+            DVec2::new(w, h),
+            DVec2::new(0.0, h),
+        ]
+    }
+
+    fn trapezoid(w: f64, h: f64, lean: f64) -> Vec<DVec2> {
+        vec![
+            DVec2::ZERO,
+            DVec2::new(w, 0.0),
+            DVec2::new(w - lean, h),
+            DVec2::new(lean, h),
+        ]
+    }
+
+    /// Distance between two convex polygons, or a negative number if they overlap.
+    fn gap(a: &[DVec2], b: &[DVec2]) -> f64 {
+        let mut separation = f64::NEG_INFINITY;
+        for (p, q) in [(a, b), (b, a)] {
+            for k in 0..p.len() {
+                let e = p[(k + 1) % p.len()] - p[k];
+                if e.length() == 0.0 {
+                    continue;
+                }
+                let n = outward(e);
+                let lo = q
+                    .iter()
+                    .map(|x| (*x - p[k]).dot(n))
+                    .fold(f64::INFINITY, f64::min);
+                separation = separation.max(lo);
+            }
+        }
+        if separation <= 0.0 {
+            return separation;
+        }
+        let to_segment = |x: DVec2, s: DVec2, t: DVec2| {
+            let e = t - s;
+            let u = ((x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+            x.distance(s + e * u)
+        };
+        let mut d = f64::INFINITY;
+        for (p, q) in [(a, b), (b, a)] {
+            for x in q {
+                for k in 0..p.len() {
+                    d = d.min(to_segment(*x, p[k], p[(k + 1) % p.len()]));
+                }
+            }
+        }
+        d
+    }
+
+    fn placed(parts: &[Vec<DVec2>], n: &Nesting) -> Vec<Vec<DVec2>> {
+        parts
+            .iter()
+            .zip(&n.places)
+            .map(|(p, pl)| p.iter().map(|q| pl.apply(*q)).collect())
+            .collect()
+    }
+
+    fn assert_valid(parts: &[Vec<DVec2>], n: &Nesting, opts: &NestOptions) {
+        let out = placed(parts, n);
+        for (i, p) in out.iter().enumerate() {
+            for q in p {
+                assert!(
+                    q.x >= opts.margin - 1e-9 && q.y >= opts.margin - 1e-9,
+                    "{i}: {q}"
+                );
+                assert!(q.x <= opts.sheet.x - opts.margin + 1e-9, "{i}: {q}");
+                assert!(q.y <= opts.sheet.y - opts.margin + 1e-9, "{i}: {q}");
+            }
+            for (j, other) in out.iter().enumerate().take(i) {
+                if n.places[i].sheet == n.places[j].sheet {
+                    let g = gap(p, other);
+                    assert!(g >= opts.spacing, "parts {i} and {j} are {g} apart");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn contact_distance_is_exact_for_boxes_and_slopes() {
+        let a = rect(10.0, 10.0);
+        let b: Vec<DVec2> = rect(10.0, 10.0)
+            .iter()
+            .map(|p| *p + DVec2::new(-30.0, 0.0))
+            .collect();
+        assert!((contact(&a, &b, DVec2::NEG_X) - 20.0).abs() < 1e-12);
+        assert_eq!(contact(&a, &b, DVec2::NEG_Y), f64::INFINITY);
+        // A box over a slope rising to the left: its lower-left corner lands on it.
+        let slope = vec![
+            DVec2::new(-20.0, -20.0),
+            DVec2::new(20.0, -20.0),
+            DVec2::new(-20.0, 0.0),
+        ];
+        let d = contact(&a, &slope, DVec2::NEG_Y);
+        assert!((d - 10.0).abs() < 1e-12, "{d}");
+    }
+
+    #[test]
+    fn grown_hull_holds_every_point_within_the_distance() {
+        let t = trapezoid(100.0, 20.0, 30.0); // sharp corners (34°), bevelled
+        let g = grow(&t, 3.0);
+        for (k, corner) in t.iter().enumerate() {
+            for a in 0..36 {
+                let q = *corner + DVec2::from_angle(a as f64 * 10f64.to_radians()) * 3.0;
+                assert!(
+                    gap(&g, &[q, q + DVec2::X * 1e-9, q + DVec2::Y * 1e-9]) <= 1e-9,
+                    "corner {k} at {a}0°: {g:?}"
+                );
+            }
+        }
+        assert!(area(&g) < area(&grow(&t, 0.0)) + 3.0 * 300.0);
+    }
+
+    #[test]
+    fn identical_rectangles_fill_a_sheet_in_rows() {
+        let parts = vec![rect(290.0, 140.0); 100];
+        let opts = NestOptions {
+            sheet: DVec2::new(3000.0, 1500.0),
+            margin: 0.0,
+            spacing: 10.0,
+            ..Default::default()
+        };
+        let n = BottomLeft::default().nest(&parts, &opts).expect("fits");
+        assert_valid(&parts, &n, &opts);
+        // 10 × 10 of 300 × 150 (with spacing) fill the sheet exactly.
+        assert_eq!(n.sheets, 1);
+    }
+
+    #[test]
+    fn trapezoids_pair_into_parallelograms() {
+        let parts = vec![trapezoid(400.0, 100.0, 80.0); 40];
+        let opts = NestOptions {
+            sheet: DVec2::new(1500.0, 1000.0),
+            ..Default::default()
+        };
+        let paired = BottomLeft::default().nest(&parts, &opts).expect("fits");
+        assert_valid(&parts, &paired, &opts);
+        let alone = BottomLeft::default()
+            .nest(
+                &parts,
+                &NestOptions {
+                    pair: false,
+                    ..opts.clone()
+                },
+            )
+            .expect("fits");
+        assert_valid(&parts, &alone, &opts);
+        assert!(
+            paired.sheets <= alone.sheets,
+            "{} vs {}",
+            paired.sheets,
+            alone.sheets
+        );
+    }
+
+    #[test]
+    fn a_part_longer_than_the_sheet_is_named() {
+        let parts = vec![rect(100.0, 50.0), rect(3500.0, 50.0), rect(10.0, 10.0)];
+        let err = BottomLeft::default()
+            .nest(&parts, &NestOptions::default())
+            .unwrap_err();
+        match err {
+            NestError::TooLarge(list) => {
+                assert_eq!(list.len(), 1);
+                assert_eq!(list[0].0, 1);
+            }
+            e => panic!("{e}"),
+        }
+        let bad = NestOptions {
+            spacing: -1.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            BottomLeft::default().nest(&parts[..1], &bad).unwrap_err(),
+            NestError::Spacing(-1.0)
+        );
+    }
+
+    #[test]
+    fn families_get_their_own_sheets_and_results_repeat() {
+        let parts: Vec<Vec<DVec2>> = (0..60)
+            .map(|k| {
+                trapezoid(
+                    150.0 + (k % 7) as f64 * 20.0,
+                    60.0 + (k % 3) as f64 * 15.0,
+                    20.0,
+                )
+            })
+            .collect();
+        let keys: Vec<u32> = (0..60).map(|k| (k % 2) as u32).collect();
+        let opts = NestOptions {
+            sheet: DVec2::new(800.0, 600.0),
+            rotations: Rotations::Any,
+            ..Default::default()
+        };
+        let (n, sheet_keys) =
+            nest_families(&BottomLeft::default(), &parts, &keys, &opts).expect("fits");
+        assert_valid(&parts, &n, &opts);
+        for (p, k) in n.places.iter().zip(&keys) {
+            assert_eq!(sheet_keys[p.sheet], *k);
+        }
+        let (again, _) = nest_families(&BottomLeft::default(), &parts, &keys, &opts).expect("fits");
+        assert_eq!(n.places, again.places);
+    }
+}

@@ -1,0 +1,88 @@
+//! A picture of nested sheets: every sheet to scale, stacked, each part filled in its assembly
+//! group's colour and labelled with its tag. SVG, for the shop and for report pages.
+
+use std::fmt::Write as _;
+
+use glam::DVec2;
+
+/// One sheet as drawn.
+pub struct SheetView<'a> {
+    pub title: String,
+    /// Outline in sheet coordinates (mm), tag, assembly group (from 1).
+    pub parts: Vec<(Vec<DVec2>, &'a str, u32)>,
+}
+
+const PALETTE: [&str; 10] = [
+    "#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#76b7b2", "#edc948", "#b07aa1", "#ff9da7",
+    "#9c755f", "#bab0ac",
+];
+
+/// The sheets, `width` pixels wide, one below the other.
+pub fn sheets_svg(sheet: DVec2, sheets: &[SheetView], width: f64) -> String {
+    let scale = width / sheet.x;
+    let title_h = 28.0;
+    let gap = 16.0;
+    let block = title_h + sheet.y * scale + gap;
+    let height = block * sheets.len() as f64;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.1} {height:.1}" font-family="sans-serif">"#
+    );
+    for (k, sh) in sheets.iter().enumerate() {
+        let top = k as f64 * block;
+        // Sheet y points up; the picture's y points down.
+        let map = |p: DVec2| DVec2::new(p.x * scale, top + title_h + (sheet.y - p.y) * scale);
+        let _ = writeln!(
+            s,
+            r#"<text x="2" y="{:.1}" font-size="16">{}</text>"#,
+            top + 19.0,
+            escape(&sh.title)
+        );
+        let _ = writeln!(
+            s,
+            r##"<rect x="0" y="{:.1}" width="{:.1}" height="{:.1}" fill="#f4f4f2" stroke="#555" stroke-width="1"/>"##,
+            top + title_h,
+            sheet.x * scale,
+            sheet.y * scale
+        );
+        for (outline, id, group) in &sh.parts {
+            let pts: Vec<String> = outline
+                .iter()
+                .map(|p| {
+                    let q = map(*p);
+                    format!("{:.1},{:.1}", q.x, q.y)
+                })
+                .collect();
+            let colour = PALETTE[(*group as usize).saturating_sub(1) % PALETTE.len()];
+            let _ = writeln!(
+                s,
+                r##"<polygon points="{}" fill="{colour}" fill-opacity="0.55" stroke="#222" stroke-width="0.6"><title>{}</title></polygon>"##,
+                pts.join(" "),
+                escape(id)
+            );
+            let lo = outline.iter().fold(DVec2::INFINITY, |m, p| m.min(*p));
+            let hi = outline.iter().fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
+            let centre = map(outline.iter().copied().sum::<DVec2>() / outline.len() as f64);
+            let size = ((hi - lo).min_element() * scale * 0.3)
+                .min((hi - lo).max_element() * scale / (id.len() as f64 * 0.7));
+            if size >= 4.0 {
+                let _ = writeln!(
+                    s,
+                    r#"<text x="{:.1}" y="{:.1}" font-size="{size:.1}" text-anchor="middle" dominant-baseline="middle">{}</text>"#,
+                    centre.x,
+                    centre.y,
+                    escape(id)
+                );
+            }
+        }
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn escape(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
