@@ -161,6 +161,31 @@ fn demo_writes_every_output_and_an_index() -> TestResult {
     let cells: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("calyx/cells.json"))?)?;
     assert_eq!(cells["cells"].as_array().map(Vec::len), Some(26));
+    // Steel: plates in seven groups, every one nested, the preview, BOM and assembly linked.
+    for link in [
+        "calyx/cut/sheets.svg",
+        "calyx/cut/bom.csv",
+        "calyx/cut/assembly.scad",
+    ] {
+        assert!(index.contains(&format!("href=\"{link}\"")), "{link}");
+    }
+    let nest: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calyx/cut/nest.json"))?)?;
+    let plates: Value = serde_json::from_str(&std::fs::read_to_string(
+        out.join("calyx/plates/plates.json"),
+    )?)?;
+    let list = plates["plates"].as_array().ok_or("plates")?;
+    let placed: usize = nest["sheets"]
+        .as_array()
+        .ok_or("sheets")?
+        .iter()
+        .map(|s| s["parts"].as_array().map_or(0, Vec::len))
+        .sum();
+    assert_eq!(placed, list.len());
+    assert!(list
+        .iter()
+        .filter(|p| p["group"].as_u64().is_some())
+        .all(|p| p["group"].as_u64() <= Some(7)));
     Ok(())
 }
 
@@ -172,7 +197,16 @@ fn demo_is_deterministic() -> TestResult {
         let o = lamina(&["demo", "--out", d.to_str().ok_or("path")?, "--size", "200"]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    for sub in ["networks", "surfaces", "venation", "calyx", "."] {
+    for sub in [
+        "networks",
+        "surfaces",
+        "venation",
+        "calyx",
+        "calyx/plates",
+        "calyx/plates/parts",
+        "calyx/cut",
+        ".",
+    ] {
         for entry in std::fs::read_dir(a.join(sub))? {
             let name = entry?.file_name();
             let text = name.to_string_lossy();

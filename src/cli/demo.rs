@@ -1,7 +1,7 @@
 //! `lamina demo [--out DIR]`: the whole way on the embedded fixtures: read each fixture, check
 //! it, convert it to every format and render it; grow two leaves; run the Calyx network through
-//! cells and node axes with planarity reports; write an index.html linking everything. Later
-//! stages add their steps here.
+//! cells and node axes with planarity reports, then into plates, assembly groups and nested
+//! cut sheets; write an index.html linking everything. Later stages add their steps here.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -13,12 +13,15 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::info::summary;
 use super::input::{load, Loaded, WeldArgs};
 use super::planarize::{MethodArg, ReportArgs};
+use glam::DVec2;
+use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::venation::Mode;
 use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
+use lamina::rationalize::plates::EdgeSelector;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -74,7 +77,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 3),
+        Some(FIXTURES.len() as u64 + 4),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -96,6 +99,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.set_message("calyx: cells, node axes, reports");
     entries.push(calyx(out, &inputs, args.size)?);
+    bar.inc(1);
+    bar.set_message("calyx: plates, groups, cut sheets");
+    entries.push(steel(out)?);
     bar.inc(1);
     bar.finish_and_clear();
     let index = out.join("index.html");
@@ -302,6 +308,86 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
             .into(),
         outputs,
         preview: "calyx/panels.png".into(),
+        facts,
+    })
+}
+
+/// From the L-BFGS axes to steel: plates in seven assembly groups (base ring at 6 mm, the rest
+/// by vein radius), nested on 3000 × 1500 sheets per thickness.
+fn steel(out: &Path) -> Result<Entry> {
+    let dir = out.join("calyx");
+    let plates = super::plates::execute(&super::plates::Args {
+        input: dir.join("lbfgs-axes.json"),
+        gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
+        thickness: None,
+        edge_thickness: vec![(EdgeSelector::parse("z<1").map_err(anyhow::Error::msg)?, 6.0)],
+        weld_gap: 1.0,
+        groups: 7,
+        output: dir.join("plates"),
+        json: false,
+    })?;
+    let sheet = DVec2::new(3000.0, 1500.0);
+    let nest = super::nest::execute(&super::nest::Args {
+        input: dir.join("plates/plates.json"),
+        sheet,
+        margin: 10.0,
+        spacing: 5.0,
+        rotations: Rotations::Listed(vec![0.0, 90.0, 180.0, 270.0]),
+        keep_groups: false,
+        tries: None,
+        seed: 1,
+        no_pairs: false,
+        output: dir.join("cut"),
+        json: false,
+    })?;
+    let p = &plates.plates;
+    let seams = p.iter().filter(|q| q.bolted_to.is_some()).count() / 2;
+    let mass: f64 = p
+        .iter()
+        .map(|q| q.area() * q.thickness * super::nest::DENSITY * 1e-6)
+        .sum();
+    let mut facts = format!(
+        "{} plates in 7 groups, {seams} seams split into bolted half-thickness pairs, {mass:.1} kg          of stainless steel. Nested on {} sheets, one family per thickness: ",
+        p.len(),
+        nest.sheets.len()
+    );
+    let per: Vec<String> = nest
+        .sheets
+        .iter()
+        .map(|s| {
+            format!(
+                "{} mm: {} parts, {:.1} %",
+                s.thickness,
+                s.parts.len(),
+                100.0 * s.area / (sheet.x * sheet.y)
+            )
+        })
+        .collect();
+    let _ = write!(
+        facts,
+        "{}. OpenSCAD rebuilds the sculpture from the sheet DXFs with          <code>openscad cut/assembly.scad</code>.",
+        per.join("; ")
+    );
+    let mut outputs: Vec<String> = [
+        "plates/plates.json",
+        "plates/assembly.stl",
+        "plates/assembly.obj",
+        "plates/assembly.scad",
+        "cut/sheets.svg",
+        "cut/bom.csv",
+        "cut/nest.json",
+        "cut/assembly.scad",
+    ]
+    .iter()
+    .map(|f| format!("calyx/{f}"))
+    .collect();
+    outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
+    Ok(Entry {
+        name: "Calyx: plates, assembly groups and cut sheets".into(),
+        about: "`lamina plates` on the L-BFGS axes (gauges 1.5–6 mm by vein radius, the base                 ring at 6 mm with `--edge-thickness 'z<1:6'`, weld gap 1 mm, `--groups 7`), then                 `lamina nest` on 3000 × 1500 mm sheets, margin 10 mm, spacing 5 mm: a cut DXF per                 sheet with etched tags, the BOM, nest.json and the OpenSCAD assembly"
+            .into(),
+        outputs,
+        preview: "calyx/cut/sheets.svg".into(),
         facts,
     })
 }

@@ -14,7 +14,7 @@ use lamina::fabricate::tags::{fit, strokes, TAG_HEIGHT, TAG_MARGIN};
 use lamina::files::write_atomic;
 use lamina::mesh::io::write_mesh;
 use lamina::rationalize::axes::read_axes;
-use lamina::rationalize::plates::{plates, Plate, PlateOptions, Thickness};
+use lamina::rationalize::plates::{plates, EdgeSelector, Plate, PlateOptions, Thickness};
 use lamina::TriMesh;
 
 #[derive(ClapArgs)]
@@ -27,6 +27,11 @@ pub struct Args {
     /// Every plate this thick, mm [default: from the vein radii, thicker veins on thicker gauges]
     #[arg(long)]
     pub thickness: Option<f64>,
+    /// Thickness for some edges, over the rule: `SELECTOR:MM`, where SELECTOR is `edge=K` or a
+    /// node selector both ends must match (`all`, `node=N`, `x|y|z` `<` `<=` `>` `>=` value),
+    /// e.g. `z<1:6` for a 6 mm base ring; repeatable, a later match wins
+    #[arg(long, value_parser = parse_override)]
+    pub edge_thickness: Vec<(EdgeSelector, f64)>,
     /// Gap left between plates meeting at a node, for the weld, mm
     #[arg(long, default_value_t = 1.0)]
     pub weld_gap: f64,
@@ -41,6 +46,17 @@ pub struct Args {
     /// Print a machine-readable summary on stdout
     #[arg(long)]
     pub json: bool,
+}
+
+fn parse_override(s: &str) -> Result<(EdgeSelector, f64), String> {
+    let (sel, t) = s
+        .rsplit_once(':')
+        .ok_or_else(|| format!("`{s}`: expected SELECTOR:MM, like z<1:6 or edge=12:4"))?;
+    let t: f64 = t
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: `{t}` is not a thickness in mm"))?;
+    Ok((EdgeSelector::parse(sel)?, t))
 }
 
 pub struct Outcome {
@@ -94,6 +110,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             Some(t) => Thickness::Constant(t),
             None => Thickness::FromRadius,
         },
+        overrides: args.edge_thickness.clone(),
         weld_gap: args.weld_gap,
         groups: args.groups,
     };

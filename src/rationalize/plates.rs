@@ -18,6 +18,7 @@
 use glam::{DVec2, DVec3};
 
 use super::axes::Axes;
+use super::planarize::Selector;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Thickness {
@@ -28,11 +29,45 @@ pub enum Thickness {
     FromRadius,
 }
 
+/// Which edges a thickness override applies to.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EdgeSelector {
+    /// One edge, by index.
+    Edge(usize),
+    /// Every edge whose two nodes both match.
+    Nodes(Selector),
+}
+
+impl EdgeSelector {
+    /// `edge=K`, or a node selector (`all`, `node=N`, `z<1`, ...) both ends must match.
+    pub fn parse(s: &str) -> Result<EdgeSelector, String> {
+        match s.trim().strip_prefix("edge=") {
+            Some(k) => k
+                .trim()
+                .parse()
+                .map(EdgeSelector::Edge)
+                .map_err(|_| format!("\"{k}\" is not an edge number")),
+            None => Selector::parse(s).map(EdgeSelector::Nodes),
+        }
+    }
+
+    fn matches(&self, axes: &Axes, k: usize) -> bool {
+        match self {
+            EdgeSelector::Edge(e) => *e == k,
+            EdgeSelector::Nodes(sel) => axes.edges[k]
+                .iter()
+                .all(|&v| sel.matches(v, axes.positions[v as usize])),
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct PlateOptions {
     /// Sheet thicknesses available, mm, ascending.
     pub gauges: Vec<f64>,
     pub thickness: Thickness,
+    /// Per-edge thicknesses over the rule, in order (a later match wins).
+    pub overrides: Vec<(EdgeSelector, f64)>,
     /// Gap left between plates meeting at a node, mm.
     pub weld_gap: f64,
     /// Assembly groups (see `groups.rs`); seam plates are split in two of half thickness.
@@ -44,6 +79,7 @@ impl Default for PlateOptions {
         PlateOptions {
             gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
             thickness: Thickness::FromRadius,
+            overrides: Vec::new(),
             weld_gap: 1.0,
             groups: 1,
         }
@@ -58,6 +94,12 @@ pub enum PlateError {
     Gauges(Vec<f64>),
     #[error("--thickness must be a positive number of mm, got {0}")]
     Thickness(f64),
+    #[error("a thickness override must be a positive number of mm, got {0}")]
+    Override(f64),
+    #[error("a thickness override names edge {0}, but there are {1} edges")]
+    OverrideEdge(usize, usize),
+    #[error("thickness override {0} (counting from 1) matches no edge")]
+    OverrideUnused(usize),
     #[error("--weld-gap must be ≥ 0 mm, got {0}")]
     WeldGap(f64),
     #[error("node {0} has no usable axis or height")]
@@ -184,6 +226,16 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
             return Err(PlateError::Thickness(t));
         }
     }
+    for (sel, t) in &opts.overrides {
+        if !(t.is_finite() && *t > 0.0) {
+            return Err(PlateError::Override(*t));
+        }
+        if let EdgeSelector::Edge(k) = sel {
+            if *k >= axes.edges.len() {
+                return Err(PlateError::OverrideEdge(*k, axes.edges.len()));
+            }
+        }
+    }
     if !(opts.weld_gap.is_finite() && opts.weld_gap >= 0.0) {
         return Err(PlateError::WeldGap(opts.weld_gap));
     }
@@ -216,8 +268,25 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     Ok(())
 }
 
-/// Thickness of each edge's plate.
-pub fn thicknesses(axes: &Axes, opts: &PlateOptions) -> Vec<f64> {
+/// Thickness of each edge's plate: the rule, then the overrides.
+pub fn thicknesses(axes: &Axes, opts: &PlateOptions) -> Result<Vec<f64>, PlateError> {
+    let mut t = by_rule(axes, opts);
+    for (n, (sel, value)) in opts.overrides.iter().enumerate() {
+        let mut used = false;
+        for (k, t) in t.iter_mut().enumerate() {
+            if sel.matches(axes, k) {
+                *t = *value;
+                used = true;
+            }
+        }
+        if !used {
+            return Err(PlateError::OverrideUnused(n + 1));
+        }
+    }
+    Ok(t)
+}
+
+fn by_rule(axes: &Axes, opts: &PlateOptions) -> Vec<f64> {
     match opts.thickness {
         Thickness::Constant(t) => vec![t; axes.edges.len()],
         Thickness::FromRadius => {
@@ -241,7 +310,7 @@ pub fn thicknesses(axes: &Axes, opts: &PlateOptions) -> Vec<f64> {
 pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<Vec<Plate>, PlateError> {
     check(axes, opts)?;
     let n = axes.positions.len();
-    let t = thicknesses(axes, opts);
+    let t = thicknesses(axes, opts)?;
     // Incident edges per node, and each edge's in-section direction u at each end.
     let mut at: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n]; // (edge, end)
     let mut dir = vec![[DVec3::ZERO; 2]; axes.edges.len()];
@@ -485,8 +554,29 @@ mod tests {
     fn thickness_follows_the_radius_hierarchy() {
         let mut axes = y_joint();
         axes.edge_radii = vec![1.0, 0.5, 0.0];
-        let t = thicknesses(&axes, &PlateOptions::default());
+        let t = thicknesses(&axes, &PlateOptions::default()).expect("valid");
         assert_eq!(t, vec![6.0, 4.0, 1.5]);
+        // Overrides by edge and by nodes (edges 1 and 2 end at nodes 2 and 3, both at y ≠ 0).
+        let opts = PlateOptions {
+            overrides: vec![
+                (EdgeSelector::parse("y>1").expect("selector"), 5.0),
+                (EdgeSelector::parse("edge=2").expect("selector"), 2.0),
+            ],
+            ..Default::default()
+        };
+        // y>1 needs both ends: node 0 is at the origin, so no edge matches.
+        assert!(matches!(
+            thicknesses(&axes, &opts),
+            Err(PlateError::OverrideUnused(_))
+        ));
+        let opts = PlateOptions {
+            overrides: vec![
+                (EdgeSelector::parse("x<=0").expect("selector"), 5.0),
+                (EdgeSelector::parse("edge=2").expect("selector"), 2.0),
+            ],
+            ..Default::default()
+        };
+        assert_eq!(thicknesses(&axes, &opts), Ok(vec![6.0, 5.0, 2.0]));
     }
 
     #[test]
