@@ -11,8 +11,10 @@
 //! - Congruent quads are paired first: two copies, the second turned 180°, joined along the edge
 //!   that leaves the least waste (a trapezoid and its turned copy make a parallelogram). A pair
 //!   is kept only if its hull wastes under [`PAIR_WASTE`] of its area.
-//! - Items go largest first onto the first sheet that takes them (first fit decreasing). On a
-//!   sheet, each allowed rotation is tried from sampled starts: dropped from the top edge, pushed
+//! - Items go largest first onto the first sheet that takes them (first fit decreasing); a
+//!   sheet that refused an item is not offered anything at least as large in both dimensions. On a
+//!   sheet, each allowed rotation is tried from sampled starts: next to the box corners of
+//!   placed items (where the item's box is clear of theirs), dropped from the top edge, pushed
 //!   in from the right edge, and at random free points. From each start the item slides down,
 //!   then left, and again, until it rests; the resting place with the lowest top (then the
 //!   leftmost) wins. A slide's length is exact: the nearest wall, or the nearest contact with a
@@ -218,7 +220,7 @@ pub struct BottomLeft {
 impl Default for BottomLeft {
     fn default() -> Self {
         BottomLeft {
-            drops: 10,
+            drops: 6,
             progress: None,
         }
     }
@@ -384,6 +386,15 @@ impl Sheet {
             .detect_poly_collision(&shape.poly.transform_clone(&t), &NoFilter)
     }
 
+    /// Whether a box of `size` at `at` (shrunk by a hair) meets no placed item's box.
+    fn box_clear(&self, at: DVec2, size: DVec2) -> bool {
+        let (lo, hi) = (at + 1e-6, at + size - 1e-6);
+        self.boxes
+            .locate_in_envelope_intersecting(&AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]))
+            .next()
+            .is_none()
+    }
+
     /// How far the shape at `at` can move along `dir` (−x or −y) before it meets a wall or a
     /// placed item.
     fn slide(&self, shape: &Shape, at: DVec2, dir: DVec2) -> f64 {
@@ -394,9 +405,22 @@ impl Sheet {
         let lo = at + dir * wall;
         let swept = AABB::from_corners([lo.x, lo.y], [at.x + shape.size.x, at.y + shape.size.y]);
         let moved: Vec<DVec2> = shape.pts.iter().map(|p| *p + at).collect();
+        // Nearest boxes first: the gap between boxes along the slide bounds the contact
+        // distance from below, so the scan stops once that gap passes the reach.
+        let axis = if dir.x < 0.0 { 0 } else { 1 };
+        let from = if dir.x < 0.0 { at.x } else { at.y };
+        let mut near: Vec<(f64, u32)> = self
+            .boxes
+            .locate_in_envelope_intersecting(&swept)
+            .map(|b| ((from - b.geom().upper()[axis]).max(0.0), b.data))
+            .collect();
+        near.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let mut reach = wall;
-        for b in self.boxes.locate_in_envelope_intersecting(&swept) {
-            reach = reach.min(contact(&moved, &self.placed[b.data as usize], dir));
+        for (gap, k) in near {
+            if gap >= reach {
+                break;
+            }
+            reach = reach.min(contact(&moved, &self.placed[k as usize], dir));
             if reach <= BACKOFF {
                 return 0.0;
             }
@@ -780,7 +804,11 @@ impl BottomLeft {
                         done = true;
                         break;
                     }
-                    None => sheet.refused.push(dims),
+                    None => {
+                        // Keep only the smallest refusals (a Pareto front): the list stays short.
+                        sheet.refused.retain(|r| !(dims.x <= r.x && dims.y <= r.y));
+                        sheet.refused.push(dims);
+                    }
                 }
             }
             if !done {
@@ -815,7 +843,16 @@ impl BottomLeft {
                 continue;
             }
             starts.push((s, DVec2::ZERO));
-            starts.extend(sheet.corners.iter().map(|c| (s, c.min(room))));
+            // Corners only where the item's box is clear of every placed box: a cheap rstar test
+            // that keeps full sheets from costing a collision query per corner.
+            starts.extend(
+                sheet
+                    .corners
+                    .iter()
+                    .map(|c| c.min(room))
+                    .filter(|c| sheet.box_clear(*c, shape.size))
+                    .map(|c| (s, c)),
+            );
             let k = self.drops.max(1);
             for j in 0..k {
                 let u = (j as f64 + rng.random::<f64>()) / k as f64;
