@@ -11,45 +11,27 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+#[path = "common/calyx.rs"]
+mod common_calyx;
+
+use common_calyx::calyx;
 use glam::{DVec2, DVec3};
 use lamina::fabricate::nest::{BottomLeft, NestOptions, Nester};
-use lamina::network::io::{read_network, ReadOptions};
 use lamina::rationalize::axes::Axes;
-use lamina::rationalize::planarize::{planarize, Input, PlanarizeOptions, Selector};
+use lamina::rationalize::planarize::{planarize, PlanarizeOptions, Selector};
 use lamina::rationalize::plates::{plates, PlateOptions, Thickness};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
 fn calyx_plates() -> Vec<Vec<DVec2>> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/networks/calyx_veins.json");
-    let net = read_network(&path, &ReadOptions::default())
-        .expect("fixture")
-        .network;
-    let input = Input {
-        positions: net.nodes.iter().map(|n| n.p).collect(),
-        edges: net.edges.iter().map(|e| [e.a, e.b]).collect(),
-        reference: net
-            .nodes
-            .iter()
-            .map(|n| n.normal.expect("stored normal"))
-            .collect(),
-        heights: vec![100.0; net.nodes.len()],
-    };
+    let input = calyx();
     let opts = PlanarizeOptions {
         fix_normals: vec![(Selector::parse("z<1").expect("selector"), DVec3::Z)],
         ..Default::default()
     };
     let sol = planarize(&input, &opts).expect("planarize");
-    let axes = Axes {
-        positions: input.positions.clone(),
-        edges: input.edges.clone(),
-        axes: sol.axes.clone(),
-        heights: input.heights.clone(),
-        reference: input.reference.clone(),
-        fixed_normals: vec![None; input.edges.len()],
-        edge_radii: vec![0.0; input.edges.len()],
-    };
+    let axes = Axes::solved(&input, &sol, vec![0.0; input.edges.len()]);
     let p = plates(
         &axes,
         &PlateOptions {

@@ -10,27 +10,14 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
-use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};
+#[path = "common/calyx.rs"]
+mod common_calyx;
+
+use common_calyx::calyx;
+use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::{Edge, Network, Node};
 use lamina::rationalize::planarize::synthetic::honeycomb;
 use lamina::rationalize::planarize::{planarize, Input, Method, PlanarizeOptions, Selector};
-
-fn calyx() -> Input {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/networks/calyx_veins.json");
-    let net = read_network(&path, &ReadOptions::default())
-        .expect("fixture")
-        .network;
-    Input {
-        positions: net.nodes.iter().map(|n| n.p).collect(),
-        edges: net.edges.iter().map(|e| [e.a, e.b]).collect(),
-        reference: net
-            .nodes
-            .iter()
-            .map(|n| n.normal.expect("stored normal"))
-            .collect(),
-        heights: vec![100.0; net.nodes.len()],
-    }
-}
 
 /// The Calyx job for the peer: positions, edges, references, heights, the base plates.
 fn write_peer_job(input: &Input) {

@@ -136,6 +136,37 @@ pub(crate) fn utf8_text(path: &Path, bytes: Vec<u8>) -> Result<String, ReadError
     })
 }
 
+/// Checks a lamina JSON file's `format` and `version` before its schema, so that another lamina
+/// file given by mistake is named as such (`what` says which file was expected).
+pub(crate) fn check_format(
+    path: &Path,
+    text: &str,
+    format: &str,
+    version: u32,
+    what: &str,
+) -> Result<(), ReadError> {
+    #[derive(serde::Deserialize)]
+    struct Header {
+        format: Option<String>,
+        version: Option<u32>,
+    }
+    let header: Header =
+        serde_json::from_str(text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+    if header.format.as_deref() == Some(format) && header.version == Some(version) {
+        return Ok(());
+    }
+    Err(ReadError::file(
+        path,
+        format!(
+            "format {} version {} is not {format} version {version} ({what})",
+            header
+                .format
+                .map_or("(none)".into(), |f| format!("\"{f}\"")),
+            header.version.map_or("(none)".into(), |v| v.to_string())
+        ),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

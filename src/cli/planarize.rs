@@ -165,19 +165,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let start = Instant::now();
     let sol = planarize(&input, &opts)?;
     let seconds = start.elapsed().as_secs_f64();
-    let axes = Axes {
-        positions: input.positions.clone(),
-        edges: input.edges.clone(),
-        axes: sol.axes.clone(),
-        heights: input.heights.clone(),
-        reference: input.reference.clone(),
-        fixed_normals: sol
-            .panels
-            .iter()
-            .map(|p| p.fixed_normal.map(DVec3::from_array))
-            .collect(),
-        edge_radii: net.edges.iter().map(|e| e.radius).collect(),
-    };
+    let axes = Axes::solved(&input, &sol, net.edges.iter().map(|e| e.radius).collect());
     let summary = summary(&sol);
     write_axes(&axes, &summary, &args.output)?;
     let quads = axes.quads();

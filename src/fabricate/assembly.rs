@@ -40,17 +40,12 @@ pub fn write_scad(parts: &[ScadPart], path: &Path) -> Result<(), WriteError> {
         )?;
         writeln!(w, "}}")?;
         for p in parts {
-            let m: Vec<String> = p
-                .matrix
-                .iter()
-                .map(|r| format!("[{:?}, {:?}, {:?}, {:?}]", r[0], r[1], r[2], r[3]))
-                .collect();
             writeln!(
                 w,
                 "part(\"{}\", {:?}, [{}]); // {}",
                 p.dxf,
                 p.thickness,
-                m.join(", "),
+                rows(&p.matrix),
                 p.id
             )?;
         }
@@ -98,11 +93,6 @@ pub fn write_scad_from_sheets(parts: &[SheetPart], path: &Path) -> Result<(), Wr
         writeln!(w, "    }}")?;
         writeln!(w, "}}")?;
         for p in parts {
-            let m: Vec<String> = p
-                .matrix
-                .iter()
-                .map(|r| format!("[{:?}, {:?}, {:?}, {:?}]", r[0], r[1], r[2], r[3]))
-                .collect();
             // Inverse of q ↦ R q + o: s ↦ Rᵀ (s − o).
             let (sin, cos) = p.angle.sin_cos();
             let t = DVec2::new(
@@ -123,11 +113,20 @@ pub fn write_scad_from_sheets(parts: &[SheetPart], path: &Path) -> Result<(), Wr
                 "part(\"{}\", {:?}, [{}], {back}, [{}]); // {}",
                 p.dxf,
                 p.thickness,
-                m.join(", "),
+                rows(&p.matrix),
                 clip.join(", "),
                 p.id
             )?;
         }
         Ok(())
     })
+}
+
+/// A 4 × 4 matrix as OpenSCAD rows, every digit kept.
+fn rows(m: &[[f64; 4]; 4]) -> String {
+    let r: Vec<String> = m
+        .iter()
+        .map(|r| format!("[{:?}, {:?}, {:?}, {:?}]", r[0], r[1], r[2], r[3]))
+        .collect();
+    r.join(", ")
 }

@@ -109,6 +109,12 @@ pub struct Place {
 }
 
 impl Place {
+    const ORIGIN: Place = Place {
+        sheet: 0,
+        angle: 0.0,
+        offset: DVec2::ZERO,
+    };
+
     pub fn apply(&self, p: DVec2) -> DVec2 {
         DVec2::from_angle(self.angle).rotate(p) + self.offset
     }
@@ -161,14 +167,7 @@ pub fn nest_families<K: Ord + Clone>(
 ) -> Result<(Nesting, Vec<K>), NestError> {
     let mut order: Vec<usize> = (0..parts.len()).collect();
     order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
-    let mut places = vec![
-        Place {
-            sheet: 0,
-            angle: 0.0,
-            offset: DVec2::ZERO,
-        };
-        parts.len()
-    ];
+    let mut places = vec![Place::ORIGIN; parts.len()];
     let mut sheet_keys = Vec::new();
     let mut too_large = Vec::new();
     for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
@@ -911,52 +910,23 @@ impl Nester for BottomLeft {
         let mut items = Vec::new();
         let mut too_large = Vec::new();
         for (members, hull) in self.items(&hulls, opts) {
-            let grown = grow(&hull, d);
-            let sum: f64 = members.iter().map(|m| area(&hulls[m.part])).sum();
-            let mut shapes = Vec::new();
-            for a in angles(&grown, &opts.rotations) {
-                shapes.push(shape(&grown, a).map_err(|m| NestError::Engine(members[0].part, m))?);
-            }
-            let fits = |s: &Shape| s.size.x <= container.size.x && s.size.y <= container.size.y;
-            shapes.retain(fits);
-            if shapes.is_empty() {
-                if members.len() > 1 {
-                    // The pair is too big: its parts go alone.
-                    for m in members {
-                        let grown = grow(&hulls[m.part], d);
-                        let mut shapes = Vec::new();
-                        for a in angles(&grown, &opts.rotations) {
-                            shapes
-                                .push(shape(&grown, a).map_err(|e| NestError::Engine(m.part, e))?);
-                        }
-                        shapes.retain(fits);
-                        let single = Member {
-                            angle: 0.0,
-                            offset: DVec2::ZERO,
-                            ..m
-                        };
-                        if shapes.is_empty() {
-                            too_large.push((m.part, smallest(&hulls[m.part], &opts.rotations)));
-                        } else {
-                            items.push(Item {
-                                members: vec![single],
-                                area: area(&hulls[m.part]),
-                                grown,
-                                shapes,
-                            });
-                        }
-                    }
-                } else {
-                    too_large.push((members[0].part, smallest(&hull, &opts.rotations)));
-                }
+            if let Some(item) = make_item(members.clone(), &hull, &hulls, d, opts, &container)? {
+                items.push(item);
                 continue;
             }
-            items.push(Item {
-                members,
-                area: sum,
-                grown,
-                shapes,
-            });
+            // Too big: a pair's parts go alone; a part alone is reported.
+            for m in members {
+                let single = Member {
+                    angle: 0.0,
+                    offset: DVec2::ZERO,
+                    ..m
+                };
+                let hull = &hulls[m.part];
+                match make_item(vec![single], hull, &hulls, d, opts, &container)? {
+                    Some(item) => items.push(item),
+                    None => too_large.push((m.part, smallest(hull, &opts.rotations))),
+                }
+            }
         }
         if !too_large.is_empty() {
             too_large.sort_by_key(|t| t.0);
@@ -993,14 +963,7 @@ impl Nester for BottomLeft {
             }
         }
         let (sheets, _, at) = best.expect("at least one try");
-        let mut places = vec![
-            Place {
-                sheet: 0,
-                angle: 0.0,
-                offset: DVec2::ZERO,
-            };
-            parts.len()
-        ];
+        let mut places = vec![Place::ORIGIN; parts.len()];
         for (item, &(sheet, s, pos)) in items.iter().zip(&at) {
             let shape = &item.shapes[s];
             let r = DVec2::from_angle(shape.angle);
@@ -1014,6 +977,35 @@ impl Nester for BottomLeft {
         }
         Ok(Nesting { places, sheets })
     }
+}
+
+/// An item of these members (their hull `hull`) grown by `d`, at every allowed rotation that
+/// fits the container; None if none fits.
+fn make_item(
+    members: Vec<Member>,
+    hull: &[DVec2],
+    hulls: &[Vec<DVec2>],
+    d: f64,
+    opts: &NestOptions,
+    container: &Container,
+) -> Result<Option<Item>, NestError> {
+    let grown = grow(hull, d);
+    let mut shapes = Vec::new();
+    for a in angles(&grown, &opts.rotations) {
+        let s = shape(&grown, a).map_err(|m| NestError::Engine(members[0].part, m))?;
+        if s.size.x <= container.size.x && s.size.y <= container.size.y {
+            shapes.push(s);
+        }
+    }
+    if shapes.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(Item {
+        area: members.iter().map(|m| area(&hulls[m.part])).sum(),
+        members,
+        grown,
+        shapes,
+    }))
 }
 
 /// The hull's bounding box at the allowed rotation that makes it smallest (for messages).

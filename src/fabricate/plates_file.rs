@@ -7,7 +7,7 @@ use std::path::Path;
 use glam::DVec2;
 use serde::Deserialize;
 
-use crate::files::{read_nonempty, utf8_text, ReadError};
+use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
 
 pub const FORMAT: &str = "lamina-plates";
 pub const VERSION: u32 = 1;
@@ -39,12 +39,6 @@ impl PlateRecord {
 }
 
 #[derive(Deserialize)]
-struct Header {
-    format: Option<String>,
-    version: Option<u32>,
-}
-
-#[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct End {
     node: u32,
@@ -71,18 +65,13 @@ struct File {
 
 pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
     let text = utf8_text(path, read_nonempty(path)?)?;
-    let header: Header =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
-    if header.format.as_deref() != Some(FORMAT) || header.version != Some(VERSION) {
-        return Err(ReadError::file(
-            path,
-            format!(
-                "format {} version {} is not {FORMAT} version {VERSION} (the plates file `lamina plates` writes)",
-                header.format.map_or("(none)".into(), |f| format!("\"{f}\"")),
-                header.version.map_or("(none)".into(), |v| v.to_string())
-            ),
-        ));
-    }
+    check_format(
+        path,
+        &text,
+        FORMAT,
+        VERSION,
+        "the plates file `lamina plates` writes",
+    )?;
     let file: File =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     if file.plates.is_empty() {

@@ -12,7 +12,8 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::panels::panel_quad;
-use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
+use super::planarize::{Input, Solution};
+use crate::files::{check_format, read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
 
 pub const FORMAT: &str = "lamina-axes";
 pub const VERSION: u32 = 1;
@@ -33,6 +34,23 @@ pub struct Axes {
 }
 
 impl Axes {
+    /// The axes planarize found for `input`, with each edge's vein radius.
+    pub fn solved(input: &Input, sol: &Solution, edge_radii: Vec<f64>) -> Axes {
+        Axes {
+            positions: input.positions.clone(),
+            edges: input.edges.clone(),
+            axes: sol.axes.clone(),
+            heights: input.heights.clone(),
+            reference: input.reference.clone(),
+            fixed_normals: sol
+                .panels
+                .iter()
+                .map(|p| p.fixed_normal.map(DVec3::from_array))
+                .collect(),
+            edge_radii,
+        }
+    }
+
     /// The panel quad of every edge, in edge order.
     pub fn quads(&self) -> Vec<[DVec3; 4]> {
         self.edges
@@ -79,7 +97,7 @@ fn is_zero(v: &f64) -> bool {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FileRecord {
-    /// Checked through `Header` before the rest is read.
+    /// Checked by `check_format` before the rest is read.
     #[allow(dead_code)]
     format: String,
     #[allow(dead_code)]
@@ -135,25 +153,13 @@ pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Resu
 pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
     let bytes = read_nonempty(path)?;
     let text = utf8_text(path, bytes)?;
-    // The format first, so that another lamina file is named as such rather than as a schema
-    // error.
-    #[derive(Deserialize)]
-    struct Header {
-        format: Option<String>,
-        version: Option<u32>,
-    }
-    let header: Header =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
-    if header.format.as_deref() != Some(FORMAT) || header.version != Some(VERSION) {
-        return Err(ReadError::file(
-            path,
-            format!(
-                "format {} version {} is not {FORMAT} version {VERSION} (the axes file `lamina planarize` writes)",
-                header.format.map_or("(none)".into(), |f| format!("\"{f}\"")),
-                header.version.map_or("(none)".into(), |v| v.to_string())
-            ),
-        ));
-    }
+    check_format(
+        path,
+        &text,
+        FORMAT,
+        VERSION,
+        "the axes file `lamina planarize` writes",
+    )?;
     let rec: FileRecord =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     let n = rec.nodes.len() as u32;
