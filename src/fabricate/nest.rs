@@ -1230,4 +1230,32 @@ mod tests {
         let (again, _) = nest_families(&BottomLeft::default(), &parts, &keys, &opts).expect("fits");
         assert_eq!(n.places, again.places);
     }
+
+    #[test]
+    fn the_result_does_not_depend_on_the_thread_count() {
+        let parts: Vec<Vec<DVec2>> = (0..80)
+            .map(|k| {
+                trapezoid(
+                    120.0 + (k % 5) as f64 * 30.0,
+                    50.0 + (k % 4) as f64 * 10.0,
+                    15.0,
+                )
+            })
+            .collect();
+        let opts = NestOptions {
+            sheet: DVec2::new(900.0, 600.0),
+            tries: 2,
+            ..Default::default()
+        };
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("pool")
+                .install(|| BottomLeft::default().nest(&parts, &opts).expect("fits"))
+        };
+        let (one, three) = (run(1), run(3));
+        assert_valid(&parts, &one, &opts);
+        assert_eq!(one.places, three.places);
+    }
 }
