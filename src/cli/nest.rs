@@ -45,7 +45,7 @@ pub struct Args {
     /// Each assembly group on sheets of its own (still one family per thickness)
     #[arg(long)]
     pub keep_groups: bool,
-    /// Seeded tries, the best kept [default: 8 for up to 250 plates, fewer for more, 1 from 1,000]
+    /// Seeded tries, the best kept [default: 8 up to 250 plates, fewer above, 1 from 2,000]
     #[arg(long)]
     pub tries: Option<usize>,
     #[arg(long, default_value_t = 1)]

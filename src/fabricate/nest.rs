@@ -49,6 +49,8 @@ use rstar::{RTree, AABB};
 pub const SLACK: f64 = 0.01;
 /// A slide stops this short of contact, mm.
 const BACKOFF: f64 = 0.005;
+/// Starts keep this far off the container's walls, mm.
+const CLEAR: f64 = 2.0 * BACKOFF;
 /// A pair of quads is kept if its hull wastes less than this fraction of its area.
 const PAIR_WASTE: f64 = 0.04;
 /// Congruent: side lengths and diagonals equal within this, mm.
@@ -815,7 +817,12 @@ impl BottomLeft {
                 let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((n as u64) << 20));
                 let (s, pos) = self
                     .best(&sheet, item, container, &mut rng)
-                    .expect("an item that fits the container fits an empty sheet");
+                    .ok_or_else(|| {
+                        NestError::Engine(
+                            item.members[0].part,
+                            "no free start on an empty sheet".into(),
+                        )
+                    })?;
                 sheet
                     .place(&item.shapes[s], pos, i as u32)
                     .map_err(|m| NestError::Engine(item.members[0].part, m))?;
@@ -838,7 +845,7 @@ impl BottomLeft {
         let mut starts: Vec<(usize, DVec2)> = Vec::new();
         for (s, shape) in item.shapes.iter().enumerate() {
             let room = c - shape.size;
-            if room.x < 0.0 || room.y < 0.0 {
+            if room.x < 2.0 * CLEAR || room.y < 2.0 * CLEAR {
                 continue;
             }
             starts.push((s, DVec2::ZERO));
@@ -873,6 +880,8 @@ impl BottomLeft {
             .enumerate()
             .filter_map(|(n, &(s, start))| {
                 let shape = &item.shapes[s];
+                // Off the walls: a start touching one would count as a collision.
+                let start = start.clamp(DVec2::splat(CLEAR), c - shape.size - CLEAR);
                 if sheet.collides(shape, start) {
                     return None;
                 }
@@ -993,7 +1002,8 @@ fn make_item(
     let mut shapes = Vec::new();
     for a in angles(&grown, &opts.rotations) {
         let s = shape(&grown, a).map_err(|m| NestError::Engine(members[0].part, m))?;
-        if s.size.x <= container.size.x && s.size.y <= container.size.y {
+        if s.size.x <= container.size.x - 2.0 * CLEAR && s.size.y <= container.size.y - 2.0 * CLEAR
+        {
             shapes.push(s);
         }
     }
@@ -1257,5 +1267,22 @@ mod tests {
         let (one, three) = (run(1), run(3));
         assert_valid(&parts, &one, &opts);
         assert_eq!(one.places, three.places);
+    }
+
+    #[test]
+    fn a_part_the_size_of_the_usable_sheet_is_placed_or_reported_never_a_panic() {
+        let opts = NestOptions {
+            sheet: DVec2::new(1000.0, 500.0),
+            ..Default::default()
+        };
+        // Usable: 980 × 480; the grown part needs 0.04 mm more than the part.
+        let snug = vec![rect(979.9, 479.9)];
+        let n = BottomLeft::default().nest(&snug, &opts).expect("fits");
+        assert_valid(&snug, &n, &opts);
+        let full = vec![rect(980.0, 480.0)];
+        assert!(matches!(
+            BottomLeft::default().nest(&full, &opts),
+            Err(NestError::TooLarge(_))
+        ));
     }
 }
