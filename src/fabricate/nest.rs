@@ -467,10 +467,9 @@ impl Sheet {
         };
         self.corners.retain(|c| !inside(*c, at, hi));
         // Just clear of the item, so that a start there does not touch it.
-        let clear = 2.0 * BACKOFF;
         for c in [
-            DVec2::new(hi.x + clear, at.y),
-            DVec2::new(at.x, hi.y + clear),
+            DVec2::new(hi.x + CLEAR, at.y),
+            DVec2::new(at.x, hi.y + CLEAR),
         ] {
             let covered = self
                 .boxes
