@@ -2,7 +2,7 @@
 //! sheets, one sheet family per thickness; a cut DXF per sheet, bom.csv, nest.json,
 //! assembly.scad (rebuilt from the sheet DXFs) and sheets.svg.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -188,14 +188,11 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         .zip(&nesting.places)
         .map(|(p, place)| p.outline.iter().map(|q| place.apply(*q)).collect())
         .collect();
-    let placed = |i: usize| on_sheet[i].clone();
 
     // Cut DXFs.
     for sheet in &sheets {
-        let mut outlines = Vec::with_capacity(sheet.parts.len());
         let mut strokes = Vec::with_capacity(sheet.parts.len());
         for &i in &sheet.parts {
-            outlines.push(placed(i));
             let lines = etch(&plates[i].id, &plates[i].outline)
                 .map(|(_, l)| l)
                 .unwrap_or_default();
@@ -207,11 +204,12 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                     .collect::<Vec<_>>(),
             );
         }
-        let drawn: Vec<Drawn> = outlines
+        let drawn: Vec<Drawn> = sheet
+            .parts
             .iter()
             .zip(&strokes)
-            .map(|(o, s)| Drawn {
-                outline: o,
+            .map(|(&i, s)| Drawn {
+                outline: &on_sheet[i],
                 strokes: s,
             })
             .collect();
@@ -231,7 +229,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             matrix: p.matrix,
             angle: place.angle,
             offset: place.offset,
-            clip: grown_hull(&placed(i), clip_d),
+            clip: grown_hull(&on_sheet[i], clip_d),
         })
         .collect();
     write_scad_from_sheets(&scad, &args.output.join("assembly.scad"))?;
@@ -260,7 +258,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                 .iter()
                 .map(|&i| {
                     (
-                        placed(i),
+                        on_sheet[i].as_slice(),
                         outcome.plates[i].id.as_str(),
                         outcome.plates[i].group,
                     )
@@ -367,15 +365,11 @@ fn write_bom(
 
 fn write_nest_json(out: &Outcome, opts: &NestOptions, path: &Path) -> Result<()> {
     let sheet_area = out.sheet_size.x * out.sheet_size.y;
-    let mut per_thickness: HashMap<u64, usize> = HashMap::new();
+    // Positive thicknesses order as their bits do.
+    let mut families: BTreeMap<u64, usize> = BTreeMap::new();
     for s in &out.sheets {
-        *per_thickness.entry(s.thickness.to_bits()).or_default() += 1;
+        *families.entry(s.thickness.to_bits()).or_default() += 1;
     }
-    let mut families: Vec<(f64, usize)> = per_thickness
-        .into_iter()
-        .map(|(b, n)| (f64::from_bits(b), n))
-        .collect();
-    families.sort_by(|a, b| a.0.total_cmp(&b.0));
     let doc = json!({
         "format": "lamina-nest",
         "version": 1,
@@ -399,7 +393,7 @@ fn write_nest_json(out: &Outcome, opts: &NestOptions, path: &Path) -> Result<()>
             "part_area_mm2": s.area,
             "utilisation": s.area / sheet_area,
         })).collect::<Vec<_>>(),
-        "families": families.iter().map(|(t, n)| json!({"thickness": t, "sheets": n})).collect::<Vec<_>>(),
+        "families": families.iter().map(|(t, n)| json!({"thickness": f64::from_bits(*t), "sheets": n})).collect::<Vec<_>>(),
         "total": {
             "sheets": out.sheets.len(),
             "part_area_mm2": out.sheets.iter().map(|s| s.area).sum::<f64>(),

@@ -14,6 +14,29 @@ use glam::DVec2;
 
 use crate::files::{write_atomic, WriteError};
 
+const PARTS_HEADER: &str = "\
+// lamina assembly: every part imported from its cut DXF (layer CUT),
+// extruded by its thickness about its mid-plane, placed by its matrix. mm.
+module part(file, t, m) {
+  multmatrix(m) translate([0, 0, -t / 2])
+    linear_extrude(height = t) import(file, layer = \"CUT\");
+}
+";
+
+const SHEETS_HEADER: &str = "\
+// lamina assembly from the nested sheets: each part is cut out of its
+// sheet's DXF (layer CUT) by a clip polygon around it, moved back into
+// its plate frame, extruded by its thickness about its mid-plane and
+// placed by its matrix. mm.
+module part(file, t, m, back, clip) {
+  multmatrix(m) translate([0, 0, -t / 2]) linear_extrude(height = t)
+    multmatrix(back) intersection() {
+      import(file, layer = \"CUT\");
+      polygon(clip);
+    }
+}
+";
+
 /// One part for the program: its DXF (relative to the program), thickness, placement rows.
 pub struct ScadPart<'a> {
     pub id: &'a str,
@@ -24,21 +47,7 @@ pub struct ScadPart<'a> {
 
 pub fn write_scad(parts: &[ScadPart], path: &Path) -> Result<(), WriteError> {
     write_atomic(path, |w| {
-        writeln!(
-            w,
-            "// lamina assembly: every part imported from its cut DXF (layer CUT),"
-        )?;
-        writeln!(
-            w,
-            "// extruded by its thickness about its mid-plane, placed by its matrix. mm."
-        )?;
-        writeln!(w, "module part(file, t, m) {{")?;
-        writeln!(w, "  multmatrix(m) translate([0, 0, -t / 2])")?;
-        writeln!(
-            w,
-            "    linear_extrude(height = t) import(file, layer = \"CUT\");"
-        )?;
-        writeln!(w, "}}")?;
+        w.write_all(PARTS_HEADER.as_bytes())?;
         for p in parts {
             writeln!(
                 w,
@@ -69,29 +78,7 @@ pub struct SheetPart<'a> {
 
 pub fn write_scad_from_sheets(parts: &[SheetPart], path: &Path) -> Result<(), WriteError> {
     write_atomic(path, |w| {
-        writeln!(
-            w,
-            "// lamina assembly from the nested sheets: each part is cut out of its"
-        )?;
-        writeln!(
-            w,
-            "// sheet's DXF (layer CUT) by a clip polygon around it, moved back into"
-        )?;
-        writeln!(
-            w,
-            "// its plate frame, extruded by its thickness about its mid-plane and"
-        )?;
-        writeln!(w, "// placed by its matrix. mm.")?;
-        writeln!(w, "module part(file, t, m, back, clip) {{")?;
-        writeln!(
-            w,
-            "  multmatrix(m) translate([0, 0, -t / 2]) linear_extrude(height = t)"
-        )?;
-        writeln!(w, "    multmatrix(back) intersection() {{")?;
-        writeln!(w, "      import(file, layer = \"CUT\");")?;
-        writeln!(w, "      polygon(clip);")?;
-        writeln!(w, "    }}")?;
-        writeln!(w, "}}")?;
+        w.write_all(SHEETS_HEADER.as_bytes())?;
         for p in parts {
             // Inverse of q ↦ R q + o: s ↦ Rᵀ (s − o).
             let (sin, cos) = p.angle.sin_cos();

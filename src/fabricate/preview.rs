@@ -9,7 +9,7 @@ use glam::DVec2;
 pub struct SheetView<'a> {
     pub title: String,
     /// Outline in sheet coordinates (mm), tag, assembly group (from 1).
-    pub parts: Vec<(Vec<DVec2>, &'a str, u32)>,
+    pub parts: Vec<(&'a [DVec2], &'a str, u32)>,
 }
 
 const PALETTE: [&str; 10] = [
