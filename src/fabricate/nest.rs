@@ -271,8 +271,8 @@ struct Item {
     members: Vec<Member>,
     /// The members' hulls' area, mm².
     area: f64,
-    /// The item's hull grown by half the spacing, in the item frame.
-    grown: Vec<DVec2>,
+    /// Area of the item's hull grown by half the spacing, mm².
+    grown_area: f64,
     shapes: Vec<Shape>,
 }
 
@@ -549,7 +549,8 @@ pub fn convex_hull(points: &[DVec2]) -> Vec<DVec2> {
         for &q in it {
             while hull.len() >= start + 2 {
                 let (a, b) = (hull[hull.len() - 2], hull[hull.len() - 1]);
-                if (b - a).perp_dot(q - b) > 1e-12 {
+                // A left turn, beyond rounding (relative to the edge lengths).
+                if (b - a).perp_dot(q - b) > 1e-12 * (b - a).length() * (q - b).length() {
                     break;
                 }
                 hull.pop();
@@ -685,33 +686,45 @@ fn pair(
     let onto = |p: DVec2| DVec2::from_angle(to_a).rotate(p - b[k]) + a[0];
     let mut best: Option<(f64, Vec<Member>, Vec<DVec2>)> = None;
     for e in 0..4 {
-        // Turn the copy 180° about the midpoint of edge e, then push it out by the gap.
+        // Turn the copy 180° about the midpoint of edge e, then push it off the edge's line by
+        // the gap: along the normal, or along a neighbouring edge (which keeps a trapezoid's
+        // parallel sides in line, so the pair stays a parallelogram).
         let (p, q) = (a[e], a[(e + 1) % 4]);
         let mid = 0.5 * (p + q);
-        let push = outward(q - p) * gap;
-        // b point → a frame (onto) → half turn about mid → pushed.
-        let angle = to_a + std::f64::consts::PI;
-        let offset = 2.0 * mid - onto(DVec2::ZERO) + push;
-        let member = Member {
-            part: j,
-            angle,
-            offset,
-        };
-        let placed: Vec<DVec2> = b
-            .iter()
-            .map(|p| DVec2::from_angle(angle).rotate(*p) + offset)
-            .collect();
-        let mut all = a.to_vec();
-        all.extend(&placed);
-        let hull = convex_hull(&all);
-        let waste = area(&hull) / (area(a) + area(&placed)) - 1.0;
-        if best.as_ref().is_none_or(|b| waste < b.0) {
-            let first = Member {
-                part: i,
-                angle: 0.0,
-                offset: DVec2::ZERO,
-            };
-            best = Some((waste, vec![first, member], hull));
+        let normal = outward(q - p);
+        let before = (p - a[(e + 3) % 4]).normalize();
+        let after = (a[(e + 2) % 4] - q).normalize();
+        for dir in [normal, before, -before, after, -after] {
+            let along = dir.dot(normal);
+            if along < 0.2 {
+                continue;
+            }
+            // Every point of the copy ends at least `gap` beyond the edge's line.
+            let push = dir * (gap / along);
+            // b point → a frame (onto) → half turn about mid → pushed.
+            let angle = to_a + std::f64::consts::PI;
+            let offset = 2.0 * mid - onto(DVec2::ZERO) + push;
+            let placed: Vec<DVec2> = b
+                .iter()
+                .map(|p| DVec2::from_angle(angle).rotate(*p) + offset)
+                .collect();
+            let mut all = a.to_vec();
+            all.extend(&placed);
+            let hull = convex_hull(&all);
+            let waste = area(&hull) / (area(a) + area(&placed)) - 1.0;
+            if best.as_ref().is_none_or(|b| waste < b.0) {
+                let first = Member {
+                    part: i,
+                    angle: 0.0,
+                    offset: DVec2::ZERO,
+                };
+                let member = Member {
+                    part: j,
+                    angle,
+                    offset,
+                };
+                best = Some((waste, vec![first, member], hull));
+            }
         }
     }
     let (waste, members, hull) = best?;
@@ -742,16 +755,20 @@ impl BottomLeft {
                 continue;
             }
             let key = (quad_key(h, 0)[..4].iter().sum::<f64>() / (4.0 * CONGRUENT)).round() as i64;
+            let gap = opts.spacing + 2.0 * SLACK;
             let mut paired = None;
             for bucket in [key - 1, key, key + 1] {
-                if let Some(list) = waiting.get_mut(&bucket) {
-                    if let Some(pos) = list.iter().position(|&j| {
-                        pair(j, &hulls[j], i, h, opts.spacing + 2.0 * SLACK).is_some()
-                    }) {
-                        let j = list.remove(pos);
-                        paired = pair(j, &hulls[j], i, h, opts.spacing + 2.0 * SLACK);
-                        break;
-                    }
+                let Some(list) = waiting.get_mut(&bucket) else {
+                    continue;
+                };
+                let found = list
+                    .iter()
+                    .enumerate()
+                    .find_map(|(pos, &j)| pair(j, &hulls[j], i, h, gap).map(|p| (pos, p)));
+                if let Some((pos, p)) = found {
+                    list.remove(pos);
+                    paired = Some(p);
+                    break;
                 }
             }
             match paired {
@@ -779,7 +796,7 @@ impl BottomLeft {
             if let Some(tick) = &self.progress {
                 tick(item.members.len());
             }
-            let grown_area = area(&item.grown);
+            let grown_area = item.grown_area;
             let dims = {
                 let s = item.shapes[0].size;
                 DVec2::new(s.x.min(s.y), s.x.max(s.y))
@@ -1012,7 +1029,7 @@ fn make_item(
     Ok(Some(Item {
         area: members.iter().map(|m| area(&hulls[m.part])).sum(),
         members,
-        grown,
+        grown_area: area(&grown),
         shapes,
     }))
 }
@@ -1165,6 +1182,16 @@ mod tests {
 
     #[test]
     fn trapezoids_pair_into_parallelograms() {
+        // A trapezoid and its copy turned 180° against a leg, `gap` apart: a parallelogram of
+        // twice the area plus gap × leg.
+        let t = convex_hull(&trapezoid(400.0, 100.0, 80.0));
+        let gap = 5.0;
+        let (members, hull) = pair(0, &t, 1, &t, gap).expect("congruent quads pair");
+        assert_eq!(members.len(), 2);
+        assert_eq!(hull.len(), 4, "{hull:?}");
+        let leg = DVec2::new(80.0, 100.0).length();
+        assert!((area(&hull) - (2.0 * area(&t) + gap * leg)).abs() < 1e-6);
+        assert!(pair(0, &t, 1, &convex_hull(&rect(400.0, 100.0)), gap).is_none());
         let parts = vec![trapezoid(400.0, 100.0, 80.0); 40];
         let opts = NestOptions {
             sheet: DVec2::new(1500.0, 1000.0),
