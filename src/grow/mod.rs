@@ -10,4 +10,5 @@ pub mod outline;
 pub mod outline_file;
 pub mod poisson;
 pub mod report;
+pub mod space;
 pub mod venation;

@@ -36,8 +36,9 @@ use rstar::primitives::GeomWithData;
 use rstar::RTree;
 
 use super::outline::Outline;
+use super::space::{Blade, Domain, Vector};
 
-type Indexed = GeomWithData<[f64; 2], u32>;
+type Indexed<V> = GeomWithData<<V as Vector>::Array, u32>;
 
 /// Open venation makes trees; closed venation makes loops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -161,9 +162,9 @@ pub enum VenationError {
 
 /// A grown venation.
 #[derive(Clone, Debug, Default)]
-pub struct Growth {
-    /// Node positions in mm, in the blade's final frame.
-    pub positions: Vec<DVec2>,
+pub struct Growth<V = DVec2> {
+    /// Node positions in mm (in a blade: its final frame).
+    pub positions: Vec<V>,
     /// Parent of each node in the growth tree; `None` for roots, which come first.
     pub parent: Vec<Option<u32>>,
     /// Loop-closing edges (closed venation), in the order they were made.
@@ -189,7 +190,7 @@ pub enum Stop {
     IterationCap,
 }
 
-impl Growth {
+impl<V> Growth<V> {
     /// Growth-tree edges (parent, child) in node order.
     pub fn tree_edges(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
         self.parent
@@ -216,19 +217,19 @@ impl Growth {
 
 /// The state shown to an observer every few steps: positions and sources in mm in the blade's
 /// frame of that moment, and the blade itself.
-pub struct Frame<'a> {
+pub struct Frame<'a, V = DVec2> {
     pub step: usize,
-    pub positions: &'a [DVec2],
+    pub positions: &'a [V],
     pub parent: &'a [Option<u32>],
     pub joins: &'a [[u32; 2]],
-    pub sources: &'a [DVec2],
+    pub sources: &'a [V],
     pub blade: &'a Outline,
 }
 
 /// Called every `every` steps (and after the last) with the current state.
-pub struct Observer<'a> {
+pub struct Observer<'a, V = DVec2> {
     pub every: usize,
-    pub call: &'a mut dyn FnMut(&Frame),
+    pub call: &'a mut dyn FnMut(&Frame<V>),
 }
 
 /// The blade at step 0: the outline scaled about the first root, or the outline itself.
@@ -239,9 +240,9 @@ pub fn initial_blade(outline: &Outline, root: DVec2, opts: &VenationOptions) -> 
     }
 }
 
-/// Grows venation from `roots` towards `sources` (positions in mm inside the initial blade, see
-/// `initial_blade`). `birth(p)` gives the birth distance of darts at blade position `p` of the
-/// full-size outline; `rng` throws them.
+/// Grows venation in a blade from `roots` towards `sources` (positions in mm inside the
+/// initial blade, see `initial_blade`). `birth(p)` gives the birth distance of darts at blade
+/// position `p` of the full-size outline; `rng` throws them.
 pub fn grow(
     outline: &Outline,
     roots: &[DVec2],
@@ -251,11 +252,55 @@ pub fn grow(
     rng: &mut impl Rng,
     observer: Option<Observer>,
 ) -> Result<Growth, VenationError> {
-    check(outline, roots, birth, opts)?;
-    let mut g = Grower::new(outline, roots, sources, birth, opts);
+    check(opts)?;
+    let first = *roots.first().ok_or(VenationError::NoRoot)?;
+    let blade = initial_blade(outline, first, opts);
+    if let Some((i, r)) = roots.iter().enumerate().find(|(_, r)| !blade.contains(**r)) {
+        return Err(VenationError::RootOutside(i, r.x, r.y));
+    }
+    let (growth, blade) = grow_in(
+        Blade::new(outline, first, birth, opts),
+        roots,
+        sources,
+        opts,
+        rng,
+        observer,
+    )?;
+    Ok(Growth {
+        scale: blade.scale(),
+        ..growth
+    })
+}
+
+/// Grows venation in any domain: the core that blades and surfaces share. `roots` and
+/// `sources` are in mm, in the domain.
+pub fn grow_in<D: Domain>(
+    domain: D,
+    roots: &[D::V],
+    sources: &[D::V],
+    opts: &VenationOptions,
+    rng: &mut impl Rng,
+    observer: Option<Observer<D::V>>,
+) -> Result<(Growth<D::V>, D), VenationError> {
+    check(opts)?;
+    if roots.is_empty() {
+        return Err(VenationError::NoRoot);
+    }
+    if opts.sources_per_step > 0 {
+        // Darts keep the birth distance from the veins; if the kill distance reaches past it
+        // everywhere, every dart is born dying.
+        let birth = domain.birth_max();
+        if opts.kill >= birth {
+            return Err(VenationError::KillNotBelowBirth {
+                kill: opts.kill,
+                birth,
+            });
+        }
+    }
+    let mut g = Grower::new(domain, roots, sources, opts);
     // Sources within the kill distance of a root die before anything grows (in closed
     // venation too: a root is all such a source's neighbourhood holds at the first step).
-    let kill2 = g.eff(opts.kill).powi(2);
+    let kill2 = g.domain.eff(opts.kill).powi(2);
     let doomed = g
         .active
         .iter()
@@ -277,12 +322,7 @@ pub fn grow(
     Ok(g.finish())
 }
 
-fn check(
-    outline: &Outline,
-    roots: &[DVec2],
-    birth: &(dyn Fn(DVec2) -> f64 + Sync),
-    opts: &VenationOptions,
-) -> Result<(), VenationError> {
+fn check(opts: &VenationOptions) -> Result<(), VenationError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if !positive(opts.step) {
         return Err(VenationError::Step(opts.step));
@@ -303,33 +343,6 @@ fn check(
         if !positive(opts.blade_rate) {
             return Err(VenationError::BladeRate(opts.blade_rate));
         }
-    }
-    if opts.sources_per_step > 0 {
-        // Darts keep the birth distance from the veins; if the kill distance reaches past it
-        // everywhere, every dart is born dying. Sampled at the corners and a 16 × 16 grid.
-        let (lo, hi) = outline.bounds();
-        let grid = (0..=16 * 16).map(|k| {
-            let (i, j) = ((k % 17) as f64 / 16.0, (k / 17) as f64 / 16.0);
-            lo + (hi - lo) * DVec2::new(i, j)
-        });
-        let birth_max = outline
-            .points()
-            .iter()
-            .copied()
-            .chain(grid.filter(|p| outline.contains(*p)))
-            .map(birth)
-            .fold(0.0, f64::max);
-        if opts.kill >= birth_max {
-            return Err(VenationError::KillNotBelowBirth {
-                kill: opts.kill,
-                birth: birth_max,
-            });
-        }
-    }
-    let first = *roots.first().ok_or(VenationError::NoRoot)?;
-    let blade = initial_blade(outline, first, opts);
-    if let Some((i, r)) = roots.iter().enumerate().find(|(_, r)| !blade.contains(**r)) {
-        return Err(VenationError::RootOutside(i, r.x, r.y));
     }
     Ok(())
 }
@@ -370,16 +383,16 @@ const EMPTY: Cache = Cache {
 };
 
 /// A live source and its cache.
-struct Active {
-    pos: DVec2,
+struct Active<V> {
+    pos: V,
     id: u32,
     cache: Cache,
 }
 
 /// The node data sources read every step.
 #[derive(Clone, Copy)]
-struct Hot {
-    p: DVec2,
+struct Hot<V> {
+    p: V,
     /// The latest child and the step it grew (u32::MAX: none yet).
     last_child: u32,
     child_born: u32,
@@ -390,29 +403,25 @@ struct Hot {
 /// relative neighbourhood beyond its candidate list.
 const REFRESH: u32 = 16;
 
-struct Grower<'a> {
-    outline: &'a Outline,
-    birth: &'a (dyn Fn(DVec2) -> f64 + Sync),
+struct Grower<D: Domain> {
+    domain: D,
     opts: VenationOptions,
-    centre: DVec2,
-    /// Blade size as a fraction of the full outline.
-    scale: f64,
-    positions: Vec<DVec2>,
+    positions: Vec<D::V>,
     parent: Vec<Option<u32>>,
     born: Vec<u32>,
     adj: Vec<[u32; MAX_DEGREE]>,
     degree: Vec<u8>,
     /// What sources read of each node every step, packed together.
-    hot: Vec<Hot>,
+    hot: Vec<Hot<D::V>>,
     joins: Vec<[u32; 2]>,
     roots: usize,
-    open: RTree<Indexed>,
-    all: RTree<Indexed>,
-    live: RTree<Indexed>,
-    source_pos: Vec<DVec2>,
+    open: RTree<Indexed<D::V>>,
+    all: RTree<Indexed<D::V>>,
+    live: RTree<Indexed<D::V>>,
+    source_pos: Vec<D::V>,
     alive: Vec<bool>,
     /// Live sources in id order with their caches, packed for the per-step pass.
-    active: Vec<Active>,
+    active: Vec<Active<D::V>>,
     influence: Vec<Influence>,
     live_count: usize,
     longest_edge: f64,
@@ -422,25 +431,11 @@ struct Grower<'a> {
     uncached: bool,
 }
 
-impl<'a> Grower<'a> {
-    fn new(
-        outline: &'a Outline,
-        roots: &[DVec2],
-        sources: &[DVec2],
-        birth: &'a (dyn Fn(DVec2) -> f64 + Sync),
-        opts: &VenationOptions,
-    ) -> Self {
-        let centre = roots[0];
-        let scale = match opts.blade {
-            BladeGrowth::None => 1.0,
-            _ => opts.initial_scale,
-        };
+impl<D: Domain> Grower<D> {
+    fn new(domain: D, roots: &[D::V], sources: &[D::V], opts: &VenationOptions) -> Self {
         let mut g = Grower {
-            outline,
-            birth,
+            domain,
             opts: *opts,
-            centre,
-            scale,
             positions: Vec::new(),
             parent: Vec::new(),
             born: Vec::new(),
@@ -462,18 +457,18 @@ impl<'a> Grower<'a> {
             stop: Stop::NothingGrew,
             uncached: false,
         };
-        let work: Vec<DVec2> = roots.iter().map(|r| g.to_work(*r)).collect();
-        for p in work {
+        for r in roots {
+            let p = g.domain.to_work(*r);
             g.push_node(p, None);
         }
-        let mut src: Vec<DVec2> = sources.iter().map(|s| g.to_work(*s)).collect();
+        let mut src: Vec<D::V> = sources.iter().map(|s| g.domain.to_work(*s)).collect();
         // In space-filling-curve order, neighbouring sources read neighbouring nodes: the
         // per-step pass over all sources then mostly hits the cache.
         morton_sort(&mut src);
         g.live = RTree::bulk_load(
             src.iter()
                 .enumerate()
-                .map(|(i, s)| Indexed::new(s.to_array(), i as u32))
+                .map(|(i, s)| Indexed::<D::V>::new(s.to_array(), i as u32))
                 .collect(),
         );
         g.alive = vec![true; src.len()];
@@ -491,43 +486,7 @@ impl<'a> Grower<'a> {
         g
     }
 
-    /// Working frame: the full-size blade under uniform growth (so veins stretch with it),
-    /// real millimetres otherwise.
-    fn to_work(&self, real: DVec2) -> DVec2 {
-        match self.opts.blade {
-            BladeGrowth::Uniform => self.centre + (real - self.centre) / self.scale,
-            _ => real,
-        }
-    }
-
-    fn to_real(&self, work: DVec2) -> DVec2 {
-        match self.opts.blade {
-            BladeGrowth::Uniform => self.centre + (work - self.centre) * self.scale,
-            _ => work,
-        }
-    }
-
-    /// A distance in mm, in the working frame.
-    fn eff(&self, d: f64) -> f64 {
-        match self.opts.blade {
-            BladeGrowth::Uniform => d / self.scale,
-            _ => d,
-        }
-    }
-
-    /// Where a working point sits on the full-size outline.
-    fn blade_coord(&self, p: DVec2) -> DVec2 {
-        match self.opts.blade {
-            BladeGrowth::Marginal => self.centre + (p - self.centre) / self.scale,
-            _ => p,
-        }
-    }
-
-    fn in_blade(&self, p: DVec2) -> bool {
-        self.outline.contains(self.blade_coord(p))
-    }
-
-    fn push_node(&mut self, p: DVec2, parent: Option<u32>) -> u32 {
+    fn push_node(&mut self, p: D::V, parent: Option<u32>) -> u32 {
         let id = self.positions.len() as u32;
         self.positions.push(p);
         self.parent.push(parent);
@@ -540,8 +499,8 @@ impl<'a> Grower<'a> {
             child_born: 0,
             can_grow: true,
         });
-        self.open.insert(Indexed::new(p.to_array(), id));
-        self.all.insert(Indexed::new(p.to_array(), id));
+        self.open.insert(Indexed::<D::V>::new(p.to_array(), id));
+        self.all.insert(Indexed::<D::V>::new(p.to_array(), id));
         if let Some(q) = parent {
             self.link(q, id);
             let h = &mut self.hot[q as usize];
@@ -571,22 +530,26 @@ impl<'a> Grower<'a> {
     /// The node stops growing and attracting.
     fn retire(&mut self, v: u32) {
         if std::mem::replace(&mut self.hot[v as usize].can_grow, false) {
-            self.open
-                .remove(&Indexed::new(self.positions[v as usize].to_array(), v));
+            self.open.remove(&Indexed::<D::V>::new(
+                self.positions[v as usize].to_array(),
+                v,
+            ));
         }
     }
 
     fn remove_source(&mut self, s: u32) {
         if std::mem::replace(&mut self.alive[s as usize], false) {
-            self.live
-                .remove(&Indexed::new(self.source_pos[s as usize].to_array(), s));
+            self.live.remove(&Indexed::<D::V>::new(
+                self.source_pos[s as usize].to_array(),
+                s,
+            ));
             self.live_count -= 1;
         }
     }
 
     /// Open venation: remove the sources within the kill distance of node `v`.
     fn kill_near(&mut self, v: u32) {
-        let k = self.eff(self.opts.kill);
+        let k = self.domain.eff(self.opts.kill);
         let doomed: Vec<u32> = self
             .live
             .locate_within_distance(self.positions[v as usize].to_array(), k * k)
@@ -597,8 +560,8 @@ impl<'a> Grower<'a> {
         }
     }
 
-    fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer>) {
-        let mut pull = vec![DVec2::ZERO; self.positions.len()];
+    fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer<D::V>>) {
+        let mut pull = vec![D::V::ZERO; self.positions.len()];
         let mut pulled: Vec<u32> = Vec::new();
         loop {
             if self.step >= self.opts.max_iterations {
@@ -606,7 +569,7 @@ impl<'a> Grower<'a> {
                 break;
             }
             self.step += 1;
-            let grew_blade = self.grow_blade();
+            let grew_blade = self.domain.grow(self.step);
             let thrown = self.throw_darts(rng);
             if self.live_count == 0 && !grew_blade && thrown == 0 {
                 self.step -= 1;
@@ -616,7 +579,9 @@ impl<'a> Grower<'a> {
             let alive = &self.alive;
             self.active.retain(|a| alive[a.id as usize]);
             self.influences();
-            // Apply in source order, so the sums do not depend on threads.
+            // Apply in source order, so the sums do not depend on threads. A source beyond the
+            // domain's reach does not pull (on a surface it may sit across a gap).
+            let reach2 = self.domain.reach().powi(2);
             let mut died = 0;
             for (a, inf) in self.active.iter().zip(&self.influence) {
                 let sp = a.pos;
@@ -624,8 +589,12 @@ impl<'a> Grower<'a> {
                     Influence::Idle => {}
                     Influence::Pull(nodes, n) => {
                         for &v in &nodes[..n as usize] {
-                            if let Some(u) = (sp - self.positions[v as usize]).try_normalize() {
-                                if pull[v as usize] == DVec2::ZERO {
+                            let to = sp - self.positions[v as usize];
+                            if to.dot(to) > reach2 {
+                                continue;
+                            }
+                            if let Some(u) = to.try_normalize() {
+                                if pull[v as usize] == D::V::ZERO {
                                     pulled.push(v);
                                 }
                                 pull[v as usize] += u;
@@ -653,21 +622,19 @@ impl<'a> Grower<'a> {
             // Grow in node order so the result does not depend on the trees' iteration order.
             pulled.sort_unstable();
             let mut grown = 0;
-            let step = self.eff(self.opts.step);
+            let step = self.domain.eff(self.opts.step);
             let crowd2 = (CROWDING * step).powi(2);
             for &v in &pulled {
-                let dir = std::mem::take(&mut pull[v as usize]);
+                let dir = std::mem::replace(&mut pull[v as usize], D::V::ZERO);
                 let Some(dir) = dir.try_normalize() else {
                     continue;
                 };
                 if !self.hot[v as usize].can_grow {
                     continue;
                 }
-                let at = self.positions[v as usize] + dir * step;
-                let from = self.blade_coord(self.positions[v as usize]);
-                if !self.outline.contains_segment(from, self.blade_coord(at)) {
+                let Some(at) = self.domain.step(self.positions[v as usize], dir, step) else {
                     continue;
-                }
+                };
                 if self
                     .all
                     .locate_within_distance(at.to_array(), crowd2)
@@ -685,7 +652,7 @@ impl<'a> Grower<'a> {
                     continue;
                 }
                 let child = self.push_node(at, Some(v));
-                pull.push(DVec2::ZERO);
+                pull.push(D::V::ZERO);
                 if self.opts.mode == Mode::Open {
                     self.kill_near(child);
                 }
@@ -714,40 +681,20 @@ impl<'a> Grower<'a> {
         }
     }
 
-    /// Scales the blade for this step; true while it is still growing.
-    fn grow_blade(&mut self) -> bool {
-        if self.opts.blade == BladeGrowth::None || self.scale >= 1.0 {
-            return false;
-        }
-        let next = (self.opts.initial_scale + self.opts.blade_rate * self.step as f64).min(1.0);
-        self.scale = next;
-        true
-    }
-
     /// Throws this step's darts; returns how many were kept.
     fn throw_darts(&mut self, rng: &mut impl Rng) -> usize {
         let want = self.opts.sources_per_step;
         if want == 0 {
             return 0;
         }
-        let (lo, hi) = self.outline.bounds();
-        let (lo, hi) = match self.opts.blade {
-            BladeGrowth::Marginal => (
-                self.centre + (lo - self.centre) * self.scale,
-                self.centre + (hi - self.centre) * self.scale,
-            ),
-            _ => (lo, hi),
-        };
         let mut kept = 0;
         for _ in 0..want * DART_TRIES {
             if kept == want {
                 break;
             }
-            let p = DVec2::new(rng.random_range(lo.x..=hi.x), rng.random_range(lo.y..=hi.y));
-            if !self.in_blade(p) {
+            let Some((p, b)) = self.domain.dart(rng) else {
                 continue;
-            }
-            let b = self.eff((self.birth)(self.blade_coord(p)));
+            };
             let b2 = b * b;
             if self
                 .live
@@ -765,7 +712,7 @@ impl<'a> Grower<'a> {
             let id = self.source_pos.len() as u32;
             self.source_pos.push(p);
             self.alive.push(true);
-            self.live.insert(Indexed::new(p.to_array(), id));
+            self.live.insert(Indexed::<D::V>::new(p.to_array(), id));
             self.active.push(Active {
                 pos: p,
                 id,
@@ -779,8 +726,8 @@ impl<'a> Grower<'a> {
 
     /// What every live source does this step, into `influence` in `active` order.
     fn influences(&mut self) {
-        let kill2 = self.eff(self.opts.kill).powi(2);
-        let d = self.eff(self.opts.step);
+        let kill2 = self.domain.eff(self.opts.kill).powi(2);
+        let d = self.domain.eff(self.opts.step);
         let mut active = std::mem::take(&mut self.active);
         let mut influence = std::mem::take(&mut self.influence);
         influence.resize(active.len(), Influence::Idle);
@@ -806,7 +753,7 @@ impl<'a> Grower<'a> {
     /// Brings a cache up to this step: the bound falls by D per step since it was seen, and
     /// children grown since then join the candidates (the closest `NEIGHBOURHOOD_SIZE`, or the
     /// closest one in open venation; one pushed out lowers the bound).
-    fn update(&self, mut c: Cache, sp: DVec2, d: f64) -> Cache {
+    fn update(&self, mut c: Cache, sp: D::V, d: f64) -> Cache {
         if c.n == 0 {
             return c;
         }
@@ -852,7 +799,7 @@ impl<'a> Grower<'a> {
     }
 
     /// Open venation: the closest node that can still grow.
-    fn closest(&self, c: &mut Cache, sp: DVec2) -> Influence {
+    fn closest(&self, c: &mut Cache, sp: D::V) -> Influence {
         let valid = c.n == 1 && {
             let h = &self.hot[c.cand[0] as usize];
             h.can_grow && c.bound > h.p.distance(sp)
@@ -879,7 +826,7 @@ impl<'a> Grower<'a> {
 
     /// Closed venation: the relative neighbourhood of a source among all nodes, and what it
     /// does with it.
-    fn neighbourhood(&self, c: &mut Cache, sp: DVec2, kill2: f64) -> Influence {
+    fn neighbourhood(&self, c: &mut Cache, sp: D::V, kill2: f64) -> Influence {
         if let Some(inf) = self.neighbourhood_from(c, sp, kill2, false) {
             return inf;
         }
@@ -905,7 +852,7 @@ impl<'a> Grower<'a> {
     fn neighbourhood_from(
         &self,
         c: &Cache,
-        sp: DVec2,
+        sp: D::V,
         kill2: f64,
         fresh: bool,
     ) -> Option<Influence> {
@@ -913,7 +860,7 @@ impl<'a> Grower<'a> {
             return None;
         }
         let n = c.n as usize;
-        let mut pos = [(0.0f64, DVec2::ZERO); NEIGHBOURHOOD_SIZE];
+        let mut pos = [(0.0f64, D::V::ZERO); NEIGHBOURHOOD_SIZE];
         for (slot, &v) in pos.iter_mut().zip(&c.cand[..n]) {
             let p = self.hot[v as usize].p;
             *slot = (p.distance_squared(sp), p);
@@ -1000,7 +947,7 @@ impl<'a> Grower<'a> {
 
     /// Gokmen §3.2 step g: every open tip looks ahead for a node to join.
     fn join_tips(&mut self) {
-        let reach = self.eff(self.opts.join_distance());
+        let reach = self.domain.eff(self.opts.join_distance());
         let cos_max = self.opts.join_angle.to_radians().cos();
         for t in self.roots as u32..self.positions.len() as u32 {
             if self.degree[t as usize] != 1 {
@@ -1019,7 +966,7 @@ impl<'a> Grower<'a> {
                 .locate_within_distance(tp.to_array(), reach * reach)
             {
                 let u = c.data;
-                let to = DVec2::from_array(*c.geom()) - tp;
+                let to = D::V::from_array(*c.geom()) - tp;
                 let d = to.length();
                 if u == t || self.degree[u as usize] as usize >= MAX_DEGREE || d == 0.0 {
                     continue;
@@ -1054,15 +1001,11 @@ impl<'a> Grower<'a> {
             || self.degree[a as usize] as usize >= MAX_DEGREE
             || self.degree[b as usize] as usize >= MAX_DEGREE
             || len == 0.0
-            || len > self.eff(self.opts.join_distance()) * (1.0 + 1e-9)
+            || len > self.domain.eff(self.opts.join_distance()) * (1.0 + 1e-9)
         {
             return false;
         }
-        if self.tree_hops_below(a, b, MIN_LOOP - 1)
-            || !self
-                .outline
-                .contains_segment(self.blade_coord(pa), self.blade_coord(pb))
-        {
+        if self.tree_hops_below(a, b, MIN_LOOP - 1) || !self.domain.holds_edge(pa, pb) {
             return false;
         }
         let cos_min = MIN_JOINT_ANGLE.to_radians().cos();
@@ -1085,7 +1028,7 @@ impl<'a> Grower<'a> {
 
     /// Whether segment pa–pb would cross or touch an edge that has neither `a` nor `b` as an
     /// end (`b` may be u32::MAX for a node not made yet).
-    fn crosses(&self, pa: DVec2, pb: DVec2, a: u32, b: u32) -> bool {
+    fn crosses(&self, pa: D::V, pb: D::V, a: u32, b: u32) -> bool {
         let mid = (pa + pb) * 0.5;
         let r = 0.5 * pa.distance(pb) + self.longest_edge;
         for c in self.all.locate_within_distance(mid.to_array(), r * r) {
@@ -1095,10 +1038,7 @@ impl<'a> Grower<'a> {
             }
             let pu = self.positions[u as usize];
             for &w in self.neighbours(u) {
-                if w != a
-                    && w != b
-                    && crate::geom::segments_touch(pa, pb, pu, self.positions[w as usize])
-                {
+                if w != a && w != b && self.domain.touch(pa, pb, pu, self.positions[w as usize]) {
                     return true;
                 }
             }
@@ -1134,18 +1074,18 @@ impl<'a> Grower<'a> {
         false
     }
 
-    fn show(&self, o: &mut Observer) {
-        let positions: Vec<DVec2> = self.positions.iter().map(|p| self.to_real(*p)).collect();
-        let sources: Vec<DVec2> = self
+    fn show(&self, o: &mut Observer<D::V>) {
+        let Some(blade) = self.domain.outline_now() else {
+            return;
+        };
+        let real = |p: &D::V| self.domain.to_real(*p);
+        let positions: Vec<D::V> = self.positions.iter().map(real).collect();
+        let sources: Vec<D::V> = self
             .active
             .iter()
             .filter(|a| self.alive[a.id as usize])
-            .map(|a| self.to_real(a.pos))
+            .map(|a| real(&a.pos))
             .collect();
-        let blade = match self.opts.blade {
-            BladeGrowth::None => self.outline.clone(),
-            _ => self.outline.scaled(self.centre, self.scale),
-        };
         (o.call)(&Frame {
             step: self.step,
             positions: &positions,
@@ -1156,9 +1096,13 @@ impl<'a> Grower<'a> {
         });
     }
 
-    fn finish(self) -> Growth {
-        Growth {
-            positions: self.positions.iter().map(|p| self.to_real(*p)).collect(),
+    fn finish(self) -> (Growth<D::V>, D) {
+        let growth = Growth {
+            positions: self
+                .positions
+                .iter()
+                .map(|p| self.domain.to_real(*p))
+                .collect(),
             parent: self.parent,
             joins: self.joins,
             born: self.born,
@@ -1166,32 +1110,38 @@ impl<'a> Grower<'a> {
             iterations: self.step,
             sources_placed: self.source_pos.len(),
             sources_left: self.live_count,
-            scale: self.scale,
+            scale: 1.0,
             stop: self.stop,
-        }
+        };
+        (growth, self.domain)
     }
 }
 
-/// Sorts points along a Z-order curve over their bounding box (stable, so ties keep order).
-fn morton_sort(points: &mut [DVec2]) {
-    let lo = points
-        .iter()
-        .fold(DVec2::splat(f64::INFINITY), |a, p| a.min(*p));
-    let hi = points
-        .iter()
-        .fold(DVec2::splat(f64::NEG_INFINITY), |a, p| a.max(*p));
-    let span = (hi - lo).max(DVec2::splat(f64::MIN_POSITIVE));
-    let spread = |v: u32| {
-        let mut x = v as u64;
-        x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
-        x = (x | (x << 8)) & 0x00ff_00ff_00ff_00ff;
-        x = (x | (x << 4)) & 0x0f0f_0f0f_0f0f_0f0f;
-        x = (x | (x << 2)) & 0x3333_3333_3333_3333;
-        (x | (x << 1)) & 0x5555_5555_5555_5555
-    };
-    let key = |p: &DVec2| {
-        let q = ((*p - lo) / span * 65535.0).clamp(DVec2::ZERO, DVec2::splat(65535.0));
-        spread(q.x as u32) | (spread(q.y as u32) << 1)
+/// Sorts points along a Z-order curve over their bounding box, 16 bits per axis (stable, so
+/// ties keep order).
+fn morton_sort<V: Vector>(points: &mut [V]) {
+    use rstar::Point;
+    let dims = V::Array::DIMENSIONS;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points.iter() {
+        let a = p.to_array();
+        for d in 0..dims {
+            lo[d] = lo[d].min(a.nth(d));
+            hi[d] = hi[d].max(a.nth(d));
+        }
+    }
+    let key = |p: &V| {
+        let a = p.to_array();
+        let mut key = 0u64;
+        for d in 0..dims {
+            let span = (hi[d] - lo[d]).max(f64::MIN_POSITIVE);
+            let q = ((a.nth(d) - lo[d]) / span * 65535.0).clamp(0.0, 65535.0) as u64;
+            for bit in 0..16 {
+                key |= ((q >> bit) & 1) << (bit * dims + d);
+            }
+        }
+        key
     };
     points.sort_by_cached_key(key);
 }
@@ -1316,11 +1266,11 @@ mod tests {
         let src = sources(&o, 3);
         let opts = mode(Mode::Open);
         let run = |uncached: bool| {
-            let mut g = Grower::new(&o, &[root], &src, &|_| 2.0, &opts);
+            let mut g = Grower::new(Blade::new(&o, root, &|_| 2.0, &opts), &[root], &src, &opts);
             g.uncached = uncached;
             g.kill_near(0);
             g.run(&mut ChaCha8Rng::seed_from_u64(1), None);
-            g.finish()
+            g.finish().0
         };
         let (a, b) = (run(false), run(true));
         assert!(a.positions.len() > 500);
