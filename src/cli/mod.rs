@@ -9,4 +9,5 @@ pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod render;
+pub mod surface;
 pub mod venation;

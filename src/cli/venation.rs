@@ -52,6 +52,14 @@ pub enum BladeArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+pub enum ChannelArg {
+    Red,
+    Green,
+    Blue,
+    Luminance,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 pub enum PlacementArg {
     Poisson,
     Random,
@@ -62,13 +70,34 @@ pub struct Args {
     /// Built-in blade, 100 mm from base to tip; the root is the petiole at its base
     #[arg(long, value_enum, default_value = "ovate", conflicts_with = "outline")]
     pub shape: ShapeArg,
+    /// Grow on this triangle mesh (.obj .stl) instead of in a blade (Gokmen §3.3)
+    #[arg(
+        long,
+        value_name = "MESH",
+        conflicts_with_all = ["outline", "blade", "r", "sweep_r", "frames", "density", "placement"]
+    )]
+    pub surface: Option<PathBuf>,
+    /// On a surface: density from this vertex colour (dark = dense), from --birth-min (darkest)
+    /// to --birth-max (lightest)
+    #[arg(long, value_enum, requires = "surface")]
+    pub density_channel: Option<ChannelArg>,
+    /// On a surface: sources farther than this from a node do not pull it, mm [default: 4 ×
+    /// the largest birth distance]
+    #[arg(long, requires = "surface")]
+    pub reach: Option<f64>,
+    /// On a surface: a step or loop edge whose chord leaves the surface by more than this is
+    /// not made, mm [default: D / 4]
+    #[arg(long, requires = "surface")]
+    pub edge_tolerance: Option<f64>,
     /// Blade outline from a file: network JSON/OBJ or DXF (a closed polyline), or SVG
     /// (<polygon>, <path>); the largest closed loop is used
     #[arg(long, value_name = "FILE")]
     pub outline: Option<PathBuf>,
-    /// Root node at X,Y in mm (repeat for several) [default: the petiole at the base]
-    #[arg(long, value_name = "X,Y", value_parser = parse_point)]
-    pub root: Vec<DVec2>,
+    /// Root node (repeat for several): X,Y in mm in a blade; on a surface a vertex index V, a
+    /// triangle tT (its centroid) or a point X,Y,Z (snapped) [default: the petiole at the base;
+    /// on a surface the lowest vertex]
+    #[arg(long, value_name = "X,Y|V|tT|X,Y,Z")]
+    pub root: Vec<String>,
     /// Open venation grows trees; closed venation joins veins into loops
     #[arg(long, value_enum, default_value = "closed")]
     pub mode: ModeArg,
@@ -90,32 +119,37 @@ pub struct Args {
     /// Random seed: the same seed gives the same bytes
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// D, the length of each vein segment, mm
-    #[arg(long, default_value_t = 0.75)]
-    pub step: f64,
-    /// Kill distance: sources this close to a vein are removed, mm
-    #[arg(long, default_value_t = 1.1)]
-    pub kill: f64,
+    /// D, the length of each vein segment, mm [default: 0.75; on a surface min(birth / 2,
+    /// 0.9 × mean edge length)]
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Kill distance: sources this close to a vein are removed, mm [default: 1.1; on a surface
+    /// 1.5 D]
+    #[arg(long)]
+    pub kill: Option<f64>,
     /// Birth distance: Poisson-disk radius of the sources, and the distance darts keep, mm
-    #[arg(long, default_value_t = 1.5)]
-    pub birth: f64,
+    /// [default: 1.5; on a surface the radius that places --sources]
+    #[arg(long)]
+    pub birth: Option<f64>,
     /// Density map (PNG over the blade's bounding box; dark = dense, from alpha if any pixel is
     /// transparent, else grey)
     #[arg(long, value_name = "PNG")]
     pub density: Option<PathBuf>,
-    /// With --density: the birth distance where the map is darkest [default: --birth]
-    #[arg(long, requires = "density")]
+    /// With --density or --density-channel: the birth distance where the map is darkest
+    /// [default: --birth]
+    #[arg(long)]
     pub birth_min: Option<f64>,
-    /// With --density: the birth distance where the map is lightest [default: 2 × --birth]
-    #[arg(long, requires = "density")]
+    /// With --density or --density-channel: the birth distance where the map is lightest
+    /// [default: 2 × --birth]
+    #[arg(long)]
     pub birth_max: Option<f64>,
     /// Place about this many initial sources (Poisson radius chosen to fit), or exactly this
-    /// many with --placement random
+    /// many with --placement random [on a surface, default: 3000 unless --birth is given]
     #[arg(long, value_name = "N", conflicts_with = "density")]
     pub sources: Option<usize>,
-    /// How initial sources are placed
-    #[arg(long, value_enum, default_value = "poisson")]
-    pub placement: PlacementArg,
+    /// How initial sources are placed [default: poisson]
+    #[arg(long, value_enum)]
+    pub placement: Option<PlacementArg>,
     /// Darts thrown each step (Peele §3.1.2) [default: 0, or 20 when the blade grows]
     #[arg(long, value_name = "N")]
     pub sources_per_step: Option<usize>,
@@ -149,9 +183,9 @@ pub struct Args {
     /// Murray exponent n: r_parent^n = sum of r_child^n
     #[arg(long, default_value_t = 3.0)]
     pub murray: f64,
-    /// Radius of vein tips (and loop-closing edges), mm
-    #[arg(long, default_value_t = 0.1)]
-    pub tip_radius: f64,
+    /// Radius of vein tips (and loop-closing edges), mm [default: 0.1; on a surface D / 7.5]
+    #[arg(long)]
+    pub tip_radius: Option<f64>,
     /// Stop after this many growth steps
     #[arg(long, default_value_t = 10_000)]
     pub max_iterations: usize,
@@ -192,6 +226,9 @@ struct Setup {
 }
 
 fn setup(args: &Args) -> Result<Setup> {
+    if args.density.is_none() && (args.birth_min.is_some() || args.birth_max.is_some()) {
+        bail!("--birth-min and --birth-max need --density");
+    }
     let outline = match &args.outline {
         Some(path) => read_outline(path)?,
         None => Outline::shape(args.shape.into()),
@@ -199,8 +236,12 @@ fn setup(args: &Args) -> Result<Setup> {
     let roots = if args.root.is_empty() {
         vec![outline.default_root()]
     } else {
-        args.root.clone()
+        args.root
+            .iter()
+            .map(|r| parse_point(r).map_err(|e| anyhow::anyhow!("--root: {e}")))
+            .collect::<Result<_>>()?
     };
+    let step = args.step.unwrap_or(0.75);
     let density = args.density.as_deref().map(DensityMap::read).transpose()?;
     let sweeping = !args.sweep_r.is_empty();
     let blade = match args.blade {
@@ -218,8 +259,8 @@ fn setup(args: &Args) -> Result<Setup> {
             ModeArg::Open => Mode::Open,
             ModeArg::Closed => Mode::Closed,
         },
-        step: args.step,
-        kill: args.kill,
+        step,
+        kill: args.kill.unwrap_or(1.1),
         max_iterations: args.max_iterations,
         blade,
         initial_scale: args.initial_scale,
@@ -233,21 +274,21 @@ fn setup(args: &Args) -> Result<Setup> {
     };
     let mut opts = LeafOptions {
         growth,
-        birth: args.birth,
+        birth: args.birth.unwrap_or(1.5),
         birth_min: args.birth_min,
         birth_max: args.birth_max,
         density,
         sources: args.sources,
         placement: match args.placement {
-            PlacementArg::Poisson => Placement::Poisson,
-            PlacementArg::Random => Placement::Random,
+            None | Some(PlacementArg::Poisson) => Placement::Poisson,
+            Some(PlacementArg::Random) => Placement::Random,
         },
         murray: args.murray,
-        tip_radius: args.tip_radius,
+        tip_radius: args.tip_radius.unwrap_or(0.1),
         seed: args.seed,
     };
     if let Some(r) = args.r {
-        opts.growth.blade_rate = blade_rate_for(r, args.step, &outline, roots[0])?;
+        opts.growth.blade_rate = blade_rate_for(r, step, &outline, roots[0])?;
     }
     Ok(Setup {
         outline,
@@ -270,6 +311,9 @@ fn blade_rate_for(r: f64, step: f64, outline: &Outline, root: DVec2) -> Result<f
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(mesh) = &args.surface {
+        return super::surface::venation(&args, mesh);
+    }
     let s = setup(&args)?;
     if !args.sweep_r.is_empty() {
         return sweep(&args, s);
@@ -371,7 +415,7 @@ fn print_summary(output: &Path, leaf: &Leaf) {
     }
 }
 
-fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
+pub(super) fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
     let text = serde_json::to_string_pretty(value)? + "\n";
     write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     Ok(())
@@ -387,7 +431,7 @@ fn sweep(args: &Args, s: Setup) -> Result<()> {
     let mut leaves = Vec::new();
     for &r in &args.sweep_r {
         let mut opts = s.opts.clone();
-        opts.growth.blade_rate = blade_rate_for(r, args.step, &s.outline, s.roots[0])?;
+        opts.growth.blade_rate = blade_rate_for(r, opts.growth.step, &s.outline, s.roots[0])?;
         let leaf = grow_leaf(&s.outline, &s.roots, &opts, None)?;
         let name = format!("r-{r}");
         write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;

@@ -78,6 +78,41 @@ pub fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
 }
 
+/// The distance between segments ab and cd in space (Ericson, Real-Time Collision Detection
+/// §5.1.9: the closest points by clamped parameters).
+pub fn segment_distance(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
+    let (d1, d2, r) = (b - a, d - c, a - c);
+    let (aa, ee, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let (s, t) = if aa <= f64::EPSILON && ee <= f64::EPSILON {
+        (0.0, 0.0)
+    } else if aa <= f64::EPSILON {
+        (0.0, (f / ee).clamp(0.0, 1.0))
+    } else {
+        let cc = d1.dot(r);
+        if ee <= f64::EPSILON {
+            ((-cc / aa).clamp(0.0, 1.0), 0.0)
+        } else {
+            let bb = d1.dot(d2);
+            let denom = aa * ee - bb * bb;
+            let mut s = if denom > 0.0 {
+                ((bb * f - cc * ee) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (bb * s + f) / ee;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-cc / aa).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((bb - cc) / aa).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    (a + d1 * s).distance(c + d2 * t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +125,41 @@ mod tests {
         assert!(approx_eq(b.diagonal(), 13f64.sqrt(), 1e-12));
         assert!(Aabb::empty().is_empty());
         assert_eq!(Aabb::empty().diagonal(), 0.0);
+    }
+
+    #[test]
+    fn segment_distances_in_space() {
+        let v = DVec3::new;
+        // Skew lines one apart, crossing in plan.
+        let d = segment_distance(
+            v(-1.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            v(0.0, -1.0, 1.0),
+            v(0.0, 1.0, 1.0),
+        );
+        assert!(approx_eq(d, 1.0, 1e-12));
+        // Parallel, end to end with a gap of 2.
+        let d = segment_distance(
+            v(0.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            v(3.0, 0.0, 0.0),
+            v(4.0, 0.0, 0.0),
+        );
+        assert!(approx_eq(d, 2.0, 1e-12));
+        // A point against a segment, and crossing segments.
+        let d = segment_distance(
+            v(0.5, 2.0, 0.0),
+            v(0.5, 2.0, 0.0),
+            v(0.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+        );
+        assert!(approx_eq(d, 2.0, 1e-12));
+        let d = segment_distance(
+            v(0.0, 0.0, 0.0),
+            v(2.0, 2.0, 0.0),
+            v(0.0, 2.0, 0.0),
+            v(2.0, 0.0, 0.0),
+        );
+        assert!(d < 1e-12);
     }
 }

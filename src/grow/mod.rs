@@ -11,4 +11,5 @@ pub mod outline_file;
 pub mod poisson;
 pub mod report;
 pub mod space;
+pub mod surface;
 pub mod venation;

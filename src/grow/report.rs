@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use glam::DVec2;
+use glam::DVec3;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
@@ -29,7 +29,7 @@ pub struct Quality {
     pub not_y_or_i: usize,
     /// Joints where two legs meet at less than `SHARP_JOINT` degrees.
     pub sharp_joints: usize,
-    /// Mean turning angle at degree-2 nodes, degrees: the zigzag index.
+    /// Mean turning angle at degree-2 nodes (in space), degrees: the zigzag index.
     pub zigzag_deg: f64,
     /// The largest turning angle at a degree-2 node, degrees.
     pub max_turn_deg: f64,
@@ -49,14 +49,10 @@ impl Quality {
         let mut sharp = 0;
         let cos_sharp = SHARP_JOINT.to_radians().cos();
         for v in 0..n {
-            let legs: Vec<DVec2> = adj
+            let legs: Vec<DVec3> = adj
                 .neighbours(v as u32)
                 .iter()
-                .filter_map(|&(w, _)| {
-                    (net.nodes[w as usize].p - net.nodes[v].p)
-                        .truncate()
-                        .try_normalize()
-                })
+                .filter_map(|&(w, _)| (net.nodes[w as usize].p - net.nodes[v].p).try_normalize())
                 .collect();
             *by_degree.entry(adj.degree(v as u32)).or_default() += 1;
             if legs.len() == 2 {
@@ -190,7 +186,6 @@ fn crossings(net: &Network) -> usize {
 mod tests {
     use super::*;
     use crate::network::{Edge, Node};
-    use glam::DVec3;
 
     fn net(points: &[(f64, f64)], edges: &[(u32, u32)]) -> Network {
         Network {

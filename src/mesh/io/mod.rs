@@ -12,7 +12,7 @@ use glam::DVec3;
 use super::TriMesh;
 use crate::files::{extension, ReadError, WriteError};
 
-pub use png::render_png_bytes;
+pub use png::{render_png_bytes, render_png_bytes_with, Stroke3};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
@@ -61,6 +61,20 @@ pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
 /// Writes a mesh, choosing the format by extension (`size` is the PNG render's longer side).
 pub fn write_mesh(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     write_checked(mesh, None, path, size)
+}
+
+/// Writes a PNG render of a mesh with strokes on it (veins on their surface).
+pub fn write_png_with_strokes(
+    mesh: &TriMesh,
+    strokes: &[Stroke3],
+    path: &Path,
+    size: u32,
+) -> Result<(), WriteError> {
+    let bytes = render_png_bytes_with(mesh, strokes, size).map_err(|msg| WriteError::Content {
+        path: path.to_path_buf(),
+        msg,
+    })?;
+    crate::files::write_atomic(path, |w| std::io::Write::write_all(w, &bytes))
 }
 
 /// Writes an OBJ mesh with one normal per vertex.

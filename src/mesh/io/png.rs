@@ -13,6 +13,7 @@ use crate::mesh::TriMesh;
 
 const SUPERSAMPLE: usize = 2;
 const BACKGROUND: [u8; 3] = [0xf4, 0xf2, 0xee];
+const STROKE: [u8; 3] = [0x1d, 0x3b, 0x2a];
 
 pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     let bytes = render_png_bytes(mesh, size).map_err(|msg| WriteError::Content {
@@ -22,8 +23,27 @@ pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     write_atomic(path, |w| std::io::Write::write_all(w, &bytes))
 }
 
+/// A stroke drawn over a mesh render: a segment in space and its radius in mm.
+#[derive(Clone, Copy, Debug)]
+pub struct Stroke3 {
+    pub a: DVec3,
+    pub b: DVec3,
+    pub radius: f64,
+}
+
 /// The PNG bytes of a shaded render whose longer side is `size` pixels (16..=8192).
 pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
+    render_png_bytes_with(mesh, &[], size)
+}
+
+/// A shaded render with strokes on it (veins on their surface). A stroke is hidden where the
+/// surface lies in front of it by more than 1 % of the model's size, so veins on the far side
+/// of a closed surface do not show through.
+pub fn render_png_bytes_with(
+    mesh: &TriMesh,
+    strokes: &[Stroke3],
+    size: u32,
+) -> Result<Vec<u8>, String> {
     if !(16..=8192).contains(&size) {
         return Err(format!("render size {size} px is outside 16..=8192 px"));
     }
@@ -69,6 +89,18 @@ pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
             if d > depth[i] {
                 depth[i] = d;
                 color[i] = rgb;
+            }
+        });
+    }
+    let bias = 0.01 * ext.max_element();
+    for s in strokes {
+        let (pa, pb) = (to_px(s.a), to_px(s.b));
+        let (za, zb) = (s.a.dot(eye), s.b.dot(eye));
+        let half = (s.radius * scale * ss as f64).max(0.6 * ss as f64);
+        fill_capsule(pa, pb, half, sw, sh, |i, t| {
+            let d = za + (zb - za) * t;
+            if d + bias >= depth[i] {
+                color[i] = STROKE;
             }
         });
     }
@@ -119,6 +151,39 @@ fn fill_triangle(
             let b2 = 1.0 - b0 - b1;
             if b0 >= 0.0 && b1 >= 0.0 && b2 >= 0.0 {
                 plot(y * w + x, b0 * z[0] + b1 * z[1] + b2 * z[2]);
+            }
+        }
+    }
+}
+
+/// Calls `plot(pixel index, t)` for every pixel centre within `half` of segment ab, with t the
+/// parameter of the closest point on ab.
+fn fill_capsule(
+    a: DVec2,
+    b: DVec2,
+    half: f64,
+    w: usize,
+    h: usize,
+    mut plot: impl FnMut(usize, f64),
+) {
+    let lo = (a.min(b) - DVec2::splat(half)).floor().max(DVec2::ZERO);
+    let hi = (a.max(b) + DVec2::splat(half)).ceil();
+    let (x1, y1) = (
+        (hi.x.max(0.0) as usize).min(w),
+        (hi.y.max(0.0) as usize).min(h),
+    );
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    for y in lo.y as usize..y1 {
+        for x in lo.x as usize..x1 {
+            let c = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+            let t = if len2 > 0.0 {
+                ((c - a).dot(ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            if c.distance_squared(a + ab * t) <= half * half {
+                plot(y * w + x, t);
             }
         }
     }

@@ -1,0 +1,195 @@
+//! Venation on a surface (`lamina venation --surface`) and geodesic veins (`lamina veins`):
+//! reading the mesh and roots, and writing the network, its render on the surface and the
+//! report.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use glam::DVec3;
+use serde_json::json;
+
+use super::venation::{write_json, Args, ChannelArg, ModeArg};
+use lamina::files::extension;
+use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
+use lamina::grow::venation::{Mode, VenationOptions};
+use lamina::mesh::io::{read_mesh, write_png_with_strokes, Stroke3};
+use lamina::network::io::{write_network, RenderOptions};
+use lamina::network::Network;
+use lamina::TriMesh;
+
+/// Sources placed on a surface when neither --sources nor --birth is given.
+pub const DEFAULT_SOURCES: usize = 3000;
+
+/// `V` a vertex, `tT` a triangle, `X,Y,Z` a point.
+pub fn parse_root(s: &str) -> Result<Root> {
+    let t = s.trim();
+    if let Some(tri) = t.strip_prefix('t') {
+        return tri
+            .parse()
+            .map(Root::Triangle)
+            .with_context(|| format!("--root {s}: tT needs a triangle index"));
+    }
+    if !t.contains(',') {
+        return t
+            .parse()
+            .map(Root::Vertex)
+            .with_context(|| format!("--root {s}: expected a vertex index, tT or X,Y,Z"));
+    }
+    let parts: Vec<f64> = t
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--root {s}: X,Y,Z needs three numbers"))?;
+    let [x, y, z] = parts[..] else {
+        bail!("--root {s}: a point on a surface needs X,Y,Z");
+    };
+    Ok(Root::Point(DVec3::new(x, y, z)))
+}
+
+pub fn read_surface(path: &Path) -> Result<TriMesh> {
+    let mesh = read_mesh(path)?;
+    if mesh.triangles.is_empty() {
+        bail!("--surface {}: has no triangles", path.display());
+    }
+    Ok(mesh)
+}
+
+/// `lamina venation --surface MESH`.
+pub fn venation(args: &Args, path: &Path) -> Result<()> {
+    let mesh = read_surface(path)?;
+    let roots: Vec<Root> = args
+        .root
+        .iter()
+        .map(|r| parse_root(r))
+        .collect::<Result<_>>()?;
+    let density = args.density_channel.map(|c| match c {
+        ChannelArg::Red => Channel::Red,
+        ChannelArg::Green => Channel::Green,
+        ChannelArg::Blue => Channel::Blue,
+        ChannelArg::Luminance => Channel::Luminance,
+    });
+    if density.is_none() && (args.birth_min.is_some() || args.birth_max.is_some()) {
+        bail!("--birth-min and --birth-max need --density-channel on a surface");
+    }
+    if args.sources.is_some() && args.birth.is_some() {
+        bail!("--sources and --birth both set the source spacing on a surface: give one");
+    }
+    let base = match (args.birth, args.sources) {
+        (Some(b), _) => b,
+        (None, n) => surface::birth_for_count(&mesh, n.unwrap_or(DEFAULT_SOURCES), density),
+    };
+    let birth_min = args.birth_min.unwrap_or(base);
+    let birth_max = match density {
+        Some(_) => args.birth_max.unwrap_or(2.0 * birth_min),
+        None => birth_min,
+    };
+    let step = args
+        .step
+        .unwrap_or_else(|| (0.5 * birth_min).min(0.9 * surface::mean_edge_length(&mesh)));
+    let opts = SurfaceOptions {
+        growth: VenationOptions {
+            mode: match args.mode {
+                ModeArg::Open => Mode::Open,
+                ModeArg::Closed => Mode::Closed,
+            },
+            step,
+            kill: args.kill.unwrap_or(1.5 * step),
+            max_iterations: args.max_iterations,
+            sources_per_step: args.sources_per_step.unwrap_or(0),
+            join_distance: args.join_distance,
+            join_angle: args.join_angle,
+            ..Default::default()
+        },
+        birth_min,
+        birth_max,
+        density,
+        reach: args.reach,
+        edge_tolerance: args.edge_tolerance,
+        murray: args.murray,
+        tip_radius: args.tip_radius.unwrap_or(step / 7.5),
+        seed: args.seed,
+    };
+    let veins = grow_on_surface(&mesh, &roots, &opts)
+        .with_context(|| format!("--surface {}", path.display()))?;
+    let mut net = veins.network;
+    net.meta
+        .parameters
+        .insert("surface".into(), json!(path.display().to_string()));
+    write_outputs(
+        &net,
+        &mesh,
+        &args.output,
+        args.svg.as_deref(),
+        args.png.as_deref(),
+        args.size,
+    )?;
+    let g = &veins.growth;
+    let summary = json!({
+        "output": args.output,
+        "surface": path,
+        "nodes": net.nodes.len(),
+        "edges": net.edges.len(),
+        "iterations": g.iterations,
+        "stop": g.stop,
+        "sources_placed": g.sources_placed,
+        "sources_left": g.sources_left,
+        "loop_edges": g.joins.len(),
+        "step": opts.growth.step,
+        "kill": opts.growth.kill,
+        "birth_min": opts.birth_min,
+        "birth_max": opts.birth_max,
+        "quality": veins.quality,
+    });
+    if let Some(report) = &args.report {
+        write_json(report, &summary)?;
+    }
+    if args.json {
+        println!("{summary}");
+    } else {
+        println!(
+            "wrote {}: {} steps, D = {:.4} mm, kill {:.4} mm, {} sources",
+            args.output.display(),
+            g.iterations,
+            opts.growth.step,
+            opts.growth.kill,
+            g.sources_placed
+        );
+        for line in veins.quality.lines() {
+            println!("  {line}");
+        }
+    }
+    Ok(())
+}
+
+/// The network to `output` (a .png output is the render on the surface), plus the extra
+/// renders asked for.
+pub fn write_outputs(
+    net: &Network,
+    mesh: &TriMesh,
+    output: &Path,
+    svg: Option<&Path>,
+    png: Option<&Path>,
+    size: u32,
+) -> Result<()> {
+    let render = RenderOptions { size };
+    for path in [Some(output), svg, png].into_iter().flatten() {
+        if extension(path) == "png" {
+            write_png_with_strokes(mesh, &strokes(net), path, size)?;
+        } else {
+            write_network(net, path, &render)?;
+        }
+    }
+    Ok(())
+}
+
+/// The network's edges as strokes for a render on its surface.
+pub fn strokes(net: &Network) -> Vec<Stroke3> {
+    net.edges
+        .iter()
+        .map(|e| Stroke3 {
+            a: net.nodes[e.a as usize].p,
+            b: net.nodes[e.b as usize].p,
+            radius: e.radius,
+        })
+        .collect()
+}
