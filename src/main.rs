@@ -27,8 +27,12 @@ enum Command {
     Convert(cli::convert::Args),
     /// Render a network (SVG or PNG) or a mesh (PNG).
     Render(cli::render::Args),
-    /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005)
+    /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005),
+    /// or on a triangle mesh with --surface (Gokmen §3.3)
     Venation(Box<cli::venation::Args>),
+    /// Geodesic veins along the edges of a mesh, from a root vertex to source vertices
+    /// (Bachman), with shortest paths kept up to date incrementally
+    Veins(Box<cli::veins::Args>),
     /// The closed cells of a network on a surface (faces of its rotation system), triangulated
     /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
     Cells(cli::cells::Args),
@@ -69,6 +73,7 @@ fn main() -> ExitCode {
         Command::Convert(args) => cli::convert::run(args).map(Within::from),
         Command::Render(args) => cli::render::run(args).map(Within::from),
         Command::Venation(args) => cli::venation::run(*args).map(Within::from),
+        Command::Veins(args) => cli::veins::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),

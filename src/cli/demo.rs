@@ -1,7 +1,9 @@
 //! `lamina demo [--out DIR]`: the whole way on the embedded fixtures: read each fixture, check
 //! it, convert it to every format and render it; grow two leaves; run the Calyx network through
 //! cells and node axes with planarity reports, then into plates, assembly groups and nested
-//! cut sheets; write an index.html linking everything. Later stages add their steps here.
+//! cut sheets; grow veins on the Calyx band, a sphere, a torus and a density plate (surface
+//! venation and geodesic veins, each rendered on its surface); write an index.html linking
+//! everything. Later stages add their steps here.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -16,8 +18,10 @@ use super::planarize::{MethodArg, ReportArgs};
 use glam::DVec2;
 use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
+use lamina::grow::geodesic::{self, grow_veins, Incremental, MeshGraph, VeinOptions};
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
+use lamina::grow::surface::{self, grow_on_surface, Channel, SurfaceOptions};
 use lamina::grow::venation::Mode;
 use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
@@ -63,6 +67,26 @@ const FIXTURES: &[(&str, &[u8], &str)] = &[
     ),
 ];
 
+/// The surfaces veins grow on (besides the Calyx band above), inside the binary too.
+const SURFACES: &[(&str, &[u8], &str)] = &[
+    (
+        "sphere.obj",
+        include_bytes!("../../fixtures/surfaces/sphere.obj"),
+        "an icosphere, radius 50 mm (closed)",
+    ),
+    (
+        "torus.obj",
+        include_bytes!("../../fixtures/surfaces/torus.obj"),
+        "a torus, radii 60 and 20 mm (closed, genus 1)",
+    ),
+    (
+        "density_halves.obj",
+        include_bytes!("../../fixtures/surfaces/density_halves.obj"),
+        "a 200 × 100 mm plate, dark (dense) on the left half, light on the right, in its vertex \
+         colours",
+    ),
+];
+
 struct Entry {
     name: String,
     about: String,
@@ -77,7 +101,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 4),
+        Some(FIXTURES.len() as u64 + 4 + 4),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -103,6 +127,18 @@ pub fn run(args: Args) -> Result<()> {
     bar.set_message("calyx: plates, groups, cut sheets");
     entries.push(steel(out)?);
     bar.inc(1);
+    for (name, bytes, _) in SURFACES {
+        write_atomic(&inputs.join(name), |w| std::io::Write::write_all(w, bytes))?;
+    }
+    let calyx_about = "the Calyx-like band (open, 2 m)";
+    let surfaces = [("calyx.obj", calyx_about)]
+        .into_iter()
+        .chain(SURFACES.iter().map(|(n, _, a)| (*n, *a)));
+    for (name, about) in surfaces {
+        bar.set_message(format!("veins on {name}"));
+        entries.push(surface_veins(out, &inputs.join(name), about, args.size)?);
+        bar.inc(1);
+    }
     bar.finish_and_clear();
     let index = out.join("index.html");
     let html = index_html(&entries);
@@ -389,6 +425,88 @@ fn steel(out: &Path) -> Result<Entry> {
         outputs,
         preview: "calyx/cut/sheets.svg".into(),
         facts,
+    })
+}
+
+/// Closed surface venation and smoothed geodesic veins on one mesh, each rendered on it (the
+/// density plate grows open venation with its colours as the density map).
+fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result<Entry> {
+    let mesh = read_mesh(mesh_path)?;
+    let stem = mesh_path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("surface")
+        .to_string();
+    let dir = out.join("on-surfaces");
+    std::fs::create_dir_all(&dir)?;
+    let density = (stem == "density_halves").then_some(Channel::Luminance);
+    let mode = if density.is_some() {
+        Mode::Open
+    } else {
+        Mode::Closed
+    };
+    let opts = SurfaceOptions::for_mesh(&mesh, mode, 3000, density);
+    let veins = grow_on_surface(&mesh, &[], &opts)
+        .with_context(|| format!("venation on {}", mesh_path.display()))?;
+    let mut outputs = Vec::new();
+    let venation_json = format!("on-surfaces/{stem}-venation.json");
+    let venation_png = format!("on-surfaces/{stem}-venation.png");
+    super::surface::write_outputs(
+        &veins.network,
+        &mesh,
+        &out.join(&venation_json),
+        None,
+        Some(&out.join(&venation_png)),
+        size,
+    )?;
+    outputs.extend([venation_json, venation_png.clone()]);
+    let graph = MeshGraph::new(&mesh);
+    let root = surface::lowest_vertex(&mesh).context("a mesh with triangles")?;
+    let sources = geodesic::sample_sources(&mesh, &graph, root, 300, density, 1)?;
+    let tree = grow_veins(
+        &graph,
+        &mesh.positions,
+        root,
+        &sources.vertices,
+        &mut Incremental,
+    )?;
+    let vein_opts = VeinOptions {
+        tip_radius: 0.08 * surface::mean_edge_length(&mesh),
+        murray: 3.0,
+        smooth: 3,
+    };
+    let net = geodesic::to_network(&mesh, &tree, &vein_opts)?;
+    let veins_json = format!("on-surfaces/{stem}-veins.json");
+    let veins_png = format!("on-surfaces/{stem}-veins.png");
+    super::surface::write_outputs(
+        &net,
+        &mesh,
+        &out.join(&veins_json),
+        None,
+        Some(&out.join(&veins_png)),
+        size,
+    )?;
+    outputs.extend([veins_json, veins_png.clone()]);
+    let how = match density {
+        Some(_) => "open, density from the vertex luminance",
+        None => "closed",
+    };
+    Ok(Entry {
+        name: format!("veins on {stem}"),
+        about: format!(
+            "On {about}: surface venation ({how}, about 3,000 sources, `lamina venation --surface`) \
+             and geodesic veins along mesh edges (about 300 sources, smoothed, `lamina veins \
+             --smooth 3`). Second picture: <a href=\"{veins_png}\">geodesic veins</a>."
+        ),
+        outputs,
+        preview: venation_png,
+        facts: format!(
+            "venation: {}; geodesic veins: {} tree vertices to {} sources in {} iterations",
+            veins.quality.lines().join("; "),
+            tree.order.len(),
+            tree.sources.len(),
+            tree.iterations
+        ),
     })
 }
 

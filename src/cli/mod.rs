@@ -10,4 +10,5 @@ pub mod planarize;
 pub mod plates;
 pub mod render;
 pub mod surface;
+pub mod veins;
 pub mod venation;

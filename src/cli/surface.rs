@@ -11,7 +11,7 @@ use serde_json::json;
 use super::venation::{write_json, Args, ChannelArg, ModeArg};
 use lamina::files::extension;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
-use lamina::grow::venation::{Mode, VenationOptions};
+use lamina::grow::venation::Mode;
 use lamina::mesh::io::{read_mesh, write_png_with_strokes, Stroke3};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
@@ -62,53 +62,45 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
         .iter()
         .map(|r| parse_root(r))
         .collect::<Result<_>>()?;
-    let density = args.density_channel.map(|c| match c {
-        ChannelArg::Red => Channel::Red,
-        ChannelArg::Green => Channel::Green,
-        ChannelArg::Blue => Channel::Blue,
-        ChannelArg::Luminance => Channel::Luminance,
-    });
+    let density = args.density_channel.map(Channel::from);
     if density.is_none() && (args.birth_min.is_some() || args.birth_max.is_some()) {
         bail!("--birth-min and --birth-max need --density-channel on a surface");
     }
     if args.sources.is_some() && args.birth.is_some() {
         bail!("--sources and --birth both set the source spacing on a surface: give one");
     }
-    let base = match (args.birth, args.sources) {
-        (Some(b), _) => b,
-        (None, n) => surface::birth_for_count(&mesh, n.unwrap_or(DEFAULT_SOURCES), density),
+    let mode = match args.mode {
+        ModeArg::Open => Mode::Open,
+        ModeArg::Closed => Mode::Closed,
     };
-    let birth_min = args.birth_min.unwrap_or(base);
-    let birth_max = match density {
-        Some(_) => args.birth_max.unwrap_or(2.0 * birth_min),
-        None => birth_min,
-    };
-    let step = args
-        .step
-        .unwrap_or_else(|| (0.5 * birth_min).min(0.9 * surface::mean_edge_length(&mesh)));
-    let opts = SurfaceOptions {
-        growth: VenationOptions {
-            mode: match args.mode {
-                ModeArg::Open => Mode::Open,
-                ModeArg::Closed => Mode::Closed,
-            },
-            step,
-            kill: args.kill.unwrap_or(1.5 * step),
-            max_iterations: args.max_iterations,
-            sources_per_step: args.sources_per_step.unwrap_or(0),
-            join_distance: args.join_distance,
-            join_angle: args.join_angle,
-            ..Default::default()
-        },
-        birth_min,
-        birth_max,
+    let mut opts = SurfaceOptions::for_mesh(
+        &mesh,
+        mode,
+        args.sources.unwrap_or(DEFAULT_SOURCES),
         density,
-        reach: args.reach,
-        edge_tolerance: args.edge_tolerance,
-        murray: args.murray,
-        tip_radius: args.tip_radius.unwrap_or(step / 7.5),
-        seed: args.seed,
+    );
+    if let Some(b) = args.birth_min.or(args.birth) {
+        opts.birth_min = b;
+    }
+    opts.birth_max = match (args.birth_max, density) {
+        (Some(b), _) => b,
+        (None, Some(_)) => 2.0 * opts.birth_min,
+        (None, None) => opts.birth_min,
     };
+    let g = &mut opts.growth;
+    g.step = args
+        .step
+        .unwrap_or_else(|| surface::default_step(&mesh, opts.birth_min));
+    g.kill = args.kill.unwrap_or(1.5 * g.step);
+    g.max_iterations = args.max_iterations;
+    g.sources_per_step = args.sources_per_step.unwrap_or(0);
+    g.join_distance = args.join_distance;
+    g.join_angle = args.join_angle;
+    opts.tip_radius = args.tip_radius.unwrap_or(g.step / 7.5);
+    opts.reach = args.reach;
+    opts.edge_tolerance = args.edge_tolerance;
+    opts.murray = args.murray;
+    opts.seed = args.seed;
     let veins = grow_on_surface(&mesh, &roots, &opts)
         .with_context(|| format!("--surface {}", path.display()))?;
     let mut net = veins.network;

@@ -14,6 +14,7 @@ use lamina::grow::frames::{render_frame, View};
 use lamina::grow::leaf::{grow_leaf, Leaf, LeafOptions, Placement};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::outline_file::read_outline;
+use lamina::grow::surface::Channel;
 use lamina::grow::venation::{BladeGrowth, Frame, Mode, Observer, VenationOptions};
 use lamina::network::io::{write_network, RenderOptions};
 
@@ -57,6 +58,17 @@ pub enum ChannelArg {
     Green,
     Blue,
     Luminance,
+}
+
+impl From<ChannelArg> for Channel {
+    fn from(c: ChannelArg) -> Channel {
+        match c {
+            ChannelArg::Red => Channel::Red,
+            ChannelArg::Green => Channel::Green,
+            ChannelArg::Blue => Channel::Blue,
+            ChannelArg::Luminance => Channel::Luminance,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]

@@ -4,6 +4,7 @@
 
 pub mod density;
 pub mod frames;
+pub mod geodesic;
 pub mod leaf;
 pub mod murray;
 pub mod outline;

@@ -100,6 +100,34 @@ pub struct SurfaceOptions {
 }
 
 impl SurfaceOptions {
+    /// The defaults for a mesh and a wanted source count: the birth distance that places about
+    /// that many (with a density channel the darkest, the lightest twice it), D = min(birth / 2,
+    /// 0.9 × mean edge length), kill 1.5 D, tips D / 7.5.
+    pub fn for_mesh(mesh: &TriMesh, mode: Mode, sources: usize, density: Option<Channel>) -> Self {
+        let birth_min = birth_for_count(mesh, sources, density);
+        let step = default_step(mesh, birth_min);
+        SurfaceOptions {
+            growth: VenationOptions {
+                mode,
+                step,
+                kill: 1.5 * step,
+                ..Default::default()
+            },
+            birth_min,
+            birth_max: if density.is_some() {
+                2.0 * birth_min
+            } else {
+                birth_min
+            },
+            density,
+            reach: None,
+            edge_tolerance: None,
+            murray: 3.0,
+            tip_radius: step / 7.5,
+            seed: 1,
+        }
+    }
+
     pub fn reach(&self) -> f64 {
         self.reach.unwrap_or(4.0 * self.birth_max)
     }
@@ -107,6 +135,11 @@ impl SurfaceOptions {
     pub fn edge_tolerance(&self) -> f64 {
         self.edge_tolerance.unwrap_or(0.25 * self.growth.step)
     }
+}
+
+/// The default D for a birth distance: half of it, kept below the mean edge length.
+pub fn default_step(mesh: &TriMesh, birth_min: f64) -> f64 {
+    (0.5 * birth_min).min(0.9 * mean_edge_length(mesh))
 }
 
 /// The birth distance that places about `count` sources on the mesh. With a density channel
@@ -455,30 +488,42 @@ fn check(mesh: &TriMesh, opts: &SurfaceOptions) -> Result<(), SurfaceError> {
     Ok(())
 }
 
-/// Root positions on the surface; the lowest vertex on a triangle when none are given.
-fn root_points(
-    mesh: &TriMesh,
-    surface: &Surface,
-    roots: &[Root],
-) -> Result<Vec<DVec3>, SurfaceError> {
+/// Which vertices some triangle uses.
+pub fn used_vertices(mesh: &TriMesh) -> Vec<bool> {
     let mut used = vec![false; mesh.positions.len()];
     for t in &mesh.triangles {
         for &v in t {
             used[v as usize] = true;
         }
     }
+    used
+}
+
+/// The lowest vertex of any triangle (least z, then y, then x): the default root.
+pub fn lowest_vertex(mesh: &TriMesh) -> Option<u32> {
+    let used = used_vertices(mesh);
+    (0..mesh.positions.len())
+        .filter(|&v| used[v])
+        .min_by(|&a, &b| {
+            let (pa, pb) = (mesh.positions[a], mesh.positions[b]);
+            (pa.z, pa.y, pa.x)
+                .partial_cmp(&(pb.z, pb.y, pb.x))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        })
+        .map(|v| v as u32)
+}
+
+/// Root positions on the surface; the lowest vertex on a triangle when none are given.
+fn root_points(
+    mesh: &TriMesh,
+    surface: &Surface,
+    roots: &[Root],
+) -> Result<Vec<DVec3>, SurfaceError> {
     if roots.is_empty() {
-        let lowest = (0..mesh.positions.len())
-            .filter(|&v| used[v])
-            .min_by(|&a, &b| {
-                let (pa, pb) = (mesh.positions[a], mesh.positions[b]);
-                (pa.z, pa.y, pa.x)
-                    .partial_cmp(&(pb.z, pb.y, pb.x))
-                    .expect("finite mesh positions")
-            })
-            .ok_or(SurfaceError::NoTriangles)?;
-        return Ok(vec![mesh.positions[lowest]]);
+        let lowest = lowest_vertex(mesh).ok_or(SurfaceError::NoTriangles)?;
+        return Ok(vec![mesh.positions[lowest as usize]]);
     }
+    let used = used_vertices(mesh);
     roots
         .iter()
         .map(|r| match *r {
@@ -499,6 +544,50 @@ fn root_points(
             Root::Point(p) => Ok(surface.snap(p).ok_or(SurfaceError::NoTriangles)?.0),
         })
         .collect()
+}
+
+/// Poisson-disk points on a mesh (as the venation sources are placed): the birth distance from
+/// `birth_min` (darkest) to `birth_max` (lightest) by the density channel, or `birth_max`.
+pub fn poisson_points(
+    mesh: &TriMesh,
+    birth_min: f64,
+    birth_max: f64,
+    density: Option<Channel>,
+    rng: &mut impl Rng,
+) -> Result<Vec<DVec3>, SurfaceError> {
+    if mesh.triangles.is_empty() {
+        return Err(SurfaceError::NoTriangles);
+    }
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !(positive(birth_min) && positive(birth_max) && birth_min <= birth_max) {
+        return Err(SurfaceError::Birth {
+            min: birth_min,
+            max: birth_max,
+        });
+    }
+    let count = FILL * mesh.area() / (birth_min * birth_min);
+    if count > MAX_SOURCES as f64 {
+        return Err(SurfaceError::TooManySources {
+            birth: birth_min,
+            count,
+        });
+    }
+    let opts = SurfaceOptions {
+        growth: VenationOptions::default(),
+        birth_min,
+        birth_max,
+        density,
+        reach: None,
+        edge_tolerance: None,
+        murray: 3.0,
+        tip_radius: 0.1,
+        seed: 0,
+    };
+    let surface = Surface::new(mesh, &opts)?;
+    if surface.area() <= 0.0 {
+        return Err(SurfaceError::NoArea);
+    }
+    Ok(poisson(&surface, rng))
 }
 
 /// Poisson-disk sources on the surface by dart throwing: each dart lands uniformly by area and

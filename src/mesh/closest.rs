@@ -93,6 +93,11 @@ impl<'a> SurfaceIndex<'a> {
         best
     }
 
+    /// The area-weighted unit normal at vertex `v` (zero on a vertex of no triangle).
+    pub fn vertex_normal(&self, v: u32) -> DVec3 {
+        self.vertex_normals[v as usize]
+    }
+
     /// The interpolated unit normal at a closest point (the face normal where the vertex normals
     /// cancel).
     pub fn normal(&self, c: &Closest) -> DVec3 {

@@ -38,7 +38,8 @@ pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
 
 /// A shaded render with strokes on it (veins on their surface). A stroke is hidden where the
 /// surface lies in front of it by more than 1 % of the model's size, so veins on the far side
-/// of a closed surface do not show through.
+/// of a closed surface do not show through; vertex colours are lightened so veins show on dark
+/// regions.
 pub fn render_png_bytes_with(
     mesh: &TriMesh,
     strokes: &[Stroke3],
@@ -78,7 +79,10 @@ pub fn render_png_bytes_with(
         let base = match &mesh.colors {
             Some(cols) => {
                 let s = t.map(|k| cols[k as usize]);
-                [0, 1, 2].map(|ch| (s[0][ch] + s[1][ch] + s[2][ch]) as f64 / 3.0)
+                // Under strokes, colours are lightened so dark regions still show the veins.
+                let lift = if strokes.is_empty() { 0.0 } else { 0.45 };
+                [0, 1, 2]
+                    .map(|ch| lift + (1.0 - lift) * (s[0][ch] + s[1][ch] + s[2][ch]) as f64 / 3.0)
             }
             None => [0.80, 0.76, 0.70],
         };
