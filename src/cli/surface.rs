@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use serde_json::json;
 
-use super::venation::{write_json, Args, ChannelArg, ModeArg};
+use super::venation::{write_json, Args, ModeArg};
 use lamina::files::extension;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
 use lamina::grow::venation::Mode;
