@@ -24,6 +24,7 @@
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use rstar::RTree;
 
 use super::leaf::MAX_SOURCES;
@@ -410,26 +411,38 @@ pub fn grow_on_surface(
     let sources = poisson(&surface, &mut rng);
     let (growth, surface) =
         venation::grow_in(surface, &roots, &sources, &opts.growth, &mut rng, None)?;
-    let mut normals = Vec::with_capacity(growth.positions.len());
-    let mut off = (0usize, 0.0f64);
     let size = mesh.bbox().diagonal();
-    for p in &growth.positions {
-        let (_, n, d) = surface.snap(*p).ok_or(SurfaceError::NoTriangles)?;
-        normals.push(n);
-        off.0 += usize::from(d > 1e-6 * size);
-        off.1 = off.1.max(d);
-    }
+    let snapped: Vec<(DVec3, f64)> = growth
+        .positions
+        .par_iter()
+        .map(|p| {
+            surface
+                .snap(*p)
+                .map(|(_, n, d)| (n, d))
+                .ok_or(SurfaceError::NoTriangles)
+        })
+        .collect::<Result<_, _>>()?;
+    let normals: Vec<DVec3> = snapped.iter().map(|s| s.0).collect();
+    let off = (
+        snapped.iter().filter(|s| s.1 > 1e-6 * size).count(),
+        snapped.iter().map(|s| s.1).fold(0.0, f64::max),
+    );
     let network = to_network(&growth, &normals, opts);
-    let mut edge_off = (0usize, 0.0f64);
-    for e in &network.edges {
-        let gap = surface.chord_gap(
-            network.nodes[e.a as usize].p,
-            network.nodes[e.b as usize].p,
-            7,
-        );
-        edge_off.0 += usize::from(gap > surface.edge_tolerance);
-        edge_off.1 = edge_off.1.max(gap);
-    }
+    let gaps: Vec<f64> = network
+        .edges
+        .par_iter()
+        .map(|e| {
+            surface.chord_gap(
+                network.nodes[e.a as usize].p,
+                network.nodes[e.b as usize].p,
+                7,
+            )
+        })
+        .collect();
+    let edge_off = (
+        gaps.iter().filter(|&&g| g > surface.edge_tolerance).count(),
+        gaps.iter().copied().fold(0.0, f64::max),
+    );
     let mut quality = Quality::of(&network, growth.roots);
     quality.crossings = crossings(&network, surface.touch);
     let quality = SurfaceQuality {
