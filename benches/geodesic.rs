@@ -174,8 +174,14 @@ fn main() {
         grow_veins(&g, &mesh.positions, 0, &sources, &mut Incremental).expect("grows")
     });
     let (t_full, _) = best_of(1, || {
-        grow_veins(&g, &mesh.positions, 0, &sources, &mut Recompute { tree: Vec::new() })
-            .expect("grows")
+        grow_veins(
+            &g,
+            &mesh.positions,
+            0,
+            &sources,
+            &mut Recompute { tree: Vec::new() },
+        )
+        .expect("grows")
     });
     let (t_each, each) = best_of(1, || {
         grow_veins(

@@ -504,3 +504,104 @@ fn catmull_rom(p0: DVec3, p1: DVec3, p2: DVec3, p3: DVec3, t: f64) -> DVec3 {
         + (p1 * 3.0 - p0 - p2 * 3.0 + p3) * t3)
         * 0.5
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng;
+
+    /// A torus grid with every vertex jittered, so no two paths are equally long.
+    fn jittered_torus(around: usize, across: usize, seed: u64) -> TriMesh {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut positions = Vec::new();
+        for i in 0..around {
+            let u =
+                std::f64::consts::TAU * (i as f64 + rng.random_range(-0.3..0.3)) / around as f64;
+            for j in 0..across {
+                let v = std::f64::consts::TAU * (j as f64 + rng.random_range(-0.3..0.3))
+                    / across as f64;
+                let r = 30.0 + 10.0 * v.cos();
+                positions.push(DVec3::new(r * u.cos(), r * u.sin(), 10.0 * v.sin()));
+            }
+        }
+        let id = |i: usize, j: usize| ((i % around) * across + j % across) as u32;
+        let mut triangles = Vec::new();
+        for i in 0..around {
+            for j in 0..across {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                triangles.push([a, b, c]);
+                triangles.push([a, c, d]);
+            }
+        }
+        TriMesh {
+            positions,
+            triangles,
+            colors: None,
+        }
+    }
+
+    struct Recompute(Vec<u32>);
+
+    impl Relabel for Recompute {
+        fn update(&mut self, g: &MeshGraph, in_tree: &[bool], added: &[u32], l: &mut Labels) {
+            self.0.extend_from_slice(added);
+            l.clear();
+            l.relabel(g, in_tree, &self.0);
+        }
+    }
+
+    #[test]
+    fn incremental_labels_grow_the_same_tree_as_recomputing_them() {
+        for seed in 1..4 {
+            let mesh = jittered_torus(40, 20, seed);
+            let g = MeshGraph::new(&mesh);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let sources: Vec<u32> = (0..60).map(|_| rng.random_range(0..800)).collect();
+            let a = grow_veins(&g, &mesh.positions, 0, &sources, &mut Incremental).expect("grows");
+            let b = grow_veins(&g, &mesh.positions, 0, &sources, &mut Recompute(Vec::new()))
+                .expect("grows");
+            assert!(a.iterations > 5);
+            assert_eq!(a.order, b.order, "seed {seed}");
+            assert_eq!(a.parent, b.parent, "seed {seed}");
+            assert!(a.relabelled < b.relabelled);
+            for s in &a.sources {
+                assert!(a.order.contains(s), "source {s} reached");
+            }
+        }
+    }
+
+    #[test]
+    fn weights_count_the_sources_downstream() {
+        // A path 0-1-2-3 with sources 2 and 3: edges into 1, 2, 3 carry 2, 2, 1.
+        let tree = VeinTree {
+            order: vec![0, 1, 2, 3],
+            parent: vec![NONE, 0, 1, 2],
+            sources: vec![2, 3],
+            iterations: 3,
+            relabelled: 0,
+        };
+        assert_eq!(tree.weights(), vec![2, 2, 2, 1]);
+    }
+
+    #[test]
+    fn unreachable_and_out_of_range_sources_are_named() {
+        // Two separate triangles.
+        let mesh = TriMesh {
+            positions: vec![
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::Y,
+                DVec3::new(5.0, 0.0, 0.0),
+                DVec3::new(6.0, 0.0, 0.0),
+                DVec3::new(5.0, 1.0, 0.0),
+            ],
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+            colors: None,
+        };
+        let g = MeshGraph::new(&mesh);
+        let grow = |s: &[u32]| grow_veins(&g, &mesh.positions, 0, s, &mut Incremental).err();
+        assert_eq!(grow(&[4]), Some(VeinError::Unreachable(4, 0)));
+        assert_eq!(grow(&[9]), Some(VeinError::Source(9, 6)));
+        assert_eq!(grow(&[2]), None);
+    }
+}
