@@ -275,7 +275,7 @@ pub enum VeinError {
     Source(u32, usize),
     #[error("--source {0}: no mesh edge path leads from the root (vertex {1}) to it")]
     Unreachable(u32, u32),
-    #[error("no sources: give --source V or --sources N")]
+    #[error("no sources apart from the root: give --source V or --sources N")]
     NoSources,
     #[error("--tip-radius must be a positive distance in mm, got {0}")]
     TipRadius(f64),
@@ -315,6 +315,9 @@ pub fn grow_veins(
     let mut live: Vec<u32> = sources.iter().copied().filter(|&s| s != root).collect();
     live.sort_unstable();
     live.dedup();
+    if live.is_empty() {
+        return Err(VeinError::NoSources);
+    }
     let given = live.clone();
     let mut in_tree = vec![false; n];
     let mut parent = vec![NONE; n];
@@ -603,5 +606,6 @@ mod tests {
         assert_eq!(grow(&[4]), Some(VeinError::Unreachable(4, 0)));
         assert_eq!(grow(&[9]), Some(VeinError::Source(9, 6)));
         assert_eq!(grow(&[2]), None);
+        assert_eq!(grow(&[0]), Some(VeinError::NoSources));
     }
 }

@@ -467,6 +467,9 @@ fn check(mesh: &TriMesh, opts: &SurfaceOptions) -> Result<(), SurfaceError> {
     if mesh.triangles.is_empty() {
         return Err(SurfaceError::NoTriangles);
     }
+    if mesh.area() <= 0.0 {
+        return Err(SurfaceError::NoArea);
+    }
     let g = &opts.growth;
     if g.blade != BladeGrowth::None {
         return Err(SurfaceError::BladeGrowth);
