@@ -14,8 +14,7 @@
 //! - Closest points: `mesh::closest::SurfaceIndex`, our own bounding-volume hierarchy (an rstar
 //!   tree of triangle boxes searched nearest-box first, stopping once a box lies beyond the best
 //!   exact distance; tested against brute force). We chose it over parry3d-f64 to keep one
-//!   spatial-index crate in the build; it answers a query on a 50,000-triangle mesh in a few
-//!   microseconds.
+//!   spatial-index crate in the build (rstar, which jagua-rs uses too).
 //! - Every node stores the surface normal at its point (interpolated vertex normals): the
 //!   reference direction d⁰ that planarization takes.
 //! - Edges may not cross: two edges that come within a twentieth of D of each other, away from
