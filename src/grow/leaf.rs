@@ -233,21 +233,31 @@ pub fn grow_leaf(
     })
 }
 
-/// The growth as a network: tree edges (parent → child) first, then the loop-closing edges,
-/// whose count is `meta.parameters["loop_edges"]`. The full-size blade is kept as
-/// `meta.parameters["outline"]` ([[x, y], …], counter-clockwise) for later stages (the leaf
-/// lamina of a print) and for checks.
-pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network {
-    let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
+/// A growth as a network with Murray widths (edge radius = radius of its downstream node;
+/// loop-closing edges take the tip radius): tree edges (parent → child) first, then the
+/// loop-closing edges, whose count is `meta.parameters["loop_edges"]`. `place(i)` gives node
+/// i's position and normal. The growth parameters go into the meta; callers add their own.
+/// Shared by the blade and the surface.
+pub fn growth_network<V>(
+    g: &Growth<V>,
+    place: impl Fn(usize) -> (DVec3, DVec3),
+    o: &VenationOptions,
+    (murray, tip): (f64, f64),
+    generator: &str,
+    seed: u64,
+) -> Network {
+    let radius = super::murray::radii(&g.parent, murray, tip);
     let mut net = Network {
-        nodes: g
-            .positions
+        nodes: radius
             .iter()
-            .zip(&radius)
-            .map(|(p, r)| Node {
-                p: p.extend(0.0),
-                normal: Some(DVec3::Z),
-                radius: *r,
+            .enumerate()
+            .map(|(i, r)| {
+                let (p, n) = place(i);
+                Node {
+                    p,
+                    normal: Some(n),
+                    radius: *r,
+                }
             })
             .collect(),
         edges: g
@@ -257,24 +267,16 @@ pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network 
                 b: c,
                 radius: radius[c as usize],
             })
-            .chain(g.joins.iter().map(|&[a, b]| Edge {
-                a,
-                b,
-                radius: opts.tip_radius,
-            }))
+            .chain(g.joins.iter().map(|&[a, b]| Edge { a, b, radius: tip }))
             .collect(),
         ..Default::default()
     };
-    let o = &opts.growth;
-    net.meta.generator = Some(
-        match o.mode {
-            Mode::Open => "venation/open",
-            Mode::Closed => "venation/closed",
-        }
-        .into(),
-    );
-    net.meta.seed = Some(opts.seed);
-    let (bmin, bmax) = opts.birth_range();
+    let mode = match o.mode {
+        Mode::Open => "open",
+        Mode::Closed => "closed",
+    };
+    net.meta.generator = Some(format!("{generator}/{mode}"));
+    net.meta.seed = Some(seed);
     let p = &mut net.meta.parameters;
     let mut put = |k: &str, v: serde_json::Value| {
         p.insert(k.into(), v);
@@ -282,6 +284,37 @@ pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network 
     put("mode", serde_json::json!(o.mode));
     put("step", o.step.into());
     put("kill", o.kill.into());
+    put("sources_per_step", o.sources_per_step.into());
+    put("murray", murray.into());
+    put("tip_radius", tip.into());
+    put("max_iterations", o.max_iterations.into());
+    put("roots", g.roots.into());
+    put("loop_edges", g.joins.len().into());
+    if o.mode == Mode::Closed {
+        put("join_distance", o.join_distance().into());
+        put("join_angle", o.join_angle.into());
+    }
+    net
+}
+
+/// The leaf as a network (`growth_network` in the plane, normals +Z). The full-size blade is
+/// kept as `meta.parameters["outline"]` ([[x, y], …], counter-clockwise) for later stages (the
+/// leaf lamina of a print) and for checks.
+pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network {
+    let o = &opts.growth;
+    let mut net = growth_network(
+        g,
+        |i| (g.positions[i].extend(0.0), DVec3::Z),
+        o,
+        (opts.murray, opts.tip_radius),
+        "venation",
+        opts.seed,
+    );
+    let (bmin, bmax) = opts.birth_range();
+    let p = &mut net.meta.parameters;
+    let mut put = |k: &str, v: serde_json::Value| {
+        p.insert(k.into(), v);
+    };
     put("birth_min", bmin.into());
     put("birth_max", bmax.into());
     put("blade", serde_json::json!(o.blade));
@@ -289,12 +322,6 @@ pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network 
         put("initial_scale", o.initial_scale.into());
         put("blade_rate", o.blade_rate.into());
     }
-    put("sources_per_step", o.sources_per_step.into());
-    put("murray", opts.murray.into());
-    put("tip_radius", opts.tip_radius.into());
-    put("max_iterations", o.max_iterations.into());
-    put("roots", g.roots.into());
-    put("loop_edges", g.joins.len().into());
     put(
         "outline",
         serde_json::json!(outline
@@ -303,9 +330,5 @@ pub fn to_network(g: &Growth, opts: &LeafOptions, outline: &Outline) -> Network 
             .map(|p| [p.x, p.y])
             .collect::<Vec<_>>()),
     );
-    if o.mode == Mode::Closed {
-        put("join_distance", o.join_distance().into());
-        put("join_angle", o.join_angle.into());
-    }
     net
 }

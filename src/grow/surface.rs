@@ -26,13 +26,13 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use rstar::RTree;
 
-use super::leaf::MAX_SOURCES;
+use super::leaf::{growth_network, MAX_SOURCES};
 use super::report::Quality;
 use super::space::Domain;
 use super::venation::{self, BladeGrowth, Growth, Mode, VenationError, VenationOptions};
 use crate::mesh::closest::SurfaceIndex;
 use crate::mesh::TriMesh;
-use crate::network::{Edge, Network, Node};
+use crate::network::Network;
 
 /// Where a root sits.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -224,8 +224,15 @@ pub struct Surface<'a> {
 }
 
 impl<'a> Surface<'a> {
-    fn new(mesh: &'a TriMesh, opts: &SurfaceOptions) -> Result<Self, SurfaceError> {
-        let lightness = match opts.density {
+    /// The surface for sampling: birth distances from `birth.0` (darkest) to `birth.1`
+    /// (lightest), no growth limits yet.
+    fn sampler(
+        mesh: &'a TriMesh,
+        birth: (f64, f64),
+        density: Option<Channel>,
+    ) -> Result<Self, SurfaceError> {
+        check_sampling(mesh, birth.0, birth.1)?;
+        let lightness = match density {
             None => None,
             Some(ch) => Some(
                 mesh.colors
@@ -250,11 +257,21 @@ impl<'a> Surface<'a> {
             mesh,
             index: SurfaceIndex::new(mesh),
             lightness,
-            birth: (opts.birth_min, opts.birth_max),
+            birth,
             cumulative,
+            reach: f64::INFINITY,
+            touch: 0.0,
+            edge_tolerance: f64::INFINITY,
+        })
+    }
+
+    /// The surface for growth with `opts`' reach, crossing distance and edge tolerance.
+    fn for_growth(mesh: &'a TriMesh, opts: &SurfaceOptions) -> Result<Self, SurfaceError> {
+        Ok(Surface {
             reach: opts.reach(),
             touch: TOUCH * opts.growth.step,
             edge_tolerance: opts.edge_tolerance(),
+            ..Surface::sampler(mesh, (opts.birth_min, opts.birth_max), opts.density)?
         })
     }
 
@@ -400,11 +417,8 @@ pub fn grow_on_surface(
     roots: &[Root],
     opts: &SurfaceOptions,
 ) -> Result<SurfaceVeins, SurfaceError> {
+    let surface = Surface::for_growth(mesh, opts)?;
     check(mesh, opts)?;
-    let surface = Surface::new(mesh, opts)?;
-    if surface.area() <= 0.0 {
-        return Err(SurfaceError::NoArea);
-    }
     let roots = root_points(mesh, &surface, roots)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let sources = poisson(&surface, &mut rng);
@@ -462,24 +476,40 @@ pub fn grow_on_surface(
     })
 }
 
-fn check(mesh: &TriMesh, opts: &SurfaceOptions) -> Result<(), SurfaceError> {
+/// A mesh with area, and birth distances that are positive, ordered, and place no more than
+/// `MAX_SOURCES` points.
+fn check_sampling(mesh: &TriMesh, birth_min: f64, birth_max: f64) -> Result<(), SurfaceError> {
     if mesh.triangles.is_empty() {
         return Err(SurfaceError::NoTriangles);
     }
-    if mesh.area() <= 0.0 {
+    let area = mesh.area();
+    if area <= 0.0 {
         return Err(SurfaceError::NoArea);
     }
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !(positive(birth_min) && positive(birth_max) && birth_min <= birth_max) {
+        return Err(SurfaceError::Birth {
+            min: birth_min,
+            max: birth_max,
+        });
+    }
+    let count = FILL * area / (birth_min * birth_min);
+    if count > MAX_SOURCES as f64 {
+        return Err(SurfaceError::TooManySources {
+            birth: birth_min,
+            count,
+        });
+    }
+    Ok(())
+}
+
+/// The growth parameters (the mesh and birth distances are checked by `Surface::sampler`).
+fn check(mesh: &TriMesh, opts: &SurfaceOptions) -> Result<(), SurfaceError> {
     let g = &opts.growth;
     if g.blade != BladeGrowth::None {
         return Err(SurfaceError::BladeGrowth);
     }
     let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !(positive(opts.birth_min) && positive(opts.birth_max) && opts.birth_min <= opts.birth_max) {
-        return Err(SurfaceError::Birth {
-            min: opts.birth_min,
-            max: opts.birth_max,
-        });
-    }
     if !positive(g.step) {
         return Err(VenationError::Step(g.step).into());
     }
@@ -492,13 +522,6 @@ fn check(mesh: &TriMesh, opts: &SurfaceOptions) -> Result<(), SurfaceError> {
     }
     if !positive(opts.edge_tolerance()) {
         return Err(SurfaceError::EdgeTolerance(opts.edge_tolerance()));
-    }
-    let count = FILL * mesh.area() / (opts.birth_min * opts.birth_min);
-    if count > MAX_SOURCES as f64 {
-        return Err(SurfaceError::TooManySources {
-            birth: opts.birth_min,
-            count,
-        });
     }
     Ok(())
 }
@@ -570,38 +593,7 @@ pub fn poisson_points(
     density: Option<Channel>,
     rng: &mut impl Rng,
 ) -> Result<Vec<DVec3>, SurfaceError> {
-    if mesh.triangles.is_empty() {
-        return Err(SurfaceError::NoTriangles);
-    }
-    let positive = |x: f64| x.is_finite() && x > 0.0;
-    if !(positive(birth_min) && positive(birth_max) && birth_min <= birth_max) {
-        return Err(SurfaceError::Birth {
-            min: birth_min,
-            max: birth_max,
-        });
-    }
-    let count = FILL * mesh.area() / (birth_min * birth_min);
-    if count > MAX_SOURCES as f64 {
-        return Err(SurfaceError::TooManySources {
-            birth: birth_min,
-            count,
-        });
-    }
-    let opts = SurfaceOptions {
-        growth: VenationOptions::default(),
-        birth_min,
-        birth_max,
-        density,
-        reach: None,
-        edge_tolerance: None,
-        murray: 3.0,
-        tip_radius: 0.1,
-        seed: 0,
-    };
-    let surface = Surface::new(mesh, &opts)?;
-    if surface.area() <= 0.0 {
-        return Err(SurfaceError::NoArea);
-    }
+    let surface = Surface::sampler(mesh, (birth_min, birth_max), density)?;
     Ok(poisson(&surface, rng))
 }
 
@@ -637,67 +629,26 @@ fn poisson(surface: &Surface, rng: &mut impl Rng) -> Vec<DVec3> {
     kept
 }
 
-/// The growth as a network with Murray widths; tree edges, then loop-closing edges.
+/// The growth as a network (`leaf::growth_network` with the surface normals) and the surface
+/// parameters.
 fn to_network(g: &Growth<DVec3>, normals: &[DVec3], opts: &SurfaceOptions) -> Network {
-    let radius = super::murray::radii(&g.parent, opts.murray, opts.tip_radius);
-    let mut net = Network {
-        nodes: g
-            .positions
-            .iter()
-            .zip(normals)
-            .zip(&radius)
-            .map(|((p, n), r)| Node {
-                p: *p,
-                normal: Some(*n),
-                radius: *r,
-            })
-            .collect(),
-        edges: g
-            .tree_edges()
-            .map(|(p, c)| Edge {
-                a: p,
-                b: c,
-                radius: radius[c as usize],
-            })
-            .chain(g.joins.iter().map(|&[a, b]| Edge {
-                a,
-                b,
-                radius: opts.tip_radius,
-            }))
-            .collect(),
-        ..Default::default()
-    };
-    let o = &opts.growth;
-    net.meta.generator = Some(
-        match o.mode {
-            Mode::Open => "venation/surface/open",
-            Mode::Closed => "venation/surface/closed",
-        }
-        .into(),
+    let mut net = growth_network(
+        g,
+        |i| (g.positions[i], normals[i]),
+        &opts.growth,
+        (opts.murray, opts.tip_radius),
+        "venation/surface",
+        opts.seed,
     );
-    net.meta.seed = Some(opts.seed);
     let p = &mut net.meta.parameters;
     let mut put = |k: &str, v: serde_json::Value| {
         p.insert(k.into(), v);
     };
-    put("mode", serde_json::json!(o.mode));
-    put("step", o.step.into());
-    put("kill", o.kill.into());
     put("birth_min", opts.birth_min.into());
     put("birth_max", opts.birth_max.into());
     put("density", serde_json::json!(opts.density));
     put("reach", opts.reach().into());
     put("edge_tolerance", opts.edge_tolerance().into());
-    put("sources_per_step", o.sources_per_step.into());
-    put("murray", opts.murray.into());
-    put("tip_radius", opts.tip_radius.into());
-    put("max_iterations", o.max_iterations.into());
-    put("roots", g.roots.into());
-    put("loop_edges", g.joins.len().into());
-    if o.mode == Mode::Closed {
-        put("join_distance", o.join_distance().into());
-        put("join_angle", o.join_angle.into());
-    }
     net
 }
 
