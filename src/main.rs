@@ -49,6 +49,9 @@ enum Command {
     /// Check the planarity of panels made elsewhere (.obj faces, .dxf 3DFACE/closed polylines):
     /// exit 0 when all are within the tolerance, 1 when some are not.
     Audit(cli::planarize::AuditArgs),
+    /// A vein network as one watertight, 2-manifold mesh for printing: tapered round veins,
+    /// optional lamina and base, scaled to a print size.
+    Solid(cli::solid::Args),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
 }
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render::run(args).map(Within::from),
         Command::Venation(args) => cli::venation::run(*args).map(Within::from),
         Command::Veins(args) => cli::veins::run(*args).map(Within::from),
+        Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),

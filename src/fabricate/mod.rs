@@ -1,9 +1,11 @@
 //! From plates to what a shop needs: etched tags, nested cut sheets, cut-sheet DXFs, and the
-//! OpenSCAD assembly that rebuilds the design from exactly what is cut.
+//! OpenSCAD assembly that rebuilds the design from exactly what is cut; and the print path: the
+//! watertight solid, its slices and the print archive.
 
 pub mod assembly;
 pub mod cutsheet;
 pub mod nest;
 pub mod plates_file;
 pub mod preview;
+pub mod solid;
 pub mod tags;

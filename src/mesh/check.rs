@@ -1,7 +1,9 @@
 //! `TriMesh::check_manifold`: topology counts (V, E, F, boundary loops, components, genus) and
 //! every problem that stops a mesh from being a manifold surface.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
 use std::fmt;
 
 use super::TriMesh;
@@ -88,12 +90,6 @@ impl Topology {
     }
 }
 
-#[derive(Default)]
-struct EdgeUse {
-    forward: u32,
-    backward: u32,
-}
-
 impl TriMesh {
     /// Counts V, E, F, boundary loops and components, and finds every problem. Genus and volume
     /// are given only when there is no problem.
@@ -120,29 +116,44 @@ impl TriMesh {
                 good.push(*t);
             }
         }
-        let mut edges: HashMap<(u32, u32), EdgeUse> = HashMap::with_capacity(good.len() * 2);
+        // Every half-edge as (low end, high end, direction), sorted: the uses of an undirected
+        // edge sit side by side, forward (low → high) ones first. Vertex indices fit in 31 bits
+        // (a mesh with 2³¹ vertices would not fit in memory here).
+        let mut half: Vec<u64> = good
+            .par_iter()
+            .flat_map_iter(|t| {
+                (0..3).map(move |j| {
+                    let (a, b) = (t[j] as u64, t[(j + 1) % 3] as u64);
+                    (a.min(b) << 32) | (a.max(b) << 1) | u64::from(a > b)
+                })
+            })
+            .collect();
+        half.par_sort_unstable();
         let mut parent: Vec<u32> = (0..nv as u32).collect();
         let mut used = vec![false; nv];
         for t in &good {
-            for j in 0..3 {
-                let (a, b) = (t[j], t[(j + 1) % 3]);
-                let u = edges.entry((a.min(b), a.max(b))).or_default();
-                if a < b {
-                    u.forward += 1;
-                } else {
-                    u.backward += 1;
-                }
-                used[a as usize] = true;
-                union(&mut parent, a, b);
+            for &v in t {
+                used[v as usize] = true;
             }
+            union(&mut parent, t[0], t[1]);
+            union(&mut parent, t[0], t[2]);
         }
         let mut boundary_parent: Vec<u32> = (0..nv as u32).collect();
         let mut boundary_edges = 0;
         let mut boundary_vertex = vec![false; nv];
-        let mut sorted: Vec<(&(u32, u32), &EdgeUse)> = edges.iter().collect();
-        sorted.sort_by_key(|(k, _)| **k);
-        for (&(a, b), u) in sorted {
-            let n = u.forward + u.backward;
+        let mut edge_count = 0usize;
+        let mut s = 0;
+        while s < half.len() {
+            let key = half[s] >> 1;
+            let mut e = s;
+            let mut forward = 0u32;
+            while e < half.len() && half[e] >> 1 == key {
+                forward += u32::from(half[e] & 1 == 0);
+                e += 1;
+            }
+            let n = (e - s) as u32;
+            let (a, b) = ((key >> 31) as u32, (key & 0x7fff_ffff) as u32);
+            edge_count += 1;
             if n == 1 {
                 boundary_edges += 1;
                 boundary_vertex[a as usize] = true;
@@ -154,22 +165,35 @@ impl TriMesh {
                     b,
                     triangles: n as usize,
                 });
-            } else if u.forward != 1 {
+            } else if forward != 1 {
                 problems.push(MeshProblem::FlippedNeighbours { a, b });
             }
+            s = e;
         }
         let vertices = used.iter().filter(|&&u| u).count();
-        let mut comp_euler: HashMap<u32, (i64, i64)> = HashMap::new(); // root -> (chi, loops)
+        // Per component root: (V − E + F, boundary loops).
+        let mut comp_euler: BTreeMap<u32, (i64, i64)> = BTreeMap::new();
+        let mut chi = vec![0i64; nv];
         for v in 0..nv as u32 {
             if used[v as usize] {
-                comp_euler.entry(find(&mut parent, v)).or_default().0 += 1;
+                chi[find(&mut parent, v) as usize] += 1;
             }
         }
-        for &(a, _) in edges.keys() {
-            comp_euler.entry(find(&mut parent, a)).or_default().0 -= 1;
+        let mut s = 0;
+        while s < half.len() {
+            let key = half[s] >> 1;
+            chi[find(&mut parent, (key >> 31) as u32) as usize] -= 1;
+            while s < half.len() && half[s] >> 1 == key {
+                s += 1;
+            }
         }
         for t in &good {
-            comp_euler.entry(find(&mut parent, t[0])).or_default().0 += 1;
+            chi[find(&mut parent, t[0]) as usize] += 1;
+        }
+        for v in 0..nv as u32 {
+            if used[v as usize] && find(&mut parent, v) == v {
+                comp_euler.insert(v, (chi[v as usize], 0));
+            }
         }
         let mut boundary_loops = 0;
         for v in 0..nv as u32 {
@@ -178,7 +202,7 @@ impl TriMesh {
                 comp_euler.entry(find(&mut parent, v)).or_default().1 += 1;
             }
         }
-        let euler = vertices as i64 - edges.len() as i64 + good.len() as i64;
+        let euler = vertices as i64 - edge_count as i64 + good.len() as i64;
         let manifold = problems.is_empty();
         let closed = manifold && boundary_edges == 0 && !good.is_empty();
         let genus = manifold.then(|| {
@@ -189,7 +213,7 @@ impl TriMesh {
         });
         Topology {
             vertices,
-            edges: edges.len(),
+            edges: edge_count,
             faces: good.len(),
             boundary_edges,
             boundary_loops,

@@ -1,0 +1,122 @@
+//! `lamina solid NET -o leaf.stl`: a vein network as one closed, 2-manifold, outward-oriented
+//! triangle mesh, with an optional lamina and base, scaled to a print size.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::Args as ClapArgs;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use super::input::WeldArgs;
+use super::venation::write_json;
+use lamina::fabricate::solid::{solid, Base, SolidOptions, DEFAULT_CELL};
+use lamina::mesh::io::write_mesh;
+use lamina::network::io::read_network;
+
+#[derive(ClapArgs)]
+pub struct Args {
+    /// The vein network (.json .obj .dxf); radii from its nodes and edges
+    pub network: PathBuf,
+    /// Output mesh (.stl binary, .obj)
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Grid cell of the mesher, mm (default: the DMP-SL pixel)
+    #[arg(long, default_value_t = DEFAULT_CELL)]
+    pub cell: f64,
+    /// Add the leaf lamina: the blade outline extruded this thick, mm, veins standing on it
+    #[arg(long, value_name = "MM")]
+    pub lamina: Option<f64>,
+    /// Add a base under the root: cylinder:DIAMETER,HEIGHT in mm
+    #[arg(long, value_name = "cylinder:D,H")]
+    pub base: Option<String>,
+    /// Scale so the longest side of the veins (and blade) is this many mm
+    #[arg(long, value_name = "MM")]
+    pub fit: Option<f64>,
+    /// Stand the leaf up for printing: its +y becomes +z
+    #[arg(long)]
+    pub upright: bool,
+    /// Radius for edges the network gives none, mm
+    #[arg(long, value_name = "MM")]
+    pub radius: Option<f64>,
+    #[command(flatten)]
+    pub weld: WeldArgs,
+    /// Write the report as JSON here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the report as JSON on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn parse_base(text: &str) -> Result<Base> {
+    let Some(rest) = text.strip_prefix("cylinder:") else {
+        bail!("--base {text}: expected cylinder:DIAMETER,HEIGHT (mm), e.g. cylinder:6,2");
+    };
+    let nums: Vec<f64> = rest
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("--base {text}: DIAMETER and HEIGHT must be numbers"))?;
+    match nums[..] {
+        [diameter, height] => Ok(Base { diameter, height }),
+        _ => bail!("--base {text}: expected two numbers, cylinder:DIAMETER,HEIGHT"),
+    }
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let net = read_network(&args.network, &args.weld.options()?)?.network;
+    let opts = SolidOptions {
+        cell: args.cell,
+        lamina: args.lamina,
+        base: args.base.as_deref().map(parse_base).transpose()?,
+        fit: args.fit,
+        upright: args.upright,
+        radius: args.radius,
+    };
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    bar.set_style(ProgressStyle::with_template(
+        "meshing {bar:40} {pos}/{len} bricks {elapsed}",
+    )?);
+    let made = solid(&net, &opts, &|done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })
+    .with_context(|| format!("{}", args.network.display()))?;
+    bar.finish_and_clear();
+    write_mesh(&made.mesh, &args.output, 1024)?;
+    let r = &made.report;
+    if let Some(path) = &args.report {
+        write_json(path, &serde_json::to_value(r)?)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(r)?);
+    } else {
+        let size = [0, 1, 2].map(|a| r.bbox_max[a] - r.bbox_min[a]);
+        println!(
+            "wrote {}: {} triangles, {} vertices, closed 2-manifold, {} part(s), genus {}",
+            args.output.display(),
+            r.triangles,
+            r.vertices,
+            r.parts,
+            r.genus
+        );
+        println!(
+            "  {:.1} × {:.1} × {:.1} mm, volume {:.1} mm³ ({:.3} mL), cell {} mm, scale {:.4}",
+            size[0],
+            size[1],
+            size[2],
+            r.volume_mm3,
+            r.volume_mm3 / 1000.0,
+            r.cell_mm,
+            r.scale
+        );
+        println!(
+            "  network: {} cycle(s), {} part(s); vein radius {:.4}..{:.4} mm",
+            r.network_cycles, r.network_parts, r.min_radius, r.max_radius
+        );
+    }
+    for w in &r.warnings {
+        eprintln!("lamina: warning: {w}");
+    }
+    Ok(())
+}

@@ -1,0 +1,574 @@
+//! Marching tetrahedra over a sparse grid: the union of primitives as one closed, oriented,
+//! 2-manifold triangle mesh.
+//!
+//! The grid has spacing `h` and is cut into bricks of 8³ cells. Only bricks that some primitive
+//! (grown by a band of 2h) reaches are looked at, and of those only the ones whose centre is
+//! within the brick's half-diagonal of the surface (every function is 1-Lipschitz, so the others
+//! are wholly inside or outside). Each cell is split into the six Kuhn tetrahedra that share its
+//! main diagonal; this split is the same in every cell, so neighbouring tetrahedra meet face to
+//! face and the surface is a manifold by construction: each triangle edge lies on a tetrahedron
+//! face shared by exactly two tetrahedra.
+//!
+//! A vertex sits on a grid edge whose ends differ in sign. It is made once, by the brick that
+//! holds the edge's lower end, so neighbouring bricks share it by index. Its place on the edge is
+//! found with a few regula falsi steps on the exact distance (not a linear guess), and kept at
+//! least `h/100` from either end. Grid values within `h/100` of zero count as outside. Together
+//! these keep every vertex at least about `h/100` from every other and no triangle degenerate,
+//! even after rounding to the 32-bit floats of an STL file (checked again after meshing).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::sdf::Primitive;
+use crate::mesh::TriMesh;
+
+/// Cells per brick side.
+const B: usize = 8;
+/// Points per brick side.
+const P: usize = B + 1;
+/// Largest grid size along an axis: brick keys pack three 21-bit numbers.
+const MAX_POINTS: usize = (1 << 21) * B;
+
+#[derive(Debug, thiserror::Error)]
+pub enum MarchError {
+    #[error("a grid of {0} × {1} × {2} points at this cell size is too large; use a larger cell")]
+    TooFine(usize, usize, usize),
+    #[error("the mesh would have {0} vertices, more than a 32-bit index holds; use a larger cell")]
+    TooManyVertices(usize),
+    #[error("internal meshing error: {0}")]
+    Internal(String),
+}
+
+/// The sampling grid: point (i, j, k) is at `origin + h·(i, j, k)`.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    origin: DVec3,
+    h: f64,
+    points: [usize; 3],
+}
+
+impl Grid {
+    fn at(&self, i: [usize; 3]) -> DVec3 {
+        self.origin + DVec3::new(i[0] as f64, i[1] as f64, i[2] as f64) * self.h
+    }
+    fn bricks(&self) -> [usize; 3] {
+        self.points.map(|n| (n - 1).div_ceil(B))
+    }
+}
+
+/// What one brick made: which of its points are inside, and the vertices on the edges it owns
+/// (those whose lower end is one of its own points), in the order of their keys.
+struct Brick {
+    key: u64,
+    inside: [u64; (P * P * P).div_ceil(64)],
+    keys: Vec<u32>,
+    positions: Vec<DVec3>,
+}
+
+impl Brick {
+    fn is_inside(&self, lp: usize) -> bool {
+        self.inside[lp / 64] >> (lp % 64) & 1 == 1
+    }
+}
+
+fn pack(b: [usize; 3]) -> u64 {
+    ((b[0] as u64) << 42) | ((b[1] as u64) << 21) | b[2] as u64
+}
+
+fn unpack(k: u64) -> [usize; 3] {
+    let m = (1u64 << 21) - 1;
+    [(k >> 42) as usize, (k >> 21 & m) as usize, (k & m) as usize]
+}
+
+fn local(i: usize, j: usize, k: usize) -> usize {
+    (i * P + j) * P + k
+}
+
+/// Offset of a cell corner from its code: bit 0 x, bit 1 y, bit 2 z.
+fn corner(code: u8) -> [usize; 3] {
+    [
+        (code & 1) as usize,
+        (code >> 1 & 1) as usize,
+        (code >> 2 & 1) as usize,
+    ]
+}
+
+/// Meshes the union of `prims` on a grid of spacing `h`. `progress(done, total)` is called as
+/// bricks finish (from several threads).
+pub fn mesh_union(
+    prims: &[Primitive],
+    h: f64,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<TriMesh, MarchError> {
+    let band = 2.0 * h;
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let bounds: Vec<(DVec3, DVec3)> = prims.iter().map(Primitive::bounds).collect();
+    for &(a, b) in &bounds {
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if prims.is_empty() {
+        return Ok(TriMesh::default());
+    }
+    let origin = lo - DVec3::splat(2.0 * band);
+    let size = hi - lo + DVec3::splat(4.0 * band);
+    let points = [size.x, size.y, size.z].map(|s| (s / h).ceil() as usize + 1);
+    if points.iter().any(|&n| n > MAX_POINTS) {
+        return Err(MarchError::TooFine(points[0], points[1], points[2]));
+    }
+    let grid = Grid { origin, h, points };
+    let nb = grid.bricks();
+
+    // Every brick a primitive's grown box reaches, with that primitive.
+    let mut pairs: Vec<(u64, u32)> = Vec::new();
+    for (k, &(a, b)) in bounds.iter().enumerate() {
+        let first = point_range(&grid, a - DVec3::splat(band), b + DVec3::splat(band));
+        let [(x0, x1), (y0, y1), (z0, z1)] = first.map(|(i0, i1)| {
+            // Point i lies in brick i / B, and also in brick i / B − 1 when on its lower face.
+            (i0.saturating_sub(1) / B, i1 / B)
+        });
+        for x in x0..=x1.min(nb[0] - 1) {
+            for y in y0..=y1.min(nb[1] - 1) {
+                for z in z0..=z1.min(nb[2] - 1) {
+                    pairs.push((pack([x, y, z]), k as u32));
+                }
+            }
+        }
+    }
+    pairs.par_sort_unstable();
+    let mut groups: Vec<(u64, std::ops::Range<usize>)> = Vec::new();
+    let mut s = 0;
+    while s < pairs.len() {
+        let mut e = s;
+        while e < pairs.len() && pairs[e].0 == pairs[s].0 {
+            e += 1;
+        }
+        groups.push((pairs[s].0, s..e));
+        s = e;
+    }
+    let members: Vec<u32> = pairs.iter().map(|&(_, p)| p).collect();
+    drop(pairs);
+
+    let total = 2 * groups.len() as u64;
+    let done = AtomicU64::new(0);
+    let tick = || {
+        let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+        if d.is_multiple_of(256) || d == total {
+            progress(d, total);
+        }
+    };
+    let bricks: Vec<Brick> = groups
+        .par_iter()
+        .filter_map(|(key, range)| {
+            let own: Vec<&Primitive> = members[range.clone()]
+                .iter()
+                .map(|&p| &prims[p as usize])
+                .collect();
+            let b = evaluate(&grid, *key, &own, band);
+            tick();
+            b
+        })
+        .collect();
+    done.store(groups.len() as u64, Ordering::Relaxed);
+
+    let mut offsets = Vec::with_capacity(bricks.len() + 1);
+    let mut count = 0usize;
+    for b in &bricks {
+        offsets.push(count);
+        count += b.keys.len();
+    }
+    if count > u32::MAX as usize {
+        return Err(MarchError::TooManyVertices(count));
+    }
+    let keys: Vec<u64> = bricks.iter().map(|b| b.key).collect();
+    let parts: Vec<Result<Vec<[u32; 3]>, MarchError>> = (0..bricks.len())
+        .into_par_iter()
+        .map(|i| {
+            let t = triangles(&bricks, &keys, &offsets, i);
+            tick();
+            t
+        })
+        .collect();
+    let mut triangles_out = Vec::new();
+    for p in parts {
+        triangles_out.extend(p?);
+    }
+    progress(total, total);
+    let mut positions = Vec::with_capacity(count);
+    for b in bricks {
+        positions.extend(b.positions);
+    }
+    Ok(TriMesh {
+        positions,
+        triangles: triangles_out,
+        colors: None,
+    })
+}
+
+/// Grid points within the box `a..b`, as an inclusive index range per axis (clamped).
+fn point_range(grid: &Grid, a: DVec3, b: DVec3) -> [(usize, usize); 3] {
+    let lo = (a - grid.origin) / grid.h;
+    let hi = (b - grid.origin) / grid.h;
+    let r = |l: f64, h: f64, n: usize| {
+        let i0 = l.ceil().max(0.0) as usize;
+        let i1 = (h.floor().max(0.0) as usize).min(n - 1);
+        (i0.min(n - 1), i1)
+    };
+    [
+        r(lo.x, hi.x, grid.points[0]),
+        r(lo.y, hi.y, grid.points[1]),
+        r(lo.z, hi.z, grid.points[2]),
+    ]
+}
+
+/// Samples one brick; `None` when the surface does not pass through it.
+fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Brick> {
+    let bk = unpack(key);
+    let base = bk.map(|b| b * B);
+    let h = grid.h;
+    let half = 0.5 * (B as f64) * h * 3f64.sqrt();
+    let centre = grid.at(base.map(|b| b + B / 2));
+    let fc = prims
+        .iter()
+        .map(|p| p.eval(centre, 1.01 * half))
+        .fold(f64::INFINITY, f64::min);
+    let eps = 0.01 * h;
+    // 1-Lipschitz: every point of the brick is within `half` of the centre. Values in
+    // (−eps, 0) count as outside, hence the wider margin below zero.
+    if fc > half || fc < -half - 2.0 * eps {
+        return None;
+    }
+
+    let last = grid.points.map(|n| n - 1);
+    let mut values = [f64::INFINITY; P * P * P];
+    for prim in prims {
+        let (a, b) = prim.bounds();
+        let range = point_range(grid, a - DVec3::splat(band), b + DVec3::splat(band));
+        let span = |axis: usize| {
+            let (i0, i1) = range[axis];
+            let top = (base[axis] + B).min(last[axis]);
+            (i0.max(base[axis]), i1.min(top))
+        };
+        let ((x0, x1), (y0, y1), (z0, z1)) = (span(0), span(1), span(2));
+        if x0 > x1 || y0 > y1 || z0 > z1 {
+            continue;
+        }
+        for x in x0..=x1 {
+            for y in y0..=y1 {
+                let column = local(x - base[0], y - base[1], 0);
+                match prim {
+                    // The in-plane distance does not change along z: one per column.
+                    Primitive::Prism(s) => {
+                        let p = grid.at([x, y, z0]);
+                        let across = s.outline.signed_distance(p.truncate(), band);
+                        for z in z0..=z1 {
+                            let v = s.with_across(across, grid.origin.z + z as f64 * h);
+                            let slot = &mut values[column + z - base[2]];
+                            *slot = slot.min(v);
+                        }
+                    }
+                    _ => {
+                        for z in z0..=z1 {
+                            let v = prim.eval(grid.at([x, y, z]), band);
+                            let slot = &mut values[column + z - base[2]];
+                            *slot = slot.min(v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    let mut inside = [0u64; (P * P * P).div_ceil(64)];
+    let mut any_in = false;
+    let mut any_out = false;
+    for (lp, v) in values.iter_mut().enumerate() {
+        if *v <= -eps {
+            inside[lp / 64] |= 1 << (lp % 64);
+            any_in = true;
+        } else {
+            *v = v.max(eps);
+            any_out = true;
+        }
+    }
+    if !(any_in && any_out) {
+        return None;
+    }
+
+    let f = |p: DVec3| {
+        prims
+            .iter()
+            .map(|q| q.eval(p, band))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut keys = Vec::new();
+    let mut positions = Vec::new();
+    for i in 0..B {
+        for j in 0..B {
+            for k in 0..B {
+                let lp = local(i, j, k);
+                let p_in = inside[lp / 64] >> (lp % 64) & 1 == 1;
+                for dir in 1u8..8 {
+                    let d = corner(dir);
+                    let lq = local(i + d[0], j + d[1], k + d[2]);
+                    if p_in == (inside[lq / 64] >> (lq % 64) & 1 == 1) {
+                        continue;
+                    }
+                    let gp = grid.at([base[0] + i, base[1] + j, base[2] + k]);
+                    let gq = grid.at([base[0] + i + d[0], base[1] + j + d[1], base[2] + k + d[2]]);
+                    let (a, fa, b, fb) = if p_in {
+                        (gp, values[lp], gq, values[lq])
+                    } else {
+                        (gq, values[lq], gp, values[lp])
+                    };
+                    keys.push((lp * 8 + dir as usize) as u32);
+                    positions.push(crossing(a, fa, b, fb, &f, eps));
+                }
+            }
+        }
+    }
+    Some(Brick {
+        key,
+        inside,
+        keys,
+        positions,
+    })
+}
+
+/// Where the surface crosses the edge from `a` (inside, `fa < 0`) to `b` (outside, `fb > 0`):
+/// Illinois regula falsi on `f`, kept at least `eps` from both ends.
+fn crossing(a: DVec3, fa: f64, b: DVec3, fb: f64, f: &impl Fn(DVec3) -> f64, eps: f64) -> DVec3 {
+    let (mut t0, mut f0, mut t1, mut f1) = (0.0, fa, 1.0, fb);
+    let mut t = f0 / (f0 - f1);
+    let mut side = 0i8;
+    for _ in 0..6 {
+        let ft = f(a.lerp(b, t));
+        if ft.abs() < 1e-9 * eps {
+            break;
+        }
+        if ft < 0.0 {
+            (t0, f0) = (t, ft);
+            if side == -1 {
+                f1 *= 0.5;
+            }
+            side = -1;
+        } else {
+            (t1, f1) = (t, ft);
+            if side == 1 {
+                f0 *= 0.5;
+            }
+            side = 1;
+        }
+        t = t0 + (t1 - t0) * f0 / (f0 - f1);
+    }
+    let margin = (eps / a.distance(b)).min(0.25);
+    a.lerp(b, t.clamp(margin, 1.0 - margin))
+}
+
+/// The triangles of brick `i`, with vertex indices into the concatenated vertex lists.
+fn triangles(
+    bricks: &[Brick],
+    keys: &[u64],
+    offsets: &[usize],
+    i: usize,
+) -> Result<Vec<[u32; 3]>, MarchError> {
+    let brick = &bricks[i];
+    let bk = unpack(brick.key);
+    let table = table();
+    let vertex = |origin: [usize; 3], dir: u8| -> Result<u32, MarchError> {
+        let (mut owner, mut lo) = (i, origin);
+        if origin.contains(&B) {
+            let nk = pack([0, 1, 2].map(|a| bk[a] + origin[a] / B));
+            owner = keys.binary_search(&nk).map_err(|_| {
+                MarchError::Internal(format!(
+                    "brick {:?} missing for a shared vertex",
+                    unpack(nk)
+                ))
+            })?;
+            lo = origin.map(|c| c % B);
+        }
+        let key = (local(lo[0], lo[1], lo[2]) * 8 + dir as usize) as u32;
+        let at = bricks[owner].keys.binary_search(&key).map_err(|_| {
+            MarchError::Internal(format!(
+                "no vertex on edge {dir} at {lo:?} of brick {:?}",
+                unpack(bricks[owner].key)
+            ))
+        })?;
+        Ok((offsets[owner] + at) as u32)
+    };
+    let mut out = Vec::new();
+    for x in 0..B {
+        for y in 0..B {
+            for z in 0..B {
+                let mut mask = 0u8;
+                for c in 0..8u8 {
+                    let d = corner(c);
+                    if brick.is_inside(local(x + d[0], y + d[1], z + d[2])) {
+                        mask |= 1 << c;
+                    }
+                }
+                if mask == 0 || mask == 0xff {
+                    continue;
+                }
+                for (t, tet) in TETS.iter().enumerate() {
+                    let m = (0..4).fold(0usize, |m, v| m | (((mask >> tet[v]) & 1) as usize) << v);
+                    for tri in &table[t * 16 + m] {
+                        let mut ids = [0u32; 3];
+                        for (slot, &[vi, vj]) in ids.iter_mut().zip(tri) {
+                            let o = corner(tet[vi as usize]);
+                            *slot = vertex(
+                                [x + o[0], y + o[1], z + o[2]],
+                                tet[vi as usize] ^ tet[vj as usize],
+                            )?;
+                        }
+                        out.push(ids);
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The six Kuhn tetrahedra of a cell as corner codes, each a monotone path from corner 0 to
+/// corner 7, so every tetrahedron edge runs from a lower corner to a higher one.
+const TETS: [[u8; 4]; 6] = [
+    [0, 1, 3, 7],
+    [0, 1, 5, 7],
+    [0, 2, 3, 7],
+    [0, 2, 6, 7],
+    [0, 4, 5, 7],
+    [0, 4, 6, 7],
+];
+
+/// For each tetrahedron and inside-mask of its four corners: triangles as pairs of tetrahedron
+/// corners (the vertex sits on the edge between them), wound so their normals point outside.
+type Table = Vec<Vec<[[u8; 2]; 3]>>;
+
+fn table() -> &'static Table {
+    static TABLE: OnceLock<Table> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        let mut out = Vec::with_capacity(96);
+        for tet in &TETS {
+            for mask in 0..16usize {
+                out.push(cases(tet, mask));
+            }
+        }
+        out
+    })
+}
+
+fn cases(tet: &[u8; 4], mask: usize) -> Vec<[[u8; 2]; 3]> {
+    let ins: Vec<u8> = (0..4).filter(|v| mask >> v & 1 == 1).collect();
+    let outs: Vec<u8> = (0..4).filter(|v| mask >> v & 1 == 0).collect();
+    let edge = |a: u8, b: u8| [a.min(b), a.max(b)];
+    let polygon: Vec<[u8; 2]> = match (ins.len(), outs.len()) {
+        (1, 3) => outs.iter().map(|&o| edge(ins[0], o)).collect(),
+        (3, 1) => ins.iter().map(|&i| edge(i, outs[0])).collect(),
+        (2, 2) => {
+            let ([a, b], [c, d]) = ([ins[0], ins[1]], [outs[0], outs[1]]);
+            vec![edge(a, c), edge(b, c), edge(b, d), edge(a, d)]
+        }
+        _ => return Vec::new(),
+    };
+    // Orientation from the exact midpoint geometry (doubled integer coordinates): the normal
+    // must point from the inside corners to the outside ones.
+    let pos = |v: u8| corner(tet[v as usize]).map(|c| c as i64);
+    let mid = |e: [u8; 2]| {
+        let (p, q) = (pos(e[0]), pos(e[1]));
+        [p[0] + q[0], p[1] + q[1], p[2] + q[2]]
+    };
+    let sub = |p: [i64; 3], q: [i64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    let (m0, m1, m2) = (mid(polygon[0]), mid(polygon[1]), mid(polygon[2]));
+    let (u, v) = (sub(m1, m0), sub(m2, m0));
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let sum = |vs: &[u8]| {
+        vs.iter().fold([0i64; 3], |s, &v| {
+            let p = pos(v);
+            [s[0] + p[0], s[1] + p[1], s[2] + p[2]]
+        })
+    };
+    let (si, so) = (sum(&ins), sum(&outs));
+    let (ni, no) = (ins.len() as i64, outs.len() as i64);
+    let away = [0, 1, 2].map(|a| so[a] * ni - si[a] * no);
+    let dot = n[0] * away[0] + n[1] * away[1] + n[2] * away[2];
+    debug_assert!(dot != 0, "degenerate case {tet:?} {mask}");
+    let mut polygon = polygon;
+    if dot < 0 {
+        polygon.reverse();
+    }
+    (1..polygon.len() - 1)
+        .map(|k| [polygon[0], polygon[k], polygon[k + 1]])
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fabricate::solid::sdf::RoundCone;
+
+    #[test]
+    fn every_case_is_oriented_and_covers_each_crossing_edge_once_or_twice() {
+        for tet in &TETS {
+            for mask in 1..15usize {
+                let tris = cases(tet, mask);
+                let crossing = (0..4)
+                    .flat_map(|a| (a + 1..4).map(move |b| (a, b)))
+                    .filter(|&(a, b)| (mask >> a & 1) != (mask >> b & 1))
+                    .count();
+                assert_eq!(tris.len(), crossing - 2, "tet {tet:?} mask {mask}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_ball_is_a_closed_manifold_of_the_right_volume() {
+        let ball = [Primitive::Cone(RoundCone::new(
+            DVec3::ZERO,
+            DVec3::new(0.3, 0.0, 0.0),
+            1.0,
+            1.0,
+        ))];
+        let mesh = mesh_union(&ball, 0.05, &|_, _| {}).unwrap();
+        let topo = mesh.check_manifold();
+        assert!(
+            topo.is_manifold(),
+            "{:?}",
+            &topo.problems[..3.min(topo.problems.len())]
+        );
+        assert!(topo.closed);
+        assert_eq!(topo.components, 1);
+        assert_eq!(topo.genus, Some(0));
+        // A capsule: a cylinder of length 0.3 and a ball of radius 1.
+        let want = std::f64::consts::PI * (0.3 + 4.0 / 3.0);
+        let got = mesh.signed_volume();
+        assert!((got - want).abs() / want < 0.005, "volume {got} vs {want}");
+    }
+
+    #[test]
+    fn a_ring_of_cones_has_genus_one() {
+        let n = 12;
+        let ring: Vec<Primitive> = (0..n)
+            .map(|i| {
+                let at = |k: usize| {
+                    let a = std::f64::consts::TAU * k as f64 / n as f64;
+                    DVec3::new(a.cos(), a.sin(), 0.0) * 3.0
+                };
+                Primitive::Cone(RoundCone::new(at(i), at((i + 1) % n), 0.3, 0.4))
+            })
+            .collect();
+        let mesh = mesh_union(&ring, 0.07, &|_, _| {}).unwrap();
+        let topo = mesh.check_manifold();
+        assert!(topo.is_manifold());
+        assert_eq!((topo.components, topo.genus), (1, Some(1)));
+        assert!(mesh.signed_volume() > 0.0);
+    }
+}

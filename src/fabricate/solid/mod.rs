@@ -1,0 +1,525 @@
+//! A vein network as one printable solid: a closed, oriented, 2-manifold triangle mesh.
+//!
+//! # Method
+//! Each edge becomes a round cone: the convex hull of a ball at each end, whose radii come from
+//! the network (below). The optional lamina is the blade outline extruded by a thickness; the
+//! optional base is a cylinder under the root. The solid is the union of these pieces, meshed
+//! as the zero set of their signed distance (the minimum over the pieces) by marching
+//! tetrahedra on a sparse grid (`march`). That mesh is a manifold by construction, whatever the
+//! pieces do (overlap, touch, nest): no Boolean operation on meshes is ever attempted. It is
+//! checked anyway (edges, orientation, 32-bit vertex rounding) and the command fails rather
+//! than write a mesh that is not closed.
+//!
+//! # Radii
+//! At a node, the vein runs on through its two thickest edges: those take the node's radius at
+//! that end, so a vein tapers smoothly from node to node. Other edges (side branches, loop
+//! closers) keep their own radius, and meet the vein inside its ball. With Murray widths this
+//! is a tapered tree whose joints are round.
+//!
+//! # Accuracy
+//! Vertices lie on the exact surface (to ~1e-9 mm along each grid edge); between vertices the
+//! mesh cuts chords, so a vein of radius r meshed with cell h loses about h²/(6r²) of its
+//! volume (1 % at r = 4h), and a vein thinner than about h may break into pieces or vanish. Edges
+//! where the surface folds sharply (creases between veins) are rounded within one cell. The
+//! default cell is the printer's pixel (35 µm): finer than that cannot be printed.
+
+mod march;
+pub mod sdf;
+
+use glam::{DVec2, DVec3};
+
+pub use march::MarchError;
+use sdf::{Cylinder, Polygon, Primitive, Prism, RoundCone};
+
+use crate::mesh::TriMesh;
+use crate::network::Network;
+
+/// The default cell: the DMP-SL printer's pixel, mm.
+pub const DEFAULT_CELL: f64 = 0.035;
+
+#[derive(Clone, Debug)]
+pub struct SolidOptions {
+    /// Grid spacing, mm.
+    pub cell: f64,
+    /// Lamina thickness, mm (after `fit`); `None` for veins only.
+    pub lamina: Option<f64>,
+    /// Base cylinder under the root (node 0).
+    pub base: Option<Base>,
+    /// Scale so the solid's longest side is this many mm (before lamina and base are added).
+    pub fit: Option<f64>,
+    /// Stand the leaf up: the network's +y becomes +z (Peele prints leaves upright).
+    pub upright: bool,
+    /// Radius for edges the network gives none, mm (after `fit`).
+    pub radius: Option<f64>,
+}
+
+impl Default for SolidOptions {
+    fn default() -> Self {
+        SolidOptions {
+            cell: DEFAULT_CELL,
+            lamina: None,
+            base: None,
+            fit: None,
+            upright: false,
+            radius: None,
+        }
+    }
+}
+
+/// A disc of `diameter` and `height` mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Base {
+    pub diameter: f64,
+    pub height: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SolidError {
+    #[error("the network has no edges: nothing to make solid")]
+    NoEdges,
+    #[error("edge {edge}: node {node} is out of range ({nodes} nodes)")]
+    EdgeOutOfRange {
+        edge: usize,
+        node: u32,
+        nodes: usize,
+    },
+    #[error("node {0}: position is not finite")]
+    NotFinite(usize),
+    #[error(
+        "edge {0} has no radius (nor have its nodes); give one with --radius, or use a network \
+         with widths (venation and veins write Murray widths)"
+    )]
+    NoRadius(usize),
+    #[error("{what} must be a positive number of mm, got {value}")]
+    NotPositive { what: &'static str, value: f64 },
+    #[error(
+        "--lamina needs the blade outline, which venation stores in meta.parameters.outline; \
+         this network has {0}"
+    )]
+    NoOutline(String),
+    #[error("--lamina needs a flat network (all nodes at one z); node {node} is at z = {z}")]
+    NotFlat { node: usize, z: f64 },
+    #[error(transparent)]
+    March(#[from] MarchError),
+    #[error("the mesh is not a closed 2-manifold ({0}); this is a bug, please report it")]
+    NotManifold(String),
+    #[error(
+        "vertices {0} and {1} fall on the same point in 32-bit floats; use a larger --cell or \
+         a smaller model"
+    )]
+    Coincident(u32, u32),
+}
+
+/// The solid and what it is.
+#[derive(Clone, Debug)]
+pub struct Solid {
+    pub mesh: TriMesh,
+    pub report: SolidReport,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SolidReport {
+    pub cell_mm: f64,
+    /// Factor the network was scaled by (`--fit`), 1 otherwise.
+    pub scale: f64,
+    pub vertices: usize,
+    pub triangles: usize,
+    pub volume_mm3: f64,
+    pub area_mm2: f64,
+    pub bbox_min: [f64; 3],
+    pub bbox_max: [f64; 3],
+    /// Connected shells of the mesh.
+    pub parts: usize,
+    /// Closed voids inside the solid (where pieces touch around a pocket), removed so no resin
+    /// is trapped.
+    pub cavities_filled: usize,
+    pub genus: i64,
+    /// Independent cycles of the network (E − V + components): the genus the veins alone
+    /// should have when every loop stays open.
+    pub network_cycles: usize,
+    pub network_parts: usize,
+    /// Thinnest and thickest vein radius after scaling, mm.
+    pub min_radius: f64,
+    pub max_radius: f64,
+    pub lamina_mm: Option<f64>,
+    pub base: Option<[f64; 2]>,
+    pub upright: bool,
+    pub warnings: Vec<String>,
+}
+
+/// Builds the solid. `progress(done, total)` is called while meshing.
+pub fn solid(
+    net: &Network,
+    opts: &SolidOptions,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Solid, SolidError> {
+    positive("--cell", opts.cell)?;
+    for (what, v) in [
+        ("--lamina", opts.lamina),
+        ("--fit", opts.fit),
+        ("--radius", opts.radius),
+        ("--base diameter", opts.base.map(|b| b.diameter)),
+        ("--base height", opts.base.map(|b| b.height)),
+    ] {
+        if let Some(v) = v {
+            positive(what, v)?;
+        }
+    }
+    if net.edges.is_empty() {
+        return Err(SolidError::NoEdges);
+    }
+    let n = net.nodes.len();
+    for (k, e) in net.edges.iter().enumerate() {
+        if let Some(&node) = [e.a, e.b].iter().find(|&&i| i as usize >= n) {
+            return Err(SolidError::EdgeOutOfRange {
+                edge: k,
+                node,
+                nodes: n,
+            });
+        }
+    }
+    if let Some(i) = net.nodes.iter().position(|v| !v.p.is_finite()) {
+        return Err(SolidError::NotFinite(i));
+    }
+
+    let ends = end_radii(net, opts.radius)?;
+    let outline = match opts.lamina {
+        Some(_) => Some(outline(net)?),
+        None => None,
+    };
+    let scale = match opts.fit {
+        Some(size) => {
+            let mut lo = DVec3::splat(f64::INFINITY);
+            let mut hi = DVec3::splat(f64::NEG_INFINITY);
+            for (e, r) in net.edges.iter().zip(&ends) {
+                for (i, r) in [(e.a, r[0]), (e.b, r[1])] {
+                    let p = net.nodes[i as usize].p;
+                    lo = lo.min(p - DVec3::splat(r));
+                    hi = hi.max(p + DVec3::splat(r));
+                }
+            }
+            for p in outline.iter().flatten() {
+                lo = lo.min(p.extend(lo.z));
+                hi = hi.max(p.extend(hi.z));
+            }
+            size / (hi - lo).max_element()
+        }
+        None => 1.0,
+    };
+    let points: Vec<DVec3> = net.nodes.iter().map(|v| v.p * scale).collect();
+    let ends: Vec<[f64; 2]> = ends.iter().map(|r| r.map(|r| r * scale)).collect();
+    let (min_radius, max_radius) = ends
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| {
+            (lo.min(r), hi.max(r))
+        });
+
+    let mut prims = Vec::with_capacity(net.edges.len() + 2);
+    // Veins stand on the lamina: each end of a vein rises so that its ball sinks min(r, T)/2
+    // into the sheet, never through it.
+    let lift = |r: f64| opts.lamina.map_or(0.0, |t| r - r.min(t) / 2.0);
+    if let (Some(t), Some(outline)) = (opts.lamina, &outline) {
+        let z = points.first().map_or(0.0, |p| p.z);
+        if let Some(i) = points
+            .iter()
+            .position(|p| (p.z - z).abs() > 1e-9 * (1.0 + z.abs()))
+        {
+            return Err(SolidError::NotFlat {
+                node: i,
+                z: net.nodes[i].p.z,
+            });
+        }
+        let bucket = 8.0 * opts.cell;
+        prims.push(Primitive::Prism(Prism {
+            outline: Polygon::new(outline.iter().map(|p| *p * scale).collect(), bucket),
+            z0: z - t,
+            z1: z,
+        }));
+    }
+    let mut widest = vec![0.0f64; n];
+    for (e, r) in net.edges.iter().zip(&ends) {
+        let (a, b) = (e.a as usize, e.b as usize);
+        widest[a] = widest[a].max(r[0]);
+        widest[b] = widest[b].max(r[1]);
+        prims.push(Primitive::Cone(RoundCone::new(
+            points[a] + DVec3::Z * lift(r[0]),
+            points[b] + DVec3::Z * lift(r[1]),
+            r[0],
+            r[1],
+        )));
+    }
+    if let Some(base) = opts.base {
+        // Under the root, from its centre down past the lowest point of everything else.
+        let down = if opts.upright {
+            DVec3::NEG_Y
+        } else {
+            DVec3::NEG_Z
+        };
+        let root = points[0] + DVec3::Z * lift(widest[0]);
+        let deepest = prims
+            .iter()
+            .map(|p| {
+                let (lo, hi) = p.bounds();
+                (lo * down).max_element().max((hi * down).max_element())
+            })
+            .fold(f64::NEG_INFINITY, f64::max);
+        prims.push(Primitive::Cylinder(Cylinder {
+            base: root,
+            axis: down,
+            height: deepest - root.dot(down) + base.height,
+            radius: base.diameter / 2.0,
+        }));
+    }
+
+    let mut mesh = march::mesh_union(&prims, opts.cell, progress)?;
+    let cavities = fill_cavities(&mut mesh);
+    place(&mut mesh, opts.upright);
+    let topo = mesh.check_manifold();
+    if !topo.is_manifold() || !topo.closed {
+        let first = topo
+            .problems
+            .first()
+            .map_or("open edges".to_string(), |p| p.to_string());
+        return Err(SolidError::NotManifold(first));
+    }
+    check_f32(&mesh)?;
+
+    let (_, network_parts) = net.component_labels();
+    let used = {
+        let mut u = vec![false; n];
+        for e in &net.edges {
+            u[e.a as usize] = true;
+            u[e.b as usize] = true;
+        }
+        u
+    };
+    let used_nodes = used.iter().filter(|&&u| u).count();
+    let isolated = (0..n).filter(|&i| !used[i]).count();
+    let network_parts = network_parts - isolated;
+    let network_cycles = net.edges.len() + network_parts - used_nodes;
+    let bbox = mesh.bbox();
+    let mut warnings = Vec::new();
+    if min_radius < opts.cell {
+        warnings.push(format!(
+            "the thinnest vein (radius {min_radius:.4} mm) is thinner than the cell \
+             ({:.4} mm): it may break up; use a smaller --cell or a larger --fit",
+            opts.cell
+        ));
+    }
+    let genus = topo.genus.unwrap_or(0);
+    if opts.lamina.is_none() && opts.base.is_none() {
+        if (genus as usize) < network_cycles {
+            warnings.push(format!(
+                "genus {genus} is below the network's {network_cycles} cycles: veins thick \
+                 enough to fill {} loop(s)",
+                network_cycles - genus as usize
+            ));
+        } else if genus as usize > network_cycles {
+            warnings.push(format!(
+                "genus {genus} is above the network's {network_cycles} cycles: veins that are \
+                 not joined in the network touch"
+            ));
+        }
+    }
+    if topo.components > network_parts.max(1) {
+        warnings.push(format!(
+            "{} separate shells where the network has {network_parts} part(s): thin veins broke \
+             up at this cell size",
+            topo.components
+        ));
+    }
+    let report = SolidReport {
+        cell_mm: opts.cell,
+        cavities_filled: cavities,
+        scale,
+        vertices: mesh.positions.len(),
+        triangles: mesh.triangles.len(),
+        volume_mm3: topo.volume.unwrap_or(0.0),
+        area_mm2: topo.area,
+        bbox_min: bbox.min.to_array(),
+        bbox_max: bbox.max.to_array(),
+        parts: topo.components,
+        genus,
+        network_cycles,
+        network_parts,
+        min_radius,
+        max_radius,
+        lamina_mm: opts.lamina,
+        base: opts.base.map(|b| [b.diameter, b.height]),
+        upright: opts.upright,
+        warnings,
+    };
+    Ok(Solid { mesh, report })
+}
+
+fn positive(what: &'static str, value: f64) -> Result<(), SolidError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(SolidError::NotPositive { what, value })
+    }
+}
+
+/// Radius at each end of each edge (see the module doc).
+fn end_radii(net: &Network, fallback: Option<f64>) -> Result<Vec<[f64; 2]>, SolidError> {
+    let mut radius = Vec::with_capacity(net.edges.len());
+    for (k, e) in net.edges.iter().enumerate() {
+        let nodes = net.nodes[e.a as usize]
+            .radius
+            .max(net.nodes[e.b as usize].radius);
+        let r = [e.radius, nodes, fallback.unwrap_or(0.0)]
+            .into_iter()
+            .find(|r| r.is_finite() && *r > 0.0)
+            .ok_or(SolidError::NoRadius(k))?;
+        radius.push(r);
+    }
+    let adj = net.adjacency();
+    let mut ends: Vec<[f64; 2]> = radius.iter().map(|&r| [r, r]).collect();
+    let mut around: Vec<(f64, u32)> = Vec::new();
+    for v in 0..net.nodes.len() as u32 {
+        let node_r = net.nodes[v as usize].radius;
+        if !(node_r.is_finite() && node_r > 0.0) {
+            continue;
+        }
+        around.clear();
+        around.extend(
+            adj.neighbours(v)
+                .iter()
+                .map(|&(_, e)| (radius[e as usize], e)),
+        );
+        // Thickest first; ties by edge index, so the choice is deterministic.
+        around.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        for &(_, e) in around.iter().take(2) {
+            let edge = &net.edges[e as usize];
+            let side = usize::from(edge.a != v);
+            ends[e as usize][side] = node_r;
+        }
+    }
+    Ok(ends)
+}
+
+/// The blade outline venation stores in `meta.parameters.outline`.
+fn outline(net: &Network) -> Result<Vec<DVec2>, SolidError> {
+    let value = net
+        .meta
+        .parameters
+        .get("outline")
+        .ok_or_else(|| SolidError::NoOutline("none".into()))?;
+    let bad = |why: String| SolidError::NoOutline(why);
+    let list = value
+        .as_array()
+        .ok_or_else(|| bad("an outline that is not a list of [x, y] points".into()))?;
+    let mut points = Vec::with_capacity(list.len());
+    for (i, p) in list.iter().enumerate() {
+        let xy = p
+            .as_array()
+            .filter(|a| a.len() == 2)
+            .and_then(|a| Some(DVec2::new(a[0].as_f64()?, a[1].as_f64()?)))
+            .filter(|p| p.is_finite())
+            .ok_or_else(|| bad(format!("outline point {i} that is not a finite [x, y]")))?;
+        points.push(xy);
+    }
+    if points.len() < 3 {
+        return Err(bad(format!("an outline of {} point(s)", points.len())));
+    }
+    Ok(points)
+}
+
+/// Turns the mesh upright if asked (exactly: +y becomes +z), then sets it on z = 0, centred on
+/// the z axis.
+fn place(mesh: &mut TriMesh, upright: bool) {
+    if upright {
+        for p in &mut mesh.positions {
+            *p = DVec3::new(p.x, -p.z, p.y);
+        }
+    }
+    let b = mesh.bbox();
+    if b.is_empty() {
+        return;
+    }
+    let shift = DVec3::new(
+        -0.5 * (b.min.x + b.max.x),
+        -0.5 * (b.min.y + b.max.y),
+        -b.min.z,
+    );
+    for p in &mut mesh.positions {
+        *p += shift;
+    }
+}
+
+/// Removes the shells that enclose negative volume: voids sealed inside the solid. Returns how
+/// many there were. The rest is untouched (vertex order kept, unused vertices dropped).
+fn fill_cavities(mesh: &mut TriMesh) -> usize {
+    let n = mesh.positions.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            parent[v as usize] = parent[parent[v as usize] as usize];
+            v = parent[v as usize];
+        }
+        v
+    }
+    for t in &mesh.triangles {
+        for &o in &t[1..] {
+            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, o));
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut volume = vec![0.0f64; n];
+    for t in &mesh.triangles {
+        let [a, b, c] = mesh.corners(t);
+        volume[find(&mut parent, t[0]) as usize] += a.dot(b.cross(c)) / 6.0;
+    }
+    let voids = (0..n as u32)
+        .filter(|&v| find(&mut parent, v) == v && volume[v as usize] < 0.0)
+        .count();
+    if voids == 0 {
+        return 0;
+    }
+    let keep: Vec<bool> = (0..n as u32)
+        .map(|v| volume[find(&mut parent, v) as usize] >= 0.0)
+        .collect();
+    let mut index = vec![u32::MAX; n];
+    let mut positions = Vec::with_capacity(n);
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if keep[v] {
+            index[v] = positions.len() as u32;
+            positions.push(*p);
+        }
+    }
+    mesh.triangles.retain(|t| keep[t[0] as usize]);
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| index[v as usize]);
+    }
+    mesh.positions = positions;
+    voids
+}
+
+/// STL stores 32-bit floats and readers weld equal positions: no two vertices may round to one.
+fn check_f32(mesh: &TriMesh) -> Result<(), SolidError> {
+    use rayon::prelude::*;
+    let mut keyed: Vec<([u32; 3], u32)> = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            (
+                p.as_vec3().to_array().map(|c| (c + 0.0).to_bits()),
+                i as u32,
+            )
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    for w in keyed.windows(2) {
+        if w[0].0 == w[1].0 {
+            return Err(SolidError::Coincident(
+                w[0].1.min(w[1].1),
+                w[0].1.max(w[1].1),
+            ));
+        }
+    }
+    Ok(())
+}
