@@ -52,6 +52,9 @@ enum Command {
     /// A vein network as one watertight, 2-manifold mesh for printing: tapered round veins,
     /// optional lamina and base, scaled to a print size.
     Solid(cli::solid::Args),
+    /// Slice closed meshes for a masked-SLA (DMP-SL) printer: anti-aliased layer PNGs in an
+    /// SL1 archive (PrusaSlicer layout), with resin volume, cost and build time.
+    Slice(Box<cli::slice::Args>),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
 }
@@ -78,6 +81,7 @@ fn main() -> ExitCode {
         Command::Venation(args) => cli::venation::run(*args).map(Within::from),
         Command::Veins(args) => cli::veins::run(*args).map(Within::from),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
+        Command::Slice(args) => cli::slice::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),

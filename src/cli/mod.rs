@@ -9,6 +9,7 @@ pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod render;
+pub mod slice;
 pub mod solid;
 pub mod surface;
 pub mod veins;

@@ -2,10 +2,13 @@
 //! OpenSCAD assembly that rebuilds the design from exactly what is cut; and the print path: the
 //! watertight solid, its slices and the print archive.
 
+pub mod archive;
 pub mod assembly;
 pub mod cutsheet;
+pub mod estimate;
 pub mod nest;
 pub mod plates_file;
 pub mod preview;
+pub mod slice;
 pub mod solid;
 pub mod tags;

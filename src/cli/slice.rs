@@ -1,0 +1,365 @@
+//! `lamina slice MODEL.stl... -o job.sl1`: layer images of closed meshes for a masked-SLA
+//! printer, as an SL1 archive (and a folder of PNGs), with a print estimate.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args as ClapArgs;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+
+use super::venation::write_json;
+use lamina::fabricate::archive::{Job, Sl1Writer};
+use lamina::fabricate::estimate::{estimate, Estimate, Resin};
+use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer};
+use lamina::files::write_atomic;
+use lamina::mesh::io::read_mesh;
+
+#[derive(ClapArgs)]
+pub struct Args {
+    /// Closed meshes to print (.stl .obj); overlapping shells are fine
+    #[arg(required = true)]
+    pub models: Vec<PathBuf>,
+    /// The SL1 archive to write
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Printer: `dmp-sl` (built in) or a JSON profile whose fields override it
+    #[arg(long, default_value = "dmp-sl")]
+    pub printer: String,
+    /// Layer height, mm
+    #[arg(long, value_name = "MM")]
+    pub layer: Option<f64>,
+    /// Pixel size, mm
+    #[arg(long, value_name = "MM")]
+    pub pixel: Option<f64>,
+    /// Display resolution, WIDTHxHEIGHT pixels
+    #[arg(long, value_name = "WxH")]
+    pub resolution: Option<String>,
+    /// Exposure per layer, s
+    #[arg(long, value_name = "S")]
+    pub exposure: Option<f64>,
+    /// Exposure of the bottom layers, s
+    #[arg(long, value_name = "S")]
+    pub bottom_exposure: Option<f64>,
+    /// How many bottom layers
+    #[arg(long, value_name = "N")]
+    pub bottom_layers: Option<u32>,
+    /// Peel lift after each layer, mm
+    #[arg(long, value_name = "MM")]
+    pub lift: Option<f64>,
+    /// Lift and retract speed, mm/min
+    #[arg(long, value_name = "MM_MIN")]
+    pub lift_speed: Option<f64>,
+    /// Print this many copies of each model
+    #[arg(long, default_value_t = 1)]
+    pub copies: usize,
+    /// Space between models on the plate, mm
+    #[arg(long, default_value_t = 2.0)]
+    pub gap: f64,
+    /// Print the models where they are (x, y in the display's mm) instead of arranging them
+    #[arg(long)]
+    pub keep_position: bool,
+    /// Also write the layer images into this folder
+    #[arg(long, value_name = "DIR")]
+    pub layers_dir: Option<PathBuf>,
+    /// Write the print estimate (print.json) here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Resin price per litre
+    #[arg(long, default_value_t = 55.0)]
+    pub resin_cost: f64,
+    /// Resin density, g/mL
+    #[arg(long, default_value_t = 1.1)]
+    pub density: f64,
+    /// Build speed, mm/h, instead of the exposure and peel model (Peele: 25)
+    #[arg(long, value_name = "MM_H")]
+    pub speed: Option<f64>,
+    /// Resin name for the archive
+    #[arg(long, default_value = "")]
+    pub material: String,
+    /// Print the estimate as JSON on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn printer(args: &Args) -> Result<Printer> {
+    let mut p = if args.printer == "dmp-sl" {
+        Printer::default()
+    } else {
+        let path = Path::new(&args.printer);
+        let text = std::fs::read_to_string(path).with_context(|| {
+            format!(
+                "--printer {}: not `dmp-sl` and not a readable JSON profile",
+                path.display()
+            )
+        })?;
+        serde_json::from_str::<Printer>(&text)
+            .with_context(|| format!("{}: not a printer profile", path.display()))?
+    };
+    if let Some(v) = args.layer {
+        p.layer_mm = v;
+    }
+    if let Some(v) = args.pixel {
+        p.pixel_mm = v;
+    }
+    if let Some(r) = &args.resolution {
+        let parsed = r
+            .split_once(['x', 'X'])
+            .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)));
+        let Some((w, h)) = parsed else {
+            bail!("--resolution {r}: expected WIDTHxHEIGHT in pixels, e.g. 1920x1080");
+        };
+        (p.pixels_x, p.pixels_y) = (w, h);
+    }
+    if let Some(v) = args.exposure {
+        p.exposure_s = v;
+    }
+    if let Some(v) = args.bottom_exposure {
+        p.bottom_exposure_s = v;
+    }
+    if let Some(v) = args.bottom_layers {
+        p.bottom_layers = v;
+    }
+    if let Some(v) = args.lift {
+        p.lift_mm = v;
+    }
+    if let Some(v) = args.lift_speed {
+        p.lift_speed_mm_min = v;
+        p.retract_speed_mm_min = v;
+    }
+    p.check()?;
+    Ok(p)
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let printer = printer(&args)?;
+    for (what, v) in [
+        ("--resin-cost", args.resin_cost),
+        ("--density", args.density),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("{what} must be a number ≥ 0, got {v}");
+        }
+    }
+    if let Some(v) = args.speed {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("--speed must be a positive number of mm/h, got {v}");
+        }
+    }
+    if args.copies == 0 {
+        bail!("--copies must be at least 1");
+    }
+    if !(args.gap.is_finite() && args.gap >= 0.0) {
+        bail!("--gap must be a number of mm ≥ 0, got {}", args.gap);
+    }
+    let mut models = Vec::with_capacity(args.models.len());
+    for path in &args.models {
+        let mesh = read_mesh(path)?;
+        models.push(Model {
+            path: path.clone(),
+            mesh,
+        });
+    }
+    let placed = arrange(&models, &printer, args.copies, args.gap, args.keep_position)?;
+    let resin = Resin {
+        cost_per_litre: args.resin_cost,
+        density: args.density,
+    };
+    let spec = Spec {
+        output: &args.output,
+        layers_dir: args.layers_dir.as_deref(),
+        resin,
+        speed: args.speed,
+        material: &args.material,
+        copies: args.copies,
+    };
+    let (report, e, _) = slice_job(&models, &placed, &printer, &spec, &[])?;
+    let mesh_volume = report["mesh_volume_ml"].as_f64().unwrap_or(0.0) * 1000.0;
+    if let Some(path) = &args.report {
+        write_json(path, &report)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "wrote {}: {} layers of {} mm ({:.2} mm), {} model(s) on the plate",
+            args.output.display(),
+            e.layers,
+            printer.layer_mm,
+            e.height_mm,
+            placed.len()
+        );
+        println!(
+            "  resin {:.4} mL (mesh {:.4} mL), cost {:.4}, {:.3} g; build {:.2} h ({})",
+            e.volume_ml,
+            mesh_volume / 1000.0,
+            e.resin_cost,
+            e.mass_g,
+            e.build_time_h,
+            e.build_time_from
+        );
+    }
+    Ok(())
+}
+
+/// Where and how to write a sliced job.
+pub struct Spec<'a> {
+    pub output: &'a Path,
+    pub layers_dir: Option<&'a Path>,
+    pub resin: Resin,
+    pub speed: Option<f64>,
+    pub material: &'a str,
+    pub copies: usize,
+}
+
+/// Slices placed models into the SL1 archive (and the layers folder), and returns print.json,
+/// the estimate, and the raw images of the layers listed in `keep`.
+pub fn slice_job(
+    models: &[Model],
+    placed: &[Placement],
+    printer: &Printer,
+    spec: &Spec,
+    keep: &[usize],
+) -> Result<(serde_json::Value, Estimate, Vec<(usize, Vec<u8>)>)> {
+    let name = spec
+        .output
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .filter(|s| !s.is_empty())
+        .unwrap_or("lamina")
+        .to_string();
+    let layers_total = layer_count(models, printer);
+    let bar =
+        ProgressBar::with_draw_target(Some(layers_total as u64), ProgressDrawTarget::stderr());
+    bar.set_style(ProgressStyle::with_template(
+        "slicing {bar:40} {pos}/{len} layers {elapsed}",
+    )?);
+    let staging = match spec.layers_dir {
+        Some(dir) => Some(Staging::new(dir)?),
+        None => None,
+    };
+    let mut areas = Vec::with_capacity(layers_total);
+    let mut exact = Vec::with_capacity(layers_total);
+    let mut kept = Vec::new();
+    write_atomic(spec.output, |w| {
+        let mut sl1 = Sl1Writer::new(w, &name);
+        slice::slice(models, placed, printer, |layer| {
+            sl1.layer(layer.index, &layer.png)?;
+            if let Some(s) = &staging {
+                std::fs::write(
+                    s.tmp.join(format!("{name}{:05}.png", layer.index)),
+                    &layer.png,
+                )?;
+            }
+            areas.push(layer.area_mm2);
+            exact.push(layer.exact_area_mm2);
+            if keep.contains(&layer.index) {
+                kept.push((layer.index, layer.image));
+            }
+            bar.inc(1);
+            Ok::<(), std::io::Error>(())
+        })?;
+        let e = estimate(printer, &spec.resin, &areas, spec.speed);
+        sl1.finish(
+            printer,
+            &Job {
+                name: &name,
+                layers: areas.len(),
+                print_seconds: printer.build_seconds(areas.len()),
+                used_ml: e.volume_ml,
+                material: spec.material,
+            },
+        )?;
+        Ok(())
+    })?;
+    bar.finish_and_clear();
+    if let Some(s) = staging {
+        s.commit()?;
+    }
+    let e = estimate(printer, &spec.resin, &areas, spec.speed);
+    let mesh_volume: f64 = placed
+        .iter()
+        .map(|p| models[p.model].mesh.signed_volume())
+        .sum();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in placed {
+        let h = models[p.model].mesh.bbox().size().z;
+        lo = [lo[0].min(p.min[0]), lo[1].min(p.min[1]), 0.0];
+        hi = [hi[0].max(p.max[0]), hi[1].max(p.max[1]), hi[2].max(h)];
+    }
+    let exact_ml = exact.iter().sum::<f64>() * printer.layer_mm / 1000.0;
+    let paths: Vec<&Path> = models.iter().map(|m| m.path.as_path()).collect();
+    let report = json!({
+        "archive": spec.output,
+        "printer": printer,
+        "models": paths,
+        "copies": spec.copies,
+        "placements": placed,
+        "layers": e.layers,
+        "layer_mm": printer.layer_mm,
+        "height_mm": e.height_mm,
+        "volume_ml": e.volume_ml,
+        "contour_volume_ml": exact_ml,
+        "mesh_volume_ml": mesh_volume / 1000.0,
+        "resin_cost": e.resin_cost,
+        "resin_cost_per_litre": spec.resin.cost_per_litre,
+        "density_g_ml": spec.resin.density,
+        "mass_g": e.mass_g,
+        "build_time_h": e.build_time_h,
+        "build_time_from": e.build_time_from,
+        "model_build_time_h": e.model_time_h,
+        "bbox_min": lo,
+        "bbox_max": hi,
+        "layer_area_mm2": areas,
+    });
+    Ok((report, e, kept))
+}
+
+/// A layers folder written beside its final place and renamed into it at the end, so an error
+/// never leaves half a stack.
+struct Staging {
+    tmp: PathBuf,
+    dir: PathBuf,
+}
+
+impl Staging {
+    fn new(dir: &Path) -> Result<Self> {
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent)
+            .with_context(|| format!("--layers-dir {}: cannot create its parent", dir.display()))?;
+        let tmp = tempfile::Builder::new()
+            .prefix(".lamina-layers-")
+            .tempdir_in(&parent)
+            .with_context(|| format!("--layers-dir {}: cannot write beside it", dir.display()))?
+            .keep();
+        Ok(Staging {
+            tmp,
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    fn commit(self) -> Result<()> {
+        if self.dir.exists() {
+            std::fs::remove_dir_all(&self.dir).with_context(|| {
+                format!("--layers-dir {}: cannot replace it", self.dir.display())
+            })?;
+        }
+        std::fs::rename(&self.tmp, &self.dir).with_context(|| {
+            format!(
+                "--layers-dir {}: cannot move the layers in",
+                self.dir.display()
+            )
+        })?;
+        Ok(())
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        // After a successful commit the folder is gone from here; otherwise clean up.
+        let _ = std::fs::remove_dir_all(&self.tmp);
+    }
+}

@@ -1,0 +1,577 @@
+//! Slicing closed meshes into the anti-aliased layer images a masked-SLA (DMP-SL) printer
+//! shows, one per layer.
+//!
+//! Models sit on the build plate (their lowest point at z = 0) and are arranged side by side on
+//! the display without overlap, or kept where they are (`keep_position`). Layer i is cut at
+//! its middle height, (i + ½)·layer. Each triangle that crosses the plane gives one directed
+//! segment (the solid on its left seen from above, from the triangle's winding), the segments of
+//! all models are rasterised by exact area coverage (`raster`), and the non-zero rule fills the
+//! image: overlapping closed shells need no union. Image row 0 is the far edge of the plate
+//! (largest y), column 0 its left edge, as PrusaSlicer draws them.
+
+mod raster;
+
+use std::path::PathBuf;
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use crate::mesh::TriMesh;
+
+pub use raster::Coverage;
+
+/// A masked-SLA printer: its display and its motion.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Printer {
+    pub name: String,
+    /// Display resolution, pixels.
+    pub pixels_x: u32,
+    pub pixels_y: u32,
+    /// Pixel size, mm (square pixels).
+    pub pixel_mm: f64,
+    pub layer_mm: f64,
+    pub exposure_s: f64,
+    pub bottom_exposure_s: f64,
+    pub bottom_layers: u32,
+    /// Peel: the plate rises this far after each layer and comes back down.
+    pub lift_mm: f64,
+    pub lift_speed_mm_min: f64,
+    pub retract_speed_mm_min: f64,
+    /// Wait before each exposure, s.
+    pub settle_s: f64,
+    pub max_height_mm: f64,
+}
+
+impl Default for Printer {
+    /// The DMP-SL printer Peele used (§3.2.1): 1920 × 1080 pixels of 35 µm, 50 µm layers; the
+    /// motion is set so the model gives his 25 mm/h (7.2 s a layer).
+    fn default() -> Self {
+        Printer {
+            name: "dmp-sl".into(),
+            pixels_x: 1920,
+            pixels_y: 1080,
+            pixel_mm: 0.035,
+            layer_mm: 0.05,
+            exposure_s: 3.0,
+            bottom_exposure_s: 20.0,
+            bottom_layers: 3,
+            lift_mm: 4.0,
+            lift_speed_mm_min: 120.0,
+            retract_speed_mm_min: 120.0,
+            settle_s: 0.2,
+            max_height_mm: 100.0,
+        }
+    }
+}
+
+impl Printer {
+    /// The display, mm.
+    pub fn area(&self) -> DVec2 {
+        DVec2::new(self.pixels_x as f64, self.pixels_y as f64) * self.pixel_mm
+    }
+
+    pub fn check(&self) -> Result<(), SliceError> {
+        let positive = [
+            ("pixel_mm", self.pixel_mm),
+            ("layer_mm", self.layer_mm),
+            ("lift_speed_mm_min", self.lift_speed_mm_min),
+            ("retract_speed_mm_min", self.retract_speed_mm_min),
+            ("max_height_mm", self.max_height_mm),
+        ];
+        let non_negative = [
+            ("exposure_s", self.exposure_s),
+            ("bottom_exposure_s", self.bottom_exposure_s),
+            ("lift_mm", self.lift_mm),
+            ("settle_s", self.settle_s),
+        ];
+        for (what, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SliceError::Printer(format!("{what} must be > 0, got {v}")));
+            }
+        }
+        for (what, v) in non_negative {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(SliceError::Printer(format!("{what} must be ≥ 0, got {v}")));
+            }
+        }
+        if self.pixels_x == 0
+            || self.pixels_y == 0
+            || self.pixels_x > 16384
+            || self.pixels_y > 16384
+        {
+            return Err(SliceError::Printer(format!(
+                "the display must be 1..16384 pixels each way, got {} × {}",
+                self.pixels_x, self.pixels_y
+            )));
+        }
+        Ok(())
+    }
+
+    /// Seconds to print `layers` layers by the exposure and peel model.
+    pub fn build_seconds(&self, layers: usize) -> f64 {
+        let bottom = (self.bottom_layers as usize).min(layers);
+        let peel = 60.0
+            * (self.lift_mm / self.lift_speed_mm_min + self.lift_mm / self.retract_speed_mm_min);
+        bottom as f64 * self.bottom_exposure_s
+            + (layers - bottom) as f64 * self.exposure_s
+            + layers as f64 * (peel + self.settle_s)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SliceError {
+    #[error("printer: {0}")]
+    Printer(String),
+    #[error("{}: the mesh has no triangles", .0.display())]
+    Empty(PathBuf),
+    #[error(
+        "{}: not a closed mesh: {count} edge(s) are not matched by an edge running the other \
+         way (first: between vertices {a} and {b}); the slicer needs closed shells",
+        path.display()
+    )]
+    Open {
+        path: PathBuf,
+        count: usize,
+        a: u32,
+        b: u32,
+    },
+    #[error(
+        "{}: {size_x:.2} × {size_y:.2} mm does not fit the {area_x:.2} × {area_y:.2} mm display",
+        path.display()
+    )]
+    TooBig {
+        path: PathBuf,
+        size_x: f64,
+        size_y: f64,
+        area_x: f64,
+        area_y: f64,
+    },
+    #[error("{}: {height:.2} mm tall; the printer builds at most {max:.2} mm", path.display())]
+    TooTall {
+        path: PathBuf,
+        height: f64,
+        max: f64,
+    },
+    #[error(
+        "{placed} of {wanted} models fit side by side on the {area_x:.2} × {area_y:.2} mm \
+         display ({gap} mm apart); ask for fewer copies or a smaller gap"
+    )]
+    Crowded {
+        placed: usize,
+        wanted: usize,
+        area_x: f64,
+        area_y: f64,
+        gap: f64,
+    },
+    #[error("{}: lies outside the display at its own position (x {x0:.2}..{x1:.2}, y {y0:.2}..{y1:.2} mm)", path.display())]
+    Outside {
+        path: PathBuf,
+        x0: f64,
+        x1: f64,
+        y0: f64,
+        y1: f64,
+    },
+}
+
+/// A model to print and where its file came from (for messages and the report).
+pub struct Model {
+    pub path: PathBuf,
+    pub mesh: TriMesh,
+}
+
+/// One copy of a model on the plate: turn it a quarter turn about z if `turned` ((x, y) →
+/// (−y, x)), then add `offset` to its vertices.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Placement {
+    pub model: usize,
+    pub copy: usize,
+    pub turned: bool,
+    pub offset: [f64; 3],
+    /// Footprint on the plate, mm.
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+/// Checks every model is a closed shell and fits, and places `copies` of each on the plate:
+/// in rows, left to right, `gap` mm apart, the whole group centred (all turned a quarter turn
+/// when only that fits them all); or each where it is.
+pub fn arrange(
+    models: &[Model],
+    printer: &Printer,
+    copies: usize,
+    gap: f64,
+    keep_position: bool,
+) -> Result<Vec<Placement>, SliceError> {
+    let area = printer.area();
+    let mut boxes = Vec::with_capacity(models.len());
+    for m in models {
+        if m.mesh.triangles.is_empty() {
+            return Err(SliceError::Empty(m.path.clone()));
+        }
+        closed(m)?;
+        let b = m.mesh.bbox();
+        let size = b.size();
+        if size.z > printer.max_height_mm {
+            return Err(SliceError::TooTall {
+                path: m.path.clone(),
+                height: size.z,
+                max: printer.max_height_mm,
+            });
+        }
+        let fits = |w: f64, h: f64| w <= area.x && h <= area.y;
+        if !fits(size.x, size.y) && (keep_position || !fits(size.y, size.x)) {
+            return Err(SliceError::TooBig {
+                path: m.path.clone(),
+                size_x: size.x,
+                size_y: size.y,
+                area_x: area.x,
+                area_y: area.y,
+            });
+        }
+        boxes.push((b.min, b.max));
+    }
+    if keep_position {
+        let mut placed = Vec::new();
+        for (k, (m, &(lo, hi))) in models.iter().zip(&boxes).enumerate() {
+            if lo.x < 0.0 || lo.y < 0.0 || hi.x > area.x || hi.y > area.y {
+                return Err(SliceError::Outside {
+                    path: m.path.clone(),
+                    x0: lo.x,
+                    x1: hi.x,
+                    y0: lo.y,
+                    y1: hi.y,
+                });
+            }
+            placed.push(Placement {
+                model: k,
+                copy: 0,
+                turned: false,
+                offset: [0.0, 0.0, -lo.z],
+                min: [lo.x, lo.y],
+                max: [hi.x, hi.y],
+            });
+        }
+        return Ok(placed);
+    }
+    match shelves(&boxes, copies, gap, area, false) {
+        Ok(p) => Ok(p),
+        Err(straight) => shelves(&boxes, copies, gap, area, true).map_err(|turned| {
+            {
+                // Report the way that placed more.
+                if turned.0 > straight.0 {
+                    turned
+                } else {
+                    straight
+                }
+            }
+            .into_error(models.len() * copies, area, gap)
+        }),
+    }
+}
+
+/// How many models had been placed when the plate ran out.
+struct Short(usize);
+
+impl Short {
+    fn into_error(self, wanted: usize, area: DVec2, gap: f64) -> SliceError {
+        SliceError::Crowded {
+            placed: self.0,
+            wanted,
+            area_x: area.x,
+            area_y: area.y,
+            gap,
+        }
+    }
+}
+
+/// Rows of footprints, left to right, then the whole group centred on the display.
+fn shelves(
+    boxes: &[(DVec3, DVec3)],
+    copies: usize,
+    gap: f64,
+    area: DVec2,
+    turned: bool,
+) -> Result<Vec<Placement>, Short> {
+    let mut placed = Vec::new();
+    let (mut x, mut y, mut row) = (0.0f64, 0.0f64, 0.0f64);
+    let mut used = DVec2::ZERO;
+    for (k, &(lo, hi)) in boxes.iter().enumerate() {
+        // The footprint's corner and size as placed: a quarter turn maps (x, y) to (−y, x).
+        let (corner, size) = if turned {
+            (
+                DVec2::new(-hi.y, lo.x),
+                DVec2::new(hi.y - lo.y, hi.x - lo.x),
+            )
+        } else {
+            (lo.truncate(), (hi - lo).truncate())
+        };
+        for copy in 0..copies {
+            if x > 0.0 && x + size.x > area.x {
+                (x, y, row) = (0.0, y + row + gap, 0.0);
+            }
+            if x + size.x > area.x || y + size.y > area.y {
+                return Err(Short(placed.len()));
+            }
+            placed.push(Placement {
+                model: k,
+                copy,
+                turned,
+                offset: [x - corner.x, y - corner.y, -lo.z],
+                min: [x, y],
+                max: [x + size.x, y + size.y],
+            });
+            used = used.max(DVec2::new(x + size.x, y + size.y));
+            x += size.x + gap;
+            row = row.max(size.y);
+        }
+    }
+    let shift = (area - used) / 2.0;
+    for p in &mut placed {
+        p.offset[0] += shift.x;
+        p.offset[1] += shift.y;
+        p.min = [p.min[0] + shift.x, p.min[1] + shift.y];
+        p.max = [p.max[0] + shift.x, p.max[1] + shift.y];
+    }
+    Ok(placed)
+}
+
+/// Every edge must be used as often in one direction as in the other.
+fn closed(m: &Model) -> Result<(), SliceError> {
+    let mut half: Vec<(u32, u32, i32)> = m
+        .mesh
+        .triangles
+        .iter()
+        .flat_map(|t| {
+            (0..3).map(move |j| {
+                let (a, b) = (t[j], t[(j + 1) % 3]);
+                (a.min(b), a.max(b), if a < b { 1 } else { -1 })
+            })
+        })
+        .collect();
+    half.par_sort_unstable();
+    let mut open = 0usize;
+    let mut first = None;
+    let mut s = 0;
+    while s < half.len() {
+        let (a, b) = (half[s].0, half[s].1);
+        let mut balance = 0;
+        while s < half.len() && half[s].0 == a && half[s].1 == b {
+            balance += half[s].2;
+            s += 1;
+        }
+        if balance != 0 {
+            open += 1;
+            first.get_or_insert((a, b));
+        }
+    }
+    match first {
+        None => Ok(()),
+        Some((a, b)) => Err(SliceError::Open {
+            path: m.path.clone(),
+            count: open,
+            a,
+            b,
+        }),
+    }
+}
+
+/// A finished layer.
+pub struct Layer {
+    pub index: usize,
+    /// Grey PNG, display-sized.
+    pub png: Vec<u8>,
+    /// The same image, row-major, one byte a pixel.
+    pub image: Vec<u8>,
+    /// Area as the image shows it (Σ grey/255 × pixel area), mm².
+    pub area_mm2: f64,
+    /// Area enclosed by the section's contours, mm².
+    pub exact_area_mm2: f64,
+}
+
+/// Which triangles cross each layer plane, per model.
+struct LayerIndex {
+    start: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl LayerIndex {
+    fn new(mesh: &TriMesh, z0: f64, layer: f64, layers: usize) -> Self {
+        // Layer i is cut at (i + ½)·layer; a triangle crosses it when min z ≤ cut < max z.
+        let range = |t: &[u32; 3]| {
+            let zs = t.map(|i| mesh.positions[i as usize].z - z0);
+            let lo = zs[0].min(zs[1]).min(zs[2]);
+            let hi = zs[0].max(zs[1]).max(zs[2]);
+            // One layer wider each way than the arithmetic says: `cut` decides exactly, and a
+            // rounding here must not drop a triangle that crosses.
+            let first = ((lo / layer - 0.5).ceil() - 1.0).max(0.0) as usize;
+            let last = ((hi / layer - 0.5).ceil() as i64).min(layers as i64 - 1);
+            (first, last)
+        };
+        let mut start = vec![0u32; layers + 1];
+        for t in &mesh.triangles {
+            let (a, b) = range(t);
+            for i in a as i64..=b {
+                start[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..layers {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut triangles = vec![0u32; start[layers] as usize];
+        for (k, t) in mesh.triangles.iter().enumerate() {
+            let (a, b) = range(t);
+            for i in a as i64..=b {
+                triangles[fill[i as usize] as usize] = k as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        LayerIndex { start, triangles }
+    }
+
+    fn layer(&self, i: usize) -> &[u32] {
+        &self.triangles[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+}
+
+/// How many layers the placed models need.
+pub fn layer_count(models: &[Model], printer: &Printer) -> usize {
+    let height = models
+        .iter()
+        .map(|m| m.mesh.bbox().size().z)
+        .fold(0.0, f64::max);
+    ((height / printer.layer_mm) - 1e-9).ceil().max(1.0) as usize
+}
+
+/// Slices the placed models and hands each layer, in order, to `sink`. Layers are made in
+/// parallel batches, so memory stays at a few dozen images.
+pub fn slice<E>(
+    models: &[Model],
+    placed: &[Placement],
+    printer: &Printer,
+    mut sink: impl FnMut(Layer) -> Result<(), E>,
+) -> Result<usize, E> {
+    let layers = layer_count(models, printer);
+    let indices: Vec<LayerIndex> = models
+        .par_iter()
+        .map(|m| LayerIndex::new(&m.mesh, m.mesh.bbox().min.z, printer.layer_mm, layers))
+        .collect();
+    let batch = 4 * rayon::current_num_threads().max(1);
+    let mut next = 0;
+    while next < layers {
+        let end = (next + batch).min(layers);
+        let done: Vec<Layer> = (next..end)
+            .into_par_iter()
+            .map(|i| layer(models, placed, &indices, printer, i))
+            .collect();
+        for l in done {
+            sink(l)?;
+        }
+        next = end;
+    }
+    Ok(layers)
+}
+
+fn layer(
+    models: &[Model],
+    placed: &[Placement],
+    indices: &[LayerIndex],
+    printer: &Printer,
+    i: usize,
+) -> Layer {
+    let z = (i as f64 + 0.5) * printer.layer_mm;
+    let px = printer.pixel_mm;
+    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
+    let mut segments: Vec<[[f64; 2]; 2]> = Vec::new();
+    let mut exact = 0.0;
+    for p in placed {
+        let mesh = &models[p.model].mesh;
+        let off = DVec3::from_array(p.offset);
+        let z_model = z - off.z;
+        for &t in indices[p.model].layer(i) {
+            if let Some([a, b]) = cut(mesh, mesh.triangles[t as usize], z_model) {
+                let turn = |q: DVec2| if p.turned { q.perp() } else { q };
+                let (a, b) = (turn(a) + off.truncate(), turn(b) + off.truncate());
+                exact += 0.5 * a.perp_dot(b);
+                // Pixels: x right from the left edge, y down from the far edge.
+                let pix = |q: DVec2| [q.x / px, h as f64 - q.y / px];
+                segments.push([pix(a), pix(b)]);
+            }
+        }
+    }
+    let mut image = vec![0u8; w * h];
+    let mut area_px = 0.0;
+    if !segments.is_empty() {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for s in &segments {
+            for q in s {
+                lo = [lo[0].min(q[0]), lo[1].min(q[1])];
+                hi = [hi[0].max(q[0]), hi[1].max(q[1])];
+            }
+        }
+        let c0 = (lo[0].floor() as i64).max(0);
+        let r0 = (lo[1].floor() as i64).max(0);
+        let c1 = (hi[0].ceil() as i64).min(w as i64);
+        let r1 = (hi[1].ceil() as i64).min(h as i64);
+        let mut cov = Coverage::new(c0, r0, (c1 - c0).max(1) as usize, (r1 - r0).max(1) as usize);
+        for s in &segments {
+            cov.add(s);
+        }
+        area_px = cov.write(&mut image, w);
+    }
+    Layer {
+        index: i,
+        png: encode_grey(&image, w as u32, h as u32),
+        image,
+        area_mm2: area_px * px * px,
+        exact_area_mm2: exact.abs(),
+    }
+}
+
+/// The segment where triangle `t` crosses the plane at height `z`, directed so the solid is on
+/// its left seen from above: from where the boundary a → b → c goes down through the plane to
+/// where it goes up. A vertex exactly on the plane counts as below, in every triangle alike, so
+/// segments meet end to end.
+fn cut(mesh: &TriMesh, t: [u32; 3], z: f64) -> Option<[DVec2; 2]> {
+    let above = t.map(|i| mesh.positions[i as usize].z > z);
+    if above[0] == above[1] && above[1] == above[2] {
+        return None;
+    }
+    let (mut down, mut up) = (None, None);
+    for j in 0..3 {
+        let (a, b) = (t[j], t[(j + 1) % 3]);
+        match (above[j], above[(j + 1) % 3]) {
+            (true, false) => down = Some(crossing(mesh, a, b, z)),
+            (false, true) => up = Some(crossing(mesh, a, b, z)),
+            _ => {}
+        }
+    }
+    Some([down?, up?])
+}
+
+/// Where edge a–b crosses height `z`, computed the same way from either triangle that shares
+/// the edge (ends in index order), so neighbouring segments meet exactly.
+fn crossing(mesh: &TriMesh, a: u32, b: u32, z: f64) -> DVec2 {
+    let (p, q) = if a < b { (a, b) } else { (b, a) };
+    let (p, q) = (mesh.positions[p as usize], mesh.positions[q as usize]);
+    let t = (z - p.z) / (q.z - p.z);
+    p.truncate().lerp(q.truncate(), t)
+}
+
+/// An 8-bit grey PNG, fast compression (the images are mostly black).
+pub fn encode_grey(image: &[u8], w: u32, h: u32) -> Vec<u8> {
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w, h);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Balanced);
+        enc.set_filter(png::Filter::NoFilter);
+        let mut writer = enc.write_header().expect("PNG header into memory");
+        writer
+            .write_image_data(image)
+            .expect("PNG data into memory");
+    }
+    out
+}
