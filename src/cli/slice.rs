@@ -202,6 +202,9 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
+/// Raw images of chosen layers: (index, row-major grey bytes).
+pub type Kept = Vec<(usize, Vec<u8>)>;
+
 /// Where and how to write a sliced job.
 pub struct Spec<'a> {
     pub output: &'a Path,
@@ -220,7 +223,7 @@ pub fn slice_job(
     printer: &Printer,
     spec: &Spec,
     keep: &[usize],
-) -> Result<(serde_json::Value, Estimate, Vec<(usize, Vec<u8>)>)> {
+) -> Result<(serde_json::Value, Estimate, Kept)> {
     let name = spec
         .output
         .file_stem()
