@@ -1,0 +1,144 @@
+//! The print path in the demo: a leaf grown for printing, made solid (lamina, base, standing
+//! up), sliced for the DMP-SL printer five at a time as Peele printed them, with print.json and
+//! a strip of layer images.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use super::Entry;
+use crate::cli::slice::{slice_job, Spec};
+use crate::cli::venation::write_json;
+use lamina::fabricate::estimate::Resin;
+use lamina::fabricate::slice::{arrange, encode_grey, layer_count, Model, Printer};
+use lamina::fabricate::solid::{solid, Base, SolidOptions};
+use lamina::files::write_atomic;
+use lamina::grow::leaf::{grow_leaf, LeafOptions};
+use lamina::grow::outline::{Outline, Shape};
+use lamina::mesh::io::write_mesh;
+use lamina::network::io::{write_network, RenderOptions};
+
+/// Leaves printed at once, as in Peele §4.2.
+const COPIES: usize = 5;
+
+pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
+    let dir = out.join("print");
+    std::fs::create_dir_all(&dir)?;
+    // Sparser sources and thicker tips than the venation demo: veins a printer can make once
+    // the leaf is 20 mm tall.
+    let outline = Outline::shape(Shape::Ovate);
+    let opts = LeafOptions {
+        birth: 3.0,
+        tip_radius: 0.5,
+        ..Default::default()
+    };
+    let leaf = grow_leaf(&outline, &[outline.default_root()], &opts, None)?;
+    write_network(&leaf.network, &dir.join("leaf.json"), &RenderOptions { size })?;
+
+    let solid_opts = SolidOptions {
+        cell: 0.05,
+        lamina: Some(0.3),
+        base: Some(Base {
+            diameter: 4.0,
+            height: 1.5,
+        }),
+        fit: Some(20.0),
+        upright: true,
+        radius: None,
+    };
+    let made = solid(&leaf.network, &solid_opts, &|_, _| {})?;
+    write_mesh(&made.mesh, &dir.join("leaf.stl"), size)?;
+    write_mesh(&made.mesh, &dir.join("leaf.png"), size)?;
+    write_json(&dir.join("solid.json"), &serde_json::to_value(&made.report)?)?;
+
+    let printer = Printer::default();
+    let models = [Model {
+        path: dir.join("leaf.stl"),
+        mesh: made.mesh,
+    }];
+    let placed = arrange(&models, &printer, COPIES, 2.0, false)?;
+    let layers = layer_count(&models, &printer);
+    let keep: Vec<usize> = (1..=6).map(|k| k * layers / 7).collect();
+    let spec = Spec {
+        output: &dir.join("leaf.sl1"),
+        layers_dir: Some(&dir.join("layers")),
+        resin: Resin::default(),
+        speed: None,
+        material: "MakerJuice G+",
+        copies: COPIES,
+    };
+    let (report, e, kept) = slice_job(&models, &placed, &printer, &spec, &keep)?;
+    write_json(&dir.join("print.json"), &report)?;
+
+    // The strip: each kept layer cropped to the first leaf's footprint, side by side.
+    let px = printer.pixel_mm;
+    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
+    let ([x0, y0], [x1, y1]) = (placed[0].min, placed[0].max);
+    let margin = 8;
+    let c0 = ((x0 / px) as usize).saturating_sub(margin);
+    let c1 = ((x1 / px).ceil() as usize + margin).min(w);
+    let r0 = (h as f64 - y1 / px).max(0.0) as usize;
+    let r0 = r0.saturating_sub(margin);
+    let r1 = ((h as f64 - y0 / px).ceil() as usize + margin).min(h);
+    let (cw, ch) = (c1 - c0, r1 - r0);
+    let gap = 6;
+    let sw = kept.len() * cw + (kept.len().saturating_sub(1)) * gap;
+    let mut strip = vec![96u8; sw * ch];
+    for (k, (_, image)) in kept.iter().enumerate() {
+        for r in 0..ch {
+            let src = &image[(r0 + r) * w + c0..(r0 + r) * w + c1];
+            let at = r * sw + k * (cw + gap);
+            strip[at..at + cw].copy_from_slice(src);
+        }
+    }
+    let strip_png = encode_grey(&strip, sw as u32, ch as u32);
+    write_atomic(&dir.join("layers-strip.png"), |w| {
+        std::io::Write::write_all(w, &strip_png)
+    })?;
+
+    let r = &made.report;
+    let layer_names: Vec<String> = kept.iter().map(|(i, _)| i.to_string()).collect();
+    Ok(Entry {
+        name: "print: leaf → solid → slices".into(),
+        about: format!(
+            "A closed leaf grown for printing (`lamina venation --birth 3 --tip-radius 0.5`), made \
+             solid by `lamina solid --fit 20 --lamina 0.3 --base cylinder:4,1.5 --upright --cell \
+             0.05` and sliced {COPIES} at a time by `lamina slice --copies {COPIES}` for the \
+             DMP-SL printer (1920 × 1080 pixels of 35 µm, 50 µm layers). Layers {} of {}:<br>\
+             <img src=\"print/layers-strip.png\" alt=\"layer images\" style=\"width:100%;max-height:none\">",
+            layer_names.join(", "),
+            e.layers
+        ),
+        outputs: [
+            "leaf.json",
+            "leaf.stl",
+            "solid.json",
+            "leaf.sl1",
+            "print.json",
+            "layers-strip.png",
+            "layers/",
+        ]
+        .iter()
+        .map(|f| format!("print/{f}"))
+        .collect(),
+        preview: "print/leaf.png".into(),
+        facts: format!(
+            "solid: {} triangles, closed 2-manifold, {} part(s), genus {}, {:.1} mm³, \
+             {:.1} × {:.1} × {:.1} mm; print: {} layers, {:.3} mL of resin for {COPIES} \
+             leaves, cost {:.3} at 55/L, {:.1} g, {:.2} h ({})",
+            r.triangles,
+            r.parts,
+            r.genus,
+            r.volume_mm3,
+            r.bbox_max[0] - r.bbox_min[0],
+            r.bbox_max[1] - r.bbox_min[1],
+            r.bbox_max[2] - r.bbox_min[2],
+            e.layers,
+            e.volume_ml,
+            e.resin_cost,
+            e.mass_g,
+            e.build_time_h,
+            e.build_time_from
+        ),
+    })
+}
