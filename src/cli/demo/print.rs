@@ -25,15 +25,19 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     let dir = out.join("print");
     std::fs::create_dir_all(&dir)?;
     // Sparser sources and thicker tips than the venation demo: veins a printer can make once
-    // the leaf is 20 mm tall.
+    // the leaf is 20 mm tall (tips 80 µm), and areoles wide enough to stay open.
     let outline = Outline::shape(Shape::Ovate);
     let opts = LeafOptions {
-        birth: 3.0,
-        tip_radius: 0.5,
+        birth: 4.0,
+        tip_radius: 0.4,
         ..Default::default()
     };
     let leaf = grow_leaf(&outline, &[outline.default_root()], &opts, None)?;
-    write_network(&leaf.network, &dir.join("leaf.json"), &RenderOptions { size })?;
+    write_network(
+        &leaf.network,
+        &dir.join("leaf.json"),
+        &RenderOptions { size },
+    )?;
 
     let solid_opts = SolidOptions {
         cell: 0.05,
@@ -49,7 +53,10 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     let made = solid(&leaf.network, &solid_opts, &|_, _| {})?;
     write_mesh(&made.mesh, &dir.join("leaf.stl"), size)?;
     write_mesh(&made.mesh, &dir.join("leaf.png"), size)?;
-    write_json(&dir.join("solid.json"), &serde_json::to_value(&made.report)?)?;
+    write_json(
+        &dir.join("solid.json"),
+        &serde_json::to_value(&made.report)?,
+    )?;
 
     let printer = Printer::default();
     let models = [Model {
@@ -101,7 +108,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     Ok(Entry {
         name: "print: leaf → solid → slices".into(),
         about: format!(
-            "A closed leaf grown for printing (`lamina venation --birth 3 --tip-radius 0.5`), made \
+            "A closed leaf grown for printing (`lamina venation --birth 4 --tip-radius 0.4`), made \
              solid by `lamina solid --fit 20 --lamina 0.3 --base cylinder:4,1.5 --upright --cell \
              0.05` and sliced {COPIES} at a time by `lamina slice --copies {COPIES}` for the \
              DMP-SL printer (1920 × 1080 pixels of 35 µm, 50 µm layers). Layers {} of {}:<br>\
