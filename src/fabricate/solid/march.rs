@@ -273,8 +273,13 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
                     }
                     _ => {
                         for z in z0..=z1 {
-                            let v = prim.eval(grid.at([x, y, z]), band);
                             let slot = &mut values[column + z - base[2]];
+                            // Already deep inside: no crossing edge ends here (the surface is
+                            // more than an edge away), so its exact value no longer matters.
+                            if *slot <= -band {
+                                continue;
+                            }
+                            let v = prim.eval(grid.at([x, y, z]), band);
                             *slot = slot.min(v);
                         }
                     }
@@ -345,9 +350,9 @@ fn crossing(a: DVec3, fa: f64, b: DVec3, fb: f64, f: &impl Fn(DVec3) -> f64, eps
     let (mut t0, mut f0, mut t1, mut f1) = (0.0, fa, 1.0, fb);
     let mut t = f0 / (f0 - f1);
     let mut side = 0i8;
-    for _ in 0..6 {
+    for _ in 0..4 {
         let ft = f(a.lerp(b, t));
-        if ft.abs() < 1e-9 * eps {
+        if ft.abs() < 1e-4 * eps {
             break;
         }
         if ft < 0.0 {
