@@ -336,16 +336,52 @@ fn shelves(
     Ok(placed)
 }
 
-/// Every edge must be used as often in one direction as in the other.
+/// Every edge must be used as often in one direction as in the other. First a one-pass test:
+/// the sum over half-edges of ±hash(edge) is zero when every edge is balanced, and a nonzero
+/// balance leaves it zero only by a 64-bit hash coincidence. Only when it is not zero are the
+/// half-edges sorted to name the first open edge.
 fn closed(m: &Model) -> Result<(), SliceError> {
-    let mut half: Vec<(u32, u32, i32)> = m
+    let signature = m
         .mesh
         .triangles
-        .iter()
-        .flat_map(|t| {
+        .par_iter()
+        .map(|t| {
+            (0..3).fold(0u64, |sum, j| {
+                let (a, b) = (t[j] as u64, t[(j + 1) % 3] as u64);
+                let h = mix((a.min(b) << 32) | a.max(b));
+                if a < b {
+                    sum.wrapping_add(h)
+                } else {
+                    sum.wrapping_sub(h)
+                }
+            })
+        })
+        .reduce(|| 0, u64::wrapping_add);
+    if signature == 0 {
+        return Ok(());
+    }
+    open_edges(m)
+}
+
+/// SplitMix64's finaliser: a bijective mix of all 64 bits.
+fn mix(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// The open edges by sorting the half-edges: how many, and the first.
+fn open_edges(m: &Model) -> Result<(), SliceError> {
+    // Half-edges as (low end, high end, direction) packed in a u64, sorted: the uses of an edge
+    // sit side by side. Vertex indices fit in 31 bits (2³¹ vertices would not fit in memory).
+    let mut half: Vec<u64> = m
+        .mesh
+        .triangles
+        .par_iter()
+        .flat_map_iter(|t| {
             (0..3).map(move |j| {
-                let (a, b) = (t[j], t[(j + 1) % 3]);
-                (a.min(b), a.max(b), if a < b { 1 } else { -1 })
+                let (a, b) = (t[j] as u64, t[(j + 1) % 3] as u64);
+                (a.min(b) << 32) | (a.max(b) << 1) | u64::from(a > b)
             })
         })
         .collect();
@@ -354,15 +390,15 @@ fn closed(m: &Model) -> Result<(), SliceError> {
     let mut first = None;
     let mut s = 0;
     while s < half.len() {
-        let (a, b) = (half[s].0, half[s].1);
-        let mut balance = 0;
-        while s < half.len() && half[s].0 == a && half[s].1 == b {
-            balance += half[s].2;
+        let key = half[s] >> 1;
+        let mut balance = 0i64;
+        while s < half.len() && half[s] >> 1 == key {
+            balance += if half[s] & 1 == 0 { 1 } else { -1 };
             s += 1;
         }
         if balance != 0 {
             open += 1;
-            first.get_or_insert((a, b));
+            first.get_or_insert(((key >> 31) as u32, (key & 0x7fff_ffff) as u32));
         }
     }
     match first {

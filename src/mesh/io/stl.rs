@@ -33,6 +33,9 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
             format!("not an STL file: no ASCII \"solid\" start, and {detail}"),
         ));
     }
+    if is_binary {
+        return Ok(read_binary(&bytes));
+    }
     let indexed = stl_io::read_stl(&mut Cursor::new(&bytes)).map_err(|e| {
         if is_binary {
             ReadError::file(path, format!("cannot read binary STL: {e}"))
@@ -64,6 +67,113 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         triangles,
         colors: None,
     })
+}
+
+/// A binary STL whose size has been checked: corners at the same point (bit for bit, with −0
+/// read as +0) become one vertex, numbered in order of first appearance. Corners are welded in
+/// parallel: split into shards by a hash of the point, each shard welded with its own map.
+fn read_binary(bytes: &[u8]) -> TriMesh {
+    use rayon::prelude::*;
+    use std::collections::HashMap;
+    use std::hash::BuildHasherDefault;
+
+    const SHARDS: usize = 256;
+    let n = (bytes.len() - 84) / 50;
+    let f =
+        |at: usize| f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let at = |c: usize| 84 + (c / 3) * 50 + 12 + (c % 3) * 12;
+    let key = |c: usize| {
+        let a = at(c);
+        [f(a), f(a + 4), f(a + 8)].map(|v| (v + 0.0).to_bits())
+    };
+    let shard = |k: &[u32; 3]| {
+        let h = mix(((k[0] as u64) << 32 | k[1] as u64) ^ mix(k[2] as u64));
+        (h >> 56) as usize % SHARDS
+    };
+    let of: Vec<u8> = (0..3 * n)
+        .into_par_iter()
+        .map(|c| shard(&key(c)) as u8)
+        .collect();
+    // Corners grouped by shard, in increasing order within each (a counting sort).
+    let mut start = vec![0usize; SHARDS + 1];
+    for &s in &of {
+        start[s as usize + 1] += 1;
+    }
+    for s in 0..SHARDS {
+        start[s + 1] += start[s];
+    }
+    let mut fill = start.clone();
+    let mut order = vec![([0u32; 3], 0u32); 3 * n];
+    for (c, &s) in of.iter().enumerate() {
+        order[fill[s as usize]] = (key(c), c as u32);
+        fill[s as usize] += 1;
+    }
+    drop(of);
+    type Map = HashMap<[u32; 3], u32, BuildHasherDefault<MixHasher>>;
+    let firsts: Vec<Vec<u32>> = (0..SHARDS)
+        .into_par_iter()
+        .map(|s| {
+            let mine = &order[start[s]..start[s + 1]];
+            let mut seen = Map::with_capacity_and_hasher(mine.len() / 2, Default::default());
+            mine.iter()
+                .map(|&(k, c)| *seen.entry(k).or_insert(c))
+                .collect()
+        })
+        .collect();
+    let mut first = vec![0u32; 3 * n];
+    for s in 0..SHARDS {
+        for (&(_, c), &f0) in order[start[s]..start[s + 1]].iter().zip(&firsts[s]) {
+            first[c as usize] = f0;
+        }
+    }
+    drop(firsts);
+    drop(order);
+    let mut id = vec![0u32; 3 * n];
+    let mut positions = Vec::new();
+    for c in 0..3 * n {
+        let f0 = first[c] as usize;
+        if f0 == c {
+            id[c] = positions.len() as u32;
+            let a = at(c);
+            positions.push(DVec3::new(f(a) as f64, f(a + 4) as f64, f(a + 8) as f64));
+        } else {
+            id[c] = id[f0];
+        }
+    }
+    let triangles = (0..n)
+        .map(|t| [id[3 * t], id[3 * t + 1], id[3 * t + 2]])
+        .collect();
+    TriMesh {
+        positions,
+        triangles,
+        colors: None,
+    }
+}
+
+/// SplitMix64's finaliser: a bijective mix of all 64 bits.
+fn mix(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// A fast hasher for welding keys (points as bits): no need to resist crafted collisions here.
+#[derive(Default)]
+struct MixHasher(u64);
+
+impl std::hash::Hasher for MixHasher {
+    fn finish(&self) -> u64 {
+        mix(self.0)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        // FxHash's step per word; `finish` mixes the whole.
+        for chunk in bytes.chunks(4) {
+            let mut word = [0u8; 4];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.0 = (self.0.rotate_left(5) ^ u32::from_le_bytes(word) as u64)
+                .wrapping_mul(0x517c_c1b7_2722_0a95);
+        }
+    }
 }
 
 /// The first line of an ASCII STL that breaks its grammar, with what is wrong.
