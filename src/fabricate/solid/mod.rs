@@ -17,11 +17,17 @@
 //! is a tapered tree whose joints are round.
 //!
 //! # Accuracy
-//! Vertices lie on the exact surface (to ~1e-9 mm along each grid edge); between vertices the
-//! mesh cuts chords, so a vein of radius r meshed with cell h loses about h²/(6r²) of its
-//! volume (1 % at r = 4h), and a vein thinner than about h may break into pieces or vanish. Edges
-//! where the surface folds sharply (creases between veins) are rounded within one cell. The
-//! default cell is the printer's pixel (35 µm): finer than that cannot be printed.
+//! Vertices lie on the exact surface (to ~1e-7 mm along each grid edge); between vertices the
+//! mesh cuts chords, so a vein of radius r meshed with cell h loses roughly h²/(6r²) of its
+//! volume (an estimate: 1 % at r = 4h), and a vein thinner than about h may break into pieces or
+//! vanish. Measured: the small fixture network (radii 0.3–1 mm) at h = 0.1 mm is 0.11 % from
+//! manifold3d's union of the same sphere hulls (64 segments), its symmetric difference 0.3 %.
+//! Creases between veins are rounded within one cell. The default cell is the printer's pixel
+//! (35 µm): finer than that cannot be printed.
+//!
+//! The mesh is as fine as the cell everywhere, flat lamina included: a 50 mm leaf with its
+//! lamina is millions of triangles. Simplifying it (edge collapse that keeps it a manifold) is
+//! the next step, not done.
 
 mod march;
 pub mod sdf;
