@@ -13,7 +13,7 @@ use lamina::fabricate::archive::{Job, Sl1Writer};
 use lamina::fabricate::estimate::{estimate, Estimate, Resin};
 use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer};
 use lamina::files::write_atomic;
-use lamina::mesh::io::read_mesh;
+use lamina::mesh::io::read_triangles;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -154,7 +154,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut models = Vec::with_capacity(args.models.len());
     for path in &args.models {
-        let mesh = read_mesh(path)?;
+        let mesh = read_triangles(path)?;
         models.push(Model {
             path: path.clone(),
             mesh,

@@ -127,14 +127,14 @@ pub enum SliceError {
     Empty(PathBuf),
     #[error(
         "{}: not a closed mesh: {count} edge(s) are not matched by an edge running the other \
-         way (first: between vertices {a} and {b}); the slicer needs closed shells",
+         way (one from {a:?} to {b:?}); the slicer needs closed shells",
         path.display()
     )]
     Open {
         path: PathBuf,
         count: usize,
-        a: u32,
-        b: u32,
+        a: [f64; 3],
+        b: [f64; 3],
     },
     #[error(
         "{}: {size_x:.2} × {size_y:.2} mm does not fit the {area_x:.2} × {area_y:.2} mm display",
@@ -336,19 +336,21 @@ fn shelves(
     Ok(placed)
 }
 
-/// Every edge must be used as often in one direction as in the other. First a one-pass test:
-/// the sum over half-edges of ±hash(edge) is zero when every edge is balanced, and a nonzero
-/// balance leaves it zero only by a 64-bit hash coincidence. Only when it is not zero are the
-/// half-edges sorted to name the first open edge.
+/// Every edge must be used as often in one direction as in the other, edges being told apart by
+/// where their ends are (so a triangle soup from an STL needs no welding). First a one-pass
+/// test: the sum over half-edges of ±hash(edge) is zero when every edge is balanced, and a
+/// nonzero balance leaves it zero only by a 64-bit hash coincidence. Only when it is not zero are
+/// the half-edges sorted to name an open edge.
 fn closed(m: &Model) -> Result<(), SliceError> {
+    let key = |i: u32| point_key(m.mesh.positions[i as usize]);
     let signature = m
         .mesh
         .triangles
         .par_iter()
         .map(|t| {
             (0..3).fold(0u64, |sum, j| {
-                let (a, b) = (t[j] as u64, t[(j + 1) % 3] as u64);
-                let h = mix((a.min(b) << 32) | a.max(b));
+                let (a, b) = (key(t[j]), key(t[(j + 1) % 3]));
+                let h = mix(mix(a.min(b)) ^ a.max(b).rotate_left(17));
                 if a < b {
                     sum.wrapping_add(h)
                 } else {
@@ -360,7 +362,13 @@ fn closed(m: &Model) -> Result<(), SliceError> {
     if signature == 0 {
         return Ok(());
     }
-    open_edges(m)
+    open_edge(m)
+}
+
+/// A point as one 64-bit number that equal points share: a mix of its coordinates' bits.
+fn point_key(p: DVec3) -> u64 {
+    let bits = |v: f64| (v + 0.0).to_bits();
+    mix(bits(p.x) ^ mix(bits(p.y) ^ mix(bits(p.z))))
 }
 
 /// SplitMix64's finaliser: a bijective mix of all 64 bits.
@@ -370,18 +378,27 @@ fn mix(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
-/// The open edges by sorting the half-edges: how many, and the first.
-fn open_edges(m: &Model) -> Result<(), SliceError> {
-    // Half-edges as (low end, high end, direction) packed in a u64, sorted: the uses of an edge
-    // sit side by side. Vertex indices fit in 31 bits (2³¹ vertices would not fit in memory).
-    let mut half: Vec<u64> = m
+/// The open edges, found by sorting the half-edges by their ends' coordinates: how many, and
+/// one of them.
+fn open_edge(m: &Model) -> Result<(), SliceError> {
+    type Point = [u64; 3];
+    let point = |i: u32| {
+        m.mesh.positions[i as usize]
+            .to_array()
+            .map(|v| (v + 0.0).to_bits())
+    };
+    let mut half: Vec<(Point, Point, i8)> = m
         .mesh
         .triangles
         .par_iter()
         .flat_map_iter(|t| {
             (0..3).map(move |j| {
-                let (a, b) = (t[j] as u64, t[(j + 1) % 3] as u64);
-                (a.min(b) << 32) | (a.max(b) << 1) | u64::from(a > b)
+                let (a, b) = (point(t[j]), point(t[(j + 1) % 3]));
+                if a < b {
+                    (a, b, 1)
+                } else {
+                    (b, a, -1)
+                }
             })
         })
         .collect();
@@ -390,24 +407,25 @@ fn open_edges(m: &Model) -> Result<(), SliceError> {
     let mut first = None;
     let mut s = 0;
     while s < half.len() {
-        let key = half[s] >> 1;
+        let (a, b) = (half[s].0, half[s].1);
         let mut balance = 0i64;
-        while s < half.len() && half[s] >> 1 == key {
-            balance += if half[s] & 1 == 0 { 1 } else { -1 };
+        while s < half.len() && half[s].0 == a && half[s].1 == b {
+            balance += half[s].2 as i64;
             s += 1;
         }
         if balance != 0 {
             open += 1;
-            first.get_or_insert(((key >> 31) as u32, (key & 0x7fff_ffff) as u32));
+            first.get_or_insert((a, b));
         }
     }
+    let at = |p: Point| DVec3::from_array(p.map(f64::from_bits)).to_array();
     match first {
         None => Ok(()),
         Some((a, b)) => Err(SliceError::Open {
             path: m.path.clone(),
             count: open,
-            a,
-            b,
+            a: at(a),
+            b: at(b),
         }),
     }
 }
@@ -587,10 +605,14 @@ fn cut(mesh: &TriMesh, t: [u32; 3], z: f64) -> Option<[DVec2; 2]> {
 }
 
 /// Where edge a–b crosses height `z`, computed the same way from either triangle that shares
-/// the edge (ends in index order), so neighbouring segments meet exactly.
+/// the edge (ends in coordinate order, so welded or not), so neighbouring segments meet exactly.
 fn crossing(mesh: &TriMesh, a: u32, b: u32, z: f64) -> DVec2 {
-    let (p, q) = if a < b { (a, b) } else { (b, a) };
-    let (p, q) = (mesh.positions[p as usize], mesh.positions[q as usize]);
+    let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+    let (p, q) = if pa.to_array() < pb.to_array() {
+        (pa, pb)
+    } else {
+        (pb, pa)
+    };
     let t = (z - p.z) / (q.z - p.z);
     p.truncate().lerp(q.truncate(), t)
 }

@@ -35,9 +35,23 @@ impl MeshFormat {
 /// Reads a mesh, choosing the format by extension. The result has in-range indices and finite
 /// coordinates; whether it is a manifold is for `check_manifold` to say.
 pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
+    read_with(path, stl::read)
+}
+
+/// Like `read_mesh`, but a binary STL's corners are not welded: three vertices per triangle,
+/// in file order. For callers that only need the triangles (the slicer): reading is then
+/// little more than parsing.
+pub fn read_triangles(path: &Path) -> Result<TriMesh, ReadError> {
+    read_with(path, stl::read_soup)
+}
+
+fn read_with(
+    path: &Path,
+    read_stl: fn(&Path) -> Result<TriMesh, ReadError>,
+) -> Result<TriMesh, ReadError> {
     let mesh = match MeshFormat::from_path(path) {
         Some(MeshFormat::Obj) => obj::read(path)?,
-        Some(MeshFormat::Stl) => stl::read(path)?,
+        Some(MeshFormat::Stl) => read_stl(path)?,
         _ => {
             return Err(ReadError::file(
                 path,

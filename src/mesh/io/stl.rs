@@ -11,6 +11,15 @@ use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
 use crate::mesh::TriMesh;
 
 pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
+    read_as(path, true)
+}
+
+/// A binary STL as a triangle soup (three vertices per triangle); ASCII is welded as by `read`.
+pub fn read_soup(path: &Path) -> Result<TriMesh, ReadError> {
+    read_as(path, false)
+}
+
+fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
     let bytes = read_nonempty(path)?;
     let len = bytes.len() as u64;
     let is_binary = len >= 84 && {
@@ -34,7 +43,11 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         ));
     }
     if is_binary {
-        return Ok(read_binary(&bytes));
+        return Ok(if weld {
+            read_binary(&bytes)
+        } else {
+            soup(&bytes)
+        });
     }
     let indexed = stl_io::read_stl(&mut Cursor::new(&bytes)).map_err(|e| {
         if is_binary {
@@ -142,6 +155,29 @@ fn read_binary(bytes: &[u8]) -> TriMesh {
     }
     let triangles = (0..n)
         .map(|t| [id[3 * t], id[3 * t + 1], id[3 * t + 2]])
+        .collect();
+    TriMesh {
+        positions,
+        triangles,
+        colors: None,
+    }
+}
+
+/// Three vertices per triangle, in file order, as stored.
+fn soup(bytes: &[u8]) -> TriMesh {
+    use rayon::prelude::*;
+    let n = (bytes.len() - 84) / 50;
+    let f =
+        |at: usize| f32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let positions = (0..3 * n)
+        .into_par_iter()
+        .map(|c| {
+            let at = 84 + (c / 3) * 50 + 12 + (c % 3) * 12;
+            DVec3::new(f(at) as f64, f(at + 4) as f64, f(at + 8) as f64)
+        })
+        .collect();
+    let triangles = (0..n as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
         .collect();
     TriMesh {
         positions,
