@@ -267,7 +267,7 @@ pub fn solid(
             .iter()
             .map(|p| {
                 let (lo, hi) = p.bounds();
-                (lo * down).max_element().max((hi * down).max_element())
+                lo.dot(down).max(hi.dot(down))
             })
             .fold(f64::NEG_INFINITY, f64::max);
         prims.push(Primitive::Cylinder(Cylinder {
@@ -528,4 +528,76 @@ fn check_f32(mesh: &TriMesh) -> Result<(), SolidError> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::network::{Edge, Node};
+
+    fn bar_at(z: f64) -> Network {
+        let node = |x: f64| Node {
+            p: DVec3::new(x, 0.0, z),
+            normal: None,
+            radius: 1.0,
+        };
+        Network {
+            nodes: vec![node(0.0), node(5.0)],
+            edges: vec![Edge {
+                a: 0,
+                b: 1,
+                radius: 1.0,
+            }],
+            meta: Default::default(),
+        }
+    }
+
+    #[test]
+    fn the_base_reaches_its_height_below_the_lowest_point_wherever_the_network_is() {
+        for z in [10.0, -4.0] {
+            let opts = SolidOptions {
+                cell: 0.1,
+                base: Some(Base {
+                    diameter: 2.0,
+                    height: 3.0,
+                }),
+                ..Default::default()
+            };
+            let made = solid(&bar_at(z), &opts, &|_, _| {}).unwrap();
+            // The bar spans z ± 1; the base goes 3 below that.
+            let height = made.mesh.bbox().size().z;
+            assert!((height - 5.0).abs() < 0.1, "z {z}: height {height}");
+            assert_eq!((made.report.parts, made.report.genus), (1, 0));
+        }
+    }
+
+    #[test]
+    fn bad_options_and_networks_are_named() {
+        let bare = Network {
+            edges: vec![Edge::new(0, 1)],
+            ..bar_at(0.0)
+        };
+        let mut bare = bare;
+        bare.nodes.iter_mut().for_each(|n| n.radius = 0.0);
+        let err = solid(&bare, &SolidOptions::default(), &|_, _| {}).unwrap_err();
+        assert!(matches!(err, SolidError::NoRadius(0)));
+        let opts = SolidOptions {
+            cell: -1.0,
+            ..Default::default()
+        };
+        assert!(matches!(
+            solid(&bar_at(0.0), &opts, &|_, _| {}).unwrap_err(),
+            SolidError::NotPositive { what: "--cell", .. }
+        ));
+        let mut far = bar_at(0.0);
+        far.edges.push(Edge::new(0, 7));
+        assert!(matches!(
+            solid(&far, &SolidOptions::default(), &|_, _| {}).unwrap_err(),
+            SolidError::EdgeOutOfRange {
+                edge: 1,
+                node: 7,
+                ..
+            }
+        ));
+    }
 }
