@@ -57,7 +57,7 @@ pub struct Args {
     #[arg(long, default_value_t = 2.0)]
     pub gap: f64,
     /// Print the models where they are (x, y in the display's mm) instead of arranging them
-    #[arg(long)]
+    #[arg(long, conflicts_with = "copies")]
     pub keep_position: bool,
     /// Also write the layer images into this folder
     #[arg(long, value_name = "DIR")]
