@@ -244,6 +244,7 @@ pub fn slice_job(
     let mut areas = Vec::with_capacity(layers_total);
     let mut exact = Vec::with_capacity(layers_total);
     let mut kept = Vec::new();
+    let mut est = None;
     write_atomic(spec.output, |w| {
         let mut sl1 = Sl1Writer::new(w, &name);
         slice::slice(models, placed, printer, |layer| {
@@ -262,7 +263,7 @@ pub fn slice_job(
             bar.inc(1);
             Ok::<(), std::io::Error>(())
         })?;
-        let e = estimate(printer, &spec.resin, &areas, spec.speed);
+        let e = est.insert(estimate(printer, &spec.resin, &areas, spec.speed));
         sl1.finish(
             printer,
             &Job {
@@ -279,14 +280,14 @@ pub fn slice_job(
     if let Some(s) = staging {
         s.commit()?;
     }
-    let e = estimate(printer, &spec.resin, &areas, spec.speed);
-    let mesh_volume: f64 = placed
-        .iter()
-        .map(|p| models[p.model].mesh.signed_volume())
-        .sum();
+    let e = est.ok_or_else(|| anyhow::anyhow!("internal: slicing finished without an estimate"))?;
+    // Per model once; every copy has the same volume and height.
+    let volumes: Vec<f64> = models.iter().map(|m| m.mesh.signed_volume()).collect();
+    let heights: Vec<f64> = models.iter().map(|m| m.mesh.bbox().size().z).collect();
+    let mesh_volume: f64 = placed.iter().map(|p| volumes[p.model]).sum();
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in placed {
-        let h = models[p.model].mesh.bbox().size().z;
+        let h = heights[p.model];
         lo = [lo[0].min(p.min[0]), lo[1].min(p.min[1]), 0.0];
         hi = [hi[0].max(p.max[0]), hi[1].max(p.max[1]), hi[2].max(h)];
     }

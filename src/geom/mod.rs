@@ -50,6 +50,13 @@ impl Aabb {
 
 /// True when `a` and `b` differ by at most `tol` (absolute). Named for what it is, so no float
 /// type gets an approximate `PartialEq`.
+/// SplitMix64's finaliser: a bijective mix of all 64 bits, for hashing points and edges.
+pub fn mix64(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
 pub fn approx_eq(a: f64, b: f64, tol: f64) -> bool {
     (a - b).abs() <= tol
 }

@@ -228,7 +228,8 @@ impl TriMesh {
     }
 }
 
-fn find(parent: &mut [u32], mut v: u32) -> u32 {
+/// Union-find over vertex indices: the root of `v`, halving the path on the way.
+pub(crate) fn find(parent: &mut [u32], mut v: u32) -> u32 {
     while parent[v as usize] != v {
         parent[v as usize] = parent[parent[v as usize] as usize];
         v = parent[v as usize];
@@ -236,7 +237,8 @@ fn find(parent: &mut [u32], mut v: u32) -> u32 {
     v
 }
 
-fn union(parent: &mut [u32], a: u32, b: u32) {
+/// Union-find: joins the sets of `a` and `b` under the smaller root.
+pub(crate) fn union(parent: &mut [u32], a: u32, b: u32) {
     let (ra, rb) = (find(parent, a), find(parent, b));
     if ra != rb {
         parent[ra.max(rb) as usize] = ra.min(rb);

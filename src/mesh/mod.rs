@@ -9,6 +9,7 @@ use glam::DVec3;
 
 use crate::geom::Aabb;
 
+pub(crate) use check::{find, union};
 pub use check::{MeshProblem, Topology};
 
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -16,6 +16,7 @@ use std::path::PathBuf;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
+use crate::geom::mix64 as mix;
 use crate::mesh::TriMesh;
 
 pub use raster::Coverage;
@@ -369,13 +370,6 @@ fn closed(m: &Model) -> Result<(), SliceError> {
 fn point_key(p: DVec3) -> u64 {
     let bits = |v: f64| (v + 0.0).to_bits();
     mix(bits(p.x) ^ mix(bits(p.y) ^ mix(bits(p.z))))
-}
-
-/// SplitMix64's finaliser: a bijective mix of all 64 bits.
-fn mix(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
 }
 
 /// The open edges, found by sorting the half-edges by their ends' coordinates: how many, and

@@ -70,8 +70,12 @@ struct Brick {
 
 impl Brick {
     fn is_inside(&self, lp: usize) -> bool {
-        self.inside[lp / 64] >> (lp % 64) & 1 == 1
+        bit(&self.inside, lp)
     }
+}
+
+fn bit(bits: &[u64], i: usize) -> bool {
+    bits[i / 64] >> (i % 64) & 1 == 1
 }
 
 fn pack(b: [usize; 3]) -> u64 {
@@ -316,11 +320,11 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
         for j in 0..B {
             for k in 0..B {
                 let lp = local(i, j, k);
-                let p_in = inside[lp / 64] >> (lp % 64) & 1 == 1;
+                let p_in = bit(&inside, lp);
                 for dir in 1u8..8 {
                     let d = corner(dir);
                     let lq = local(i + d[0], j + d[1], k + d[2]);
-                    if p_in == (inside[lq / 64] >> (lq % 64) & 1 == 1) {
+                    if p_in == bit(&inside, lq) {
                         continue;
                     }
                     let gp = grid.at([base[0] + i, base[1] + j, base[2] + k]);

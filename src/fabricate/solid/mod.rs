@@ -37,7 +37,7 @@ use glam::{DVec2, DVec3};
 pub use march::MarchError;
 use sdf::{Cylinder, Polygon, Primitive, Prism, RoundCone};
 
-use crate::mesh::TriMesh;
+use crate::mesh::{find, union, TriMesh};
 use crate::network::Network;
 
 /// The default cell: the DMP-SL printer's pixel, mm.
@@ -291,19 +291,13 @@ pub fn solid(
     }
     check_f32(&mesh)?;
 
-    let (_, network_parts) = net.component_labels();
-    let used = {
-        let mut u = vec![false; n];
-        for e in &net.edges {
-            u[e.a as usize] = true;
-            u[e.b as usize] = true;
-        }
-        u
-    };
-    let used_nodes = used.iter().filter(|&&u| u).count();
-    let isolated = (0..n).filter(|&i| !used[i]).count();
-    let network_parts = network_parts - isolated;
-    let network_cycles = net.edges.len() + network_parts - used_nodes;
+    // The network's own counts: its cycles (E − V + C of the simple graph), and its parts
+    // without the nodes no edge uses (they make no solid).
+    let checked = net.validate();
+    let adj = net.adjacency();
+    let isolated = (0..n as u32).filter(|&v| adj.degree(v) == 0).count();
+    let network_parts = checked.components - isolated;
+    let network_cycles = checked.cycles;
     let bbox = mesh.bbox();
     let mut warnings = Vec::new();
     if min_radius < opts.cell {
@@ -459,20 +453,9 @@ fn place(mesh: &mut TriMesh, upright: bool) {
 fn fill_cavities(mesh: &mut TriMesh) -> usize {
     let n = mesh.positions.len();
     let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn find(parent: &mut [u32], mut v: u32) -> u32 {
-        while parent[v as usize] != v {
-            parent[v as usize] = parent[parent[v as usize] as usize];
-            v = parent[v as usize];
-        }
-        v
-    }
     for t in &mesh.triangles {
-        for &o in &t[1..] {
-            let (a, b) = (find(&mut parent, t[0]), find(&mut parent, o));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
-        }
+        union(&mut parent, t[0], t[1]);
+        union(&mut parent, t[0], t[2]);
     }
     let mut volume = vec![0.0f64; n];
     for t in &mesh.triangles {

@@ -8,6 +8,7 @@ use glam::DVec3;
 use stl_io::{Normal, Triangle, Vertex};
 
 use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
+use crate::geom::mix64 as mix;
 use crate::mesh::TriMesh;
 
 pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
@@ -184,13 +185,6 @@ fn soup(bytes: &[u8]) -> TriMesh {
         triangles,
         colors: None,
     }
-}
-
-/// SplitMix64's finaliser: a bijective mix of all 64 bits.
-fn mix(mut x: u64) -> u64 {
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
 }
 
 /// A fast hasher for welding keys (points as bits): no need to resist crafted collisions here.
