@@ -22,26 +22,42 @@ const CURVE_SEGMENTS: usize = 16;
 pub enum OutlineFileError {
     #[error(transparent)]
     Read(#[from] ReadError),
-    #[error("--outline {path}: cannot read the file: {source}")]
+    #[error("{option} {path}: cannot read the file: {source}")]
     Io {
+        option: &'static str,
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("--outline {path}: {msg}")]
-    Content { path: PathBuf, msg: String },
-    #[error("--outline {path}: {source}")]
-    Shape { path: PathBuf, source: OutlineError },
+    #[error("{option} {path}: {msg}")]
+    Content {
+        option: &'static str,
+        path: PathBuf,
+        msg: String,
+    },
+    #[error("{option} {path}: {source}")]
+    Shape {
+        option: &'static str,
+        path: PathBuf,
+        source: OutlineError,
+    },
 }
 
 /// Reads the blade outline in `path`, by its extension.
 pub fn read_outline(path: &Path) -> Result<Outline, OutlineFileError> {
+    read_polygon(path, "--outline")
+}
+
+/// Reads a closed polygon (the largest loop) from `path`; `option` names it in errors.
+pub fn read_polygon(path: &Path, option: &'static str) -> Result<Outline, OutlineFileError> {
     let content = |msg: String| OutlineFileError::Content {
+        option,
         path: path.to_path_buf(),
         msg,
     };
     let ext = crate::files::extension(path);
     let loops = if ext == "svg" {
         let text = std::fs::read_to_string(path).map_err(|source| OutlineFileError::Io {
+            option,
             path: path.to_path_buf(),
             source,
         })?;
@@ -61,6 +77,7 @@ pub fn read_outline(path: &Path) -> Result<Outline, OutlineFileError> {
         })
         .ok_or_else(|| content("holds no closed outline with 3 or more points".into()))?;
     Outline::new(best).map_err(|source| OutlineFileError::Shape {
+        option,
         path: path.to_path_buf(),
         source,
     })
