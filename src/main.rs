@@ -33,6 +33,13 @@ enum Command {
     /// Geodesic veins along the edges of a mesh, from a root vertex to source vertices
     /// (Bachman), with shortest paths kept up to date incrementally
     Veins(Box<cli::veins::Args>),
+    /// Derive a bracketed L-system and draw it with a 2D/3D turtle (runs of F merged into
+    /// members), or only count it; optionally fitted to a façade boundary and projected onto a
+    /// surface (Hanafin et al.)
+    Lsystem(Box<cli::lsystem::Args>),
+    /// A tree by recursive bifurcation (fixed or random angles and scales), optionally fitted
+    /// to a façade boundary and projected onto a surface (Hanafin et al.)
+    Bifurcate(Box<cli::bifurcate::Args>),
     /// The closed cells of a network on a surface (faces of its rotation system), triangulated
     /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
     Cells(cli::cells::Args),
@@ -80,6 +87,8 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render::run(args).map(Within::from),
         Command::Venation(args) => cli::venation::run(*args).map(Within::from),
         Command::Veins(args) => cli::veins::run(*args).map(Within::from),
+        Command::Lsystem(args) => cli::lsystem::run(*args).map(Within::from),
+        Command::Bifurcate(args) => cli::bifurcate::run(*args).map(Within::from),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),

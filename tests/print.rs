@@ -8,18 +8,10 @@ mod common;
 use std::io::Read;
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use common::{fixture, lamina, run_ok, stderr, TestResult};
 use glam::DVec3;
 use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::TriMesh;
-
-fn run_ok(args: &[&str]) -> Result<String, Box<dyn std::error::Error>> {
-    let o = lamina(args);
-    if !o.status.success() {
-        return Err(format!("lamina {args:?} failed: {}", stderr(&o)).into());
-    }
-    Ok(stdout(&o))
-}
 
 /// An axis-aligned box from `lo` to `hi`, outward-wound.
 fn cuboid(lo: DVec3, hi: DVec3) -> TriMesh {

@@ -1,10 +1,13 @@
 //! One module per subcommand: an argument struct and a `run` that calls the library.
 
+pub mod bifurcate;
+pub mod branching;
 pub mod cells;
 pub mod convert;
 pub mod demo;
 pub mod info;
 pub mod input;
+pub mod lsystem;
 pub mod nest;
 pub mod planarize;
 pub mod plates;

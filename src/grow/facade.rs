@@ -1,12 +1,16 @@
 //! Fitting a flat tree to a façade (Hanafin et al. §4, Figs. 5 and 9): the tree is scaled about
-//! its root and its root placed on the façade; branches are cut where they leave the boundary
-//! polygon; only what stays connected to the root is kept; and the boundary itself becomes the
-//! frame, split wherever a branch meets it. The result is the structure; its cells (the
+//! its root and the root placed on the façade (on the boundary, inside it, or below it so that
+//! the boundary frames a section of the crown); branches are cut where they leave the boundary
+//! polygon; the boundary itself becomes the frame, split wherever a branch meets it; members
+//! that cross are joined where they cross; and only what stays connected to the root is kept.
+//! The façade's root is the tree's root when it lies inside, else the point where the tree
+//! first enters (nearest the root along the tree). The result is the structure; its cells (the
 //! infill panels) are the `cells` stage's to find.
 //!
 //! Guarantees: no member lies outside the boundary (cut points lie on it, within the
-//! tolerance), the result is one connected network that holds the root, and no two nodes
-//! coincide within the tolerance (1e-9 of the boundary's diagonal).
+//! tolerance), the result is one connected network that holds the façade's root, members meet
+//! only at nodes (collinear overlaps excepted), and no two nodes coincide within the tolerance
+//! (1e-9 of the boundary's diagonal).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -64,12 +68,18 @@ pub struct FacadeReport {
     pub cut: usize,
     /// Tree members wholly outside.
     pub outside: usize,
-    /// Pieces inside the boundary but no longer connected to the root (dropped).
+    /// Pieces inside the boundary but connected to the root neither through the tree nor the
+    /// frame (dropped).
     pub detached_pieces: usize,
+    /// Whether the façade's root lies on the boundary. When the tree's root is outside, the
+    /// façade's root is the kept point nearest it along the tree: where the trunk enters.
+    pub root_on_boundary: bool,
     /// Points where a branch meets the frame.
     pub frame_joints: usize,
     /// Frame members (0 without a frame).
     pub frame_edges: usize,
+    /// Places where members crossed or touched and were joined.
+    pub joints_at_crossings: usize,
     /// The shortest member of the result, mm: where a branch meets the frame close to a corner
     /// or to another branch, panels get small.
     pub shortest_member: f64,
@@ -81,8 +91,6 @@ pub struct FacadeReport {
 pub enum FacadeError {
     #[error("the tree is not flat (node {0} is off the XY plane): a façade takes a 2D tree")]
     NotFlat(usize),
-    #[error("the root point ({0}, {1}) lies outside the boundary: give --root-at inside it")]
-    RootOutside(f64, f64),
     #[error("--fit cover: from its root the tree never reaches the boundary's {0} side")]
     CannotCover(&'static str),
     #[error(
@@ -92,7 +100,7 @@ pub enum FacadeError {
     CannotContain(&'static str),
     #[error("--fit: the scale must be a positive number, got {0}")]
     Scale(f64),
-    #[error("the tree has no member inside the boundary from its root")]
+    #[error("no member of the tree reaches inside the boundary")]
     Empty,
 }
 
@@ -266,9 +274,6 @@ pub fn fit(
     }
     let sides = Sides::new(boundary);
     let at = opts.root_at.unwrap_or_else(|| default_root(boundary));
-    if !boundary.contains(at) && sides.on(at, tol).is_none() {
-        return Err(FacadeError::RootOutside(at.x, at.y));
-    }
     let r0 = tree
         .nodes
         .get(root as usize)
@@ -285,8 +290,12 @@ pub fn fit(
         [at.x - blo.x, bhi.x - at.x, at.y - blo.y, bhi.y - at.y],
         tol,
     )?;
-    let place = |p: DVec3| at + (p.truncate() - r0) * scale;
-    let placed: Vec<DVec2> = tree.nodes.iter().map(|n| place(n.p)).collect();
+    let placed: Vec<DVec2> = tree
+        .nodes
+        .iter()
+        .map(|n| at + (n.p.truncate() - r0) * scale)
+        .collect();
+    let from_root = tree_distances(tree, root, &placed);
 
     let mut report = FacadeReport {
         scale,
@@ -296,8 +305,10 @@ pub fn fit(
         cut: 0,
         outside: 0,
         detached_pieces: 0,
+        root_on_boundary: false,
         frame_joints: 0,
         frame_edges: 0,
+        joints_at_crossings: 0,
         shortest_member: 0.0,
         closest_to_frame: None,
     };
@@ -307,9 +318,13 @@ pub fn fit(
     let mut out = Builder::default();
     let mut ts = Vec::new();
     for e in &tree.edges {
-        let (p, q) = (placed[e.a as usize], placed[e.b as usize]);
+        let (ka, kb) = (e.a as usize, e.b as usize);
+        let (p, q) = (placed[ka], placed[kb]);
+        let len = p.distance(q);
+        let reach = |t: f64| (from_root[ka] + t * len).min(from_root[kb] + (1.0 - t) * len);
         if boundary.contains_segment(p, q) {
-            let (a, b) = (out.old(e.a, p, &tree.nodes), out.old(e.b, q, &tree.nodes));
+            let a = out.old(e.a, p, &tree.nodes, from_root[ka]);
+            let b = out.old(e.b, q, &tree.nodes, from_root[kb]);
             out.edge(a, b, e.radius);
             report.kept_whole += 1;
             continue;
@@ -319,7 +334,7 @@ pub fn fit(
         ts.push(0.0);
         ts.push(1.0);
         ts.sort_by(f64::total_cmp);
-        ts.dedup_by(|b, a| (*b - *a) * p.distance(q) <= tol);
+        ts.dedup_by(|b, a| (*b - *a) * len <= tol);
         let (mut pieces, mut whole) = (0, false);
         for w in ts.windows(2) {
             let (t0, t1) = (w[0], w[1]);
@@ -328,11 +343,11 @@ pub fn fit(
             }
             let mut end = |t: f64| {
                 if t == 0.0 {
-                    out.old(e.a, p, &tree.nodes)
+                    out.old(e.a, p, &tree.nodes, from_root[ka])
                 } else if t == 1.0 {
-                    out.old(e.b, q, &tree.nodes)
+                    out.old(e.b, q, &tree.nodes, from_root[kb])
                 } else {
-                    out.new_point(p.lerp(q, t), e.radius)
+                    out.new_point(p.lerp(q, t), e.radius, reach(t))
                 }
             };
             let (a, b) = (end(t0), end(t1));
@@ -348,77 +363,45 @@ pub fn fit(
             report.cut += 1;
         }
     }
-    let Some(&root_node) = out.map.get(&root) else {
-        return Err(FacadeError::Empty);
+    // The façade's root: the tree's root if kept, else where the tree first enters.
+    let root_node = (0..out.nodes.len())
+        .filter(|&k| out.reach[k].is_finite())
+        .min_by(|&x, &y| out.reach[x].total_cmp(&out.reach[y]).then(x.cmp(&y)))
+        .ok_or(FacadeError::Empty)? as u32;
+    let mut network = Network {
+        nodes: out.nodes,
+        edges: out.edges,
+        meta: Default::default(),
     };
 
-    // Keep what the root reaches.
-    let (kept, detached) = out.reachable(root_node);
-    report.detached_pieces = detached;
-    let (map, mut network) = out.compact(&kept);
-    let root_new = map[root_node as usize].expect("the root is reachable from itself");
-
-    // The frame: every side split where kept nodes lie on it.
-    let frame_radius = opts
-        .frame_radius
-        .unwrap_or(tree.nodes[root as usize].radius);
-    let mut on_frame = vec![false; network.nodes.len()];
     if opts.frame {
-        let mut splits: Vec<Vec<(f64, u32)>> = vec![Vec::new(); boundary.points().len()];
-        for (k, n) in network.nodes.iter().enumerate() {
-            if let Some((i, u)) = sides.on(n.p.truncate(), tol) {
-                splits[i as usize].push((u, k as u32));
-                on_frame[k] = true;
-                report.frame_joints += 1;
-            }
-        }
-        // Corners: a node already there, or a new one.
-        let corners: Vec<u32> = (0..boundary.points().len())
-            .map(|i| {
-                let c = boundary.points()[i];
-                let prev = (i + boundary.points().len() - 1) % boundary.points().len();
-                let found = splits[i]
-                    .iter()
-                    .chain(&splits[prev])
-                    .find(|(_, k)| network.nodes[*k as usize].p.truncate().distance(c) <= tol)
-                    .map(|&(_, k)| k);
-                found.unwrap_or_else(|| {
-                    network.nodes.push(Node {
-                        p: c.extend(0.0),
-                        normal: None,
-                        radius: frame_radius,
-                    });
-                    on_frame.push(true);
-                    network.nodes.len() as u32 - 1
-                })
-            })
-            .collect();
-        let n = corners.len();
-        for (i, split) in splits.iter_mut().enumerate() {
-            split.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let mut chain = vec![corners[i]];
-            chain.extend(split.iter().map(|&(_, k)| k));
-            chain.push(corners[(i + 1) % n]);
-            chain.dedup();
-            for w in chain.windows(2) {
-                network.edges.push(Edge {
-                    a: w[0],
-                    b: w[1],
-                    radius: frame_radius,
-                });
-                report.frame_edges += 1;
-            }
-        }
-        // Nodes on the frame within the tolerance of each other are one joint.
-        network = merge_close(network, tol);
+        let radius = opts
+            .frame_radius
+            .unwrap_or(tree.nodes[root as usize].radius);
+        report.frame_joints = add_frame(&mut network, boundary, &sides, radius, tol);
+        report.frame_edges = network.edges.len() - out.edge_count;
     }
+    // Nodes within the tolerance of each other are one joint; crossing members are joined.
+    let (merged, map) = merge_close(network, tol);
+    network = merged;
+    let root_node = map[root_node as usize];
+    report.joints_at_crossings = split_crossings(&mut network, tol);
+
+    // Keep what the root reaches (through the frame too).
+    let (kept, detached) = reachable(&network, root_node);
+    report.detached_pieces = detached;
+    let (map, mut network) = compact(network, &kept);
+    let root_new = map[root_node as usize].expect("the root is reachable from itself");
+    report.root_on_boundary = sides
+        .on(network.nodes[root_new as usize].p.truncate(), tol)
+        .is_some();
     report.shortest_member = network.lengths().map_or(0.0, |l| l.min);
     report.closest_to_frame = network
         .nodes
         .iter()
-        .enumerate()
-        .filter(|(k, _)| !on_frame.get(*k).copied().unwrap_or(false))
-        .map(|(_, n)| sides.distance(n.p.truncate()))
+        .map(|n| n.p.truncate())
+        .filter(|p| sides.on(*p, tol).is_none())
+        .map(|p| sides.distance(p))
         .min_by(f64::total_cmp);
     network.meta.parameters.insert(
         "boundary".into(),
@@ -435,90 +418,271 @@ pub fn fit(
     Ok((network, report))
 }
 
-/// The network under construction: old nodes mapped on first use, new points appended.
+/// Length along the tree from `root` to every node (infinite where it does not reach).
+fn tree_distances(tree: &Network, root: u32, placed: &[DVec2]) -> Vec<f64> {
+    let adj = tree.adjacency();
+    let mut dist = vec![f64::INFINITY; tree.nodes.len()];
+    let mut heap = std::collections::BinaryHeap::new();
+    dist[root as usize] = 0.0;
+    heap.push(std::cmp::Reverse((Ordered(0.0), root)));
+    while let Some(std::cmp::Reverse((Ordered(d), v))) = heap.pop() {
+        if d > dist[v as usize] {
+            continue;
+        }
+        for &(w, _) in adj.neighbours(v) {
+            let nd = d + placed[v as usize].distance(placed[w as usize]);
+            if nd < dist[w as usize] {
+                dist[w as usize] = nd;
+                heap.push(std::cmp::Reverse((Ordered(nd), w)));
+            }
+        }
+    }
+    dist
+}
+
+/// A total order on distances for the heap.
+#[derive(Clone, Copy, PartialEq)]
+struct Ordered(f64);
+
+impl Eq for Ordered {}
+
+impl PartialOrd for Ordered {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ordered {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
+/// Adds the boundary as members, split at every node that lies on it; returns how many
+/// nodes lie on it.
+fn add_frame(net: &mut Network, boundary: &Outline, sides: &Sides, radius: f64, tol: f64) -> usize {
+    let corners = boundary.points();
+    let n = corners.len();
+    let mut splits: Vec<Vec<(f64, u32)>> = vec![Vec::new(); n];
+    for (k, node) in net.nodes.iter().enumerate() {
+        if let Some((i, u)) = sides.on(node.p.truncate(), tol) {
+            splits[i as usize].push((u, k as u32));
+        }
+    }
+    let joints = splits.iter().map(Vec::len).sum();
+    // Corners: a node already there, or a new one.
+    let corner_nodes: Vec<u32> = (0..n)
+        .map(|i| {
+            let c = corners[i];
+            let prev = (i + n - 1) % n;
+            let found = splits[i]
+                .iter()
+                .chain(&splits[prev])
+                .find(|(_, k)| net.nodes[*k as usize].p.truncate().distance(c) <= tol)
+                .map(|&(_, k)| k);
+            found.unwrap_or_else(|| {
+                net.nodes.push(Node {
+                    p: c.extend(0.0),
+                    normal: None,
+                    radius,
+                });
+                net.nodes.len() as u32 - 1
+            })
+        })
+        .collect();
+    for (i, split) in splits.iter_mut().enumerate() {
+        split.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let mut chain = vec![corner_nodes[i]];
+        chain.extend(split.iter().map(|&(_, k)| k));
+        chain.push(corner_nodes[(i + 1) % n]);
+        chain.dedup();
+        for w in chain.windows(2) {
+            net.edges.push(Edge {
+                a: w[0],
+                b: w[1],
+                radius,
+            });
+        }
+    }
+    joints
+}
+
+/// Joins members that cross or touch away from their ends: a node where they meet, each split
+/// there. Returns the number of joints made. Collinear overlaps are left as they are.
+fn split_crossings(net: &mut Network, tol: f64) -> usize {
+    type EdgeBox = GeomWithData<Rectangle<[f64; 2]>, u32>;
+    let pos = |net: &Network, k: u32| net.nodes[k as usize].p.truncate();
+    let tree = RTree::bulk_load(
+        net.edges
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                let (a, b) = (pos(net, e.a), pos(net, e.b));
+                EdgeBox::new(
+                    Rectangle::from_corners(
+                        (a.min(b) - tol).to_array(),
+                        (a.max(b) + tol).to_array(),
+                    ),
+                    i as u32,
+                )
+            })
+            .collect(),
+    );
+    // Split points per edge: (parameter, node).
+    let mut splits: BTreeMap<u32, Vec<(f64, u32)>> = BTreeMap::new();
+    let mut joints = 0;
+    for (i, e) in net.edges.clone().iter().enumerate() {
+        let (p, q) = (pos(net, e.a), pos(net, e.b));
+        let env = AABB::from_corners(p.min(q).to_array(), q.max(p).to_array());
+        let mut hits: Vec<u32> = tree
+            .locate_in_envelope_intersecting(&env)
+            .map(|c| c.data)
+            .filter(|&j| j > i as u32)
+            .collect();
+        hits.sort_unstable();
+        for j in hits {
+            let f = net.edges[j as usize];
+            if [f.a, f.b].contains(&e.a) || [f.a, f.b].contains(&e.b) {
+                continue;
+            }
+            let (a, b) = (pos(net, f.a), pos(net, f.b));
+            let (r, s) = (q - p, b - a);
+            let denom = r.perp_dot(s);
+            if denom.abs() <= 1e-12 * r.length() * s.length() {
+                continue;
+            }
+            let t = (a - p).perp_dot(s) / denom;
+            let u = (a - p).perp_dot(r) / denom;
+            let (et, eu) = (tol / r.length(), tol / s.length());
+            if t < -et || t > 1.0 + et || u < -eu || u > 1.0 + eu {
+                continue;
+            }
+            // An end lying on the other member joins it there; otherwise a new node.
+            let node = if t <= et {
+                e.a
+            } else if t >= 1.0 - et {
+                e.b
+            } else if u <= eu {
+                f.a
+            } else if u >= 1.0 - eu {
+                f.b
+            } else {
+                net.nodes.push(Node {
+                    p: p.lerp(q, t).extend(0.0),
+                    normal: None,
+                    radius: e.radius.max(f.radius),
+                });
+                net.nodes.len() as u32 - 1
+            };
+            if node != e.a && node != e.b {
+                splits.entry(i as u32).or_default().push((t, node));
+            }
+            if node != f.a && node != f.b {
+                splits.entry(j).or_default().push((u, node));
+            }
+            joints += 1;
+        }
+    }
+    if splits.is_empty() {
+        return 0;
+    }
+    let old = std::mem::take(&mut net.edges);
+    for (i, e) in old.into_iter().enumerate() {
+        match splits.get_mut(&(i as u32)) {
+            None => net.edges.push(e),
+            Some(list) => {
+                list.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+                let mut chain = vec![e.a];
+                chain.extend(list.iter().map(|&(_, k)| k));
+                chain.push(e.b);
+                chain.dedup();
+                for w in chain.windows(2) {
+                    net.edges.push(Edge {
+                        a: w[0],
+                        b: w[1],
+                        ..e
+                    });
+                }
+            }
+        }
+    }
+    joints
+}
+
+/// Nodes connected to `root`, and how many other connected pieces there are.
+fn reachable(net: &Network, root: u32) -> (Vec<bool>, usize) {
+    let (labels, count) = net.component_labels();
+    let r = labels[root as usize];
+    (labels.iter().map(|&l| l == r).collect(), count - 1)
+}
+
+/// The kept part (node order kept), with the old → new node map.
+fn compact(net: Network, kept: &[bool]) -> (Vec<Option<u32>>, Network) {
+    let mut map = vec![None; net.nodes.len()];
+    let mut out = Network {
+        meta: net.meta,
+        ..Default::default()
+    };
+    for (k, n) in net.nodes.into_iter().enumerate() {
+        if kept[k] {
+            map[k] = Some(out.nodes.len() as u32);
+            out.nodes.push(n);
+        }
+    }
+    for e in net.edges {
+        if let (Some(a), Some(b)) = (map[e.a as usize], map[e.b as usize]) {
+            out.edges.push(Edge { a, b, ..e });
+        }
+    }
+    (map, out)
+}
+
+/// The pieces under construction: old nodes mapped on first use, cut points appended, each
+/// node with its distance along the tree from the root.
 #[derive(Default)]
 struct Builder {
     nodes: Vec<Node>,
+    reach: Vec<f64>,
     edges: Vec<Edge>,
+    edge_count: usize,
     /// Old node → new node.
     map: HashMap<u32, u32>,
 }
 
 impl Builder {
-    fn old(&mut self, k: u32, p: DVec2, old: &[Node]) -> u32 {
-        let nodes = &mut self.nodes;
+    fn old(&mut self, k: u32, p: DVec2, old: &[Node], reach: f64) -> u32 {
+        let (nodes, reaches) = (&mut self.nodes, &mut self.reach);
         *self.map.entry(k).or_insert_with(|| {
             nodes.push(Node {
                 p: p.extend(0.0),
                 ..old[k as usize]
             });
+            reaches.push(reach);
             nodes.len() as u32 - 1
         })
     }
 
-    fn new_point(&mut self, p: DVec2, radius: f64) -> u32 {
+    fn new_point(&mut self, p: DVec2, radius: f64, reach: f64) -> u32 {
         self.nodes.push(Node {
             p: p.extend(0.0),
             normal: None,
             radius,
         });
+        self.reach.push(reach);
         self.nodes.len() as u32 - 1
     }
 
     fn edge(&mut self, a: u32, b: u32, radius: f64) {
         if a != b {
             self.edges.push(Edge { a, b, radius });
+            self.edge_count += 1;
         }
-    }
-
-    /// Nodes the root reaches, and how many connected pieces it does not.
-    fn reachable(&self, root: u32) -> (Vec<bool>, usize) {
-        let n = self.nodes.len();
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(p: &mut [u32], mut x: u32) -> u32 {
-            while p[x as usize] != x {
-                p[x as usize] = p[p[x as usize] as usize];
-                x = p[x as usize];
-            }
-            x
-        }
-        for e in &self.edges {
-            let (a, b) = (find(&mut parent, e.a), find(&mut parent, e.b));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
-        }
-        let r = find(&mut parent, root);
-        let labels: Vec<u32> = (0..n as u32).map(|v| find(&mut parent, v)).collect();
-        let kept: Vec<bool> = labels.iter().map(|&l| l == r).collect();
-        let mut others: Vec<u32> = labels.iter().copied().filter(|&l| l != r).collect();
-        others.sort_unstable();
-        others.dedup();
-        (kept, others.len())
-    }
-
-    /// The kept part as a network (node order kept), with the old → new map.
-    fn compact(self, kept: &[bool]) -> (Vec<Option<u32>>, Network) {
-        let mut map = vec![None; self.nodes.len()];
-        let mut net = Network::default();
-        for (k, n) in self.nodes.into_iter().enumerate() {
-            if kept[k] {
-                map[k] = Some(net.nodes.len() as u32);
-                net.nodes.push(n);
-            }
-        }
-        for e in self.edges {
-            if let (Some(a), Some(b)) = (map[e.a as usize], map[e.b as usize]) {
-                net.edges.push(Edge { a, b, ..e });
-            }
-        }
-        (map, net)
     }
 }
 
 /// Merges nodes closer than `tol` (the earlier one stays), and drops the edges that become
 /// loops or repeats.
-fn merge_close(net: Network, tol: f64) -> Network {
+fn merge_close(net: Network, tol: f64) -> (Network, Vec<u32>) {
     let cell = tol.max(f64::MIN_POSITIVE) * 4.0;
     let key = |p: DVec3| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
     let mut grid: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
@@ -555,11 +719,14 @@ fn merge_close(net: Network, tol: f64) -> Network {
             })
         })
         .collect();
-    Network {
-        nodes,
-        edges,
-        meta: net.meta,
-    }
+    (
+        Network {
+            nodes,
+            edges,
+            meta: net.meta,
+        },
+        map,
+    )
 }
 
 fn nodes_at(nodes: &[Node], k: u32) -> DVec3 {
@@ -608,6 +775,7 @@ mod tests {
         // Frame: 4 corners + the root and two cut points on it → 7 frame members.
         assert_eq!(rep.frame_joints, 3);
         assert_eq!(rep.frame_edges, 7);
+        assert!(rep.root_on_boundary);
         assert_eq!(net.edges.len(), 3 + 7);
         Ok(())
     }
@@ -664,14 +832,62 @@ mod tests {
             fit(&y_tree().network, 0, &b, &mid).map(|_| ()),
             Err(FacadeError::CannotCover("lower"))
         );
-        let outside = FacadeOptions {
-            root_at: Some(DVec2::new(0.0, -1.0)),
+        Ok(())
+    }
+
+    #[test]
+    fn a_root_below_the_boundary_enters_through_it_and_crossings_join() -> Result<(), FacadeError> {
+        // An X of two long members above a root: the window [-4, 4] × [2, 6] holds the crossing.
+        let mut t = Tree::default();
+        for q in [
+            (0.0, 0.0),
+            (0.0, 1.0),
+            (-5.0, 7.0),
+            (5.0, 7.0),
+            (-5.0, 3.0),
+            (5.0, 3.0),
+        ] {
+            t.network.nodes.push(Node::at(DVec3::new(q.0, q.1, 0.0)));
+        }
+        t.network.edges = vec![
+            Edge::new(0, 1),
+            Edge::new(1, 4),
+            Edge::new(1, 5),
+            Edge::new(4, 3),
+            Edge::new(5, 2),
+        ];
+        let b = Outline::new(vec![
+            DVec2::new(-4.0, 2.0),
+            DVec2::new(4.0, 2.0),
+            DVec2::new(4.0, 6.0),
+            DVec2::new(-4.0, 6.0),
+        ])
+        .expect("valid");
+        let opts = FacadeOptions {
+            root_at: Some(DVec2::ZERO),
+            fit: Fit::Scale(1.0),
             ..Default::default()
         };
-        assert!(matches!(
-            fit(&y_tree().network, 0, &b, &outside),
-            Err(FacadeError::RootOutside(..))
-        ));
+        let (net, rep) = fit(&t.network, 0, &b, &opts)?;
+        assert!(rep.root_on_boundary);
+        assert!(rep.joints_at_crossings >= 1);
+        assert_eq!(net.component_labels().1, 1);
+        let root = net.meta.parameters["root_node"]
+            .as_u64()
+            .expect("the root is recorded") as usize;
+        let r = net.nodes[root].p;
+        assert!(
+            r.y == 2.0 || r.x.abs() == 4.0,
+            "the root is where the tree enters: {r}"
+        );
+        // The crossing at (0, 5) is a node of degree 4.
+        let adj = net.adjacency();
+        let x = net
+            .nodes
+            .iter()
+            .position(|n| n.p.truncate().distance(DVec2::new(0.0, 5.0)) < 1e-9)
+            .expect("a node at the crossing");
+        assert_eq!(adj.degree(x as u32), 4);
         Ok(())
     }
 }

@@ -21,6 +21,15 @@ pub fn lamina(args: &[&str]) -> Output {
         .expect("the lamina binary runs")
 }
 
+/// Runs lamina and returns its stdout, or an error with its stderr when it fails.
+pub fn run_ok(args: &[&str]) -> Result<String, Box<dyn std::error::Error>> {
+    let o = lamina(args);
+    if !o.status.success() {
+        return Err(format!("lamina {args:?} failed: {}", stderr(&o)).into());
+    }
+    Ok(stdout(&o))
+}
+
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }

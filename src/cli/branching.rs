@@ -1,0 +1,324 @@
+//! What `lamina lsystem` and `lamina bifurcate` share: Murray widths, fitting to a façade
+//! boundary, standing up, projecting onto a surface, and writing the network, renders and
+//! report.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args as ClapArgs;
+use glam::{DVec2, DVec3};
+use serde_json::{json, Value};
+
+use super::surface::read_surface;
+use super::venation::write_json;
+use lamina::grow::facade::{fit, FacadeOptions, Fit};
+use lamina::grow::outline::Outline;
+use lamina::grow::outline_file::read_polygon;
+use lamina::grow::project::{project, ProjectOptions};
+use lamina::grow::report::Quality;
+use lamina::grow::tree::Tree;
+use lamina::network::io::{write_network, RenderOptions};
+use lamina::network::Network;
+
+#[derive(ClapArgs)]
+pub struct WidthArgs {
+    /// Widths by Murray's law with this exponent instead of by depth (tips take --tip-radius)
+    #[arg(long, value_name = "N")]
+    pub murray: Option<f64>,
+    /// Tip radius for --murray, mm [default: the depth radius ÷ 8]
+    #[arg(long, value_name = "MM", requires = "murray")]
+    pub tip_radius: Option<f64>,
+}
+
+#[derive(ClapArgs)]
+pub struct FacadeArgs {
+    /// Fit the tree to a façade boundary: a closed polygon in a file (.json .obj .dxf .svg, the
+    /// largest loop) or `rect:W,H` (mm, base centred on the origin)
+    #[arg(long, value_name = "FILE|rect:W,H")]
+    pub boundary: Option<String>,
+    /// Where the tree's root goes on the boundary [default: the middle of its lowest points]
+    #[arg(
+        long,
+        value_name = "X,Y",
+        requires = "boundary",
+        allow_hyphen_values = true
+    )]
+    pub root_at: Option<String>,
+    /// Size the tree: `cover` (smallest scale that spans the boundary from the root),
+    /// `contain` (largest that stays inside), or a scale factor
+    #[arg(long, default_value = "cover", requires = "boundary")]
+    pub fit: String,
+    /// Leave out the frame (the boundary as members, split where branches meet it)
+    #[arg(long, requires = "boundary")]
+    pub no_frame: bool,
+    /// Radius of the frame members, mm [default: the trunk's]
+    #[arg(long, value_name = "MM", requires = "boundary")]
+    pub frame_radius: Option<f64>,
+    /// Stand the drawing up: its +Y becomes +Z (after fitting, before projecting)
+    #[arg(long)]
+    pub upright: bool,
+    /// Project the result onto this surface (.obj .stl) along --direction
+    #[arg(long, value_name = "MESH")]
+    pub onto: Option<PathBuf>,
+    /// Direction of projection [default: +Z, or +Y with --upright]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        requires = "onto",
+        allow_hyphen_values = true
+    )]
+    pub direction: Option<String>,
+    /// Split members whose projection bends away from the chord by more than this, mm
+    /// [default: 1e-3 of the surface's size]
+    #[arg(long, value_name = "MM", requires = "onto")]
+    pub sag: Option<f64>,
+}
+
+#[derive(ClapArgs)]
+pub struct OutputArgs {
+    /// Output network (.json .obj .dxf .svg .png)
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Also write an SVG render
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Also write a PNG render
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Longer side of PNG renders, in pixels
+    #[arg(long, default_value_t = 2048)]
+    pub size: u32,
+    /// Write the report as JSON here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the report as JSON on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Numbers separated by commas, exactly `n` of them.
+pub fn parse_numbers(option: &str, text: &str, n: usize) -> Result<Vec<f64>> {
+    let nums: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()
+        .filter(|v: &Vec<f64>| v.len() == n && v.iter().all(|x| x.is_finite()))
+        .with_context(|| format!("{option} {text}: expected {n} numbers separated by commas"))?;
+    Ok(nums)
+}
+
+/// The boundary polygon: `rect:W,H` or a file.
+pub fn read_boundary(spec: &str) -> Result<Outline> {
+    if let Some(rest) = spec.strip_prefix("rect:") {
+        let wh = parse_numbers("--boundary rect:", rest, 2)?;
+        let (w, h) = (wh[0], wh[1]);
+        if !(w > 0.0 && h > 0.0) {
+            bail!("--boundary {spec}: width and height must be positive");
+        }
+        let p = DVec2::new;
+        return Ok(Outline::new(vec![
+            p(-w / 2.0, 0.0),
+            p(w / 2.0, 0.0),
+            p(w / 2.0, h),
+            p(-w / 2.0, h),
+        ])?);
+    }
+    match read_polygon(Path::new(spec), "--boundary") {
+        Ok(o) => Ok(o),
+        // Errors from the network readers name the file but not the option.
+        Err(e @ lamina::grow::outline_file::OutlineFileError::Read(_)) => {
+            Err(anyhow::Error::new(e).context("--boundary"))
+        }
+        Err(e) => Err(e.into()),
+    }
+}
+
+impl FacadeArgs {
+    fn fit_rule(&self) -> Result<Fit> {
+        Ok(match self.fit.as_str() {
+            "cover" => Fit::Cover,
+            "contain" => Fit::Contain,
+            s => match s.parse::<f64>() {
+                Ok(v) if v.is_finite() && v > 0.0 => Fit::Scale(v),
+                _ => bail!("--fit {s}: expected cover, contain or a positive scale factor"),
+            },
+        })
+    }
+}
+
+/// What a generator hands over: the tree, its name and parameters, and its own report.
+pub struct Made {
+    pub tree: Tree,
+    pub generator: &'static str,
+    pub parameters: Vec<(&'static str, Value)>,
+    pub seed: u64,
+    pub report: Value,
+    /// Radius the tip takes under --murray when no --tip-radius is given.
+    pub default_tip: f64,
+}
+
+/// Widths, façade, upright, projection; writes every output and prints the summary.
+pub fn finish(
+    mut made: Made,
+    widths: &WidthArgs,
+    facade: &FacadeArgs,
+    out: &OutputArgs,
+) -> Result<()> {
+    if let Some(n) = widths.murray {
+        let tip = widths.tip_radius.unwrap_or(made.default_tip);
+        if !(n.is_finite() && n > 0.0) {
+            bail!("--murray {n}: the exponent must be a positive number");
+        }
+        if !(tip.is_finite() && tip > 0.0) {
+            bail!("--tip-radius {tip}: must be a positive distance in mm");
+        }
+        made.tree.murray(n, tip);
+    }
+    let mut report = serde_json::Map::new();
+    report.insert(made.generator.into(), made.report);
+    let flat = {
+        let size = made.tree.network.bbox().diagonal();
+        made.tree
+            .network
+            .nodes
+            .iter()
+            .all(|n| n.p.z.abs() <= 1e-9 * size)
+    };
+    let mut net = match &facade.boundary {
+        Some(spec) => {
+            let boundary = read_boundary(spec)?;
+            let opts = FacadeOptions {
+                root_at: facade
+                    .root_at
+                    .as_deref()
+                    .map(|t| parse_numbers("--root-at", t, 2).map(|v| DVec2::new(v[0], v[1])))
+                    .transpose()?,
+                fit: facade.fit_rule()?,
+                frame: !facade.no_frame,
+                frame_radius: facade.frame_radius,
+            };
+            let (net, rep) = fit(&made.tree.network, 0, &boundary, &opts)?;
+            report.insert("facade".into(), serde_json::to_value(rep)?);
+            net
+        }
+        None => made.tree.network,
+    };
+    if flat {
+        // Crossings and joints in the plane, before standing up or projecting.
+        report.insert(
+            "quality".into(),
+            serde_json::to_value(Quality::of(&net, 1))?,
+        );
+    }
+    if facade.upright {
+        let turn = |v: DVec3| DVec3::new(v.x, -v.z, v.y);
+        for n in &mut net.nodes {
+            n.p = turn(n.p);
+            n.normal = n.normal.map(turn);
+        }
+    }
+    if let Some(mesh_path) = &facade.onto {
+        let mesh = read_surface(mesh_path)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("--onto {}", mesh_path.display()))?;
+        let direction = match &facade.direction {
+            Some(t) => {
+                let v = parse_numbers("--direction", t, 3)?;
+                DVec3::new(v[0], v[1], v[2])
+            }
+            None if facade.upright => DVec3::Y,
+            None => DVec3::Z,
+        };
+        let (projected, rep) = project(
+            &net,
+            &mesh,
+            &ProjectOptions {
+                direction,
+                sag: facade.sag,
+            },
+        )?;
+        report.insert("projection".into(), serde_json::to_value(rep)?);
+        net = projected;
+    }
+    net.meta.generator = Some(made.generator.into());
+    net.meta.seed = Some(made.seed);
+    for (k, v) in made.parameters {
+        net.meta.parameters.insert(k.into(), v);
+    }
+    let lengths = net.lengths();
+    report.insert(
+        "network".into(),
+        json!({
+            "nodes": net.nodes.len(),
+            "edges": net.edges.len(),
+            "total_length_mm": lengths.map_or(0.0, |l| l.total),
+            "longest_member_mm": lengths.map_or(0.0, |l| l.max),
+            "bbox_mm": net.bbox().size().to_array(),
+        }),
+    );
+    write_all(&net, out)?;
+    let report = Value::Object(report);
+    if let Some(path) = &out.report {
+        write_json(path, &report)?;
+    }
+    if out.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_summary(&report);
+        for p in [&out.output, &out.svg, &out.png].into_iter().flatten() {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+fn write_all(net: &Network, out: &OutputArgs) -> Result<()> {
+    let render = RenderOptions { size: out.size };
+    if let Some(p) = &out.output {
+        write_network(net, p, &render)?;
+    }
+    for (p, ext) in [(&out.svg, "svg"), (&out.png, "png")] {
+        if let Some(p) = p {
+            if lamina::files::extension(p) != ext {
+                bail!("--{ext} {}: expected a .{ext} file", p.display());
+            }
+            write_network(net, p, &render)?;
+        }
+    }
+    Ok(())
+}
+
+/// One line per section of the report.
+fn print_summary(report: &Value) {
+    let Some(map) = report.as_object() else {
+        return;
+    };
+    for (section, v) in map {
+        if let Some(fields) = v.as_object() {
+            let parts: Vec<String> = fields
+                .iter()
+                .filter(|(_, x)| !x.is_object() && !x.is_null())
+                .map(|(k, x)| format!("{k} {x}"))
+                .collect();
+            println!("{section}: {}", parts.join(", "));
+        }
+    }
+}
+
+/// Checks the outputs can be written where asked before any work is done.
+pub fn check_outputs(out: &OutputArgs) -> Result<()> {
+    if out.output.is_none() && out.svg.is_none() && out.png.is_none() {
+        bail!("give -o OUT (.json .obj .dxf .svg .png), --svg or --png");
+    }
+    if let Some(p) = &out.output {
+        let ext = lamina::files::extension(p);
+        if !["json", "obj", "dxf", "svg", "png"].contains(&ext.as_str()) {
+            bail!(
+                "-o {}: the network is written as .json, .obj, .dxf, .svg or .png",
+                p.display()
+            );
+        }
+    }
+    Ok(())
+}
