@@ -5,7 +5,7 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use serde_json::json;
 
-use super::branching::{check_outputs, finish, FacadeArgs, Made, OutputArgs, WidthArgs};
+use super::branching::{check_outputs, finish, print, FacadeArgs, Made, OutputArgs, WidthArgs};
 use lamina::grow::bifurcation::{bifurcate, BifurcationOptions};
 use lamina::grow::tree::Span;
 
@@ -44,6 +44,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let report = execute(&args)?;
+    print(&report, &args.out)
+}
+
+/// Grows, fits and writes; returns the report.
+pub fn execute(args: &Args) -> Result<serde_json::Value> {
     check_outputs(&args.out)?;
     let opts = BifurcationOptions {
         depth: args.depth,

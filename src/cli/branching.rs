@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use glam::{DVec2, DVec3};
 use serde_json::{json, Value};
 
-use super::surface::read_surface;
+use super::surface::{read_surface, strokes};
 use super::venation::write_json;
 use lamina::grow::facade::{fit, FacadeOptions, Fit};
 use lamina::grow::outline::Outline;
@@ -17,6 +17,8 @@ use lamina::grow::outline_file::read_polygon;
 use lamina::grow::project::{project, ProjectOptions};
 use lamina::grow::report::Quality;
 use lamina::grow::tree::Tree;
+use lamina::mesh::io::write_png_with_strokes;
+use lamina::mesh::TriMesh;
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
 
@@ -158,13 +160,13 @@ pub struct Made {
     pub default_tip: f64,
 }
 
-/// Widths, façade, upright, projection; writes every output and prints the summary.
+/// Widths, façade, upright, projection; writes every output and returns the report.
 pub fn finish(
     mut made: Made,
     widths: &WidthArgs,
     facade: &FacadeArgs,
     out: &OutputArgs,
-) -> Result<()> {
+) -> Result<Value> {
     if let Some(n) = widths.murray {
         let tip = widths.tip_radius.unwrap_or(made.default_tip);
         if !(n.is_finite() && n > 0.0) {
@@ -218,6 +220,7 @@ pub fn finish(
             n.normal = n.normal.map(turn);
         }
     }
+    let mut surface = None;
     if let Some(mesh_path) = &facade.onto {
         let mesh = read_surface(mesh_path)
             .map_err(|e| anyhow::anyhow!("{e}"))
@@ -240,6 +243,7 @@ pub fn finish(
         )?;
         report.insert("projection".into(), serde_json::to_value(rep)?);
         net = projected;
+        surface = Some(mesh);
     }
     net.meta.generator = Some(made.generator.into());
     net.meta.seed = Some(made.seed);
@@ -257,15 +261,20 @@ pub fn finish(
             "bbox_mm": net.bbox().size().to_array(),
         }),
     );
-    write_all(&net, out)?;
+    write_all(&net, surface.as_ref(), out)?;
     let report = Value::Object(report);
     if let Some(path) = &out.report {
         write_json(path, &report)?;
     }
+    Ok(report)
+}
+
+/// Prints the report: as JSON with --json, else one line per section and the files written.
+pub fn print(report: &Value, out: &OutputArgs) -> Result<()> {
     if out.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        println!("{}", serde_json::to_string_pretty(report)?);
     } else {
-        print_summary(&report);
+        print_summary(report);
         for p in [&out.output, &out.svg, &out.png].into_iter().flatten() {
             println!("wrote {}", p.display());
         }
@@ -273,17 +282,27 @@ pub fn finish(
     Ok(())
 }
 
-fn write_all(net: &Network, out: &OutputArgs) -> Result<()> {
+/// The network in every format asked for; a PNG of a projected network shows it on its surface.
+fn write_all(net: &Network, surface: Option<&TriMesh>, out: &OutputArgs) -> Result<()> {
     let render = RenderOptions { size: out.size };
+    let write = |p: &Path| -> Result<()> {
+        match surface {
+            Some(mesh) if lamina::files::extension(p) == "png" => {
+                write_png_with_strokes(mesh, &strokes(net), p, out.size)?
+            }
+            _ => write_network(net, p, &render)?,
+        }
+        Ok(())
+    };
     if let Some(p) = &out.output {
-        write_network(net, p, &render)?;
+        write(p)?;
     }
     for (p, ext) in [(&out.svg, "svg"), (&out.png, "png")] {
         if let Some(p) = p {
             if lamina::files::extension(p) != ext {
                 bail!("--{ext} {}: expected a .{ext} file", p.display());
             }
-            write_network(net, p, &render)?;
+            write(p)?;
         }
     }
     Ok(())

@@ -2,9 +2,11 @@
 //! it, convert it to every format and render it; grow two leaves; run the Calyx network through
 //! cells and node axes with planarity reports, then into plates, assembly groups and nested
 //! cut sheets; grow veins on the Calyx band, a sphere, a torus and a density plate (surface
-//! venation and geodesic veins, each rendered on its surface); make a leaf solid and slice it for
-//! the DMP-SL printer; write an index.html linking everything. Later stages add their steps here.
+//! venation and geodesic veins, each rendered on its surface); draw the façade paper's L-system
+//! tree and fit it to a 12 m × 4 m façade; make a leaf solid and slice it for the DMP-SL
+//! printer; write an index.html linking everything. Later stages add their steps here.
 
+mod facade;
 mod print;
 
 use std::fmt::Write as _;
@@ -103,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 4 + 4 + 1),
+        Some(FIXTURES.len() as u64 + 4 + 4 + 2),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -141,6 +143,9 @@ pub fn run(args: Args) -> Result<()> {
         entries.push(surface_veins(out, &inputs.join(name), about, args.size)?);
         bar.inc(1);
     }
+    bar.set_message("façade: L-system tree, fitted, panels, on a wall");
+    entries.push(facade::facade(out, args.size)?);
+    bar.inc(1);
     bar.set_message("print: leaf, solid, slices");
     entries.push(print::print_leaf(out, args.size)?);
     bar.inc(1);

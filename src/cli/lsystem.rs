@@ -11,7 +11,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
-use super::branching::{check_outputs, finish, FacadeArgs, Made, OutputArgs, WidthArgs};
+use super::branching::{check_outputs, finish, print, FacadeArgs, Made, OutputArgs, WidthArgs};
 use lamina::grow::lsystem::{
     derive, parse_rule, read_grammar_file, word_length, Angle, Counts, Grammar, Turtle,
     TurtleOptions, DEFAULT_MAX_SYMBOLS,
@@ -148,14 +148,20 @@ fn progress(grammar: &Grammar, iterations: u32) -> ProgressBar {
 const TICK: u64 = 1 << 20;
 
 pub fn run(args: Args) -> Result<()> {
-    let s = setup(&args)?;
     if args.derive_only {
         let o = &args.out;
         if o.output.is_some() || o.svg.is_some() || o.png.is_some() || o.report.is_some() {
             bail!("--derive-only draws nothing: leave out -o, --svg, --png and --report");
         }
-        return derive_only(&args, &s);
+        return derive_only(&args, &setup(&args)?);
     }
+    let report = execute(&args)?;
+    print(&report, &args.out)
+}
+
+/// Derives, draws and writes; returns the report.
+pub fn execute(args: &Args) -> Result<serde_json::Value> {
+    let s = setup(args)?;
     check_outputs(&args.out)?;
     let bar = progress(&s.grammar, s.iterations);
     let mut turtle = Turtle::new(&s.turtle, args.seed);
@@ -164,7 +170,7 @@ pub fn run(args: Args) -> Result<()> {
     derive(&s.grammar, s.iterations, &mut rng, args.max_symbols, |c| {
         turtle.feed(c);
         n += 1;
-        if n % TICK == 0 {
+        if n.is_multiple_of(TICK) {
             bar.set_position(n);
         }
     })?;
@@ -224,7 +230,7 @@ fn derive_only(args: &Args, s: &Setup) -> Result<()> {
                 failed = Some(e);
             }
         }
-        if counts.symbols % TICK == 0 {
+        if counts.symbols.is_multiple_of(TICK) {
             bar.set_position(counts.symbols);
         }
     })?;
