@@ -4,9 +4,10 @@ counts COUNTS.json N: rewrites the paper's grammar (Hanafin et al. 5.3: X -> F[-
     F -> FF) N times in memory and counts symbols, F's and maximal runs of F; the JSON lamina
     printed with --derive-only --json must match.
 word WORD.txt N: the whole word lamina printed with --derive-only --string must equal ours.
-facade NET.json --rect W,H [--root-on-boundary]: with shapely, every member lies inside the
-    W x H rectangle (base centred on the origin, within 1e-6 mm), members meet only at their
-    ends, the network is one connected piece holding meta.parameters.root_node.
+facade NET.json (--rect W,H | --dxf FILE) [--root-on-boundary]: with shapely, every member lies
+    inside the boundary (a W x H rectangle with its base centred on the origin, or the largest
+    closed LWPOLYLINE of a DXF read by ezdxf) within 1e-6 mm, members meet only at their ends,
+    the network is one connected piece holding meta.parameters.root_node.
 tree NET.json --edges E: a tree (E edges, E + 1 nodes, connected, acyclic).
 """
 import argparse
@@ -71,11 +72,19 @@ def check_word(path, n):
         f"n = {n}: {len(want)} symbols equal"
 
 
-def check_facade(path, rect, root_on_boundary):
+def dxf_polygon(path):
+    import ezdxf
+    from shapely.geometry import Polygon
+
+    doc = ezdxf.readfile(path)
+    loops = [Polygon([(x, y) for x, y, *_ in e.get_points()])
+             for e in doc.modelspace().query("LWPOLYLINE") if e.closed]
+    return max(loops, key=lambda p: p.area)
+
+
+def check_facade(path, frame, root_on_boundary):
     d, nodes, edges = load(path)
-    w, h = rect
     tol = 1e-6
-    frame = box(-w / 2, 0, w / 2, h)
     grown = frame.buffer(tol)
     errors = []
     lines = [LineString([nodes[a][:2], nodes[b][:2]]) for a, b in edges]
@@ -107,7 +116,7 @@ def check_facade(path, rect, root_on_boundary):
         errors.append(f"root_node {root} is not a node")
     elif root_on_boundary and frame.exterior.distance(Point(nodes[root][:2])) > tol:
         errors.append(f"root node {root} at {nodes[root][:2]} is not on the boundary")
-    return errors, f"{len(nodes)} nodes, {len(edges)} members inside {w} x {h}, {parts} piece(s)"
+    return errors, f"{len(nodes)} nodes, {len(edges)} members inside the boundary, {parts} piece(s)"
 
 
 def check_tree(path, n_edges):
@@ -133,7 +142,8 @@ def main():
     wd.add_argument("n", type=int)
     f = sub.add_parser("facade")
     f.add_argument("file")
-    f.add_argument("--rect", required=True)
+    f.add_argument("--rect", help="W,H: the rectangle with its base centred on the origin")
+    f.add_argument("--dxf", help="the largest closed LWPOLYLINE of this DXF")
     f.add_argument("--root-on-boundary", action="store_true")
     t = sub.add_parser("tree")
     t.add_argument("file")
@@ -144,8 +154,12 @@ def main():
     elif a.cmd == "word":
         errors, summary = check_word(a.file, a.n)
     elif a.cmd == "facade":
-        w, h = (float(v) for v in a.rect.split(","))
-        errors, summary = check_facade(a.file, (w, h), a.root_on_boundary)
+        if a.rect:
+            w, h = (float(v) for v in a.rect.split(","))
+            frame = box(-w / 2, 0, w / 2, h)
+        else:
+            frame = dxf_polygon(a.dxf)
+        errors, summary = check_facade(a.file, frame, a.root_on_boundary)
     else:
         errors, summary = check_tree(a.file, a.edges)
     for e in errors[:20]:
