@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 
 use glam::DVec3;
 use rstar::primitives::{GeomWithData, Rectangle};
+use rayon::prelude::*;
 use rstar::{RTree, AABB};
 
 use crate::network::Network;
@@ -157,29 +158,24 @@ fn crossings(net: &Network) -> usize {
             })
             .collect(),
     );
-    let mut count = 0;
-    for &i in &ids {
-        let (a, b) = seg(i);
-        let ei = &net.edges[i as usize];
-        let bx = AABB::from_corners(a.to_array(), b.to_array());
-        for other in tree.locate_in_envelope_intersecting(&bx) {
-            let j = other.data;
-            if j <= i {
-                continue;
-            }
-            let ej = &net.edges[j as usize];
-            let shared = [ej.a, ej.b].iter().any(|x| *x == ei.a || *x == ei.b);
-            let (c, d) = seg(j);
-            if shared {
-                // Legs of one node overlap only if collinear and pointing the same way.
-                continue;
-            }
-            if crate::geom::segments_touch(a, b, c, d) {
-                count += 1;
-            }
-        }
-    }
-    count
+    // Each edge counts its pairs with later edges; the queries run in parallel.
+    ids.par_iter()
+        .map(|&i| {
+            let (a, b) = seg(i);
+            let ei = &net.edges[i as usize];
+            let bx = AABB::from_corners(a.to_array(), b.to_array());
+            tree.locate_in_envelope_intersecting(&bx)
+                .filter(|other| {
+                    let j = other.data;
+                    let ej = &net.edges[j as usize];
+                    // Legs of one node overlap only if collinear and pointing the same way.
+                    let shared = [ej.a, ej.b].iter().any(|x| *x == ei.a || *x == ei.b);
+                    let (c, d) = seg(j);
+                    j > i && !shared && crate::geom::segments_touch(a, b, c, d)
+                })
+                .count()
+        })
+        .sum()
 }
 
 #[cfg(test)]
