@@ -4,9 +4,11 @@
 //! simplified members. Peak memory (VmHWM) is read after each stage: counting must not grow it.
 //! `harness = false`: `cargo bench --bench lsystem`.
 
-use std::time::Instant;
-
 use lamina::grow::lsystem::{count, interpret, parse_rule, Grammar, TurtleOptions};
+
+#[path = "common/timing.rs"]
+mod timing;
+use timing::best_of;
 
 fn peak_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -17,18 +19,6 @@ fn peak_mib() -> f64 {
                 .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
         })
         .map_or(f64::NAN, |kb| kb / 1024.0)
-}
-
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut last = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        let v = f();
-        best = best.min(t.elapsed().as_secs_f64());
-        last = Some(v);
-    }
-    (best, last.expect("at least one run"))
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

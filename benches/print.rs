@@ -3,24 +3,14 @@
 //! runs against manifold3d and PrusaSlicer on a 12,700-node leaf are whole-process, in
 //! `scripts/bench print`. `harness = false`: `cargo bench --bench print`.
 
-use std::time::Instant;
-
 use lamina::fabricate::slice::{arrange, slice, Model, Printer};
 use lamina::fabricate::solid::{solid, SolidOptions};
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut last = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        let v = f();
-        best = best.min(t.elapsed().as_secs_f64());
-        last = Some(v);
-    }
-    (best, last.expect("at least one run"))
-}
+#[path = "common/timing.rs"]
+mod timing;
+use timing::best_of;
 
 fn main() {
     let outline = Outline::shape(Shape::Ovate);

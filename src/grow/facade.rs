@@ -18,6 +18,8 @@ use glam::{DVec2, DVec3};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
+use crate::geom::Ordered;
+
 use super::outline::Outline;
 use crate::network::{Edge, Network, Node};
 
@@ -438,24 +440,6 @@ fn tree_distances(tree: &Network, root: u32, placed: &[DVec2]) -> Vec<f64> {
         }
     }
     dist
-}
-
-/// A total order on distances for the heap.
-#[derive(Clone, Copy, PartialEq)]
-struct Ordered(f64);
-
-impl Eq for Ordered {}
-
-impl PartialOrd for Ordered {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Ordered {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
 }
 
 /// Adds the boundary as members, split at every node that lies on it; returns how many

@@ -6,8 +6,8 @@
 use std::collections::BTreeMap;
 
 use glam::DVec3;
-use rstar::primitives::{GeomWithData, Rectangle};
 use rayon::prelude::*;
+use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
 use crate::network::Network;

@@ -21,6 +21,8 @@ use std::collections::BinaryHeap;
 
 use glam::DVec3;
 
+use crate::geom::Ordered;
+
 const BALANCE: f64 = 0.15;
 const PASSES: usize = 50;
 
@@ -267,24 +269,6 @@ fn dijkstra(adj: &[Vec<(usize, f64)>], from: &[usize]) -> Vec<f64> {
     dist.iter()
         .map(|&d| if d.is_finite() { d } else { -1.0 })
         .collect()
-}
-
-/// A total order on finite f64 for the heaps.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Ordered(f64);
-
-impl Eq for Ordered {}
-
-impl PartialOrd for Ordered {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Ordered {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
 }
 
 #[cfg(test)]

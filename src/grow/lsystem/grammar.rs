@@ -84,8 +84,8 @@ pub struct GrammarFile {
 }
 
 impl Grammar {
-    /// Checks the axiom and the productions and builds the lookup table. `at` gives each rule's
-    /// place for errors.
+    /// Checks the axiom and builds the lookup table; several productions for one symbol make
+    /// it stochastic, chosen by their relative weights.
     pub fn new(axiom: &str, rules: Vec<Rule>) -> Result<Grammar, GrammarError> {
         let axiom_bytes = symbols(axiom, "the axiom", 0)?;
         if axiom_bytes.is_empty() {
