@@ -11,6 +11,7 @@ use serde_json::{json, Value};
 
 use super::surface::{read_surface, strokes};
 use super::venation::write_json;
+use lamina::geom::upright;
 use lamina::grow::facade::{fit, FacadeOptions, Fit};
 use lamina::grow::outline::Outline;
 use lamina::grow::outline_file::read_polygon;
@@ -214,10 +215,9 @@ pub fn finish(
         );
     }
     if facade.upright {
-        let turn = |v: DVec3| DVec3::new(v.x, -v.z, v.y);
         for n in &mut net.nodes {
-            n.p = turn(n.p);
-            n.normal = n.normal.map(turn);
+            n.p = upright(n.p);
+            n.normal = n.normal.map(upright);
         }
     }
     let mut surface = None;

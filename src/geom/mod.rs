@@ -57,6 +57,11 @@ pub fn mix64(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
+/// A quarter turn about +X that takes +Y to +Z, exactly: what stands a drawing or a leaf up.
+pub fn upright(v: DVec3) -> DVec3 {
+    DVec3::new(v.x, -v.z, v.y)
+}
+
 /// An f64 with a total order (`total_cmp`), for binary heaps of distances.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ordered(pub f64);

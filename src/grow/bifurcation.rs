@@ -11,7 +11,6 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::tree::{Span, Tree};
-use crate::network::{Edge, Node};
 
 /// Deepest recursion allowed: 2^21 − 1 ≈ 2 million branches.
 pub const MAX_DEPTH: u32 = 20;
@@ -103,24 +102,8 @@ pub fn bifurcate(opts: &BifurcationOptions, seed: u64) -> Result<Tree, Bifurcati
     opts.check()?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut tree = Tree::default();
-    let add = |tree: &mut Tree, p: DVec3, parent: Option<u32>, radius: f64| {
-        tree.network.nodes.push(Node {
-            p,
-            normal: None,
-            radius,
-        });
-        tree.parent.push(parent);
-        if let Some(a) = parent {
-            tree.network.edges.push(Edge {
-                a,
-                b: tree.network.nodes.len() as u32 - 1,
-                radius,
-            });
-        }
-        tree.network.nodes.len() as u32 - 1
-    };
-    add(&mut tree, DVec3::ZERO, None, opts.radius);
-    let trunk = add(&mut tree, DVec3::Y * opts.length, Some(0), opts.radius);
+    tree.add(DVec3::ZERO, None, opts.radius);
+    let trunk = tree.add(DVec3::Y * opts.length, Some(0), opts.radius);
     let mut tips = vec![Tip {
         node: trunk,
         h: DVec3::Y,
@@ -144,7 +127,7 @@ pub fn bifurcate(opts: &BifurcationOptions, seed: u64) -> Result<Tree, Bifurcati
                 let (h, l) = (tip.h * c + l * s, l * c - tip.h * s);
                 let (length, radius) = (tip.length * k, tip.radius * opts.radius_scale);
                 let start = tree.network.nodes[tip.node as usize].p;
-                let node = add(&mut tree, start + h * length, Some(tip.node), radius);
+                let node = tree.add(start + h * length, Some(tip.node), radius);
                 next.push(Tip {
                     node,
                     h,

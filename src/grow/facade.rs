@@ -12,7 +12,7 @@
 //! only at nodes (collinear overlaps excepted), and no two nodes coincide within the tolerance
 //! (1e-9 of the boundary's diagonal).
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use glam::{DVec2, DVec3};
 use rstar::primitives::{GeomWithData, Rectangle};
@@ -144,28 +144,26 @@ impl<'a> Sides<'a> {
             .map(|s| s.data)
     }
 
+    /// The distance from `p` to side `i`, and where along the side (0..1) its foot lies.
+    fn foot(&self, i: u32, p: DVec2) -> (f64, f64) {
+        let (a, b) = self.side(i);
+        let d = b - a;
+        let u = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+        ((a + d * u).distance(p), u)
+    }
+
     /// The side `p` lies on within `tol`, and where along it (0..1).
     fn on(&self, p: DVec2, tol: f64) -> Option<(u32, f64)> {
         self.near(p, p, tol)
-            .filter_map(|i| {
-                let (a, b) = self.side(i);
-                let d = b - a;
-                let u = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
-                let dist = (a + d * u).distance(p);
-                (dist <= tol).then_some((dist, i, u))
-            })
-            .min_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)))
-            .map(|(_, i, u)| (i, u))
+            .map(|i| (self.foot(i, p), i))
+            .filter(|((dist, _), _)| *dist <= tol)
+            .min_by(|x, y| x.0 .0.total_cmp(&y.0 .0).then(x.1.cmp(&y.1)))
+            .map(|((_, u), i)| (i, u))
     }
 
     fn distance(&self, p: DVec2) -> f64 {
         (0..self.points.len() as u32)
-            .map(|i| {
-                let (a, b) = self.side(i);
-                let d = b - a;
-                let u = ((p - a).dot(d) / d.length_squared()).clamp(0.0, 1.0);
-                (a + d * u).distance(p)
-            })
+            .map(|i| self.foot(i, p).0)
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -671,7 +669,7 @@ fn merge_close(net: Network, tol: f64) -> (Network, Vec<u32>) {
     let key = |p: DVec3| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
     let mut grid: HashMap<(i64, i64), Vec<u32>> = HashMap::new();
     let mut map = vec![0u32; net.nodes.len()];
-    let mut nodes = Vec::with_capacity(net.nodes.len());
+    let mut nodes: Vec<Node> = Vec::with_capacity(net.nodes.len());
     for (k, n) in net.nodes.iter().enumerate() {
         let (cx, cy) = key(n.p);
         let hit = (-1..=1)
@@ -679,7 +677,7 @@ fn merge_close(net: Network, tol: f64) -> (Network, Vec<u32>) {
             .filter_map(|c| grid.get(&c))
             .flatten()
             .copied()
-            .find(|&m| nodes_at(&nodes, m).distance(n.p) <= tol);
+            .find(|&m| nodes[m as usize].p.distance(n.p) <= tol);
         map[k] = match hit {
             Some(m) => m,
             None => {
@@ -690,17 +688,13 @@ fn merge_close(net: Network, tol: f64) -> (Network, Vec<u32>) {
             }
         };
     }
-    let mut seen: BTreeMap<(u32, u32), ()> = BTreeMap::new();
+    let mut seen: HashSet<(u32, u32)> = HashSet::new();
     let edges = net
         .edges
         .iter()
         .filter_map(|e| {
             let (a, b) = (map[e.a as usize], map[e.b as usize]);
-            (a != b && seen.insert((a.min(b), a.max(b)), ()).is_none()).then_some(Edge {
-                a,
-                b,
-                ..*e
-            })
+            (a != b && seen.insert((a.min(b), a.max(b)))).then_some(Edge { a, b, ..*e })
         })
         .collect();
     (
@@ -711,10 +705,6 @@ fn merge_close(net: Network, tol: f64) -> (Network, Vec<u32>) {
         },
         map,
     )
-}
-
-fn nodes_at(nodes: &[Node], k: u32) -> DVec3 {
-    nodes[k as usize].p
 }
 
 #[cfg(test)]

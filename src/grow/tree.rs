@@ -7,7 +7,7 @@ use std::str::FromStr;
 use glam::DVec3;
 use rand::Rng;
 
-use crate::network::Network;
+use crate::network::{Edge, Network, Node};
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Tree {
@@ -30,13 +30,20 @@ impl Tree {
         }
     }
 
-    /// Turns +Y to +Z (a quarter turn about +X): a tree drawn heading +Y stands up.
-    pub fn upright(&mut self) {
-        let turn = |v: DVec3| DVec3::new(v.x, -v.z, v.y);
-        for n in &mut self.network.nodes {
-            n.p = turn(n.p);
-            n.normal = n.normal.map(turn);
+    /// Adds a node at `p`, and the edge to it from `parent` when there is one, both of
+    /// `radius`; returns the node.
+    pub fn add(&mut self, p: DVec3, parent: Option<u32>, radius: f64) -> u32 {
+        let n = self.network.nodes.len() as u32;
+        self.network.nodes.push(Node {
+            p,
+            normal: None,
+            radius,
+        });
+        self.parent.push(parent);
+        if let Some(a) = parent {
+            self.network.edges.push(Edge { a, b: n, radius });
         }
+        n
     }
 
     /// Checks the tree invariant: edges run parent to child. For tests.

@@ -431,7 +431,7 @@ fn outline(net: &Network) -> Result<Vec<DVec2>, SolidError> {
 fn place(mesh: &mut TriMesh, upright: bool) {
     if upright {
         for p in &mut mesh.positions {
-            *p = DVec3::new(p.x, -p.z, p.y);
+            *p = crate::geom::upright(*p);
         }
     }
     let b = mesh.bbox();

@@ -25,8 +25,6 @@ use glam::DVec3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::network::{Edge, Node};
-
 use super::super::tree::{Span, Tree};
 
 /// A turn angle in degrees: fixed, or drawn afresh from `min..=max` at every turn.
@@ -303,16 +301,10 @@ impl Turtle {
         let t = &mut self.tree;
         let start = match s.node {
             Some(n) => n,
-            None => t.add_node(s.pos, None, s.radius),
+            None => t.add(s.pos, None, s.radius),
         };
         s.pos += s.h * (k as f64 * s.step);
-        let end = t.add_node(s.pos, Some(start), s.radius);
-        t.network.edges.push(Edge {
-            a: start,
-            b: end,
-            radius: s.radius,
-        });
-        s.node = Some(end);
+        s.node = Some(t.add(s.pos, Some(start), s.radius));
     }
 
     pub fn finish(mut self) -> (Tree, TurtleStats) {
@@ -321,18 +313,5 @@ impl Turtle {
             self.draw(k);
         }
         (self.tree, self.stats)
-    }
-}
-
-impl Tree {
-    fn add_node(&mut self, p: DVec3, parent: Option<u32>, radius: f64) -> u32 {
-        let n = self.network.nodes.len() as u32;
-        self.network.nodes.push(Node {
-            p,
-            normal: None,
-            radius,
-        });
-        self.parent.push(parent);
-        n
     }
 }
