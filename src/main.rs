@@ -40,6 +40,10 @@ enum Command {
     /// A tree by recursive bifurcation (fixed or random angles and scales), optionally fitted
     /// to a façade boundary and projected onto a surface (Hanafin et al.)
     Bifurcate(Box<cli::bifurcate::Args>),
+    /// Grow a bud program into a cellular surface (Hart, "Growth Forms"): cell division, spring
+    /// embedding, buds with tropism, splitting, line buds and holes; STL/OBJ with textures as
+    /// geometry
+    Buds(Box<cli::buds::Args>),
     /// The closed cells of a network on a surface (faces of its rotation system), triangulated
     /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
     Cells(cli::cells::Args),
@@ -89,6 +93,7 @@ fn main() -> ExitCode {
         Command::Veins(args) => cli::veins::run(*args).map(Within::from),
         Command::Lsystem(args) => cli::lsystem::run(*args).map(Within::from),
         Command::Bifurcate(args) => cli::bifurcate::run(*args).map(Within::from),
+        Command::Buds(args) => cli::buds::run(*args).map(Within::from),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),

@@ -2,6 +2,7 @@
 
 pub mod bifurcate;
 pub mod branching;
+pub mod buds;
 pub mod cells;
 pub mod convert;
 pub mod demo;

@@ -4,6 +4,7 @@
 //! fitted to a façade boundary and projected onto a surface.
 
 pub mod bifurcation;
+pub mod buds;
 pub mod density;
 pub mod facade;
 pub mod frames;

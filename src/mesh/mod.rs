@@ -3,6 +3,7 @@
 
 mod check;
 pub mod closest;
+pub mod intersect;
 pub mod io;
 
 use glam::DVec3;

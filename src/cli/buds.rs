@@ -1,0 +1,221 @@
+//! `lamina buds PROGRAM`: grow a bud program (Hart, "Growth Forms") into a textured, printable
+//! surface.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args as ClapArgs;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+
+use lamina::grow::buds::{
+    read_program, skin, Form, Growth, GrowthOptions, SkinOptions, SkinReport,
+};
+use lamina::mesh::io::write_mesh;
+use lamina::mesh::TriMesh;
+
+#[derive(ClapArgs)]
+pub struct Args {
+    /// The bud program (the paper's Figure 8 language; see `lamina demo`'s buds/figure8.bud)
+    pub program: PathBuf,
+    /// The form (.stl binary, or .obj with vertex colours)
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Also write an OBJ with vertex colours
+    #[arg(long)]
+    pub obj: Option<PathBuf>,
+    /// Also write a PNG render
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Stop growing at this many cells
+    #[arg(long, default_value_t = 10_000)]
+    pub cells: usize,
+    /// Random seed: the same seed gives the same bytes, others give other individuals
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Millimetres per unit cell size
+    #[arg(long, default_value_t = 2.0)]
+    pub cell_mm: f64,
+    /// Distance, in cell sizes, at which parts of the form collide and their bud freezes
+    #[arg(long, default_value_t = 0.9)]
+    pub clearance: f64,
+    /// Leave textures out of the geometry (colours stay)
+    #[arg(long)]
+    pub no_textures: bool,
+    /// Write a PNG frame of the growth into this folder every `--every` cells
+    #[arg(long, value_name = "DIR")]
+    pub frames: Option<PathBuf>,
+    /// Cells between frames
+    #[arg(long, default_value_t = 250)]
+    pub every: usize,
+    /// Longer side of PNG renders, in pixels
+    #[arg(long, default_value_t = 1600)]
+    pub size: u32,
+    /// Write the report as JSON here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the report as JSON
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let report = execute(&args)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_summary(&report);
+    }
+    Ok(())
+}
+
+/// Grows, skins and writes; returns the report.
+pub fn execute(args: &Args) -> Result<serde_json::Value> {
+    if args.output.is_none() && args.obj.is_none() && args.png.is_none() {
+        bail!("give -o FORM (.stl .obj), --obj or --png");
+    }
+    if let Some(o) = &args.output {
+        let ext = lamina::files::extension(o);
+        if ext != "stl" && ext != "obj" {
+            bail!("-o {}: the form is written as .stl or .obj", o.display());
+        }
+    }
+    if !(args.cell_mm.is_finite() && args.cell_mm > 0.0) {
+        bail!("--cell-mm {} must be a positive length", args.cell_mm);
+    }
+    if args.every == 0 {
+        bail!("--every 0: give at least 1 cell between frames");
+    }
+    let program = read_program(&args.program)?;
+    let options = GrowthOptions {
+        max_cells: args.cells,
+        clearance: args.clearance,
+        ..GrowthOptions::default()
+    };
+    if let Some(dir) = &args.frames {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
+    }
+    let bar = progress(args.cells as u64);
+    let mut growth = Growth::new(&program, options, args.seed)?;
+    let mut next_frame = 0;
+    let mut frames = 0;
+    loop {
+        if let Some(dir) = &args.frames {
+            if growth.cells() >= next_frame {
+                frames += 1;
+                write_frame(&growth, dir, frames, args.size.min(1024))?;
+                next_frame = growth.cells() + args.every;
+            }
+        }
+        bar.set_position(growth.cells() as u64);
+        if !growth.round()? {
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    let form = growth.finish();
+    let (mesh, skin_report) = skin(
+        &form,
+        &SkinOptions {
+            cell_mm: args.cell_mm,
+            textures: !args.no_textures,
+        },
+    );
+    let topology = mesh.check_manifold();
+    if let Some(o) = &args.output {
+        write_mesh(&mesh, o, args.size)?;
+    }
+    if let Some(o) = &args.obj {
+        write_mesh(&mesh, o, args.size)?;
+    }
+    if let Some(o) = &args.png {
+        write_mesh(&mesh, o, args.size)?;
+    }
+    let report = report(args, &form, &skin_report, &mesh, &topology, frames);
+    if let Some(path) = &args.report {
+        lamina::files::write_atomic(path, |w| {
+            serde_json::to_writer_pretty(&mut *w, &report)?;
+            Ok(())
+        })?;
+    }
+    if skin_report.self_intersections > 0 {
+        bail!(
+            "the form meets itself at {} triangle pairs (outputs written); try a larger \
+             --clearance",
+            skin_report.self_intersections
+        );
+    }
+    Ok(report)
+}
+
+fn report(
+    args: &Args,
+    form: &Form,
+    skin: &SkinReport,
+    mesh: &TriMesh,
+    topology: &lamina::mesh::Topology,
+    frames: usize,
+) -> serde_json::Value {
+    json!({
+        "program": args.program.display().to_string(),
+        "seed": args.seed,
+        "growth": form.report,
+        "mesh": {
+            "vertices": mesh.positions.len(),
+            "triangles": mesh.triangles.len(),
+            "closed": topology.closed,
+            "genus": topology.genus,
+            "components": topology.components,
+            "volume_mm3": topology.volume,
+            "area_mm2": topology.area,
+            "problems": topology.problems.len(),
+        },
+        "skin": skin,
+        "frames": frames,
+    })
+}
+
+fn print_summary(r: &serde_json::Value) {
+    let g = &r["growth"];
+    println!(
+        "{} cells in {} rounds ({} divisions), genus {} ({} holes, {} refused), stopped by {}",
+        g["cells"],
+        g["rounds"],
+        g["divisions"],
+        g["genus"],
+        g["holes"],
+        g["holes_refused"],
+        g["stopped_by"]
+    );
+    println!(
+        "buds: {} made, {} died, {} froze, {} still live",
+        g["buds_made"], g["buds_dead"], g["buds_frozen"], g["buds_live"]
+    );
+    let m = &r["mesh"];
+    let s = &r["skin"];
+    println!(
+        "mesh: {} triangles, closed {}, genus {}, volume {} mm³; {} textured cells ({} reduced), {} self-intersections",
+        m["triangles"], m["closed"], m["genus"], m["volume_mm3"], s["textured_cells"], s["reduced_cells"], s["self_intersections"]
+    );
+}
+
+fn progress(total: u64) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    if let Ok(style) = ProgressStyle::with_template("growing {bar:40} {pos}/{len} cells {elapsed}")
+    {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn write_frame(growth: &Growth, dir: &Path, k: usize, size: u32) -> Result<()> {
+    let mesh = TriMesh {
+        positions: growth.positions().to_vec(),
+        triangles: growth.graph().faces(),
+        colors: Some(growth.colours().to_vec()),
+    };
+    let path = dir.join(format!("frame-{k:05}.png"));
+    write_mesh(&mesh, &path, size)?;
+    Ok(())
+}
