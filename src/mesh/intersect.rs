@@ -92,15 +92,20 @@ pub fn triangles_meet(ti: [u32; 3], pi: [DVec3; 3], tj: [u32; 3], pj: [DVec3; 3]
     }
     let mut shared = [(0usize, 0usize); 3];
     let mut count = 0;
-    for a in 0..3 {
-        for b in 0..3 {
-            if ti[a] == tj[b] {
+    for (a, va) in ti.iter().enumerate() {
+        for (b, vb) in tj.iter().enumerate() {
+            if va == vb {
                 shared[count] = (a, b);
                 count += 1;
             }
         }
     }
     let shared = &shared[..count];
+    // Möller's early out: a triangle wholly on one side of the other's plane (its shared
+    // corners aside) cannot meet it.
+    if count < 2 && (one_side(pi, pj, tj, ti) || one_side(pj, pi, ti, tj)) {
+        return false;
+    }
     match shared.len() {
         0 => {
             (0..3).any(|k| segment_meets_triangle(pi[k], pi[(k + 1) % 3], pj))
@@ -128,6 +133,28 @@ pub fn triangles_meet(ti: [u32; 3], pi: [DVec3; 3], tj: [u32; 3], pj: [DVec3; 3]
         }
         _ => false,
     }
+}
+
+/// Whether the corners of `q` not shared with `p` lie strictly on one side of p's plane.
+fn one_side(p: [DVec3; 3], q: [DVec3; 3], tq: [u32; 3], tp: [u32; 3]) -> bool {
+    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    let span = (p[1] - p[0]).length().max((p[2] - p[0]).length());
+    let eps = 1e-9 * n.length() * span.max((q[0] - p[0]).length());
+    let (mut above, mut below) = (false, false);
+    for k in 0..3 {
+        if tp.contains(&tq[k]) {
+            continue;
+        }
+        let d = n.dot(q[k] - p[0]);
+        if d > eps {
+            above = true;
+        } else if d < -eps {
+            below = true;
+        } else {
+            return false;
+        }
+    }
+    above != below
 }
 
 /// Six times the signed volume of (a, b, c, d).

@@ -20,6 +20,9 @@ use crate::mesh::intersect::triangles_meet;
 /// Springs join cells up to this many hops apart (the paper: four).
 pub const HOPS: u8 = 4;
 
+/// A Newton step shorter than this many cell sizes is not taken.
+pub const SETTLED: f64 = 1e-3;
+
 /// Cells closer than the clearance but more hops apart than this are different parts of the
 /// form colliding. Nearer in the graph, they are the two sides of a fold or a valley between
 /// lumps, which the contact term keeps apart without freezing anyone.
@@ -44,7 +47,8 @@ pub struct Embedding {
 impl Embedding {
     /// `largest` is the largest cell size the form will have: it sets the hash's bucket size.
     pub fn new(pos: Vec<DVec3>, size: Vec<f64>, clearance: f64, largest: f64) -> Embedding {
-        let mut grid = SpatialHash::new(clearance * largest);
+        // Buckets wide enough that the triangle check's reach spans few of them.
+        let mut grid = SpatialHash::new(clearance.max(1.7) * largest);
         for (v, p) in pos.iter().enumerate() {
             grid.insert(v as u32, *p);
         }
@@ -78,6 +82,18 @@ impl Embedding {
             self.pos[i] = p;
         }
         self.size[i] = size;
+    }
+
+    /// Forgets the cells from `len` on (an undone division).
+    pub fn truncate(&mut self, len: usize) {
+        while self.pos.len() > len {
+            let v = self.pos.len() - 1;
+            self.grid.remove(v as u32, self.pos[v]);
+            self.pos.pop();
+            self.size.pop();
+            self.stamp.pop();
+            self.mark.pop();
+        }
     }
 
     /// Marks the cells within `hops` of `v` (in `reach`, with their hop counts, `v` first).
@@ -148,7 +164,8 @@ impl Embedding {
         } else {
             step
         };
-        if !step.is_finite() {
+        // A thousandth of a cell is not worth the check below: settled cells stay put.
+        if !step.is_finite() || step.length() < SETTLED * sv {
             return 0.0;
         }
         // A move that would make the cell's triangles meet another is halved, then given up:
@@ -384,6 +401,14 @@ impl SpatialHash {
     fn insert(&mut self, v: u32, p: DVec3) {
         let k = self.key(p);
         self.buckets.entry(k).or_default().push(v);
+    }
+
+    fn remove(&mut self, v: u32, at: DVec3) {
+        if let Some(bucket) = self.buckets.get_mut(&self.key(at)) {
+            if let Some(k) = bucket.iter().position(|&u| u == v) {
+                bucket.swap_remove(k);
+            }
+        }
     }
 
     fn relocate(&mut self, v: u32, from: DVec3, to: DVec3) {

@@ -37,6 +37,12 @@ pub struct Census {
     pub max_degree: usize,
 }
 
+/// Neighbour lists saved before an operation that may be undone.
+pub struct Saved {
+    len: usize,
+    lists: Vec<(u32, Vec<u32>)>,
+}
+
 /// How a division placed its two cells: the ring indices of the two neighbours that gained an
 /// edge, and the new cell's id (the dividing cell keeps its id as the other child).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -156,6 +162,25 @@ impl CellGraph {
             kept: cell,
             new,
             shared: [ring[i], ring[j]],
+        }
+    }
+
+    /// The neighbour lists of `cells`, to put back with [`CellGraph::restore`].
+    pub fn save(&self, cells: &[u32]) -> Saved {
+        Saved {
+            len: self.nbrs.len(),
+            lists: cells
+                .iter()
+                .map(|&v| (v, self.nbrs[v as usize].clone()))
+                .collect(),
+        }
+    }
+
+    /// Undoes every change since `save`, if it touched only the saved cells and added cells.
+    pub fn restore(&mut self, saved: Saved) {
+        self.nbrs.truncate(saved.len);
+        for (v, list) in saved.lists {
+            self.nbrs[v as usize] = list;
         }
     }
 

@@ -12,11 +12,12 @@
 //!
 //! Guarantees: after every operation the graph is a closed oriented triangulated surface of
 //! genus equal to the holes grown (`check()` verifies it; `GrowthOptions::verify` runs it after
-//! each operation). Degrees stay at least 3. A bud freezes when a cell it moved comes within
-//! the clearance of a part of the form more than four hops away, and such parts repel in the
-//! embedder; the output mesh is tested triangle against triangle and textures are reduced where
-//! they would touch. Not guaranteed: that the base surface never self-intersects under every
-//! program (the final test reports any intersection it finds).
+//! each operation). Degrees stay at least 3. No move of a cell, and no placement of new cells,
+//! is made if a triangle round it would meet another triangle of the form, so the surface
+//! never passes through itself; distant parts of the form that come within the clearance
+//! repel, and freeze the bud that brought them there. The output mesh is tested triangle
+//! against triangle again and textures are reduced where they would touch. The tests are in
+//! floating point with a relative tolerance of 1e-9: not exact predicates.
 
 pub mod embed;
 pub mod graph;

@@ -6,14 +6,19 @@
 //! dividing cell follows the child furthest along its heading (or a random one). After the
 //! division the two children and their ring are relaxed; every [`WIDE_EVERY`] divisions of a
 //! bud its neighbourhood is relaxed more widely, and the whole form whenever it has grown by
-//! a tenth. A bud freezes when a cell it moved comes within the clearance of a part of the form
-//! more than four hops away.
+//! a fifth. Every move is checked so that no triangle passes through another.
+//!
+//! A bud freezes when a cell it moved comes within the clearance of a part of the form more
+//! than [`COLLIDE_HOPS`] hops away, or when no placement of a division's children is clear of
+//! the form (the division is then undone).
 
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::embed::Embedding;
+#[cfg(doc)]
+use super::embed::COLLIDE_HOPS;
 use super::graph::{CellGraph, Split};
 use super::hole::{self, HoleOutcome};
 use super::program::{Command, Program, Texture, SIZE_RANGE};
@@ -21,6 +26,9 @@ use super::BudError;
 
 /// Divisions of one bud between wider relaxations of its neighbourhood.
 pub const WIDE_EVERY: u32 = 8;
+
+/// The whole form is relaxed once each time it has grown by 1/GLOBAL_EVERY of its cells.
+pub const GLOBAL_EVERY: usize = 5;
 
 #[derive(Clone, Debug)]
 pub struct GrowthOptions {
@@ -64,6 +72,9 @@ pub struct GrowthReport {
     pub holes: usize,
     /// `hole` commands that found no clear way through the form.
     pub holes_refused: usize,
+    /// Divisions undone because no placement of the children was clear of the form (their
+    /// buds froze).
+    pub divisions_blocked: usize,
     pub buds_made: usize,
     pub buds_dead: usize,
     pub buds_frozen: usize,
@@ -137,6 +148,7 @@ pub struct Growth<'p> {
     divisions: u64,
     holes: usize,
     holes_refused: usize,
+    blocked: usize,
     last_global: usize,
     timeline: Vec<Sample>,
     stopped_by: Option<String>,
@@ -191,6 +203,7 @@ impl<'p> Growth<'p> {
             divisions: 0,
             holes: 0,
             holes_refused: 0,
+            blocked: 0,
             last_global: 4,
             timeline: Vec::new(),
             stopped_by: None,
@@ -239,12 +252,12 @@ impl<'p> Growth<'p> {
             }
         }
         self.rounds += 1;
-        if self.graph.len() >= self.last_global + self.last_global / 10 {
+        if self.graph.len() >= self.last_global + self.last_global / GLOBAL_EVERY {
             self.relax_all(1);
             self.last_global = self.graph.len();
         }
         let live = self.live_buds();
-        if live != self.timeline.last().map_or(usize::MAX, |s| s.live) || self.rounds % 25 == 0 {
+        if live != self.timeline.last().map_or(usize::MAX, |s| s.live) || self.rounds.is_multiple_of(25) {
             self.sample();
         }
         if self.graph.len() >= self.options.max_cells {
@@ -287,6 +300,7 @@ impl<'p> Growth<'p> {
             genus: census.genus,
             holes: self.holes,
             holes_refused: self.holes_refused,
+            divisions_blocked: self.blocked,
             buds_made: self.buds.len(),
             buds_dead: count(State::Dead),
             buds_frozen: count(State::Frozen),
@@ -422,11 +436,11 @@ impl<'p> Growth<'p> {
 
     /// Divides `cell` on behalf of bud `b` (Figure 2), moves any bud in it, keeps line buds
     /// joined, relaxes, and freezes `b` if the form came too close to itself.
-    fn divide_by(&mut self, b: usize, cell: u32) -> Result<Split, BudError> {
+    fn divide_by(&mut self, b: usize, cell: u32) -> Result<Option<Split>, BudError> {
         let ring = self.graph.neighbours(cell).to_vec();
         let n = ring.len();
         let i = self.lowest_degree(&ring);
-        let j = if n % 2 == 0 {
+        let j = if n.is_multiple_of(2) {
             (i + n / 2) % n
         } else {
             let (lo, hi) = ((i + n / 2) % n, (i + n / 2 + 1) % n);
@@ -459,7 +473,11 @@ impl<'p> Growth<'p> {
             _ => Vec::new(),
         };
         let x = self.embed.pos[cell as usize];
+        let old_size = self.embed.size[cell as usize];
         let normal = self.embed.normal(&self.graph, cell);
+        let mut touched = ring.clone();
+        touched.push(cell);
+        let saved = self.graph.save(&touched);
         let split = self.graph.divide(cell, i, j);
         let (kept, new) = (split.kept, split.new);
         let bud = &self.buds[b];
@@ -475,19 +493,26 @@ impl<'p> Growth<'p> {
         let dk = mean(kept, &self.graph, &self.embed.pos) - x;
         let dn = mean(new, &self.graph, &self.embed.pos) - x;
         // The children start towards their arcs, the surface bumped out a little; nearer the
-        // old cell if that would make triangles meet (close enough, the split star is the old
-        // star and meets nothing).
-        for (reach, bump) in [(0.3, 0.1), (0.15, 0.0), (0.05, 0.0), (0.01, 0.0)] {
-            self.embed
-                .place(kept, x + reach * dk + bump * size * normal, size);
-            self.embed
-                .place(new, x + reach * dn + bump * size * normal, size);
-            let (pk, pn) = (self.embed.pos[kept as usize], self.embed.pos[new as usize]);
-            if self.embed.star_clear(&self.graph, kept, pk)
-                && self.embed.star_clear(&self.graph, new, pn)
-            {
-                break;
-            }
+        // old cell if that would make triangles meet. If no placement is clear the form is too
+        // crowded here: the division is undone and the bud freezes.
+        let placed = [(0.3, 0.1), (0.15, 0.0), (0.05, 0.0)]
+            .iter()
+            .any(|&(reach, bump)| {
+                self.embed
+                    .place(kept, x + reach * dk + bump * size * normal, size);
+                self.embed
+                    .place(new, x + reach * dn + bump * size * normal, size);
+                let (pk, pn) = (self.embed.pos[kept as usize], self.embed.pos[new as usize]);
+                self.embed.star_clear(&self.graph, kept, pk)
+                    && self.embed.star_clear(&self.graph, new, pn)
+            });
+        if !placed {
+            self.graph.restore(saved);
+            self.embed.truncate(self.graph.len());
+            self.embed.place(cell, x, old_size);
+            self.blocked += 1;
+            self.retire(b, State::Frozen);
+            return Ok(None);
         }
         self.colour[kept as usize] = colour;
         self.colour.push(colour);
@@ -507,7 +532,7 @@ impl<'p> Growth<'p> {
                 self.embed.relax(&self.graph, v);
             }
         }
-        if self.buds[b].divisions % WIDE_EVERY == 0 {
+        if self.buds[b].divisions.is_multiple_of(WIDE_EVERY) {
             let around = self.buds[b].fat.saturating_add(3).min(12) as u8;
             let cells = self.embed.within(&self.graph, self.buds[b].cell, around);
             for (v, _) in cells {
@@ -552,61 +577,14 @@ impl<'p> Growth<'p> {
                 }
             }
         }
-        if let Some((v, u)) = moved
+        if moved
             .iter()
-            .find_map(|&v| self.embed.crowded(&self.graph, v).map(|u| (v, u)))
+            .any(|&v| self.embed.crowded(&self.graph, v).is_some())
         {
-            if std::env::var("BUDS_DEBUG").is_ok() {
-                let hops = self
-                    .embed
-                    .within(&self.graph, v, 30)
-                    .iter()
-                    .find(|x| x.0 == u)
-                    .map(|x| x.1);
-                let mut lens = Vec::new();
-                for w in 0..self.graph.len() as u32 {
-                    for &z in self.graph.neighbours(w) {
-                        lens.push(self.embed.pos[w as usize].distance(self.embed.pos[z as usize]));
-                    }
-                }
-                lens.sort_by(f64::total_cmp);
-                let mut sep = 0;
-                for w in 0..self.graph.len() as u32 {
-                    for &z in self.graph.neighbours(w) {
-                        if w < z {
-                            let c = self
-                                .graph
-                                .neighbours(w)
-                                .iter()
-                                .filter(|x| self.graph.adjacent(**x, z))
-                                .count();
-                            if c > 2 {
-                                sep += 1;
-                            }
-                        }
-                    }
-                }
-                eprintln!(
-                    "edges with >2 common neighbours: {sep}; degrees v {} u {}",
-                    self.graph.degree(v),
-                    self.graph.degree(u)
-                );
-                eprintln!("freeze bud {b} kind {} at {} cells: {v} near {u}, dist {} hops {hops:?}; edge len min {} med {} max {}", self.buds[b].kind, self.graph.len(), self.embed.pos[v as usize].distance(self.embed.pos[u as usize]), lens[0], lens[lens.len()/2], lens[lens.len()-1]);
-            }
-            if std::env::var("BUDS_DEBUG").is_ok() {
-                self.colour[v as usize] = [1.0, 0.0, 0.0];
-                self.colour[u as usize] = [0.0, 0.0, 1.0];
-                for &w in self.graph.neighbours(v).to_vec().iter() {
-                    self.colour[w as usize] = [1.0, 0.5, 0.5];
-                }
-                for &w in self.graph.neighbours(u).to_vec().iter() {
-                    self.colour[w as usize] = [0.5, 0.5, 1.0];
-                }
-            }
             self.retire(b, State::Frozen);
         }
         self.verify("a division")?;
-        Ok(split)
+        Ok(Some(split))
     }
 
     fn lowest_degree(&mut self, ring: &[u32]) -> usize {
@@ -651,7 +629,9 @@ impl<'p> Growth<'p> {
     /// `split`: the bud's cell divides and each child holds one of the two buds.
     fn split(&mut self, b: usize) -> Result<(), BudError> {
         let cell = self.buds[b].cell;
-        let s = self.divide_by(b, cell)?;
+        let Some(s) = self.divide_by(b, cell)? else {
+            return Ok(());
+        };
         if self.buds[b].state != State::Live {
             return Ok(());
         }

@@ -106,39 +106,6 @@ pub fn skin(form: &Form, options: &SkinOptions) -> (TriMesh, SkinReport) {
         passes += 1;
         let pairs = mesh.self_intersections();
         let mut changed = false;
-        if std::env::var("BUDS_DEBUG").is_ok() {
-            let mut hist = std::collections::BTreeMap::new();
-            for (a, b) in pairs.iter() {
-                let (va, vb) = (owner[*a as usize], owner[*b as usize]);
-                let mut hops = vec![u32::MAX; n];
-                hops[va as usize] = 0;
-                let mut q = std::collections::VecDeque::from([va]);
-                while let Some(x) = q.pop_front() {
-                    if x == vb || hops[x as usize] > 30 {
-                        break;
-                    }
-                    for &y in form.graph.neighbours(x) {
-                        if hops[y as usize] == u32::MAX {
-                            hops[y as usize] = hops[x as usize] + 1;
-                            q.push_back(y);
-                        }
-                    }
-                }
-                *hist.entry(hops[vb as usize]).or_insert(0) += 1;
-            }
-            eprintln!("hop histogram of intersecting owners: {hist:?}");
-            for (a, b) in pairs.iter().take(0) {
-                let (va, vb) = (owner[*a as usize], owner[*b as usize]);
-                eprintln!(
-                    "pair {a} {b}: cells {va} {vb} tex {:?} {:?} halv {} {} adjacent {}",
-                    form.texture[va as usize],
-                    form.texture[vb as usize],
-                    halvings[va as usize],
-                    halvings[vb as usize],
-                    form.graph.adjacent(va, vb)
-                );
-            }
-        }
         if !pairs.is_empty() && passes <= 2 * HALVINGS as usize + 2 {
             let mut seen = vec![false; n];
             for (a, b) in &pairs {
@@ -183,14 +150,13 @@ fn build(
     let mut colours: Vec<[f32; 3]> = form.colour.clone();
     // Face centroids, then edge midpoints.
     let mut face_of: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * faces.len());
-    for (f, t) in faces.iter().enumerate() {
+    for t in &faces {
         let id = positions.len() as u32;
         positions.push(t.iter().map(|&v| form.pos[v as usize]).sum::<DVec3>() * (s / 3.0));
         colours.push(mean_colour(t.iter().map(|&v| form.colour[v as usize])));
         for k in 0..3 {
             face_of.insert((t[k], t[(k + 1) % 3]), id);
         }
-        let _ = f;
     }
     let mut mid: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * n);
     for v in 0..n as u32 {
@@ -211,8 +177,7 @@ fn build(
     for v in 0..n as u32 {
         let ring = g.neighbours(v);
         corners.clear();
-        for k in 0..ring.len() {
-            let u = ring[k];
+        for &u in ring {
             corners.push(mid[&(v.min(u), v.max(u))]);
             corners.push(face_of[&(v, u)]);
         }
