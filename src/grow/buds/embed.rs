@@ -470,7 +470,8 @@ mod tests {
         for f in g.faces() {
             for k in 0..3 {
                 let d = e.pos[f[k] as usize].distance(e.pos[f[(k + 1) % 3] as usize]);
-                assert!((d - 1.0).abs() < 1e-6, "edge {d}");
+                // Steps under `SETTLED` cell sizes are not taken.
+                assert!((d - 1.0).abs() < 2e-3, "edge {d}");
             }
         }
     }

@@ -390,25 +390,30 @@ fn chain(v: u32, pairs: &[(u32, u32)]) -> Result<Vec<u32>, GraphError> {
 }
 
 /// Triangles joining loop `x` (run forwards) to loop `y` (run backwards), `x.len() + y.len()` of
-/// them, starting at the pair (x[0], y[0]) and advancing the loop whose step makes the shorter
-/// cross edge according to `cost(x index, y index)` (for equal loops and equal costs: an
-/// antiprism).
-pub fn zip_loops(x: &[u32], y: &[u32], mut cost: impl FnMut(u32, u32) -> f64) -> Vec<[u32; 3]> {
+/// them, starting at the pair (x[0], y[0]) and advancing the loops evenly (for equal loops: an
+/// antiprism), so every cell gains one or two cross edges.
+pub fn zip_loops(x: &[u32], y: &[u32]) -> Vec<[u32; 3]> {
     let (nx, ny) = (x.len(), y.len());
     let (mut i, mut j) = (0usize, 0usize); // steps taken on each loop
     let mut out = Vec::with_capacity(nx + ny);
     let yat = |j: usize| y[(ny - j % ny) % ny];
+    // Cross edges already made, as (i mod nx, j mod ny): none may be made twice, or the band
+    // would close on itself before it has gone round.
+    let mut made = std::collections::BTreeSet::from([(0usize, 0usize)]);
+    let free = |made: &std::collections::BTreeSet<(usize, usize)>, i: usize, j: usize| {
+        (i == nx && j == ny) || (i <= nx && j <= ny && !made.contains(&(i % nx, j % ny)))
+    };
     while i < nx || j < ny {
-        // Neither loop may be run round while the other has not moved: the band would come
-        // back to its first cross edge early.
-        let step_x = if i == nx || (i + 1 == nx && j == 0) {
-            false
-        } else if j == ny || (j + 1 == ny && i == 0) {
+        let can_x = free(&made, i + 1, j);
+        let can_y = free(&made, i, j + 1);
+        // The first step goes along x, so the band never has to wrap round y early.
+        let step_x = if i == 0 && j == 0 {
             true
+        } else if can_x && can_y {
+            // Evenly interleaved: the loop that is behind in its share of the way round.
+            (2 * i + 1) * ny <= (2 * j + 1) * nx
         } else {
-            let cx = cost(x[(i + 1) % nx], yat(j));
-            let cy = cost(x[i % nx], yat(j + 1));
-            cx <= cy
+            can_x
         };
         if step_x {
             out.push([x[i % nx], x[(i + 1) % nx], yat(j)]);
@@ -417,6 +422,7 @@ pub fn zip_loops(x: &[u32], y: &[u32], mut cost: impl FnMut(u32, u32) -> f64) ->
             out.push([yat(j + 1), yat(j), x[i % nx]]);
             j += 1;
         }
+        made.insert((i % nx, j % ny));
     }
     out
 }
@@ -487,7 +493,7 @@ mod tests {
         let n0 = g.len() as u32;
         let ring = vec![p, n0, q, n0 + 1];
         let before = g.check()?;
-        g.tunnel(p, q, &[ring], |x, y| zip_loops(x, y, |_, _| 1.0))?;
+        g.tunnel(p, q, &[ring], zip_loops)?;
         let after = g.check()?;
         assert_eq!(after.genus, before.genus + 1);
         assert_eq!(after.cells, before.cells + 2);
@@ -509,5 +515,94 @@ mod tests {
             }
         }
         last
+    }
+}
+
+#[cfg(test)]
+mod tunnel_props {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn tunnels_of_any_shape_keep_a_manifold() -> Result<(), GraphError> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for case in 0..200 {
+            let (mut g, _) = CellGraph::tetrahedron();
+            for _ in 0..150 {
+                let cell = rng.random_range(0..g.len() as u32);
+                let n = g.degree(cell);
+                let i = rng.random_range(0..n);
+                let j = (i + 1 + rng.random_range(0..n - 1)) % n;
+                g.divide(cell, i, j);
+            }
+            let p = rng.random_range(0..g.len() as u32);
+            let (q, hops) = tests_far(&g, p);
+            if hops < 5 {
+                continue;
+            }
+            let k = rng.random_range(1..4usize);
+            let sides = rng.random_range(3..9usize);
+            let mut next = g.len() as u32;
+            let mut rings = Vec::new();
+            for r in 1..=k {
+                let mut ring = Vec::new();
+                for s in 0..sides {
+                    if r == 1 && s == 0 {
+                        ring.push(p);
+                    } else if r == k && s == sides / 2 {
+                        ring.push(q);
+                    } else {
+                        ring.push(next);
+                        next += 1;
+                    }
+                }
+                rings.push(ring);
+            }
+            let before = g.check()?.genus;
+            g.tunnel(p, q, &rings, zip_loops)?;
+            assert_eq!(g.check()?.genus, before + 1, "case {case}");
+        }
+        Ok(())
+    }
+
+    fn tests_far(g: &CellGraph, from: u32) -> (u32, usize) {
+        let mut hops = vec![usize::MAX; g.len()];
+        hops[from as usize] = 0;
+        let mut queue = std::collections::VecDeque::from([from]);
+        let mut last = (from, 0);
+        while let Some(v) = queue.pop_front() {
+            last = (v, hops[v as usize]);
+            for &u in g.neighbours(v) {
+                if hops[u as usize] == usize::MAX {
+                    hops[u as usize] = hops[v as usize] + 1;
+                    queue.push_back(u);
+                }
+            }
+        }
+        last
+    }
+}
+
+#[cfg(test)]
+mod zip_props {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn zips_use_every_directed_edge_once() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..2000 {
+            let nx = rng.random_range(3..9u32);
+            let ny = rng.random_range(3..9u32);
+            let x: Vec<u32> = (0..nx).collect();
+            let y: Vec<u32> = (100..100 + ny).collect();
+            let f = zip_loops(&x, &y);
+            let mut darts = std::collections::BTreeSet::new();
+            for t in &f {
+                for k in 0..3 {
+                    assert!(darts.insert((t[k], t[(k + 1) % 3])), "{nx} {ny} {f:?}");
+                }
+            }
+        }
     }
 }

@@ -20,12 +20,33 @@ pub enum HoleOutcome {
 pub fn grow(
     graph: &mut CellGraph,
     embed: &mut Embedding,
-    p: u32,
+    bud: u32,
     size: f64,
 ) -> Result<HoleOutcome, GraphError> {
-    let Some(plan) = plan(graph, embed, p, size) else {
-        return Ok(HoleOutcome::Refused);
-    };
+    // From the bud's cell, or failing that from a cell within two hops of it.
+    let tries: Vec<u32> = embed
+        .within(graph, bud, 2)
+        .iter()
+        .map(|&(c, _)| c)
+        .collect();
+    for p in tries {
+        if let Some(plan) = plan(graph, embed, p, size) {
+            if let Some(made) = dig(graph, embed, p, plan, size)? {
+                return Ok(made);
+            }
+        }
+    }
+    Ok(HoleOutcome::Refused)
+}
+
+/// Makes the planned tube, or undoes it and says None if it would meet the form.
+fn dig(
+    graph: &mut CellGraph,
+    embed: &mut Embedding,
+    p: u32,
+    plan: Plan,
+    size: f64,
+) -> Result<Option<HoleOutcome>, GraphError> {
     let Plan {
         q,
         axis,
@@ -36,6 +57,8 @@ pub fn grow(
     } = plan;
     let xp = embed.pos[p as usize];
     let before = graph.len();
+    let (at_p, at_q) = (xp, embed.pos[q as usize]);
+    let (size_p, size_q) = (embed.size[p as usize], embed.size[q as usize]);
     let u = axis.any_orthonormal_vector();
     let w = axis.cross(u);
     let mut next = graph.len() as u32;
@@ -65,6 +88,10 @@ pub fn grow(
     }
     let ring_p = graph.neighbours(p).to_vec();
     let ring_q = graph.neighbours(q).to_vec();
+    let mut touched = vec![p, q];
+    touched.extend(&ring_p);
+    touched.extend(&ring_q);
+    let saved = graph.save(&touched);
     let pos = &embed.pos;
     let dist = |a: u32, b: u32| pos[a as usize].distance(pos[b as usize]);
     graph.tunnel(p, q, &rings, |x, y| {
@@ -72,19 +99,30 @@ pub fn grow(
             .min_by(|&a, &b| dist(x[0], y[a]).total_cmp(&dist(x[0], y[b])))
             .unwrap_or(0);
         let y: Vec<u32> = y[j..].iter().chain(&y[..j]).copied().collect();
-        zip_loops(x, &y, dist)
+        zip_loops(x, &y)
     })?;
     let mut moved: Vec<u32> = rings.into_iter().flatten().collect();
     moved.extend(ring_p);
     moved.extend(ring_q);
+    // The tube must meet nothing; if it would, the hole is not made here.
+    if !moved
+        .iter()
+        .all(|&v| embed.star_clear(graph, v, embed.pos[v as usize]))
+    {
+        graph.restore(saved);
+        embed.truncate(before);
+        embed.place(p, at_p, size_p);
+        embed.place(q, at_q, size_q);
+        return Ok(None);
+    }
     for _ in 0..4 {
         for &v in &moved {
             embed.relax(graph, v);
         }
     }
-    Ok(HoleOutcome::Made {
+    Ok(Some(HoleOutcome::Made {
         new_cells: next as usize - before,
-    })
+    }))
 }
 
 struct Plan {
@@ -98,7 +136,14 @@ struct Plan {
 
 fn plan(graph: &CellGraph, embed: &mut Embedding, p: u32, size: f64) -> Option<Plan> {
     let xp = embed.pos[p as usize];
-    let inward = -embed.normal(graph, p);
+    // The surface round one cell may be a small lump facing anywhere: the inward direction is
+    // the mean normal of the cells within three hops.
+    let inward = -embed
+        .within(graph, p, 3)
+        .iter()
+        .map(|&(v, _)| embed.normal(graph, v))
+        .sum::<DVec3>()
+        .normalize_or_zero();
     if inward == DVec3::ZERO {
         return None;
     }
@@ -154,7 +199,8 @@ fn plan(graph: &CellGraph, embed: &mut Embedding, p: u32, size: f64) -> Option<P
             .sum::<f64>()
             / ns.len() as f64
     };
-    let radius = 0.5 * (ring_radius(p) + ring_radius(q));
+    // Narrower than the rings it joins, so it leaves the wall cleanly; the springs widen it.
+    let radius = 0.25 * (ring_radius(p) + ring_radius(q));
     let sides = graph.degree(p).min(graph.degree(q)).max(3);
     let rings = ((length / size).round() as usize).saturating_sub(1).max(1);
     // The tube's way must be clear of everything but the two walls it joins.

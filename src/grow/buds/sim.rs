@@ -9,8 +9,8 @@
 //! a fifth. Every move is checked so that no triangle passes through another.
 //!
 //! A bud freezes when a cell it moved comes within the clearance of a part of the form more
-//! than [`COLLIDE_HOPS`] hops away, or when no placement of a division's children is clear of
-//! the form (the division is then undone).
+//! than [`COLLIDE_HOPS`] hops away, or when [`STUCK_LIMIT`] divisions in a row were undone
+//! because no placement of the children was clear of the form.
 
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
@@ -26,6 +26,9 @@ use super::BudError;
 
 /// Divisions of one bud between wider relaxations of its neighbourhood.
 pub const WIDE_EVERY: u32 = 8;
+
+/// Blocked divisions in a row after which a bud freezes.
+pub const STUCK_LIMIT: u32 = 16;
 
 /// The whole form is relaxed once each time it has grown by 1/GLOBAL_EVERY of its cells.
 pub const GLOBAL_EVERY: usize = 5;
@@ -72,8 +75,8 @@ pub struct GrowthReport {
     pub holes: usize,
     /// `hole` commands that found no clear way through the form.
     pub holes_refused: usize,
-    /// Divisions undone because no placement of the children was clear of the form (their
-    /// buds froze).
+    /// Divisions undone because no placement of the children was clear of the form (tried
+    /// again elsewhere).
     pub divisions_blocked: usize,
     pub buds_made: usize,
     pub buds_dead: usize,
@@ -131,6 +134,8 @@ struct Bud {
     /// The cells a `blob` grows among: its start and every cell it made.
     blob: Vec<u32>,
     divisions: u32,
+    /// Divisions blocked in a row.
+    stuck: u32,
 }
 
 /// A growth in progress: call [`Growth::round`] until it returns false.
@@ -257,7 +262,9 @@ impl<'p> Growth<'p> {
             self.last_global = self.graph.len();
         }
         let live = self.live_buds();
-        if live != self.timeline.last().map_or(usize::MAX, |s| s.live) || self.rounds.is_multiple_of(25) {
+        if live != self.timeline.last().map_or(usize::MAX, |s| s.live)
+            || self.rounds.is_multiple_of(25)
+        {
             self.sample();
         }
         if self.graph.len() >= self.options.max_cells {
@@ -349,6 +356,7 @@ impl<'p> Growth<'p> {
             sleeping: 0,
             blob: Vec::new(),
             divisions: 0,
+            stuck: 0,
         };
         self.bud_at[cell as usize] = Some(self.buds.len() as u32);
         self.buds.push(bud);
@@ -365,7 +373,10 @@ impl<'p> Growth<'p> {
             if bud.remaining > 0 {
                 bud.remaining -= 1;
                 let cell = self.pick_cell(b);
-                self.divide_by(b, cell)?;
+                if self.divide_by(b, cell)?.is_none() {
+                    // Blocked: the division is owed, and tried elsewhere next turn.
+                    self.buds[b].remaining += 1;
+                }
                 return Ok(());
             }
             let Some(command) = self.program.types[bud.kind].commands.get(bud.pc).cloned() else {
@@ -511,9 +522,13 @@ impl<'p> Growth<'p> {
             self.embed.truncate(self.graph.len());
             self.embed.place(cell, x, old_size);
             self.blocked += 1;
-            self.retire(b, State::Frozen);
+            self.buds[b].stuck += 1;
+            if self.buds[b].stuck >= STUCK_LIMIT {
+                self.retire(b, State::Frozen);
+            }
             return Ok(None);
         }
+        self.buds[b].stuck = 0;
         self.colour[kept as usize] = colour;
         self.colour.push(colour);
         self.texture[kept as usize] = texture;
@@ -577,9 +592,12 @@ impl<'p> Growth<'p> {
                 }
             }
         }
-        if moved
-            .iter()
-            .any(|&v| self.embed.crowded(&self.graph, v).is_some())
+        // A blob's region is the blob itself, whose lumps may touch in its creases; a bud that
+        // grows a limb freezes when the limb reaches another part of the form.
+        if self.buds[b].task != Task::Blob
+            && moved
+                .iter()
+                .any(|&v| self.embed.crowded(&self.graph, v).is_some())
         {
             self.retire(b, State::Frozen);
         }
@@ -630,6 +648,8 @@ impl<'p> Growth<'p> {
     fn split(&mut self, b: usize) -> Result<(), BudError> {
         let cell = self.buds[b].cell;
         let Some(s) = self.divide_by(b, cell)? else {
+            // Blocked: try the split again next turn.
+            self.buds[b].pc -= 1;
             return Ok(());
         };
         if self.buds[b].state != State::Live {
