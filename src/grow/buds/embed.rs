@@ -42,6 +42,8 @@ pub struct Embedding {
     scratch: Vec<u32>,
     mark: Vec<u32>,
     mark_epoch: u32,
+    /// No edge is longer than this (grown as edges are measured, renewed by `remeasure`).
+    longest: f64,
 }
 
 impl Embedding {
@@ -64,6 +66,7 @@ impl Embedding {
             scratch: Vec::new(),
             mark: vec![0; n],
             mark_epoch: 0,
+            longest: 1.0,
         }
     }
 
@@ -82,6 +85,25 @@ impl Embedding {
             self.pos[i] = p;
         }
         self.size[i] = size;
+    }
+
+    /// Raises the bound on edge length to cover the edges of `v`.
+    pub fn measure(&mut self, g: &CellGraph, v: u32) {
+        let x = self.pos[v as usize];
+        for &u in g.neighbours(v) {
+            self.longest = self.longest.max(x.distance(self.pos[u as usize]));
+        }
+    }
+
+    /// Measures every edge again: the bound on edge length falls back to the longest there is.
+    pub fn remeasure(&mut self, g: &CellGraph) {
+        let mut longest = 0.0f64;
+        for v in 0..g.len() as u32 {
+            for &u in g.neighbours(v) {
+                longest = longest.max(self.pos[v as usize].distance(self.pos[u as usize]));
+            }
+        }
+        self.longest = longest;
     }
 
     /// Forgets the cells from `len` on (an undone division).
@@ -137,6 +159,9 @@ impl Embedding {
             let rest = h * 0.5 * (sv + self.size[u as usize]);
             let k = 1.0 / (h * h);
             let t = 1.0 - rest / len;
+            if h == 1.0 {
+                self.longest = self.longest.max(len);
+            }
             grad += k * t * d;
             hess +=
                 k * (DMat3::from_diagonal(DVec3::splat(t)) + outer(d, d) * (rest / len.powi(3)));
@@ -173,6 +198,7 @@ impl Embedding {
         for _ in 0..3 {
             if self.star_clear(g, v, x + step) {
                 self.place(v, x + step, sv);
+                self.measure(g, v);
                 return step.length();
             }
             step *= 0.5;
@@ -222,7 +248,7 @@ impl Embedding {
             g.neighbours(r).iter().for_each(|&c| add(c));
         }
         // Far triangles that reach the star have a corner within an edge of it.
-        let far = radius + 2.0 * self.size[v as usize];
+        let far = radius + self.longest.max(self.size[v as usize]);
         let pos = &self.pos;
         self.grid.near_radius(y, far, |c| {
             if pos[c as usize].distance_squared(y) <= far * far {

@@ -102,6 +102,9 @@ fn dig(
         zip_loops(x, &y)
     })?;
     let mut moved: Vec<u32> = rings.into_iter().flatten().collect();
+    for &v in &moved {
+        embed.measure(graph, v);
+    }
     moved.extend(ring_p);
     moved.extend(ring_q);
     // The tube must meet nothing; if it would, the hole is not made here.

@@ -28,7 +28,7 @@ pub mod skin;
 
 pub use graph::{CellGraph, Census, GraphError};
 pub use program::{parse_program, read_program, Command, Program, ProgramError, Texture};
-pub use sim::{grow, Form, Growth, GrowthOptions, GrowthReport, Sample};
+pub use sim::{grow, BudAt, Form, Growth, GrowthOptions, GrowthReport, Sample};
 pub use skin::{skin, SkinOptions, SkinReport};
 
 #[derive(Debug, thiserror::Error, PartialEq)]

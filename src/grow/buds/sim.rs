@@ -91,6 +91,14 @@ pub struct GrowthReport {
     pub timeline: Vec<Sample>,
 }
 
+/// Where a bud ended: its type (index in the program), its cell, and whether it died.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BudAt {
+    pub kind: usize,
+    pub cell: u32,
+    pub dead: bool,
+}
+
 /// A grown form: the cell graph and each cell's position and properties.
 #[derive(Clone, Debug)]
 pub struct Form {
@@ -99,6 +107,7 @@ pub struct Form {
     pub size: Vec<f64>,
     pub colour: Vec<[f32; 3]>,
     pub texture: Vec<Texture>,
+    pub buds: Vec<BudAt>,
     pub report: GrowthReport,
 }
 
@@ -317,7 +326,17 @@ impl<'p> Growth<'p> {
             degrees: degrees.into_iter().collect(),
             timeline: self.timeline,
         };
+        let buds = self
+            .buds
+            .iter()
+            .map(|b| BudAt {
+                kind: b.kind,
+                cell: b.cell,
+                dead: b.state == State::Dead,
+            })
+            .collect();
         Form {
+            buds,
             graph: self.graph,
             pos: self.embed.pos,
             size: self.embed.size,
@@ -529,6 +548,8 @@ impl<'p> Growth<'p> {
             return Ok(None);
         }
         self.buds[b].stuck = 0;
+        self.embed.measure(&self.graph, kept);
+        self.embed.measure(&self.graph, new);
         self.colour[kept as usize] = colour;
         self.colour.push(colour);
         self.texture[kept as usize] = texture;
@@ -702,6 +723,7 @@ impl<'p> Growth<'p> {
                 self.embed.relax(&self.graph, v);
             }
         }
+        self.embed.remeasure(&self.graph);
     }
 
     fn verify(&self, operation: &str) -> Result<(), BudError> {
