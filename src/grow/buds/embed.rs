@@ -21,7 +21,7 @@ use crate::mesh::intersect::triangles_meet;
 pub const HOPS: u8 = 4;
 
 /// A Newton step shorter than this many cell sizes is not taken.
-pub const SETTLED: f64 = 1e-3;
+pub const SETTLED: f64 = 5e-3;
 
 /// Cells closer than the clearance but more hops apart than this are different parts of the
 /// form colliding. Nearer in the graph, they are the two sides of a fold or a valley between

@@ -50,7 +50,7 @@ impl Default for GrowthOptions {
         GrowthOptions {
             max_cells: 10_000,
             clearance: 0.9,
-            sweeps: 2,
+            sweeps: 1,
             verify: false,
         }
     }
