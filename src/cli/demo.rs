@@ -6,6 +6,7 @@
 //! tree and fit it to a 12 m × 4 m façade; make a leaf solid and slice it for the DMP-SL
 //! printer; write an index.html linking everything. Later stages add their steps here.
 
+mod buds;
 mod facade;
 mod print;
 
@@ -105,7 +106,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 4 + 4 + 2),
+        Some(FIXTURES.len() as u64 + 4 + 4 + 3),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -145,6 +146,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     bar.set_message("façade: L-system tree, fitted, panels, on a wall");
     entries.push(facade::facade(out, args.size)?);
+    bar.inc(1);
+    bar.set_message("growth forms: Figure 8, split, holes");
+    entries.push(buds::buds(out, args.size)?);
     bar.inc(1);
     bar.set_message("print: leaf, solid, slices");
     entries.push(print::print_leaf(out, args.size)?);
