@@ -303,3 +303,32 @@ fn hops(g: &CellGraph, a: u32, b: u32) -> usize {
     }
     usize::MAX
 }
+
+#[test]
+fn frames_show_the_growth() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let frames = dir.path().join("frames");
+    let png = dir.path().join("form.png");
+    let program = fixture("buds/split.bud");
+    let o = lamina(&[
+        "buds",
+        program.to_str().ok_or("path")?,
+        "--png",
+        png.to_str().ok_or("path")?,
+        "--frames",
+        frames.to_str().ok_or("path")?,
+        "--every",
+        "100",
+        "--size",
+        "200",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout)?;
+    let cells = report["growth"]["cells"].as_u64().ok_or("cells")?;
+    let written = std::fs::read_dir(&frames)?.count() as u64;
+    assert_eq!(report["frames"].as_u64(), Some(written));
+    assert!(written >= cells / 100, "{written} frames for {cells} cells");
+    assert!(frames.join("frame-00001.png").exists() && png.exists());
+    Ok(())
+}

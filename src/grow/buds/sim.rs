@@ -27,6 +27,10 @@ use super::BudError;
 /// Divisions of one bud between wider relaxations of its neighbourhood.
 pub const WIDE_EVERY: u32 = 8;
 
+/// No division raises a neighbour's degree past this while another choice exists (the
+/// paper's forms keep degrees "approximately balanced"; the bound).
+pub const MAX_DEGREE: usize = 12;
+
 /// Blocked divisions in a row after which a bud freezes.
 pub const STUCK_LIMIT: u32 = 16;
 
@@ -486,6 +490,16 @@ impl<'p> Growth<'p> {
                     }
                 }
             }
+        };
+        // The paper's opposite neighbour, unless that would take it past MAX_DEGREE: then the
+        // nearest ring position to it that stays within (the balance the rule is for).
+        let j = if self.graph.degree(ring[j]) < MAX_DEGREE {
+            j
+        } else {
+            (1..n / 2)
+                .flat_map(|d| [(j + d) % n, (j + n - d) % n])
+                .find(|&k| k != i && self.graph.degree(ring[k]) < MAX_DEGREE)
+                .unwrap_or(j)
         };
         let resident = self.bud_at[cell as usize];
         // Line buds next to the dividing cell's bud, of its type.
