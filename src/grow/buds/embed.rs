@@ -288,22 +288,28 @@ impl Embedding {
         clear
     }
 
-    /// A cell more than [`COLLIDE_HOPS`] hops from `v` that lies within the clearance of it.
-    pub fn crowded(&mut self, g: &CellGraph, v: u32) -> Option<u32> {
-        self.explore(g, v, COLLIDE_HOPS);
-        let x = self.pos[v as usize];
-        let sv = self.size[v as usize];
-        let mut hit = None;
+    /// A cell within the clearance of one of `cells` (a division's children and ring, round
+    /// `centre`) but more than [`COLLIDE_HOPS`] + 1 hops from `centre`: one search serves all.
+    pub fn crowded(&mut self, g: &CellGraph, centre: u32, cells: &[u32]) -> Option<u32> {
+        self.explore(g, centre, COLLIDE_HOPS + 1);
         let (stamp, epoch, size, pos) = (&self.stamp, self.epoch, &self.size, &self.pos);
         let clearance = self.clearance;
-        self.grid.near(x, |u| {
-            if hit.is_none()
-                && stamp[u as usize] != epoch
-                && x.distance(pos[u as usize]) < clearance * 0.5 * (sv + size[u as usize])
-            {
-                hit = Some(u);
+        let mut hit = None;
+        for &v in cells {
+            let x = pos[v as usize];
+            let sv = size[v as usize];
+            self.grid.near(x, |u| {
+                if hit.is_none()
+                    && stamp[u as usize] != epoch
+                    && x.distance(pos[u as usize]) < clearance * 0.5 * (sv + size[u as usize])
+                {
+                    hit = Some(u);
+                }
+            });
+            if hit.is_some() {
+                break;
             }
-        });
+        }
         hit
     }
 

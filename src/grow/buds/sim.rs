@@ -9,8 +9,8 @@
 //! a fifth. Every move is checked so that no triangle passes through another.
 //!
 //! A bud freezes when a cell it moved comes within the clearance of a part of the form more
-//! than [`COLLIDE_HOPS`] hops away, or when [`STUCK_LIMIT`] divisions in a row were undone
-//! because no placement of the children was clear of the form.
+//! than [`COLLIDE_HOPS`] + 1 hops from the divided cell, or when [`STUCK_LIMIT`] divisions in
+//! a row were undone because no placement of the children was clear of the form.
 
 use glam::DVec3;
 use rand::{Rng, SeedableRng};
@@ -630,9 +630,7 @@ impl<'p> Growth<'p> {
         // A blob's region is the blob itself, whose lumps may touch in its creases; a bud that
         // grows a limb freezes when the limb reaches another part of the form.
         if self.buds[b].task != Task::Blob
-            && moved
-                .iter()
-                .any(|&v| self.embed.crowded(&self.graph, v).is_some())
+            && self.embed.crowded(&self.graph, kept, &moved).is_some()
         {
             self.retire(b, State::Frozen);
         }
