@@ -7,20 +7,13 @@
 
 use std::time::Instant;
 
+#[path = "common/timing.rs"]
+mod timing;
+use timing::peak_mib;
+
 use lamina::grow::buds::{
     grow, parse_program, program::FIGURE_8, skin, GrowthOptions, SkinOptions,
 };
-
-fn peak_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let program = parse_program(FIGURE_8, "Figure 8")?;

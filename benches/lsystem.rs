@@ -8,18 +8,7 @@ use lamina::grow::lsystem::{count, interpret, parse_rule, Grammar, TurtleOptions
 
 #[path = "common/timing.rs"]
 mod timing;
-use timing::best_of;
-
-fn peak_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
+use timing::{best_of, peak_mib};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let g = Grammar::new(

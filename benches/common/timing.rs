@@ -15,3 +15,15 @@ pub fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     }
     (best, last.expect("at least one run"))
 }
+
+/// Peak resident memory of this process so far (VmHWM), in MiB.
+pub fn peak_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}

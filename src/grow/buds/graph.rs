@@ -500,7 +500,7 @@ mod tests {
         Ok(())
     }
 
-    fn farthest(g: &CellGraph, from: u32) -> (u32, usize) {
+    pub(super) fn farthest(g: &CellGraph, from: u32) -> (u32, usize) {
         let mut hops = vec![usize::MAX; g.len()];
         hops[from as usize] = 0;
         let mut queue = std::collections::VecDeque::from([from]);
@@ -536,7 +536,7 @@ mod tunnel_props {
                 g.divide(cell, i, j);
             }
             let p = rng.random_range(0..g.len() as u32);
-            let (q, hops) = tests_far(&g, p);
+            let (q, hops) = super::tests::farthest(&g, p);
             if hops < 5 {
                 continue;
             }
@@ -563,23 +563,6 @@ mod tunnel_props {
             assert_eq!(g.check()?.genus, before + 1, "case {case}");
         }
         Ok(())
-    }
-
-    fn tests_far(g: &CellGraph, from: u32) -> (u32, usize) {
-        let mut hops = vec![usize::MAX; g.len()];
-        hops[from as usize] = 0;
-        let mut queue = std::collections::VecDeque::from([from]);
-        let mut last = (from, 0);
-        while let Some(v) = queue.pop_front() {
-            last = (v, hops[v as usize]);
-            for &u in g.neighbours(v) {
-                if hops[u as usize] == usize::MAX {
-                    hops[u as usize] = hops[v as usize] + 1;
-                    queue.push_back(u);
-                }
-            }
-        }
-        last
     }
 }
 
