@@ -470,13 +470,35 @@ impl SpatialHash {
         }
     }
 
+    /// Every cell in the buckets that reach within `radius` of `p` (a superset of the cells
+    /// within it): buckets wholly farther away are not looked up.
     fn near_radius(&self, p: DVec3, radius: f64, mut f: impl FnMut(u32)) {
-        let r = (radius / self.width).ceil() as i32;
-        let (x, y, z) = self.key(p);
-        for dx in -r..=r {
-            for dy in -r..=r {
-                for dz in -r..=r {
-                    if let Some(b) = self.buckets.get(&(x + dx, y + dy, z + dz)) {
+        let lo = ((p - DVec3::splat(radius)) / self.width).floor();
+        let hi = ((p + DVec3::splat(radius)) / self.width).floor();
+        let r2 = radius * radius;
+        let gap = |k: i32, c: f64| {
+            let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
+            if c < a {
+                a - c
+            } else if c > b {
+                c - b
+            } else {
+                0.0
+            }
+        };
+        for x in lo.x as i32..=hi.x as i32 {
+            let gx = gap(x, p.x);
+            for y in lo.y as i32..=hi.y as i32 {
+                let gy = gap(y, p.y);
+                if gx * gx + gy * gy > r2 {
+                    continue;
+                }
+                for z in lo.z as i32..=hi.z as i32 {
+                    let gz = gap(z, p.z);
+                    if gx * gx + gy * gy + gz * gz > r2 {
+                        continue;
+                    }
+                    if let Some(b) = self.buckets.get(&(x, y, z)) {
                         b.iter().for_each(|&u| f(u));
                     }
                 }

@@ -6,7 +6,7 @@
 //! dividing cell follows the child furthest along its heading (or a random one). After the
 //! division the two children and their ring are relaxed; every [`WIDE_EVERY`] divisions of a
 //! bud its neighbourhood is relaxed more widely, and the whole form whenever it has grown by
-//! a fifth. Every move is checked so that no triangle passes through another.
+//! a quarter. Every move is checked so that no triangle passes through another.
 //!
 //! A bud freezes when a cell it moved comes within the clearance of a part of the form more
 //! than [`COLLIDE_HOPS`] + 1 hops from the divided cell, or when [`STUCK_LIMIT`] divisions in
@@ -35,7 +35,7 @@ pub const MAX_DEGREE: usize = 12;
 pub const STUCK_LIMIT: u32 = 16;
 
 /// The whole form is relaxed once each time it has grown by 1/GLOBAL_EVERY of its cells.
-pub const GLOBAL_EVERY: usize = 5;
+pub const GLOBAL_EVERY: usize = 4;
 
 #[derive(Clone, Debug)]
 pub struct GrowthOptions {
@@ -288,9 +288,9 @@ impl<'p> Growth<'p> {
         Ok(self.stopped_by.is_none())
     }
 
-    /// Relaxes the whole form a few times and hands it over.
+    /// Relaxes the whole form once more and hands it over.
     pub fn finish(mut self) -> Form {
-        self.relax_all(3);
+        self.relax_all(1);
         self.sample();
         let census = self
             .graph
