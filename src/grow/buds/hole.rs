@@ -2,10 +2,12 @@
 //! wall opposite it, and their rings are joined by a tube of antiprism rings through the
 //! inside of the form. The genus grows by one.
 //!
-//! The opposite cell is where the ray from the bud along its inward normal first meets the
-//! form. The hole is refused (and counted) when the ray meets nothing, meets the wall from the
-//! wrong side, lands within five hops of the bud, or when the tube would pass within the
-//! clearance of another part of the form.
+//! The opposite cell is where the ray from the bud's cell along the mean inward normal of the
+//! cells within three hops first meets the form. A start is rejected when the ray meets
+//! nothing, meets the wall from the wrong side, lands within five hops, when the straight way
+//! passes within the clearance of another part of the form, or when a tube triangle would meet
+//! the form (the tube is then undone). Each cell within two hops of the bud is tried in turn;
+//! if none works the hole is refused (and counted).
 
 use glam::DVec3;
 
