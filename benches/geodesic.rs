@@ -5,8 +5,6 @@
 //! 50,000-triangle torus. Both meshes go to `target/bench-data` for the whole-process runs in
 //! `scripts/bench geodesic`. `harness = false`: `cargo bench --bench geodesic [-- --quick]`.
 
-use std::time::Instant;
-
 use lamina::grow::geodesic::{grow_veins, Incremental, Labels, MeshGraph, Relabel, VeinTree};
 use lamina::grow::surface::{self, grow_on_surface, SurfaceOptions};
 use lamina::grow::venation::{Mode, VenationOptions};
@@ -16,6 +14,9 @@ use rand_chacha::ChaCha8Rng;
 
 #[path = "common/meshes.rs"]
 mod meshes;
+#[path = "common/timing.rs"]
+mod timing;
+use timing::best_of;
 
 /// The baseline: every iteration forgets the labels and runs Dijkstra from every tree vertex.
 struct Recompute {
@@ -95,18 +96,6 @@ impl PartialOrd for Key {
     fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
         Some(self.cmp(o))
     }
-}
-
-fn best_of<T>(runs: usize, mut f: impl FnMut() -> T) -> (f64, T) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..runs {
-        let t = Instant::now();
-        let r = f();
-        best = best.min(t.elapsed().as_secs_f64());
-        out = Some(r);
-    }
-    (best, out.expect("at least one run"))
 }
 
 fn same_tree(a: &VeinTree, b: &VeinTree) -> bool {

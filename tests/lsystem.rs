@@ -8,8 +8,10 @@ mod common;
 use std::path::Path;
 
 use common::{lamina, run_ok, stderr, TestResult};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use lamina::grow::outline::Outline;
+use lamina::mesh::io::write_mesh;
+use lamina::mesh::TriMesh;
 use lamina::network::io::{read_network, ReadOptions};
 use lamina::network::Network;
 
@@ -243,35 +245,14 @@ fn a_concave_boundary_from_a_file_and_a_random_bifurcation() -> TestResult {
 fn projection_puts_every_node_on_the_surface() -> TestResult {
     let dir = tempfile::tempdir()?;
     // A barrel-vaulted wall: the 12 × 4 m façade bent about a vertical axis, 300 mm deep.
-    let mut obj = String::new();
     let (nx, nz) = (48, 8);
-    for j in 0..=nz {
-        for i in 0..=nx {
-            let x = -6500.0 + 13000.0 * i as f64 / nx as f64;
-            let z = -500.0 + 5000.0 * j as f64 / nz as f64;
-            let y = 2000.0 + 300.0 * (1.0 - (x / 6500.0) * (x / 6500.0));
-            obj.push_str(&format!("v {x} {y} {z}\n"));
-        }
-    }
-    let id = |i: usize, j: usize| j * (nx + 1) + i + 1;
-    for j in 0..nz {
-        for i in 0..nx {
-            obj.push_str(&format!(
-                "f {} {} {}\n",
-                id(i, j),
-                id(i + 1, j),
-                id(i + 1, j + 1)
-            ));
-            obj.push_str(&format!(
-                "f {} {} {}\n",
-                id(i, j),
-                id(i + 1, j + 1),
-                id(i, j + 1)
-            ));
-        }
-    }
+    let wall = TriMesh::grid(nx, nz, |i, j| {
+        let x = -6500.0 + 13000.0 * i as f64 / nx as f64;
+        let z = -500.0 + 5000.0 * j as f64 / nz as f64;
+        DVec3::new(x, 2000.0 + 300.0 * (1.0 - (x / 6500.0) * (x / 6500.0)), z)
+    });
     let mesh = dir.path().join("wall.obj");
-    std::fs::write(&mesh, obj)?;
+    write_mesh(&wall, &mesh, 0)?;
     let out = dir.path().join("onto.json");
     let report = run_ok(&args(&[
         "-n",

@@ -18,6 +18,8 @@ import sys
 from shapely.geometry import LineString, Point, box
 from shapely.strtree import STRtree
 
+from graph_parts import component_count, component_labels
+
 
 def derive(n):
     rules = str.maketrans({"X": "F[-X]F[+X]-X", "F": "FF"})
@@ -33,22 +35,6 @@ def load(path):
     nodes = [tuple(n["p"]) for n in d["nodes"]]
     edges = [(e["a"], e["b"]) for e in d["edges"]]
     return d, nodes, edges
-
-
-def components(n, edges):
-    parent = list(range(n))
-
-    def find(x):
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    for a, b in edges:
-        ra, rb = find(a), find(b)
-        if ra != rb:
-            parent[max(ra, rb)] = min(ra, rb)
-    return [find(v) for v in range(n)]
 
 
 def check_counts(path, n):
@@ -107,7 +93,7 @@ def check_facade(path, frame, root_on_boundary):
                 crossings += 1
     if crossings:
         errors.append(f"{crossings} pair(s) of members cross or touch away from a shared node")
-    labels = components(len(nodes), edges)
+    labels = component_labels(len(nodes), edges)
     parts = len(set(labels))
     if parts != 1:
         errors.append(f"{parts} connected pieces, expected 1")
@@ -126,7 +112,7 @@ def check_tree(path, n_edges):
         errors.append(f"{len(edges)} edges, expected {n_edges}")
     if len(nodes) != len(edges) + 1:
         errors.append(f"{len(nodes)} nodes for {len(edges)} edges: not a tree")
-    if len(set(components(len(nodes), edges))) != 1:
+    if component_count(len(nodes), edges) != 1:
         errors.append("not connected")
     return errors, f"{len(nodes)} nodes, {len(edges)} edges"
 

@@ -22,6 +22,8 @@ import manifold3d
 import numpy as np
 import trimesh
 
+from graph_parts import component_labels
+
 
 def load(path):
     mesh = trimesh.load(path, force="mesh", process=True)
@@ -33,21 +35,10 @@ def load(path):
 
 def network_cycles(net):
     n = len(net["nodes"])
-    parent = list(range(n))
-
-    def find(v):
-        while parent[v] != v:
-            parent[v] = parent[parent[v]]
-            v = parent[v]
-        return v
-
-    used = set()
-    for e in net["edges"]:
-        used.update((e["a"], e["b"]))
-        ra, rb = find(e["a"]), find(e["b"])
-        if ra != rb:
-            parent[ra] = rb
-    parts = len({find(v) for v in used})
+    edges = [(e["a"], e["b"]) for e in net["edges"]]
+    used = {v for e in edges for v in e}
+    labels = component_labels(n, edges)
+    parts = len({labels[v] for v in used})
     return len(net["edges"]) - len(used) + parts
 
 

@@ -19,6 +19,8 @@ import sys
 import numpy as np
 import trimesh
 
+from graph_parts import component_count
+
 
 def closest_distances(points, tris):
     """Distance from each point to the nearest triangle (n x 3 points, t x 3 x 3 triangles), and
@@ -110,17 +112,7 @@ def main():
             failures.append(f"{bad} edges are not mesh edges")
 
     if args.tree:
-        parent = list(range(len(nodes)))
-
-        def find(x):
-            while parent[x] != x:
-                parent[x] = parent[parent[x]]
-                x = parent[x]
-            return x
-
-        for a, b in edges:
-            parent[find(a)] = find(b)
-        components = len({find(i) for i in range(len(nodes))})
+        components = component_count(len(nodes), edges)
         if len(edges) != len(nodes) - 1 or components != 1:
             failures.append(f"not a tree: {len(nodes)} nodes, {len(edges)} edges, "
                             f"{components} components")

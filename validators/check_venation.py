@@ -21,19 +21,7 @@ from collections import Counter
 from shapely.geometry import LineString, Point, Polygon
 from shapely.strtree import STRtree
 
-
-def components(n, edges):
-    parent = list(range(n))
-
-    def find(x):
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    for a, b in edges:
-        parent[find(a)] = find(b)
-    return len({find(i) for i in range(n)})
+from graph_parts import component_count
 
 
 def main():
@@ -104,7 +92,7 @@ def main():
             problems.append(f"Murray's law fails at node {v}")
             break
 
-    c = components(len(nodes), edges)
+    c = component_count(len(nodes), edges)
     loops = len(edges) - len(nodes) + c
     if args.expect_loops and loops < 1:
         problems.append("no loop in a closed venation")

@@ -236,27 +236,11 @@ mod tests {
     /// A cylinder patch z = f(x) bent about the y axis: radius 10, x in −5..5, y in 0..10.
     fn barrel() -> TriMesh {
         let (nx, ny) = (40, 10);
-        let mut positions = Vec::new();
-        for j in 0..=ny {
-            for i in 0..=nx {
-                let x = -5.0 + 10.0 * i as f64 / nx as f64;
-                let y = 10.0 * j as f64 / ny as f64;
-                positions.push(DVec3::new(x, y, 20.0 + (100.0 - x * x).sqrt()));
-            }
-        }
-        let mut triangles = Vec::new();
-        let id = |i: u32, j: u32| j * (nx + 1) + i;
-        for j in 0..ny {
-            for i in 0..nx {
-                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        TriMesh {
-            positions,
-            triangles,
-            colors: None,
-        }
+        TriMesh::grid(nx, ny, |i, j| {
+            let x = -5.0 + 10.0 * i as f64 / nx as f64;
+            let y = 10.0 * j as f64 / ny as f64;
+            DVec3::new(x, y, 20.0 + (100.0 - x * x).sqrt())
+        })
     }
 
     #[test]

@@ -22,6 +22,30 @@ pub struct TriMesh {
 }
 
 impl TriMesh {
+    /// A grid of (nx + 1) × (ny + 1) vertices, row by row (j outer), placed by `at(i, j)`; each
+    /// cell split into ((i, j), (i+1, j), (i+1, j+1)) and ((i, j), (i+1, j+1), (i, j+1)).
+    pub fn grid(nx: u32, ny: u32, at: impl Fn(u32, u32) -> DVec3) -> TriMesh {
+        let mut positions = Vec::with_capacity(((nx + 1) * (ny + 1)) as usize);
+        for j in 0..=ny {
+            for i in 0..=nx {
+                positions.push(at(i, j));
+            }
+        }
+        let id = |i: u32, j: u32| j * (nx + 1) + i;
+        let mut triangles = Vec::with_capacity((2 * nx * ny) as usize);
+        for j in 0..ny {
+            for i in 0..nx {
+                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        TriMesh {
+            positions,
+            triangles,
+            colors: None,
+        }
+    }
+
     pub fn bbox(&self) -> Aabb {
         Aabb::from_points(self.positions.iter().filter(|p| p.is_finite()))
     }

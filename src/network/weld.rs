@@ -2,12 +2,12 @@
 //! node. Polyline formats (OBJ `l`, DXF) repeat shared endpoints; this is where they meet.
 
 use std::collections::{HashMap, HashSet};
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 
 use glam::DVec3;
 
 use super::{Edge, Network, Node};
-use crate::geom::Aabb;
+use crate::geom::{Aabb, KeyHasher};
 
 /// How close two points must be to become one node.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,37 +84,9 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
     (network, stats)
 }
 
-/// A multiply-rotate hasher for small integer keys: welding hashes every point read, and the
-/// default SipHash costs a third of a large import. Keys come from the file, but a collision
-/// only slows a lookup; it cannot change which points merge.
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_i64(&mut self, v: i64) {
-        self.write_u64(v as u64);
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.write_u64(v as u64);
-    }
-    fn write_usize(&mut self, v: usize) {
-        self.write_u64(v as u64);
-    }
-}
-
-type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<CellHasher>>;
-type FastSet<K> = HashSet<K, BuildHasherDefault<CellHasher>>;
+// Welding hashes every point read, and the default SipHash costs a third of a large import.
+type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<KeyHasher>>;
+type FastSet<K> = HashSet<K, BuildHasherDefault<KeyHasher>>;
 
 /// Maps each point to a node index. With cells of twice the tolerance, the ball of radius `tol`
 /// around a point touches at most two cells per axis, so eight lookups find every candidate.

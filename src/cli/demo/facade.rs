@@ -49,31 +49,11 @@ fn lsystem(extra: &[&str]) -> Result<serde_json::Value> {
 /// (y from 2000 mm at the edges to 2400 mm in the middle), 0.5 m wider and taller all round.
 fn bowed_wall() -> TriMesh {
     let (nx, nz) = (52u32, 10u32);
-    let mut positions = Vec::new();
-    for j in 0..=nz {
-        for i in 0..=nx {
-            let x = -6500.0 + 13000.0 * i as f64 / nx as f64;
-            let z = -500.0 + 5000.0 * j as f64 / nz as f64;
-            positions.push(DVec3::new(
-                x,
-                2000.0 + 400.0 * (1.0 - (x / 6500.0).powi(2)),
-                z,
-            ));
-        }
-    }
-    let id = |i: u32, j: u32| j * (nx + 1) + i;
-    let mut triangles = Vec::new();
-    for j in 0..nz {
-        for i in 0..nx {
-            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    TriMesh {
-        positions,
-        triangles,
-        colors: None,
-    }
+    TriMesh::grid(nx, nz, |i, j| {
+        let x = -6500.0 + 13000.0 * i as f64 / nx as f64;
+        let z = -500.0 + 5000.0 * j as f64 / nz as f64;
+        DVec3::new(x, 2000.0 + 400.0 * (1.0 - (x / 6500.0).powi(2)), z)
+    })
 }
 
 pub fn facade(out: &Path, size: u32) -> Result<Entry> {

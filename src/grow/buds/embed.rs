@@ -10,11 +10,12 @@
 //! the bud that caused it can freeze. A spatial hash keeps both queries local.
 
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
+use std::hash::BuildHasherDefault;
 
 use glam::{DMat3, DVec3};
 
 use super::graph::CellGraph;
+use crate::geom::KeyHasher;
 use crate::mesh::intersect::triangles_meet;
 
 /// Springs join cells up to this many hops apart (the paper: four).
@@ -328,18 +329,23 @@ impl Embedding {
         });
     }
 
-    /// Each cell's outward normal: the area-weighted normal of its faces.
+    /// The cell's outward normal (see [`cell_normal`]).
     pub fn normal(&self, g: &CellGraph, v: u32) -> DVec3 {
-        let ring = g.neighbours(v);
-        let x = self.pos[v as usize];
-        let mut n = DVec3::ZERO;
-        for k in 0..ring.len() {
-            let a = self.pos[ring[k] as usize] - x;
-            let b = self.pos[ring[(k + 1) % ring.len()] as usize] - x;
-            n += a.cross(b);
-        }
-        n.normalize_or_zero()
+        cell_normal(g, &self.pos, v)
     }
+}
+
+/// A cell's outward normal: the area-weighted normal of its faces.
+pub fn cell_normal(g: &CellGraph, pos: &[DVec3], v: u32) -> DVec3 {
+    let ring = g.neighbours(v);
+    let x = pos[v as usize];
+    let mut n = DVec3::ZERO;
+    for k in 0..ring.len() {
+        let a = pos[ring[k] as usize] - x;
+        let b = pos[ring[(k + 1) % ring.len()] as usize] - x;
+        n += a.cross(b);
+    }
+    n.normalize_or_zero()
 }
 
 fn outer(a: DVec3, b: DVec3) -> DMat3 {
@@ -388,24 +394,6 @@ fn cholesky_solve(m: DMat3, b: DVec3) -> Option<DVec3> {
     let x1 = (y1 - l21 * x2) / l11;
     let x0 = (y0 - l10 * x1 - l20 * x2) / l00;
     Some(DVec3::new(x0, x1, x2))
-}
-
-/// A multiplicative hash for bucket keys: deterministic, and fast for small integer tuples.
-#[derive(Default)]
-struct KeyHasher(u64);
-
-impl Hasher for KeyHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(5) ^ b as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-        }
-    }
-    fn write_i32(&mut self, i: i32) {
-        self.0 = (self.0.rotate_left(5) ^ i as u32 as u64).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
 }
 
 type Key = (i32, i32, i32);

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use super::embed::cell_normal;
 use super::program::Texture;
 use super::sim::Form;
 use crate::mesh::TriMesh;
@@ -78,31 +79,13 @@ fn relief(t: Texture) -> Option<Relief> {
 const HALVINGS: u32 = 5;
 
 pub fn skin(form: &Form, options: &SkinOptions) -> (TriMesh, SkinReport) {
-    let g = &form.graph;
-    let n = g.len();
-    let mut normal = vec![DVec3::ZERO; n];
-    let mut spacing = vec![0.0; n];
-    for v in 0..n as u32 {
-        let x = form.pos[v as usize];
-        let ring = g.neighbours(v);
-        let mut nv = DVec3::ZERO;
-        for k in 0..ring.len() {
-            let a = form.pos[ring[k] as usize] - x;
-            let b = form.pos[ring[(k + 1) % ring.len()] as usize] - x;
-            nv += a.cross(b);
-        }
-        normal[v as usize] = nv.normalize_or_zero();
-        spacing[v as usize] = ring
-            .iter()
-            .map(|&u| form.pos[u as usize].distance(x))
-            .sum::<f64>()
-            / ring.len() as f64;
-    }
+    let n = form.graph.len();
+    let layout = Layout::new(form, options.cell_mm);
     let textured = |v: usize| options.textures && relief(form.texture[v]).is_some();
     let mut halvings = vec![0u32; n];
     let mut passes = 0;
     loop {
-        let (mesh, owner) = build(form, options, &normal, &spacing, &halvings);
+        let (mesh, owner) = layout.build(form, options, &halvings);
         passes += 1;
         let pairs = mesh.self_intersections();
         let mut changed = false;
@@ -134,94 +117,132 @@ pub fn skin(form: &Form, options: &SkinOptions) -> (TriMesh, SkinReport) {
     }
 }
 
-/// The subdivided, textured mesh and the cell owning each triangle.
-fn build(
-    form: &Form,
-    options: &SkinOptions,
-    normal: &[DVec3],
-    spacing: &[f64],
-    halvings: &[u32],
-) -> (TriMesh, Vec<u32>) {
-    let g = &form.graph;
-    let n = g.len();
-    let s = options.cell_mm;
-    let faces = g.faces();
-    let mut positions: Vec<DVec3> = form.pos.iter().map(|p| *p * s).collect();
-    let mut colours: Vec<[f32; 3]> = form.colour.clone();
-    // Face centroids, then edge midpoints.
-    let mut face_of: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * faces.len());
-    for t in &faces {
-        let id = positions.len() as u32;
-        positions.push(t.iter().map(|&v| form.pos[v as usize]).sum::<DVec3>() * (s / 3.0));
-        colours.push(mean_colour(t.iter().map(|&v| form.colour[v as usize])));
-        for k in 0..3 {
-            face_of.insert((t[k], t[(k + 1) % 3]), id);
-        }
-    }
-    let mut mid: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * n);
-    for v in 0..n as u32 {
-        for &u in g.neighbours(v) {
-            if v < u {
-                mid.insert((v, u), positions.len() as u32);
-                positions.push((form.pos[v as usize] + form.pos[u as usize]) * (0.5 * s));
-                colours.push(mean_colour([
-                    form.colour[v as usize],
-                    form.colour[u as usize],
-                ]));
+/// What every pass shares: the subdivided surface's points (cell centres, then face
+/// centroids, then edge midpoints, in mm) and colours, each cell's patch corners, its normal
+/// and its mean edge length (in cell sizes).
+struct Layout {
+    positions: Vec<DVec3>,
+    colours: Vec<[f32; 3]>,
+    /// Corners of cell v's patch, alternately edge midpoint and face centroid, counter-clockwise:
+    /// `corners[start[v]..start[v + 1]]`.
+    corners: Vec<u32>,
+    start: Vec<usize>,
+    normal: Vec<DVec3>,
+    spacing: Vec<f64>,
+}
+
+impl Layout {
+    fn new(form: &Form, s: f64) -> Layout {
+        let g = &form.graph;
+        let n = g.len();
+        let faces = g.faces();
+        let mut positions: Vec<DVec3> = form.pos.iter().map(|p| *p * s).collect();
+        let mut colours: Vec<[f32; 3]> = form.colour.clone();
+        let mut face_of: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * faces.len());
+        for t in &faces {
+            let id = positions.len() as u32;
+            positions.push(t.iter().map(|&v| form.pos[v as usize]).sum::<DVec3>() * (s / 3.0));
+            colours.push(mean_colour(t.iter().map(|&v| form.colour[v as usize])));
+            for k in 0..3 {
+                face_of.insert((t[k], t[(k + 1) % 3]), id);
             }
         }
-    }
-    let mut triangles = Vec::with_capacity(14 * faces.len());
-    let mut owner = Vec::with_capacity(14 * faces.len());
-    let mut corners = Vec::new();
-    for v in 0..n as u32 {
-        let ring = g.neighbours(v);
-        corners.clear();
-        for &u in ring {
-            corners.push(mid[&(v.min(u), v.max(u))]);
-            corners.push(face_of[&(v, u)]);
-        }
-        let vi = v as usize;
-        let shape =
-            relief(form.texture[vi]).filter(|_| options.textures && halvings[vi] <= HALVINGS);
-        let m = corners.len();
-        match shape {
-            None => {
-                for k in 0..m {
-                    triangles.push([v, corners[k], corners[(k + 1) % m]]);
-                    owner.push(v);
-                }
-            }
-            Some(r) => {
-                let amp = spacing[vi] * s * 0.5f64.powi(halvings[vi] as i32);
-                let centre = positions[vi];
-                let first = positions.len() as u32;
-                for &c in corners.iter() {
-                    let q = positions[c as usize];
-                    positions
-                        .push(centre + (q - centre) * r.ring + normal[vi] * (r.ring_lift * amp));
-                    colours.push(form.colour[vi]);
-                }
-                positions[vi] = centre + normal[vi] * (r.tip * amp);
-                for k in 0..m {
-                    let (i0, i1) = (first + k as u32, first + ((k + 1) % m) as u32);
-                    let (q0, q1) = (corners[k], corners[(k + 1) % m]);
-                    triangles.push([v, i0, i1]);
-                    triangles.push([i0, q0, q1]);
-                    triangles.push([i0, q1, i1]);
-                    owner.extend([v, v, v]);
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::with_capacity(3 * n);
+        for v in 0..n as u32 {
+            for &u in g.neighbours(v) {
+                if v < u {
+                    mid.insert((v, u), positions.len() as u32);
+                    positions.push((form.pos[v as usize] + form.pos[u as usize]) * (0.5 * s));
+                    colours.push(mean_colour([
+                        form.colour[v as usize],
+                        form.colour[u as usize],
+                    ]));
                 }
             }
         }
-    }
-    (
-        TriMesh {
+        let mut corners = Vec::with_capacity(6 * faces.len());
+        let mut start = Vec::with_capacity(n + 1);
+        let mut normal = Vec::with_capacity(n);
+        let mut spacing = Vec::with_capacity(n);
+        for v in 0..n as u32 {
+            start.push(corners.len());
+            let ring = g.neighbours(v);
+            for &u in ring {
+                corners.push(mid[&(v.min(u), v.max(u))]);
+                corners.push(face_of[&(v, u)]);
+            }
+            let x = form.pos[v as usize];
+            normal.push(cell_normal(g, &form.pos, v));
+            spacing.push(
+                ring.iter()
+                    .map(|&u| form.pos[u as usize].distance(x))
+                    .sum::<f64>()
+                    / ring.len() as f64,
+            );
+        }
+        start.push(corners.len());
+        Layout {
             positions,
-            triangles,
-            colors: Some(colours),
-        },
-        owner,
-    )
+            colours,
+            corners,
+            start,
+            normal,
+            spacing,
+        }
+    }
+
+    /// The textured mesh with each cell's relief halved `halvings[v]` times (removed past
+    /// [`HALVINGS`]), and the cell owning each triangle.
+    fn build(&self, form: &Form, options: &SkinOptions, halvings: &[u32]) -> (TriMesh, Vec<u32>) {
+        let n = form.graph.len();
+        let mut positions = self.positions.clone();
+        let mut colours = self.colours.clone();
+        let mut triangles = Vec::with_capacity(3 * self.corners.len());
+        let mut owner = Vec::with_capacity(3 * self.corners.len());
+        for v in 0..n as u32 {
+            let vi = v as usize;
+            let corners = &self.corners[self.start[vi]..self.start[vi + 1]];
+            let shape =
+                relief(form.texture[vi]).filter(|_| options.textures && halvings[vi] <= HALVINGS);
+            let m = corners.len();
+            match shape {
+                None => {
+                    for k in 0..m {
+                        triangles.push([v, corners[k], corners[(k + 1) % m]]);
+                        owner.push(v);
+                    }
+                }
+                Some(r) => {
+                    let amp = self.spacing[vi] * options.cell_mm * 0.5f64.powi(halvings[vi] as i32);
+                    let lift = self.normal[vi];
+                    let centre = positions[vi];
+                    let first = positions.len() as u32;
+                    for &c in corners {
+                        let q = positions[c as usize];
+                        positions.push(centre + (q - centre) * r.ring + lift * (r.ring_lift * amp));
+                        colours.push(form.colour[vi]);
+                    }
+                    positions[vi] = centre + lift * (r.tip * amp);
+                    for k in 0..m {
+                        let (i0, i1) = (first + k as u32, first + ((k + 1) % m) as u32);
+                        let (q0, q1) = (corners[k], corners[(k + 1) % m]);
+                        triangles.push([v, i0, i1]);
+                        triangles.push([i0, q0, q1]);
+                        triangles.push([i0, q1, i1]);
+                        owner.extend([v, v, v]);
+                    }
+                }
+            }
+        }
+        (
+            TriMesh {
+                positions,
+                triangles,
+                colors: Some(colours),
+            },
+            owner,
+        )
+    }
 }
 
 fn mean_colour(cs: impl IntoIterator<Item = [f32; 3]>) -> [f32; 3] {
