@@ -12,10 +12,13 @@
 //! Bachman reran the shortest paths every iteration, which he reports as very slow on fine
 //! meshes. Here one multi-source Dijkstra labelling (distance to the tree, the site at the
 //! path's end, the path's first vertex off the tree) is kept, and only updated from the
-//! vertices the tree gained: the tree only grows, so distances only fall, and a label changes
-//! exactly where a path through a new vertex is strictly shorter. Each source then reads its
-//! site and first edge in O(1). The recompute-everything baseline lives in `benches/geodesic.rs`
-//! and uses the same `relabel` over every tree vertex.
+//! vertices the tree gained: the tree only grows, so distances only fall. The labels keep the
+//! shortest-path forest they came along; a vertex joining the tree hands its subtree the same
+//! paths, now ending at it, by a walk down the forest (no priority queue), and a Dijkstra then
+//! enters only the vertices some path through the new tree vertices brings strictly closer.
+//! Each source reads its site and first edge in O(1). The baselines live in
+//! `benches/geodesic.rs`: a fresh multi-source Dijkstra every iteration (`Labels::recompute`),
+//! and Bachman's own step, a Dijkstra from each source every iteration.
 //!
 //! Output: the tree as a `Network` whose every edge is a mesh edge (or, with smoothing,
 //! Catmull-Rom resampled branches snapped back onto the surface); radii grow with the number of
@@ -95,12 +98,23 @@ pub const NONE: u32 = u32::MAX;
 
 /// The multi-source shortest-path labelling from the tree: for every vertex its distance to
 /// the tree, the tree vertex its path ends at (the growth site), and the path's first vertex
-/// off the tree.
+/// off the tree; and the shortest-path forest the labels came along, so that a vertex joining
+/// the tree can hand its subtree the shorter paths without a priority queue.
 pub struct Labels {
     pub dist: Vec<f64>,
     pub site: Vec<u32>,
     pub first: Vec<u32>,
+    /// The vertex each label came from (NONE on the tree, off it, and after `recompute`) and
+    /// the length of the edge to it.
+    from: Vec<u32>,
+    from_len: Vec<f64>,
+    /// Each vertex's children in the forest as a doubly linked list.
+    child: Vec<u32>,
+    next: Vec<u32>,
+    prev: Vec<u32>,
     heap: BinaryHeap<Entry>,
+    stack: Vec<u32>,
+    shifted: Vec<u32>,
     /// Vertices whose label changed in the last `relabel` (a measure of the work done).
     pub changed: usize,
 }
@@ -130,45 +144,141 @@ impl Labels {
             dist: vec![f64::INFINITY; vertices],
             site: vec![NONE; vertices],
             first: vec![NONE; vertices],
+            from: vec![NONE; vertices],
+            from_len: vec![0.0; vertices],
+            child: vec![NONE; vertices],
+            next: vec![NONE; vertices],
+            prev: vec![NONE; vertices],
             heap: BinaryHeap::new(),
+            stack: Vec::new(),
+            shifted: Vec::new(),
             changed: 0,
         }
     }
 
-    /// Forget every label (the baseline's fresh start).
-    pub fn clear(&mut self) {
+    /// The recompute-everything baseline: forgets every label and runs a plain multi-source
+    /// Dijkstra from the whole tree (no forest kept).
+    pub fn recompute(&mut self, g: &MeshGraph, in_tree: &[bool], tree: &[u32]) {
         self.dist.fill(f64::INFINITY);
         self.site.fill(NONE);
         self.first.fill(NONE);
+        self.from.fill(NONE);
+        self.child.fill(NONE);
+        self.changed = 0;
+        for &s in tree {
+            self.dist[s as usize] = 0.0;
+            self.site[s as usize] = s;
+            self.heap.push(Entry(0.0, s));
+        }
+        self.dijkstra(g, in_tree, false);
     }
 
-    /// Brings the labels up to date after `seeds` joined the tree (`in_tree` already says so):
-    /// a Dijkstra from the seeds that only enters vertices it brings strictly closer.
+    /// Brings the labels up to date after `seeds` joined the tree (`in_tree` already says so).
+    ///
+    /// A vertex whose path ran through a seed keeps that path, now ending at the seed: the
+    /// seeds' subtrees of the forest are walked top down and each label recomputed as its
+    /// parent's plus the edge (the sum a fresh Dijkstra would form along the same path), with
+    /// the seed as site. Then a Dijkstra from the edges leaving the seeds and those subtrees
+    /// enters only the vertices it brings strictly closer. The result is the fresh labelling's
+    /// distances exactly; where two paths are equally long, the site may differ.
     pub fn relabel(&mut self, g: &MeshGraph, in_tree: &[bool], seeds: &[u32]) {
-        self.changed = 0;
         for &s in seeds {
+            self.unlink(s);
             self.dist[s as usize] = 0.0;
             self.site[s as usize] = s;
             self.first[s as usize] = NONE;
-            self.heap.push(Entry(0.0, s));
         }
+        self.shifted.clear();
+        for &s in seeds {
+            self.push_children(s);
+            while let Some(v) = self.stack.pop() {
+                let p = self.from[v as usize];
+                self.dist[v as usize] = self.dist[p as usize] + self.from_len[v as usize];
+                self.site[v as usize] = s;
+                self.first[v as usize] = if p == s { v } else { self.first[p as usize] };
+                self.shifted.push(v);
+                self.push_children(v);
+            }
+        }
+        self.changed = seeds.len() + self.shifted.len();
+        for &x in seeds {
+            self.relax(g, in_tree, x, true);
+        }
+        for i in 0..self.shifted.len() {
+            self.relax(g, in_tree, self.shifted[i], true);
+        }
+        self.dijkstra(g, in_tree, true);
+    }
+
+    /// Settles the queue, keeping the forest up to date if `forest`.
+    fn dijkstra(&mut self, g: &MeshGraph, in_tree: &[bool], forest: bool) {
         while let Some(Entry(d, x)) = self.heap.pop() {
             if d > self.dist[x as usize] {
                 continue;
             }
             self.changed += 1;
-            let (site, first) = (self.site[x as usize], self.first[x as usize]);
-            let from_tree = in_tree[x as usize];
-            for (y, len) in g.neighbours(x) {
-                let nd = d + len;
-                if nd < self.dist[y as usize] {
-                    self.dist[y as usize] = nd;
-                    self.site[y as usize] = site;
-                    self.first[y as usize] = if from_tree { y } else { first };
-                    self.heap.push(Entry(nd, y));
+            self.relax(g, in_tree, x, forest);
+        }
+    }
+
+    fn push_children(&mut self, v: u32) {
+        let mut c = self.child[v as usize];
+        while c != NONE {
+            self.stack.push(c);
+            c = self.next[c as usize];
+        }
+    }
+
+    /// Gives each neighbour of `x` the path through `x` where that is strictly shorter (and
+    /// makes it `x`'s child in the forest if `forest`).
+    fn relax(&mut self, g: &MeshGraph, in_tree: &[bool], x: u32, forest: bool) {
+        let d = self.dist[x as usize];
+        let (site, first) = (self.site[x as usize], self.first[x as usize]);
+        let from_tree = in_tree[x as usize];
+        for (y, len) in g.neighbours(x) {
+            let nd = d + len;
+            if nd < self.dist[y as usize] {
+                self.dist[y as usize] = nd;
+                self.site[y as usize] = site;
+                self.first[y as usize] = if from_tree { y } else { first };
+                if forest {
+                    self.unlink(y);
+                    self.link(y, x, len);
                 }
+                self.heap.push(Entry(nd, y));
             }
         }
+    }
+
+    /// Makes `v` a child of `p` in the forest (`v` not linked).
+    fn link(&mut self, v: u32, p: u32, len: f64) {
+        let head = self.child[p as usize];
+        self.from[v as usize] = p;
+        self.from_len[v as usize] = len;
+        self.prev[v as usize] = NONE;
+        self.next[v as usize] = head;
+        if head != NONE {
+            self.prev[head as usize] = v;
+        }
+        self.child[p as usize] = v;
+    }
+
+    /// Takes `v` out of its parent's children (nothing if it has no parent).
+    fn unlink(&mut self, v: u32) {
+        let p = self.from[v as usize];
+        if p == NONE {
+            return;
+        }
+        let (before, after) = (self.prev[v as usize], self.next[v as usize]);
+        if before == NONE {
+            self.child[p as usize] = after;
+        } else {
+            self.next[before as usize] = after;
+        }
+        if after != NONE {
+            self.prev[after as usize] = before;
+        }
+        self.from[v as usize] = NONE;
     }
 }
 
@@ -548,8 +658,7 @@ mod tests {
     impl Relabel for Recompute {
         fn update(&mut self, g: &MeshGraph, in_tree: &[bool], added: &[u32], l: &mut Labels) {
             self.0.extend_from_slice(added);
-            l.clear();
-            l.relabel(g, in_tree, &self.0);
+            l.recompute(g, in_tree, &self.0);
         }
     }
 
@@ -570,6 +679,67 @@ mod tests {
             for s in &a.sources {
                 assert!(a.order.contains(s), "source {s} reached");
             }
+        }
+    }
+
+    /// Runs the incremental update and checks its distances against a fresh Dijkstra's
+    /// after every iteration.
+    struct Checked {
+        tree: Vec<u32>,
+        fresh: Labels,
+        iterations: usize,
+    }
+
+    impl Relabel for Checked {
+        fn update(&mut self, g: &MeshGraph, in_tree: &[bool], added: &[u32], l: &mut Labels) {
+            Incremental.update(g, in_tree, added, l);
+            self.tree.extend_from_slice(added);
+            self.fresh.recompute(g, in_tree, &self.tree);
+            assert_eq!(l.dist, self.fresh.dist, "iteration {}", self.iterations);
+            for v in 0..l.dist.len() {
+                // Equally long paths may end at different sites, but each label's site and
+                // first vertex must be a tree vertex and its neighbour off the tree.
+                let (site, first) = (l.site[v], l.first[v]);
+                assert!(in_tree[site as usize]);
+                if in_tree[v] {
+                    assert_eq!((site, first), (v as u32, NONE));
+                } else {
+                    assert!(!in_tree[first as usize]);
+                    assert!(g.neighbours(site).any(|(u, _)| u == first));
+                }
+            }
+            self.iterations += 1;
+        }
+    }
+
+    #[test]
+    fn incremental_distances_equal_a_fresh_dijkstra_after_every_iteration() {
+        // A regular torus (many equally long paths) and a jittered one.
+        let regular = {
+            let mut m = jittered_torus(36, 18, 1);
+            for (k, p) in m.positions.iter_mut().enumerate() {
+                let (i, j) = (k / 18, k % 18);
+                let (u, v) = (
+                    std::f64::consts::TAU * i as f64 / 36.0,
+                    std::f64::consts::TAU * j as f64 / 18.0,
+                );
+                let r = 30.0 + 10.0 * v.cos();
+                *p = DVec3::new(r * u.cos(), r * u.sin(), 10.0 * v.sin());
+            }
+            m
+        };
+        for mesh in [regular, jittered_torus(36, 18, 9)] {
+            let g = MeshGraph::new(&mesh);
+            let mut rng = ChaCha8Rng::seed_from_u64(4);
+            let sources: Vec<u32> = (0..80).map(|_| rng.random_range(0..648)).collect();
+            let mut checked = Checked {
+                tree: Vec::new(),
+                fresh: Labels::new(g.vertices()),
+                iterations: 0,
+            };
+            let tree = grow_veins(&g, &mesh.positions, 7, &sources, &mut checked).expect("grows");
+            assert!(checked.iterations > 10);
+            assert!(tree.sources.iter().all(|s| tree.order.contains(s)));
         }
     }
 
