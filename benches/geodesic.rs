@@ -3,7 +3,7 @@
 //! whole tree every iteration, and Bachman's own step, a Dijkstra from each source every
 //! iteration (timed on every `GEODESIC_BACHMAN_EVERY`-th iteration, default 10; set it to 1 to
 //! time all of them, about half an hour). All three again on a 10,000-vertex torus, where
-//! Bachman's step runs whole. Then surface venation with about 20,000 sources on a
+//! Bachman's step runs whole. Then surface venation with at least 20,000 sources on a
 //! 50,000-triangle torus. Both large meshes go to `target/bench-data` for the whole-process
 //! runs in `scripts/bench geodesic`. `harness = false`: `cargo bench --bench geodesic [--
 //! --quick]`.
@@ -179,12 +179,16 @@ fn main() {
     write_mesh(&mesh, &data.join("torus-100k.obj"), 512).expect("mesh file");
     let g = MeshGraph::new(&mesh);
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let mut sources: Vec<u32> = (0..2000)
-        .map(|_| rng.random_range(0..mesh.positions.len() as u32))
-        .collect();
-    sources.sort_unstable();
-    sources.dedup();
+    // 2,000 distinct source vertices, none of them the root.
     let root = 0;
+    let mut drawn = std::collections::BTreeSet::new();
+    while drawn.len() < 2000 {
+        let v = rng.random_range(0..mesh.positions.len() as u32);
+        if v != root {
+            drawn.insert(v);
+        }
+    }
+    let sources: Vec<u32> = drawn.into_iter().collect();
     println!(
         "geodesic veins: torus of {} vertices, {} triangles, {} sources",
         mesh.positions.len(),
@@ -303,7 +307,19 @@ fn main() {
 
     let mesh = meshes::torus(300.0, 100.0, 250, 100);
     write_mesh(&mesh, &data.join("torus-50k-triangles.obj"), 512).expect("mesh file");
-    let birth = surface::birth_for_count(&mesh, 20_000, None);
+    // `birth_for_count` aims at a count; dart throwing places a few percent fewer, so the
+    // radius shrinks until the growth's own sampling (same seed) places at least 20,000.
+    let mut birth = surface::birth_for_count(&mesh, 20_000, None);
+    loop {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let placed = surface::poisson_points(&mesh, birth, birth, None, &mut rng)
+            .expect("samples")
+            .len();
+        if placed >= 20_000 {
+            break;
+        }
+        birth *= 0.998 * (placed as f64 / 20_000.0).sqrt();
+    }
     let step = (0.5 * birth).min(0.9 * surface::mean_edge_length(&mesh));
     let opts = SurfaceOptions {
         growth: VenationOptions {
@@ -322,8 +338,9 @@ fn main() {
         seed: 1,
     };
     println!(
-        "surface venation: torus of {} triangles, about 20,000 sources",
-        mesh.triangles.len()
+        "surface venation: torus of {} triangles, at least 20,000 sources (birth {:.4} mm)",
+        mesh.triangles.len(),
+        birth
     );
     for mode in [Mode::Closed, Mode::Open] {
         let o = SurfaceOptions {
