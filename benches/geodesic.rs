@@ -351,7 +351,7 @@ fn main() {
             ..opts.clone()
         };
         let (t, v) = best_of(if quick { 1 } else { 3 }, || {
-            grow_on_surface(&mesh, &[], &o).expect("grows")
+            grow_on_surface(&mesh, &[], &o, None).expect("grows")
         });
         println!(
             "  {:?}: {:.3} s, {} sources, {} nodes, {} left, {} steps",

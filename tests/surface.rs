@@ -9,7 +9,7 @@ mod common;
 use std::collections::HashSet;
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use common::{expected_frames, fixture, frame_names, lamina, stderr, stdout, TestResult};
 use glam::DVec3;
 use lamina::mesh::closest::closest_on_triangle;
 use lamina::mesh::io::read_mesh;
@@ -290,16 +290,88 @@ fn the_same_seed_gives_the_same_bytes_and_a_render() -> TestResult {
 }
 
 #[test]
+fn frames_on_a_surface_show_the_growth_and_end_on_the_finished_render() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let frames = dir.path().join("frames");
+    let out = dir.path().join("torus.json");
+    let png = dir.path().join("torus.png");
+    let json = run_ok(&[
+        "venation",
+        "--surface",
+        fixture("surfaces/torus.obj").to_str().ok_or("path")?,
+        "--frames",
+        frames.to_str().ok_or("path")?,
+        "--every",
+        "20",
+        "--frame-size",
+        "240",
+        "-o",
+        out.to_str().ok_or("path")?,
+        "--png",
+        png.to_str().ok_or("path")?,
+        "--size",
+        "240",
+        "--json",
+    ])?;
+    let v: serde_json::Value = serde_json::from_str(&json)?;
+    let steps = v["iterations"].as_u64().ok_or("iterations")? as usize;
+    assert_eq!(v["sources_left"].as_u64(), Some(0));
+    let names = frame_names(&frames)?;
+    assert_eq!(names, expected_frames(steps, 20));
+    let frame = |n: &String| std::fs::read(frames.join(n));
+    // Every frame differs from the one before (the veins grow), and with no source left the
+    // last one is the render of the finished network.
+    for pair in names.windows(2) {
+        assert_ne!(
+            frame(&pair[0])?,
+            frame(&pair[1])?,
+            "{} = {}",
+            pair[0],
+            pair[1]
+        );
+    }
+    let last = names.last().ok_or("no frames")?;
+    assert_eq!(frame(last)?, std::fs::read(&png)?);
+    Ok(())
+}
+
+#[test]
 fn bad_surface_input_exits_2_and_names_the_problem() -> TestResult {
     let dir = tempfile::tempdir()?;
     let out = dir.path().join("v.json");
     let out_s = out.to_str().ok_or("path")?;
     let sphere = fixture("surfaces/sphere.obj");
     let sphere = sphere.to_str().ok_or("path")?;
-    let cases: [(&[&str], &str); 7] = [
+    let frames = dir.path().join("frames");
+    let frames = frames.to_str().ok_or("path")?;
+    let cases: [(&[&str], &str); 9] = [
         (
             &["venation", "--surface", sphere, "--root", "999999"],
             "--root 999999",
+        ),
+        (
+            &[
+                "venation",
+                "--surface",
+                sphere,
+                "--frames",
+                frames,
+                "--every",
+                "0",
+            ],
+            "--every",
+        ),
+        (
+            &[
+                "venation",
+                "--surface",
+                sphere,
+                "--frames",
+                frames,
+                "--frame-size",
+                "4",
+            ],
+            "--frames: render size 4 px",
         ),
         (
             &["venation", "--surface", sphere, "--root", "t99999"],

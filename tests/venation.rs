@@ -6,7 +6,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{lamina, stderr, stdout, TestResult};
+use common::{expected_frames, frame_names, lamina, stderr, stdout, TestResult};
 use glam::DVec2;
 use lamina::grow::outline::{Outline, Shape};
 use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};
@@ -342,16 +342,8 @@ fn frames_are_written_every_k_steps() -> TestResult {
     ])?;
     let v: serde_json::Value = serde_json::from_str(&json)?;
     let steps = v["iterations"].as_u64().ok_or("iterations")? as usize;
-    let mut names: Vec<String> = std::fs::read_dir(&frames)?
-        .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
-        .collect::<Result<_, _>>()?;
-    names.sort();
-    let mut expected: Vec<String> = (1..=steps / 25)
-        .map(|k| format!("frame-{:05}.png", 25 * k))
-        .collect();
-    expected.push(format!("frame-{steps:05}.png"));
-    expected.dedup();
-    assert_eq!(names, expected);
+    let names = frame_names(&frames)?;
+    assert_eq!(names, expected_frames(steps, 25));
     for n in &names {
         let pm = tiny_skia::Pixmap::load_png(frames.join(n))?;
         assert!(pm.width() >= 100 && pm.height() >= 100);

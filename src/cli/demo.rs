@@ -460,7 +460,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
         Mode::Closed
     };
     let opts = SurfaceOptions::for_mesh(&mesh, mode, 3000, density);
-    let veins = grow_on_surface(&mesh, &[], &opts)
+    let veins = grow_on_surface(&mesh, &[], &opts, None)
         .with_context(|| format!("venation on {}", mesh_path.display()))?;
     let mut outputs = Vec::new();
     let venation_json = format!("on-surfaces/{stem}-venation.json");

@@ -8,11 +8,12 @@ use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use serde_json::json;
 
-use super::venation::{write_json, Args, ModeArg};
+use super::venation::{frames_dir, save_frame, write_json, Args, ModeArg};
 use lamina::files::extension;
+use lamina::grow::murray;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
-use lamina::grow::venation::Mode;
-use lamina::mesh::io::{read_mesh, write_png_with_strokes, Stroke3};
+use lamina::grow::venation::{Frame, Mode, Observer};
+use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, VEIN};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
 use lamina::TriMesh;
@@ -101,7 +102,7 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
     opts.edge_tolerance = args.edge_tolerance;
     opts.murray = args.murray;
     opts.seed = args.seed;
-    let veins = grow_on_surface(&mesh, &roots, &opts)
+    let veins = grow_with_frames(args, &mesh, &roots, &opts)
         .with_context(|| format!("--surface {}", path.display()))?;
     let mut net = veins.network;
     net.meta
@@ -153,6 +154,69 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Grows on the surface, writing a render of the growth so far every `--every` steps (and after
+/// the last) when `--frames` is given: the veins with the Murray widths of the tree of that
+/// moment, loop edges at the tip radius, live sources as blue dots. The mesh fixes the view,
+/// so the frames line up.
+fn grow_with_frames(
+    args: &Args,
+    mesh: &TriMesh,
+    roots: &[Root],
+    opts: &SurfaceOptions,
+) -> Result<surface::SurfaceVeins> {
+    let Some(dir) = frames_dir(args)? else {
+        return Ok(grow_on_surface(mesh, roots, opts, None)?);
+    };
+    let mut failure: Option<anyhow::Error> = None;
+    let mut write = |f: &Frame<DVec3>| {
+        if failure.is_none() {
+            let strokes = frame_strokes(f, opts.murray, opts.tip_radius);
+            let png = render_png_bytes_with(mesh, &strokes, args.frame_size);
+            failure = save_frame(dir, f.step, png).err();
+        }
+    };
+    let veins = grow_on_surface(
+        mesh,
+        roots,
+        opts,
+        Some(Observer {
+            every: args.every,
+            call: &mut write,
+        }),
+    )?;
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(veins),
+    }
+}
+
+/// A growth frame as strokes: live sources first (dots), then the veins over them.
+fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
+    const SOURCE: [u8; 3] = [0x3b, 0x7d, 0xd8];
+    let radius = murray::radii(f.parent, exponent, tip);
+    let dots = f.sources.iter().map(|&s| Stroke3 {
+        a: s,
+        b: s,
+        radius: tip,
+        color: SOURCE,
+    });
+    let tree = f.parent.iter().enumerate().filter_map(|(c, p)| {
+        p.map(|p| Stroke3 {
+            a: f.positions[p as usize],
+            b: f.positions[c],
+            radius: radius[c],
+            color: VEIN,
+        })
+    });
+    let joins = f.joins.iter().map(|&[a, b]| Stroke3 {
+        a: f.positions[a as usize],
+        b: f.positions[b as usize],
+        radius: tip,
+        color: VEIN,
+    });
+    dots.chain(tree).chain(joins).collect()
+}
+
 /// The network to `output` (a .png output is the render on the surface), plus the extra
 /// renders asked for.
 pub fn write_outputs(
@@ -182,6 +246,7 @@ pub fn strokes(net: &Network) -> Vec<Stroke3> {
             a: net.nodes[e.a as usize].p,
             b: net.nodes[e.b as usize].p,
             radius: e.radius,
+            color: VEIN,
         })
         .collect()
 }

@@ -86,7 +86,7 @@ pub struct Args {
     #[arg(
         long,
         value_name = "MESH",
-        conflicts_with_all = ["outline", "blade", "r", "sweep_r", "frames", "density", "placement"]
+        conflicts_with_all = ["outline", "blade", "r", "sweep_r", "density", "placement"]
     )]
     pub surface: Option<PathBuf>,
     /// On a surface: density from this vertex colour (dark = dense), from --birth-min (darkest)
@@ -348,15 +348,31 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
+/// The folder `--frames` names, made, after checking `--every`; none without `--frames`.
+pub fn frames_dir(args: &Args) -> Result<Option<&Path>> {
     let Some(dir) = &args.frames else {
-        return Ok(grow_leaf(&s.outline, &s.roots, &s.opts, None)?);
+        return Ok(None);
     };
     if args.every == 0 {
         bail!("--every must be at least 1");
     }
     std::fs::create_dir_all(dir)
         .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
+    Ok(Some(dir))
+}
+
+/// Writes one frame's PNG (or the render's failure) into the frames folder.
+pub fn save_frame(dir: &Path, step: usize, png: Result<Vec<u8>, String>) -> Result<()> {
+    let bytes = png.map_err(|m| anyhow::anyhow!("--frames: {m}"))?;
+    let path = dir.join(format!("frame-{step:05}.png"));
+    write_atomic(&path, |w| std::io::Write::write_all(w, &bytes))?;
+    Ok(())
+}
+
+fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
+    let Some(dir) = frames_dir(args)? else {
+        return Ok(grow_leaf(&s.outline, &s.roots, &s.opts, None)?);
+    };
     let (lo, hi) = s.outline.bounds();
     let view = View {
         lo,
@@ -365,17 +381,9 @@ fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
     };
     let mut failure: Option<anyhow::Error> = None;
     let mut write = |f: &Frame| {
-        if failure.is_some() {
-            return;
-        }
-        let path = dir.join(format!("frame-{:05}.png", f.step));
-        let result = render_frame(f, &view, s.opts.murray, s.opts.tip_radius)
-            .map_err(|m| anyhow::anyhow!("--frames: {m}"))
-            .and_then(|bytes| {
-                write_atomic(&path, |w| std::io::Write::write_all(w, &bytes)).map_err(Into::into)
-            });
-        if let Err(e) = result {
-            failure = Some(e);
+        if failure.is_none() {
+            let png = render_frame(f, &view, s.opts.murray, s.opts.tip_radius);
+            failure = save_frame(dir, f.step, png).err();
         }
     };
     let leaf = grow_leaf(

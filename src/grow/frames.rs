@@ -57,7 +57,7 @@ pub fn render_frame(
     };
     // Blade.
     let mut pb = PathBuilder::new();
-    for (i, p) in frame.blade.points().iter().enumerate() {
+    for (i, p) in frame.blade.iter().flat_map(|b| b.points()).enumerate() {
         let (x, y) = view.px(*p);
         if i == 0 {
             pb.move_to(x, y);

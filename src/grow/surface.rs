@@ -29,7 +29,7 @@ use rstar::RTree;
 use super::leaf::{growth_network, MAX_SOURCES};
 use super::report::Quality;
 use super::space::Domain;
-use super::venation::{self, BladeGrowth, Growth, Mode, VenationError, VenationOptions};
+use super::venation::{self, BladeGrowth, Growth, Mode, Observer, VenationError, VenationOptions};
 use crate::mesh::closest::SurfaceIndex;
 use crate::mesh::TriMesh;
 use crate::network::Network;
@@ -412,10 +412,12 @@ pub struct SurfaceVeins {
 
 /// Places sources on the surface and grows venation from `roots` (the lowest vertex when
 /// empty). The network's tree edges come first, then `meta.parameters.loop_edges` loop edges.
+/// An observer sees the growth every few steps (positions and live sources in space, no blade).
 pub fn grow_on_surface(
     mesh: &TriMesh,
     roots: &[Root],
     opts: &SurfaceOptions,
+    observer: Option<Observer<DVec3>>,
 ) -> Result<SurfaceVeins, SurfaceError> {
     let surface = Surface::for_growth(mesh, opts)?;
     check(mesh, opts)?;
@@ -423,7 +425,7 @@ pub fn grow_on_surface(
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let sources = poisson(&surface, &mut rng);
     let (growth, surface) =
-        venation::grow_in(surface, &roots, &sources, &opts.growth, &mut rng, None)?;
+        venation::grow_in(surface, &roots, &sources, &opts.growth, &mut rng, observer)?;
     let size = mesh.bbox().diagonal();
     let snapped: Vec<(DVec3, f64)> = growth
         .positions

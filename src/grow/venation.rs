@@ -216,14 +216,14 @@ impl<V> Growth<V> {
 }
 
 /// The state shown to an observer every few steps: positions and sources in mm in the blade's
-/// frame of that moment, and the blade itself.
+/// frame of that moment, and the blade itself (none on a surface).
 pub struct Frame<'a, V = DVec2> {
     pub step: usize,
     pub positions: &'a [V],
     pub parent: &'a [Option<u32>],
     pub joins: &'a [[u32; 2]],
     pub sources: &'a [V],
-    pub blade: &'a Outline,
+    pub blade: Option<&'a Outline>,
 }
 
 /// Called every `every` steps (and after the last) with the current state.
@@ -1075,9 +1075,7 @@ impl<D: Domain> Grower<D> {
     }
 
     fn show(&self, o: &mut Observer<D::V>) {
-        let Some(blade) = self.domain.outline_now() else {
-            return;
-        };
+        let blade = self.domain.outline_now();
         let real = |p: &D::V| self.domain.to_real(*p);
         let positions: Vec<D::V> = self.positions.iter().map(real).collect();
         let sources: Vec<D::V> = self
@@ -1092,7 +1090,7 @@ impl<D: Domain> Grower<D> {
             parent: &self.parent,
             joins: &self.joins,
             sources: &sources,
-            blade: &blade,
+            blade: blade.as_ref(),
         });
     }
 

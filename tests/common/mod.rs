@@ -38,6 +38,26 @@ pub fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
+/// The files in a frames folder, sorted.
+pub fn frame_names(dir: &Path) -> Result<Vec<String>, Box<dyn std::error::Error>> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)?
+        .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+        .collect::<Result<_, _>>()?;
+    names.sort();
+    Ok(names)
+}
+
+/// The frames a growth of `steps` steps writes every `every` steps: each multiple of `every`,
+/// and the last step.
+pub fn expected_frames(steps: usize, every: usize) -> Vec<String> {
+    let mut names: Vec<String> = (1..=steps / every)
+        .map(|k| format!("frame-{:05}.png", every * k))
+        .collect();
+    names.push(format!("frame-{steps:05}.png"));
+    names.dedup();
+    names
+}
+
 /// Every edge as its two end positions, ordered, then all edges sorted: a form that ignores node
 /// numbering and edge direction, for comparing topology across formats.
 pub fn canonical_edges(net: &Network) -> Vec<[[f64; 3]; 2]> {

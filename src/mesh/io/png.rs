@@ -13,7 +13,8 @@ use crate::mesh::TriMesh;
 
 const SUPERSAMPLE: usize = 2;
 const BACKGROUND: [u8; 3] = [0xf4, 0xf2, 0xee];
-const STROKE: [u8; 3] = [0x1d, 0x3b, 0x2a];
+/// The colour of veins drawn on a render.
+pub const VEIN: [u8; 3] = [0x1d, 0x3b, 0x2a];
 
 pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     let bytes = render_png_bytes(mesh, size).map_err(|msg| WriteError::Content {
@@ -23,12 +24,14 @@ pub fn write(mesh: &TriMesh, path: &Path, size: u32) -> Result<(), WriteError> {
     write_atomic(path, |w| std::io::Write::write_all(w, &bytes))
 }
 
-/// A stroke drawn over a mesh render: a segment in space and its radius in mm.
+/// A stroke drawn over a mesh render: a segment in space, its radius in mm and its colour (a
+/// dot where the ends coincide).
 #[derive(Clone, Copy, Debug)]
 pub struct Stroke3 {
     pub a: DVec3,
     pub b: DVec3,
     pub radius: f64,
+    pub color: [u8; 3],
 }
 
 /// The PNG bytes of a shaded render whose longer side is `size` pixels (16..=8192).
@@ -104,7 +107,7 @@ pub fn render_png_bytes_with(
         fill_capsule(pa, pb, half, sw, sh, |i, t| {
             let d = za + (zb - za) * t;
             if d + bias >= depth[i] {
-                color[i] = STROKE;
+                color[i] = s.color;
             }
         });
     }
