@@ -309,9 +309,10 @@ fn main() {
     write_mesh(&mesh, &data.join("torus-50k-triangles.obj"), 512).expect("mesh file");
     // `birth_for_count` aims at a count; dart throwing places a few percent fewer, so the
     // radius shrinks until the growth's own sampling (same seed) places at least 20,000.
+    let seed = 1;
     let mut birth = surface::birth_for_count(&mesh, 20_000, None);
     loop {
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let placed = surface::poisson_points(&mesh, birth, birth, None, &mut rng)
             .expect("samples")
             .len();
@@ -335,7 +336,7 @@ fn main() {
         edge_tolerance: None,
         murray: 3.0,
         tip_radius: step / 7.5,
-        seed: 1,
+        seed,
     };
     println!(
         "surface venation: torus of {} triangles, at least 20,000 sources (birth {:.4} mm)",
