@@ -371,7 +371,7 @@ fn bad_surface_input_exits_2_and_names_the_problem() -> TestResult {
                 "--frame-size",
                 "4",
             ],
-            "--frames: render size 4 px",
+            "--frame-size: render size 4 px",
         ),
         (
             &["venation", "--surface", sphere, "--root", "t99999"],

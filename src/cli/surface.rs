@@ -13,7 +13,9 @@ use lamina::files::extension;
 use lamina::grow::murray;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
 use lamina::grow::venation::{Frame, Mode, Observer};
-use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, VEIN};
+use lamina::mesh::io::{
+    check_render_size, read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, VEIN,
+};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
 use lamina::TriMesh;
@@ -164,6 +166,9 @@ fn grow_with_frames(
     roots: &[Root],
     opts: &SurfaceOptions,
 ) -> Result<surface::SurfaceVeins> {
+    if args.frames.is_some() {
+        check_render_size(args.frame_size).map_err(|m| anyhow::anyhow!("--frame-size: {m}"))?;
+    }
     let Some(dir) = frames_dir(args)? else {
         return Ok(grow_on_surface(mesh, roots, opts, None)?);
     };

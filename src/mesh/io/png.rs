@@ -39,6 +39,15 @@ pub fn render_png_bytes(mesh: &TriMesh, size: u32) -> Result<Vec<u8>, String> {
     render_png_bytes_with(mesh, &[], size)
 }
 
+/// Renders are 16 to 8192 pixels on their longer side.
+pub fn check_render_size(size: u32) -> Result<(), String> {
+    if (16..=8192).contains(&size) {
+        Ok(())
+    } else {
+        Err(format!("render size {size} px is outside 16..=8192 px"))
+    }
+}
+
 /// A shaded render with strokes on it (veins on their surface). A stroke is hidden where the
 /// surface lies in front of it by more than 1 % of the model's size, so veins on the far side
 /// of a closed surface do not show through; vertex colours are lightened so veins show on dark
@@ -48,9 +57,7 @@ pub fn render_png_bytes_with(
     strokes: &[Stroke3],
     size: u32,
 ) -> Result<Vec<u8>, String> {
-    if !(16..=8192).contains(&size) {
-        return Err(format!("render size {size} px is outside 16..=8192 px"));
-    }
+    check_render_size(size)?;
     let eye = DVec3::new(0.55, -0.8, 0.45).normalize();
     let right = DVec3::Z.cross(eye).normalize();
     let up = eye.cross(right);
