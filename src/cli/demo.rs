@@ -20,15 +20,15 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use super::info::summary;
 use super::input::{load, Loaded, WeldArgs};
 use super::planarize::{MethodArg, ReportArgs};
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
 use lamina::grow::geodesic::{self, grow_veins, Incremental, MeshGraph, VeinOptions};
 use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::surface::{self, grow_on_surface, Channel, SurfaceOptions};
-use lamina::grow::venation::Mode;
-use lamina::mesh::io::{read_mesh, write_mesh};
+use lamina::grow::venation::{Frame, Mode, Observer};
+use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_mesh, Stroke3};
 use lamina::network::io::{write_network, ReadOptions, RenderOptions};
 use lamina::rationalize::plates::EdgeSelector;
 
@@ -460,9 +460,36 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
         Mode::Closed
     };
     let opts = SurfaceOptions::for_mesh(&mesh, mode, 3000, density);
-    let veins = grow_on_surface(&mesh, &[], &opts, None)
+    // The torus's growth is also kept every 10 steps, for a strip of five moments up to the end.
+    let mut moments: Vec<Vec<Stroke3>> = Vec::new();
+    let mut keep = |f: &Frame<DVec3>| {
+        moments.push(super::surface::frame_strokes(
+            f,
+            opts.murray,
+            opts.tip_radius,
+        ));
+    };
+    let observer = (stem == "torus").then_some(Observer {
+        every: 10,
+        call: &mut keep,
+    });
+    let veins = grow_on_surface(&mesh, &[], &opts, observer)
         .with_context(|| format!("venation on {}", mesh_path.display()))?;
     let mut outputs = Vec::new();
+    let mut growth_link = String::new();
+    if moments.len() >= 5 {
+        let last = moments.len() - 1;
+        let pngs = (1..=5)
+            .map(|k| render_png_bytes_with(&mesh, &moments[k * last / 5], size / 4))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(anyhow::Error::msg)?;
+        let strip = format!("on-surfaces/{stem}-growth.png");
+        let bytes = super::surface::strip(&pngs)?;
+        write_atomic(&out.join(&strip), |w| std::io::Write::write_all(w, &bytes))?;
+        growth_link =
+            format!(" The growth in five moments (`--frames`): <a href=\"{strip}\">strip</a>.");
+        outputs.push(strip);
+    }
     let venation_json = format!("on-surfaces/{stem}-venation.json");
     let venation_png = format!("on-surfaces/{stem}-venation.png");
     super::surface::write_outputs(
@@ -510,7 +537,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
         about: format!(
             "On {about}: surface venation ({how}, about 3,000 sources, `lamina venation --surface`) \
              and geodesic veins along mesh edges (about 300 sources, smoothed, `lamina veins \
-             --smooth 3`). Second picture: <a href=\"{veins_png}\">geodesic veins</a>."
+             --smooth 3`). Second picture: <a href=\"{veins_png}\">geodesic veins</a>.{growth_link}"
         ),
         outputs,
         preview: venation_png,

@@ -19,6 +19,7 @@ use lamina::mesh::io::{
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
 use lamina::TriMesh;
+use tiny_skia::{Pixmap, PixmapPaint, Transform};
 
 /// Sources placed on a surface when neither --sources nor --birth is given.
 pub const DEFAULT_SOURCES: usize = 3000;
@@ -196,7 +197,7 @@ fn grow_with_frames(
 }
 
 /// A growth frame as strokes: live sources first (dots), then the veins over them.
-fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
+pub fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
     const SOURCE: [u8; 3] = [0x3b, 0x7d, 0xd8];
     let radius = murray::radii(f.parent, exponent, tip);
     let dots = f.sources.iter().map(|&s| Stroke3 {
@@ -220,6 +221,31 @@ fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
         color: VEIN,
     });
     dots.chain(tree).chain(joins).collect()
+}
+
+/// PNG images side by side on one row, top aligned, on the renders' background.
+pub fn strip(pngs: &[Vec<u8>]) -> Result<Vec<u8>> {
+    let images = pngs
+        .iter()
+        .map(|p| Pixmap::decode_png(p).context("a frame that does not decode"))
+        .collect::<Result<Vec<_>>>()?;
+    let width = images.iter().map(Pixmap::width).sum::<u32>();
+    let height = images.iter().map(Pixmap::height).max().unwrap_or(0);
+    let mut row = Pixmap::new(width, height).context("a strip of no pixels")?;
+    row.fill(tiny_skia::Color::from_rgba8(0xf4, 0xf2, 0xee, 0xff));
+    let mut x = 0;
+    for image in &images {
+        row.draw_pixmap(
+            x as i32,
+            0,
+            image.as_ref(),
+            &PixmapPaint::default(),
+            Transform::identity(),
+            None,
+        );
+        x += image.width();
+    }
+    row.encode_png().context("encoding the strip")
 }
 
 /// The network to `output` (a .png output is the render on the surface), plus the extra
