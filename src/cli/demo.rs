@@ -480,7 +480,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     if moments.len() >= 5 {
         let last = moments.len() - 1;
         let pngs = (1..=5)
-            .map(|k| render_png_bytes_with(&mesh, &moments[k * last / 5], size / 4))
+            .map(|k| render_png_bytes_with(&mesh, &moments[k * last / 5], (size / 4).max(16)))
             .collect::<Result<Vec<_>, _>>()
             .map_err(anyhow::Error::msg)?;
         let strip = format!("on-surfaces/{stem}-growth.png");
