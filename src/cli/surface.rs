@@ -10,11 +10,12 @@ use serde_json::json;
 
 use super::venation::{frames_dir, save_frame, write_json, Args, ModeArg};
 use lamina::files::extension;
-use lamina::grow::murray;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
 use lamina::grow::venation::{Frame, Mode, Observer};
+use lamina::grow::{frames, murray};
 use lamina::mesh::io::{
-    check_render_size, read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, VEIN,
+    check_render_size, read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3,
+    BACKGROUND, VEIN,
 };
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
@@ -198,13 +199,12 @@ fn grow_with_frames(
 
 /// A growth frame as strokes: live sources first (dots), then the veins over them.
 pub fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
-    const SOURCE: [u8; 3] = [0x3b, 0x7d, 0xd8];
     let radius = murray::radii(f.parent, exponent, tip);
     let dots = f.sources.iter().map(|&s| Stroke3 {
         a: s,
         b: s,
         radius: tip,
-        color: SOURCE,
+        color: frames::SOURCE,
     });
     let tree = f.parent.iter().enumerate().filter_map(|(c, p)| {
         p.map(|p| Stroke3 {
@@ -232,7 +232,8 @@ pub fn strip(pngs: &[Vec<u8>]) -> Result<Vec<u8>> {
     let width = images.iter().map(Pixmap::width).sum::<u32>();
     let height = images.iter().map(Pixmap::height).max().unwrap_or(0);
     let mut row = Pixmap::new(width, height).context("a strip of no pixels")?;
-    row.fill(tiny_skia::Color::from_rgba8(0xf4, 0xf2, 0xee, 0xff));
+    let [r, g, b] = BACKGROUND;
+    row.fill(tiny_skia::Color::from_rgba8(r, g, b, 0xff));
     let mut x = 0;
     for image in &images {
         row.draw_pixmap(

@@ -7,6 +7,9 @@ use tiny_skia::{Color, FillRule, LineCap, Paint, PathBuilder, Pixmap, Stroke, Tr
 
 use super::venation::Frame;
 
+/// The colour of live sources in frames.
+pub const SOURCE: [u8; 3] = [0x3b, 0x7d, 0xd8];
+
 /// The fixed view of an animation: the box `lo`..`hi` in mm, `size` pixels on its longer side.
 #[derive(Clone, Copy, Debug)]
 pub struct View {
@@ -90,7 +93,8 @@ pub fn render_frame(
         pb.push_circle(x, y, dot);
     }
     if let Some(path) = pb.finish() {
-        paint.set_color_rgba8(0x3b, 0x7d, 0xd8, 0xff);
+        let [r, g, b] = SOURCE;
+        paint.set_color_rgba8(r, g, b, 0xff);
         pm.fill_path(
             &path,
             &paint,

@@ -12,7 +12,9 @@ use glam::DVec3;
 use super::TriMesh;
 use crate::files::{extension, ReadError, WriteError};
 
-pub use png::{check_render_size, render_png_bytes, render_png_bytes_with, Stroke3, VEIN};
+pub use png::{
+    check_render_size, render_png_bytes, render_png_bytes_with, Stroke3, BACKGROUND, VEIN,
+};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {

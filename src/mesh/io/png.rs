@@ -12,7 +12,8 @@ use crate::files::{write_atomic, WriteError};
 use crate::mesh::TriMesh;
 
 const SUPERSAMPLE: usize = 2;
-const BACKGROUND: [u8; 3] = [0xf4, 0xf2, 0xee];
+/// The background of renders.
+pub const BACKGROUND: [u8; 3] = [0xf4, 0xf2, 0xee];
 /// The colour of veins drawn on a render.
 pub const VEIN: [u8; 3] = [0x1d, 0x3b, 0x2a];
 
