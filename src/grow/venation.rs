@@ -16,11 +16,13 @@
 //!   §3.2 step g does. Joins only make Y (3-legged) or I (2-legged) joints, never cross an edge,
 //!   and never close a loop shorter than `MIN_LOOP` edges.
 //!
-//! Guarantees: every node and growth edge lies inside the blade of its time; growth edges have length D (in the
-//! blade's frame; uniform blade growth stretches them later); no node has degree above 3 (a
-//! node at degree 3 stops attracting); no two nodes closer than `CROWDING`·D (a node whose step
-//! would land there retires). Not guaranteed: that every source is reached (a source may sit
-//! where no node can step without leaving a concave blade); those are counted.
+//! Guarantees: every node and growth edge lies inside the blade of its time; growth edges have
+//! length D (in the blade's frame; uniform blade growth stretches them later); no node has
+//! degree above 3 (a node at degree 3 stops attracting); no two nodes closer than `CROWDING`·D
+//! (a node whose step would land there, or cross a vein, steps toward its closest source
+//! instead; if that fails too it retires, so its sources pull on other nodes). Not guaranteed:
+//! that every source is reached (a source may sit where no node can step without leaving a
+//! concave blade); those are counted.
 //!
 //! Spatial queries use rstar (a tree of nodes that can still grow, one of all nodes, one of live
 //! sources). Sources are examined in parallel with rayon and their influences applied in source
@@ -562,6 +564,8 @@ impl<D: Domain> Grower<D> {
 
     fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer<D::V>>) {
         let mut pull = vec![D::V::ZERO; self.positions.len()];
+        // Per pulled node: the squared distance and direction of its closest source.
+        let mut nearest = vec![(f64::INFINITY, D::V::ZERO); self.positions.len()];
         let mut pulled: Vec<u32> = Vec::new();
         loop {
             if self.step >= self.opts.max_iterations {
@@ -598,6 +602,10 @@ impl<D: Domain> Grower<D> {
                                     pulled.push(v);
                                 }
                                 pull[v as usize] += u;
+                                let d2 = to.dot(to);
+                                if d2 < nearest[v as usize].0 {
+                                    nearest[v as usize] = (d2, u);
+                                }
                             }
                         }
                     }
@@ -626,33 +634,37 @@ impl<D: Domain> Grower<D> {
             let crowd2 = (CROWDING * step).powi(2);
             for &v in &pulled {
                 let dir = std::mem::replace(&mut pull[v as usize], D::V::ZERO);
+                let (_, closest) =
+                    std::mem::replace(&mut nearest[v as usize], (f64::INFINITY, D::V::ZERO));
                 let Some(dir) = dir.try_normalize() else {
                     continue;
                 };
                 if !self.hot[v as usize].can_grow {
                     continue;
                 }
-                let Some(at) = self.domain.step(self.positions[v as usize], dir, step) else {
+                let from = self.positions[v as usize];
+                let Some(at) = self.domain.step(from, dir, step) else {
                     continue;
                 };
-                if self
-                    .all
-                    .locate_within_distance(at.to_array(), crowd2)
-                    .next()
-                    .is_some()
-                {
-                    // Its sources sit around it with nothing new to reach: retire the node so
-                    // they pull on another one instead.
+                // Sources on both sides of a vein pull its node along the vein, onto its own
+                // child, where Runions' rule would stack nodes: the node answers its closest
+                // source instead, which starts a lateral. A vein in the way of both ends it
+                // (veins do not cross), and so does a node with nothing new to reach: it
+                // retires, so its sources pull on another one.
+                let at = if self.may_step(v, from, at, crowd2) {
+                    Some(at)
+                } else {
+                    self.domain
+                        .step(from, closest, step)
+                        .filter(|&at| self.may_step(v, from, at, crowd2))
+                };
+                let Some(at) = at else {
                     self.retire(v);
                     continue;
-                }
-                if self.crosses(self.positions[v as usize], at, v, u32::MAX) {
-                    // A vein in the way: veins do not cross, so this one ends here.
-                    self.retire(v);
-                    continue;
-                }
+                };
                 let child = self.push_node(at, Some(v));
                 pull.push(D::V::ZERO);
+                nearest.push((f64::INFINITY, D::V::ZERO));
                 if self.opts.mode == Mode::Open {
                     self.kill_near(child);
                 }
@@ -679,6 +691,16 @@ impl<D: Domain> Grower<D> {
         if let Some(o) = observer.as_mut() {
             self.show(o);
         }
+    }
+
+    /// Whether node `v` at `from` may grow a child at `at`: no node within the crowding
+    /// distance there, and no vein crossed on the way.
+    fn may_step(&self, v: u32, from: D::V, at: D::V, crowd2: f64) -> bool {
+        self.all
+            .locate_within_distance(at.to_array(), crowd2)
+            .next()
+            .is_none()
+            && !self.crosses(from, at, v, u32::MAX)
     }
 
     /// Throws this step's darts; returns how many were kept.
@@ -1153,19 +1175,39 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     fn sources(o: &Outline, seed: u64) -> Vec<DVec2> {
-        poisson::sample(o, 2.0, 2.0, |_| 2.0, &mut ChaCha8Rng::seed_from_u64(seed))
+        sources_at(o, seed, 2.0)
+    }
+
+    fn sources_at(o: &Outline, seed: u64, birth: f64) -> Vec<DVec2> {
+        poisson::sample(
+            o,
+            birth,
+            birth,
+            |_| birth,
+            &mut ChaCha8Rng::seed_from_u64(seed),
+        )
     }
 
     fn grow_with(shape: Shape, seed: u64, opts: &VenationOptions) -> (Outline, Growth) {
+        grow_at_birth(shape, seed, opts, 2.0)
+    }
+
+    /// Grows from Poisson sources `birth` apart (darts keep the same distance).
+    fn grow_at_birth(
+        shape: Shape,
+        seed: u64,
+        opts: &VenationOptions,
+        birth: f64,
+    ) -> (Outline, Growth) {
         let o = Outline::shape(shape);
         let root = o.default_root();
         let blade = initial_blade(&o, root, opts);
-        let src = sources(&blade, seed);
+        let src = sources_at(&blade, seed, birth);
         let g = grow(
             &o,
             &[root],
             &src,
-            &|_| 2.0,
+            &|_| birth,
             opts,
             &mut ChaCha8Rng::seed_from_u64(seed),
             None,
@@ -1230,6 +1272,32 @@ mod tests {
                 g.sources_left,
                 g.sources_placed
             );
+        }
+    }
+
+    /// Sources on both sides of a vein pull its nodes along it; before nodes answered their
+    /// closest source instead, such a vein retired node by node and the whole tree stopped
+    /// with most sources unreached (lanceolate blades and marginal growth, a few seeds in 40).
+    #[test]
+    fn open_venation_reaches_its_sources_when_they_flank_a_vein() {
+        let still = mode(Mode::Open);
+        let marginal = VenationOptions {
+            blade: BladeGrowth::Marginal,
+            sources_per_step: 20,
+            blade_rate: 0.75 / (5.5 * 100.0),
+            ..still
+        };
+        for (name, opts) in [("still", still), ("marginal", marginal)] {
+            for seed in 1..=40 {
+                let (_, g) = grow_at_birth(Shape::Lanceolate, seed, &opts, 1.5);
+                assert!(
+                    g.sources_left * 20 < g.sources_placed,
+                    "{name}, seed {seed}: {} of {} sources unreached, {} nodes",
+                    g.sources_left,
+                    g.sources_placed,
+                    g.positions.len()
+                );
+            }
         }
     }
 
