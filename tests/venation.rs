@@ -210,6 +210,34 @@ fn peele_sweep_lowest_r_gives_the_fewest_thick_veins() -> TestResult {
     Ok(())
 }
 
+#[test]
+fn open_trees_that_used_to_stall_reach_their_sources() -> TestResult {
+    // Each of these stopped with most sources unreached while nodes retired one by one along a
+    // vein flanked by sources (e.g. r 5.5, seed 10: 1,449 of 1,464 unreached, 35 nodes).
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("leaf.json");
+    let out = out.to_str().ok_or("path")?;
+    for args in [
+        ["--r", "0.5", "--seed", "10"],
+        ["--r", "1.5", "--seed", "19"],
+        ["--r", "5.5", "--seed", "10"],
+        ["--r", "5.5", "--seed", "20"],
+        ["--shape", "lanceolate", "--seed", "20"],
+    ] {
+        let mut all = vec!["venation", "--mode", "open", "-o", out, "--json"];
+        all.extend(args);
+        let v: serde_json::Value = serde_json::from_str(&run_ok(&all)?)?;
+        let left = v["sources_left"].as_u64().ok_or("sources_left")?;
+        let placed = v["sources_placed"].as_u64().ok_or("sources_placed")?;
+        assert!(
+            left * 20 < placed,
+            "{args:?}: {left} of {placed} sources unreached, {} nodes",
+            v["nodes"]
+        );
+    }
+    Ok(())
+}
+
 /// A concave L-shaped blade, 60 mm, as a closed loop network.
 fn l_blade() -> Network {
     let pts = [

@@ -1277,27 +1277,19 @@ mod tests {
 
     /// Sources on both sides of a vein pull its nodes along it; before nodes answered their
     /// closest source instead, such a vein retired node by node and the whole tree stopped
-    /// with most sources unreached (lanceolate blades and marginal growth, a few seeds in 40).
+    /// with most sources unreached (seed 20 here: 437 of 501). `tests/venation.rs` runs the
+    /// stalls seen with marginal growth through the CLI.
     #[test]
     fn open_venation_reaches_its_sources_when_they_flank_a_vein() {
-        let still = mode(Mode::Open);
-        let marginal = VenationOptions {
-            blade: BladeGrowth::Marginal,
-            sources_per_step: 20,
-            blade_rate: 0.75 / (5.5 * 100.0),
-            ..still
-        };
-        for (name, opts) in [("still", still), ("marginal", marginal)] {
-            for seed in 1..=40 {
-                let (_, g) = grow_at_birth(Shape::Lanceolate, seed, &opts, 1.5);
-                assert!(
-                    g.sources_left * 20 < g.sources_placed,
-                    "{name}, seed {seed}: {} of {} sources unreached, {} nodes",
-                    g.sources_left,
-                    g.sources_placed,
-                    g.positions.len()
-                );
-            }
+        for seed in 1..=40 {
+            let (_, g) = grow_at_birth(Shape::Lanceolate, seed, &mode(Mode::Open), 1.5);
+            assert!(
+                g.sources_left * 20 < g.sources_placed,
+                "seed {seed}: {} of {} sources unreached, {} nodes",
+                g.sources_left,
+                g.sources_placed,
+                g.positions.len()
+            );
         }
     }
 
