@@ -31,7 +31,15 @@ const EXPECTED: &[(&str, &[&str])] = &[
         "edge_out_of_range.json",
         &["edge 0", "joins nodes 0 and 3", "1 nodes"],
     ),
-    ("unsupported_only.dxf", &["no LINE", "2 CIRCLE", "1 TEXT"]),
+    ("unsupported_only.dxf", &["no LINE", "2 3DFACE", "1 TEXT"]),
+    (
+        "block_cycle.dxf",
+        &["entity 0 (INSERT", "block \"LOOP\" inserts itself"],
+    ),
+    (
+        "minsert_bomb.dxf",
+        &["expands to more than 20000000 points"],
+    ),
 ];
 
 #[test]

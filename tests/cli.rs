@@ -21,7 +21,7 @@ fn info_reports_the_ezdxf_fixture() -> TestResult {
     assert_eq!(v["components"], 1);
     assert_eq!(v["cycles"], 1);
     assert_eq!(v["problems"].as_array().map(|a| a.len()), Some(0));
-    assert_eq!(v["import"]["skipped"]["CIRCLE"], 1);
+    assert_eq!(v["import"]["skipped"]["DIMENSION"], 1);
     assert_eq!(v["import"]["skipped"]["TEXT"], 1);
     assert_eq!(v["bbox"]["max"][2], 5.0);
     Ok(())

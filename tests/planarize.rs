@@ -235,6 +235,8 @@ fn audit_reads_dxf_faces_and_closed_polylines() -> TestResult {
     ];
     let mut drawing = dxf::Drawing::new();
     drawing.header.version = dxf::enums::AcadVersion::R2000;
+    // The crate's default header says imperial ($MEASUREMENT 0, no $INSUNITS): say mm.
+    drawing.header.default_drawing_units = dxf::enums::Units::Millimeters;
     drawing.add_entity(Entity::new(EntityType::Face3D(Face3D::new(
         warped[0].clone(),
         warped[1].clone(),

@@ -14,7 +14,7 @@ from obj_records import read_obj
 def main():
     src, dst = sys.argv[1], sys.argv[2]
     verts, faces = read_obj(src, "f")
-    doc = ezdxf.new("R2000")
+    doc = ezdxf.new("R2000", units=4)
     msp = doc.modelspace()
     for k, face in enumerate(faces):
         corners = [verts[i] for i in face]

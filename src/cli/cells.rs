@@ -9,10 +9,10 @@ use serde_json::json;
 
 use lamina::files::{extension, write_atomic};
 use lamina::mesh::io::{read_mesh, write_obj_with_normals};
-use lamina::network::io::read_network;
 use lamina::rationalize::cells::{cells, Cells};
 
-use super::input::{reference_normals, WeldArgs};
+use super::input::{reference_normals, ReadArgs};
+use lamina::network::arrangement::defects;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
 }
 
 /// What the network's V − E + F should be, and how many faces should be holes, if it covers
@@ -58,7 +58,20 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             args.output.display()
         );
     }
-    let net = read_network(&args.input, &args.weld.options()?)?.network;
+    let imported = args.weld.network(&args.input)?;
+    let found = defects(&imported.network, imported.point_tolerance());
+    if let Some(first) = found.first() {
+        bail!(
+            "{}: the drawing is not noded: {first}{}; its cells cannot be found until every \
+             crossing is a node: give --split-crossings",
+            args.input.display(),
+            match found.len() {
+                1 => String::new(),
+                n => format!(" (and {} more crossings or T-junctions)", n - 1),
+            }
+        );
+    }
+    let net = imported.network;
     let reference = reference_normals(&net, args.surface.as_deref())?;
     let positions: Vec<_> = net.nodes.iter().map(|n| n.p).collect();
     let edges: Vec<[u32; 2]> = net.edges.iter().map(|e| [e.a, e.b]).collect();

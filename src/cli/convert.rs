@@ -6,7 +6,7 @@ use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
 use serde_json::json;
 
-use super::input::{load, Loaded, WeldArgs};
+use super::input::{load, Loaded, ReadArgs};
 use lamina::mesh::io::{write_mesh, MeshFormat};
 use lamina::network::io::{write_network, NetworkFormat, RenderOptions};
 
@@ -23,11 +23,11 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let loaded = load(&args.input, &args.weld.options()?)?;
+    let loaded = load(&args.input, &args.weld, false)?;
     let summary = match &loaded {
         Loaded::Network(imp) => {
             if NetworkFormat::from_path(&args.output).is_none() {
@@ -44,7 +44,7 @@ pub fn run(args: Args) -> Result<()> {
             json!({ "output": args.output, "kind": "network",
                     "nodes": imp.network.nodes.len(), "edges": imp.network.edges.len() })
         }
-        Loaded::Mesh(mesh) => {
+        Loaded::Mesh(mesh, _) => {
             if MeshFormat::from_path(&args.output).is_none() {
                 bail!(
                     "{}: a mesh converts to .obj, .stl or .png",

@@ -18,7 +18,7 @@ use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::info::summary;
-use super::input::{load, Loaded, WeldArgs};
+use super::input::{load, Loaded, ReadArgs};
 use super::planarize::{MethodArg, ReportArgs};
 use glam::{DVec2, DVec3};
 use lamina::fabricate::nest::Rotations;
@@ -29,7 +29,7 @@ use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::surface::{self, grow_on_surface, Channel, SurfaceOptions};
 use lamina::grow::venation::{Frame, Mode, Observer};
 use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_mesh, Stroke3};
-use lamina::network::io::{write_network, ReadOptions, RenderOptions};
+use lamina::network::io::{write_network, RenderOptions};
 use lamina::rationalize::plates::EdgeSelector;
 
 #[derive(ClapArgs)]
@@ -166,7 +166,7 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
         .file_stem()
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_else(|| name.to_string());
-    let loaded = load(input, &ReadOptions::default())?;
+    let loaded = load(input, &ReadArgs::default(), true)?;
     let info = summary(input, &loaded);
     let mut outputs = vec![format!("inputs/{name}")];
     let (dir, exts, preview): (&str, &[&str], String) = match &loaded {
@@ -175,7 +175,7 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
             &["json", "obj", "dxf", "svg", "png"],
             format!("networks/{stem}.svg"),
         ),
-        Loaded::Mesh(_) => (
+        Loaded::Mesh(..) => (
             "surfaces",
             &["stl", "obj", "png"],
             format!("surfaces/{stem}.png"),
@@ -187,7 +187,7 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
         let path = out.join(&rel);
         match &loaded {
             Loaded::Network(imp) => write_network(&imp.network, &path, &RenderOptions { size })?,
-            Loaded::Mesh(mesh) => write_mesh(mesh, &path, size)?,
+            Loaded::Mesh(mesh, _) => write_mesh(mesh, &path, size)?,
         }
         outputs.push(rel);
     }
@@ -206,7 +206,7 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
             info["cycles"],
             info["problems"].as_array().map_or(0, |a| a.len())
         ),
-        Loaded::Mesh(_) => {
+        Loaded::Mesh(..) => {
             let t = &info["topology"];
             format!(
                 "{} vertices, {} triangles, χ = {}, genus {}, {} boundary loops, closed: {}{}",
@@ -275,10 +275,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     let dir = out.join("calyx");
     std::fs::create_dir_all(&dir)?;
     let net = inputs.join("calyx_veins.json");
-    let weld = WeldArgs {
-        weld: None,
-        weld_rel: None,
-    };
+    let weld = ReadArgs::default();
     let cells_obj = dir.join("cells.obj");
     let cells = super::cells::execute(&super::cells::Args {
         input: net.clone(),
@@ -286,7 +283,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         output: cells_obj.clone(),
         table: Some(dir.join("cells.json")),
         json: false,
-        weld,
+        weld: weld.clone(),
     })?;
     let mut outputs = vec![
         "calyx/cells.obj".to_string(),
@@ -324,7 +321,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
                 html: Some(file("-report.html")),
                 json: false,
             },
-            weld,
+            weld: weld.clone(),
         })?;
         let s = &done.solution;
         let _ = write!(

@@ -6,7 +6,8 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use serde_json::{json, Value};
 
-use super::input::{load, Loaded, WeldArgs};
+use super::input::{load, Loaded, MeshNotes, ReadArgs};
+use lamina::network::arrangement::defects;
 use lamina::network::io::Imported;
 use lamina::TriMesh;
 
@@ -18,11 +19,11 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let loaded = load(&args.file, &args.weld.options()?)?;
+    let loaded = load(&args.file, &args.weld, true)?;
     let summary = summary(&args.file, &loaded);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&summary)?);
@@ -35,7 +36,7 @@ pub fn run(args: Args) -> Result<()> {
 pub fn summary(path: &Path, loaded: &Loaded) -> Value {
     match loaded {
         Loaded::Network(imp) => network_summary(path, imp),
-        Loaded::Mesh(mesh) => mesh_summary(path, mesh),
+        Loaded::Mesh(mesh, notes) => mesh_summary(path, mesh, notes),
     }
 }
 
@@ -61,6 +62,18 @@ pub fn network_summary(path: &Path, imp: &Imported) -> Value {
             o
         })
         .collect();
+    // A flat drawing that is not noded: crossings and T-junctions are problems too.
+    let defects = defects(net, imp.point_tolerance());
+    let problems: Vec<Value> = problems
+        .into_iter()
+        .chain(defects.iter().map(|d| {
+            let mut o = serde_json::to_value(d).unwrap_or(Value::Null);
+            if let Value::Object(m) = &mut o {
+                m.insert("message".into(), d.to_string().into());
+            }
+            o
+        }))
+        .collect();
     let lengths = net
         .lengths()
         .map(|l| json!({ "total": l.total, "min": l.min, "max": l.max, "mean": l.mean }));
@@ -80,11 +93,14 @@ pub fn network_summary(path: &Path, imp: &Imported) -> Value {
         "import": {
             "weld": imp.weld,
             "skipped": imp.skipped,
+            "source_units": imp.units,
+            "inserts": imp.inserts,
+            "split_crossings": imp.split,
         },
     })
 }
 
-pub fn mesh_summary(path: &Path, mesh: &TriMesh) -> Value {
+pub fn mesh_summary(path: &Path, mesh: &TriMesh, notes: &MeshNotes) -> Value {
     let t = mesh.check_manifold();
     let problems: Vec<String> = t.problems.iter().map(|p| p.to_string()).collect();
     json!({
@@ -99,8 +115,10 @@ pub fn mesh_summary(path: &Path, mesh: &TriMesh) -> Value {
             "euler": t.euler, "components": t.components,
             "boundary_edges": t.boundary_edges, "boundary_loops": t.boundary_loops,
             "closed": t.closed, "genus": t.genus, "area": t.area, "volume": t.volume,
+            "signed_volume": t.signed_volume,
         },
         "problems": problems,
+        "import": { "bodies": notes.bodies, "weld": notes.weld },
     })
 }
 
@@ -147,6 +165,31 @@ fn human(s: &Value) -> String {
                 ),
             );
         }
+        let u = &s["import"]["source_units"];
+        if u.is_object() {
+            let scale = num(&u["scale_to_mm"]);
+            let unit = u["unit"]
+                .as_str()
+                .map(str::to_string)
+                .unwrap_or_else(|| u["unit"].to_string());
+            let to_mm = if scale == 1.0 {
+                String::new()
+            } else {
+                format!(", ×{scale} to mm")
+            };
+            line(
+                &mut out,
+                "source units",
+                format!("{unit} ({}){to_mm}", u["from"].as_str().unwrap_or("")),
+            );
+        }
+        if s["import"]["inserts"].as_u64().is_some_and(|n| n > 0) {
+            line(
+                &mut out,
+                "blocks inserted",
+                s["import"]["inserts"].to_string(),
+            );
+        }
         let w = &s["import"]["weld"];
         if w.is_object() {
             line(
@@ -186,21 +229,51 @@ fn human(s: &Value) -> String {
         );
         line(&mut out, "components", t["components"].to_string());
         line(&mut out, "genus", t["genus"].to_string());
+        if let Some(b) = s["import"]["bodies"].as_u64() {
+            line(&mut out, "bodies (solids)", b.to_string());
+        }
+        let w = &s["import"]["weld"];
+        if w.is_object() {
+            line(
+                &mut out,
+                "welded",
+                format!(
+                    "{} vertices merged (tolerance {:e} mm), {} triangles collapsed",
+                    w["merged"],
+                    num(&w["tolerance"]),
+                    w["collapsed_triangles"]
+                ),
+            );
+        }
         line(&mut out, "closed", t["closed"].to_string());
         line(&mut out, "area", format!("{:.3} mm²", num(&t["area"])));
         if t["volume"].is_number() {
             line(&mut out, "volume", format!("{:.3} mm³", num(&t["volume"])));
+        } else {
+            line(
+                &mut out,
+                "volume",
+                format!(
+                    "{:.3} mm³ signed, of an open or broken mesh: true only if each body is closed",
+                    num(&t["signed_volume"])
+                ),
+            );
         }
     }
     let problems = s["problems"].as_array().cloned().unwrap_or_default();
     line(&mut out, "problems", problems.len().to_string());
-    for p in problems {
+    const SHOWN: usize = 20;
+    let more = problems.len().saturating_sub(SHOWN);
+    for p in problems.into_iter().take(SHOWN) {
         let msg = p["message"]
             .as_str()
             .or(p.as_str())
             .unwrap_or("")
             .to_string();
         out.push_str(&format!("{:>18}  - {msg}\n", ""));
+    }
+    if more > 0 {
+        out.push_str(&format!("{:>18}  … and {more} more (all in --json)\n", ""));
     }
     out
 }

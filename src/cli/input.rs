@@ -8,47 +8,202 @@ use clap::Args;
 
 use glam::DVec3;
 use lamina::files::extension;
-use lamina::mesh::io::read_mesh;
+use lamina::mesh::io::{read_mesh, stl_bodies};
+use lamina::mesh::MeshWeld;
+use lamina::network::arrangement::split_crossings;
+use lamina::network::io::units::LengthUnit;
 use lamina::network::io::{read_network, Imported, ReadOptions};
 use lamina::network::Weld;
 
 use lamina::mesh::closest::SurfaceIndex;
 use lamina::{Network, TriMesh};
 
-/// How OBJ and DXF points become shared nodes.
-#[derive(Args, Clone, Copy, Debug)]
-pub struct WeldArgs {
+/// How OBJ and DXF input is read: units, curves, and which points become shared nodes.
+#[derive(Args, Clone, Debug)]
+pub struct ReadArgs {
     /// Weld points closer than this distance, in mm, into one node (OBJ and DXF input)
     #[arg(long, value_name = "MM", conflicts_with = "weld_rel")]
     pub weld: Option<f64>,
     /// Weld points closer than this fraction of the bounding-box diagonal [default: 1e-6]
     #[arg(long, value_name = "FRACTION")]
     pub weld_rel: Option<f64>,
+    /// The unit a DXF or OBJ is drawn in (mm, cm, m, in, ft), overriding the DXF header
+    /// [default: the DXF's $INSUNITS, else $MEASUREMENT, else mm]
+    #[arg(long, value_name = "UNIT")]
+    pub units: Option<String>,
+    /// Largest distance, in mm, between a DXF arc, bulge, circle, ellipse or spline and the
+    /// straight segments it is read as
+    #[arg(long, value_name = "MM", default_value_t = ReadOptions::DEFAULT_CHORD_TOLERANCE)]
+    pub chord_tolerance: f64,
+    /// Refuse a file that holds anything not read (an entity kind, paper space)
+    #[arg(long)]
+    pub strict: bool,
+    /// Node a flat drawing: every crossing and T-junction becomes a shared node, edges split
+    #[arg(long)]
+    pub split_crossings: bool,
 }
 
-impl WeldArgs {
+impl Default for ReadArgs {
+    fn default() -> Self {
+        ReadArgs {
+            weld: None,
+            weld_rel: None,
+            units: None,
+            chord_tolerance: ReadOptions::DEFAULT_CHORD_TOLERANCE,
+            strict: false,
+            split_crossings: false,
+        }
+    }
+}
+
+/// Chord tolerances below this are refused: 1 nm is finer than any machine or printer, and a
+/// smaller one only multiplies points.
+const MIN_CHORD_TOLERANCE: f64 = 1e-6;
+
+impl ReadArgs {
     pub fn options(&self) -> Result<ReadOptions> {
         let weld = match (self.weld, self.weld_rel) {
             (Some(mm), _) => Weld::Absolute(mm),
             (None, Some(f)) => Weld::Relative(f),
             (None, None) => Weld::DEFAULT,
         };
-        let t = match weld {
-            Weld::Absolute(t) | Weld::Relative(t) => t,
+        let (t, flag) = match weld {
+            Weld::Absolute(t) => (t, "--weld"),
+            Weld::Relative(t) => (t, "--weld-rel"),
         };
         if !(t.is_finite() && t >= 0.0) {
-            bail!("weld tolerance must be a finite number ≥ 0, got {t}");
+            bail!("{flag}: the weld tolerance must be a finite number ≥ 0, got {t}");
         }
-        Ok(ReadOptions { weld })
+        if matches!(weld, Weld::Relative(f) if f > 0.5) {
+            bail!("--weld-rel: {t} of the diagonal would weld the whole drawing into a point (at most 0.5)");
+        }
+        let c = self.chord_tolerance;
+        if !(c.is_finite() && c >= MIN_CHORD_TOLERANCE) {
+            bail!("--chord-tolerance: must be a finite length of at least {MIN_CHORD_TOLERANCE} mm, got {c}");
+        }
+        let units = match &self.units {
+            None => None,
+            Some(name) => Some(LengthUnit::parse(name).with_context(|| {
+                format!(
+                    "--units: `{}` is not a unit lamina knows ({})",
+                    name.escape_debug(),
+                    LengthUnit::NAMES
+                )
+            })?),
+        };
+        Ok(ReadOptions {
+            weld,
+            units,
+            chord_tolerance: c,
+        })
+    }
+
+    /// Reads a network, says on stderr what was assumed or left out (one line each), and
+    /// with `--strict` refuses a file that held anything not read.
+    pub fn network(&self, path: &Path) -> Result<Imported> {
+        let mut imported = read_network(path, &self.options()?)?;
+        self.check_units_flag(path)?;
+        say_import(path, &imported);
+        self.check_strict(path, &imported)?;
+        self.split(path, &mut imported, false)?;
+        Ok(imported)
+    }
+
+    /// With `--split-crossings`, nodes a flat network (and says what it did).
+    fn split(&self, path: &Path, imported: &mut Imported, quiet: bool) -> Result<()> {
+        if !self.split_crossings {
+            return Ok(());
+        }
+        let tol = imported.point_tolerance();
+        let (net, stats) = split_crossings(&imported.network, tol).with_context(|| {
+            format!(
+                "{}: --split-crossings: the network does not lie in one plane (within {tol:e} mm), \
+                 so its edges cannot cross",
+                path.display()
+            )
+        })?;
+        imported.network = net;
+        if !quiet {
+            eprintln!(
+                "lamina: {}: noded {} crossings and {} T-junctions: {} nodes and {} edges added",
+                path.display(),
+                stats.crossings,
+                stats.t_junctions,
+                stats.nodes_added,
+                stats.edges_added
+            );
+        }
+        imported.split = Some(stats);
+        Ok(())
+    }
+
+    fn check_units_flag(&self, path: &Path) -> Result<()> {
+        if self.units.is_some() && extension(path) == "json" {
+            bail!(
+                "{}: --units applies to DXF and OBJ input; a lamina JSON network is in mm",
+                path.display()
+            );
+        }
+        Ok(())
+    }
+
+    fn check_strict(&self, path: &Path, imported: &Imported) -> Result<()> {
+        if self.strict && !imported.skipped.is_empty() {
+            bail!(
+                "{}: --strict: the file holds what lamina does not read: {}",
+                path.display(),
+                skipped_list(imported)
+            );
+        }
+        Ok(())
+    }
+}
+
+/// "3 TEXT, 1 DIMENSION".
+pub fn skipped_list(imported: &Imported) -> String {
+    imported
+        .skipped
+        .iter()
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// One line on stderr for units that were assumed or converted, one for what was skipped.
+pub fn say_import(path: &Path, imported: &Imported) {
+    if let Some(u) = imported
+        .units
+        .as_ref()
+        .filter(|u| u.assumed || u.scale_to_mm != 1.0)
+    {
+        eprintln!("lamina: {}: units {}", path.display(), u.describe());
+    }
+    if !imported.skipped.is_empty() {
+        eprintln!(
+            "lamina: {}: not read: {}",
+            path.display(),
+            skipped_list(imported)
+        );
     }
 }
 
 pub enum Loaded {
     Network(Box<Imported>),
-    Mesh(TriMesh),
+    Mesh(TriMesh, MeshNotes),
 }
 
-pub fn load(path: &Path, opts: &ReadOptions) -> Result<Loaded> {
+/// What reading a mesh found or did besides the triangles.
+#[derive(Clone, Debug, Default)]
+pub struct MeshNotes {
+    /// `solid` blocks of an ASCII STL.
+    pub bodies: Option<usize>,
+    /// Set when `--weld`/`--weld-rel` joined near corners.
+    pub weld: Option<MeshWeld>,
+}
+
+/// Reads a network or a mesh; `quiet` leaves the notes on units and skipped records to the
+/// caller (`info` prints them in its summary).
+pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
     let ext = extension(path);
     let is_mesh = match ext.as_str() {
         "stl" => true,
@@ -60,9 +215,42 @@ pub fn load(path: &Path, opts: &ReadOptions) -> Result<Loaded> {
         ),
     };
     Ok(if is_mesh {
-        Loaded::Mesh(read_mesh(path)?)
+        if args.units.is_some() {
+            bail!(
+                "{}: --units applies to DXF and OBJ networks; a mesh is read in mm",
+                path.display()
+            );
+        }
+        let mut mesh = read_mesh(path)?;
+        let weld = match (args.weld, args.weld_rel) {
+            (None, None) => None,
+            _ => {
+                let tol = args.options()?.weld.tolerance_for(&mesh.bbox());
+                Some(mesh.weld(tol))
+            }
+        };
+        let notes = MeshNotes {
+            bodies: stl_bodies(path),
+            weld,
+        };
+        if !quiet {
+            if let Some(w) = &notes.weld {
+                eprintln!(
+                    "lamina: {}: welded {} vertices within {:e} mm, {} triangles collapsed and dropped",
+                    path.display(), w.merged, w.tolerance, w.collapsed_triangles
+                );
+            }
+        }
+        Loaded::Mesh(mesh, notes)
     } else {
-        Loaded::Network(Box::new(read_network(path, opts)?))
+        let mut imported = read_network(path, &args.options()?)?;
+        args.check_units_flag(path)?;
+        if !quiet {
+            say_import(path, &imported);
+        }
+        args.check_strict(path, &imported)?;
+        args.split(path, &mut imported, quiet)?;
+        Loaded::Network(Box::new(imported))
     })
 }
 

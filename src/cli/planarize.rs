@@ -10,7 +10,6 @@ use glam::DVec3;
 use serde_json::json;
 
 use lamina::files::write_atomic;
-use lamina::network::io::read_network;
 use lamina::rationalize::audit::{audit, read_polygons};
 use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
 use lamina::rationalize::planarize::{
@@ -18,7 +17,7 @@ use lamina::rationalize::planarize::{
 };
 use lamina::report::planarity::{Context, PanelRow, Report};
 
-use super::input::{reference_normals, WeldArgs};
+use super::input::{reference_normals, ReadArgs};
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum MethodArg {
@@ -73,7 +72,7 @@ pub struct Args {
     #[command(flatten)]
     pub reports: ReportArgs,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
 }
 
 /// Where the planarity report goes, for `planarize` and `audit` alike.
@@ -150,7 +149,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             .map(|s| parse_override(s, "--fix-axis"))
             .collect::<Result<_>>()?,
     };
-    let net = read_network(&args.input, &args.weld.options()?)?.network;
+    let net = args.weld.network(&args.input)?.network;
     let reference = reference_normals(&net, args.surface.as_deref())?;
     let heights: Vec<f64> = match args.height_from_radius {
         Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),

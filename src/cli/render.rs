@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
 
-use super::input::{load, Loaded, WeldArgs};
+use super::input::{load, Loaded, ReadArgs};
 use lamina::files::extension;
 use lamina::mesh::io::write_mesh;
 use lamina::network::io::{write_network, RenderOptions};
@@ -21,24 +21,24 @@ pub struct Args {
     #[arg(long, default_value_t = 2048)]
     pub size: u32,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let ext = extension(&args.output);
-    let loaded = load(&args.input, &args.weld.options()?)?;
+    let loaded = load(&args.input, &args.weld, false)?;
     match (&loaded, ext.as_str()) {
         (Loaded::Network(imp), "svg" | "png") => write_network(
             &imp.network,
             &args.output,
             &RenderOptions { size: args.size },
         )?,
-        (Loaded::Mesh(mesh), "png") => write_mesh(mesh, &args.output, args.size)?,
+        (Loaded::Mesh(mesh, _), "png") => write_mesh(mesh, &args.output, args.size)?,
         (Loaded::Network(_), _) => bail!(
             "{}: a network renders to .svg or .png",
             args.output.display()
         ),
-        (Loaded::Mesh(_), _) => bail!("{}: a mesh renders to .png", args.output.display()),
+        (Loaded::Mesh(..), _) => bail!("{}: a mesh renders to .png", args.output.display()),
     }
     println!("wrote {}", args.output.display());
     Ok(())

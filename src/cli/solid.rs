@@ -7,11 +7,10 @@ use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use super::input::WeldArgs;
+use super::input::ReadArgs;
 use super::venation::write_json;
 use lamina::fabricate::solid::{solid, Base, SolidOptions, DEFAULT_CELL};
 use lamina::mesh::io::write_mesh;
-use lamina::network::io::read_network;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -39,7 +38,7 @@ pub struct Args {
     #[arg(long, value_name = "MM")]
     pub radius: Option<f64>,
     #[command(flatten)]
-    pub weld: WeldArgs,
+    pub weld: ReadArgs,
     /// Write the report as JSON here
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
@@ -64,7 +63,7 @@ pub fn parse_base(text: &str) -> Result<Base> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let net = read_network(&args.network, &args.weld.options()?)?.network;
+    let net = args.weld.network(&args.network)?.network;
     let opts = SolidOptions {
         cell: args.cell,
         lamina: args.lamina,

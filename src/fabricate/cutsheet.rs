@@ -6,7 +6,6 @@
 use std::path::Path;
 
 use dxf::entities::{Entity, EntityType, Line};
-use dxf::enums::Units;
 use dxf::tables::Layer;
 use dxf::Point;
 use glam::DVec2;
@@ -27,7 +26,6 @@ pub struct Drawn<'a> {
 /// Writes the parts (and the sheet rectangle from the origin, if given) to `path`.
 pub fn write_cut_dxf(parts: &[Drawn], sheet: Option<DVec2>, path: &Path) -> Result<(), WriteError> {
     let mut drawing = fixed_drawing();
-    drawing.header.default_drawing_units = Units::Millimeters;
     for (name, colour) in [(CUT, 1u8), (ETCH, 5), (SHEET, 8)] {
         drawing.add_layer(Layer {
             name: name.into(),
@@ -54,8 +52,6 @@ pub fn write_cut_dxf(parts: &[Drawn], sheet: Option<DVec2>, path: &Path) -> Resu
         }
     }
     write_atomic(path, |w| {
-        drawing
-            .save(w)
-            .map_err(|e| std::io::Error::other(e.to_string()))
+        crate::network::io::dxf_write::save(&mut drawing, w)
     })
 }

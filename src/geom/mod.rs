@@ -1,6 +1,8 @@
 //! Small shared geometry on glam's `DVec2`/`DVec3`. Uses nothing else of lamina.
 
 use glam::{DVec2, DVec3};
+pub mod curves;
+pub mod merge;
 
 /// An axis-aligned bounding box. `empty()` holds no point; extending it with one makes it that point.
 #[derive(Clone, Copy, Debug, PartialEq)]

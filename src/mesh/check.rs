@@ -78,9 +78,15 @@ pub struct Topology {
     pub closed: bool,
     /// Sum over components of (2 − χ − b) / 2; `None` unless the mesh is an oriented manifold.
     pub genus: Option<i64>,
+    /// Area of every triangle with three distinct, in-range corners, whatever other problems
+    /// the mesh has.
     pub area: f64,
     /// Enclosed volume in mm³, for a closed oriented manifold.
     pub volume: Option<f64>,
+    /// The signed volume of the same triangles as `area`, about the origin: the enclosed volume
+    /// when every body is closed and outward-oriented (touching bodies included), meaningless
+    /// for an open mesh.
+    pub signed_volume: f64,
     pub problems: Vec<MeshProblem>,
 }
 
@@ -221,8 +227,22 @@ impl TriMesh {
             euler,
             closed,
             genus,
-            area: if manifold { self.area() } else { 0.0 },
+            area: good
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = self.corners(t);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum(),
             volume: closed.then(|| self.signed_volume()),
+            signed_volume: good
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = self.corners(t);
+                    a.dot(b.cross(c))
+                })
+                .sum::<f64>()
+                / 6.0,
             problems,
         }
     }

@@ -5,6 +5,7 @@ mod check;
 pub mod closest;
 pub mod intersect;
 pub mod io;
+mod weld;
 
 use glam::DVec3;
 
@@ -12,6 +13,7 @@ use crate::geom::Aabb;
 
 pub(crate) use check::{find, union};
 pub use check::{MeshProblem, Topology};
+pub use weld::MeshWeld;
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriMesh {

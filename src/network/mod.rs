@@ -3,6 +3,7 @@
 //!
 //! Adjacency is built on demand (`adjacency()`, CSR). `validate()` finds every problem at once.
 
+pub mod arrangement;
 pub mod io;
 mod topology;
 mod validate;

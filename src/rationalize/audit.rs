@@ -12,6 +12,7 @@ use glam::DVec3;
 use super::panels::{polygon_deviation, quad_metrics, QuadMetrics};
 use crate::files::{extension, ReadError};
 use crate::network::io::dxf::{lw_polyline, polyline};
+use crate::network::io::units::dxf_units;
 
 /// One audited polygon.
 #[derive(Clone, Debug)]
@@ -111,9 +112,22 @@ fn read_obj(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
     Ok(out)
 }
 
+/// Panels from a DXF, in millimetres by its `$INSUNITS` (else `$MEASUREMENT`, else mm).
 fn read_dxf(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
-    let drawing = Drawing::load_file(path)
+    let bytes = crate::files::read_nonempty(path)?;
+    let scale = dxf_units(&bytes, None).scale_to_mm;
+    let drawing = Drawing::load(&mut &bytes[..])
         .map_err(|e| ReadError::file(path, format!("not a DXF lamina can read: {e}")))?;
+    let mut out = read_drawing(path, &drawing)?;
+    if scale != 1.0 {
+        for c in out.iter_mut().flatten() {
+            *c *= scale;
+        }
+    }
+    Ok(out)
+}
+
+fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Vec<Vec<DVec3>>, ReadError> {
     let v = |p: &dxf::Point| DVec3::new(p.x, p.y, p.z);
     let mut out = Vec::new();
     for e in drawing.entities() {

@@ -400,8 +400,9 @@ fn triangulate(f: &Face, positions: &[DVec3]) -> Result<Vec<[u32; 3]>, String> {
         }
         if cdt.try_add_constraint(ha, hb).is_empty() {
             return Err(format!(
-                "edge {e} crosses another edge of the cell in the cell's plane: the cell is too \
-                 curved to lay flat"
+                "edge {e} crosses another edge of the cell in the cell's plane: either the \
+                 network's edges cross without a node (node it: --split-crossings) or the cell \
+                 is too curved to lay flat"
             ));
         }
     }

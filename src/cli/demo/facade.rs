@@ -10,7 +10,7 @@ use clap::Parser;
 use glam::DVec3;
 
 use super::Entry;
-use crate::cli::input::WeldArgs;
+use crate::cli::input::ReadArgs;
 use lamina::mesh::io::write_mesh;
 use lamina::mesh::TriMesh;
 use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};
@@ -99,10 +99,7 @@ pub fn facade(out: &Path, size: u32) -> Result<Entry> {
         output: dir.join("panels.obj"),
         table: Some(dir.join("panels.json")),
         json: false,
-        weld: WeldArgs {
-            weld: None,
-            weld_rel: None,
-        },
+        weld: ReadArgs::default(),
     })?;
 
     // The same façade stood up and projected onto a bowed wall.

@@ -34,6 +34,15 @@ impl MeshFormat {
     }
 }
 
+/// Bodies in an STL file: the `solid` blocks of an ASCII STL (CAD programs write one per body);
+/// `None` for binary STL, OBJ, or a file that cannot be read.
+pub fn stl_bodies(path: &Path) -> Option<usize> {
+    if MeshFormat::from_path(path) != Some(MeshFormat::Stl) {
+        return None;
+    }
+    stl::ascii_solids(&std::fs::read(path).ok()?)
+}
+
 /// Reads a mesh, choosing the format by extension. The result has in-range indices and finite
 /// coordinates; whether it is a manifold is for `check_manifold` to say.
 pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {

@@ -1,6 +1,9 @@
 //! Mesh OBJ: read through tobj (polygons triangulated, vertex colours `v x y z r g b` kept);
 //! written by our own few lines. tobj reports what went wrong but not where, so on an error we
-//! find the offending line ourselves.
+//! find the offending line ourselves. Before tobj sees the text, `\` line continuations (Rhino
+//! writes long faces so) are joined and material records blanked (materials are not read, and
+//! tobj refuses an empty `usemtl`), keeping every line where it was. Vertices are joined by
+//! value, -0 and 0 being one value.
 
 use std::io::Write;
 use std::path::Path;
@@ -11,7 +14,7 @@ use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError
 use crate::mesh::TriMesh;
 
 pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
-    let text = utf8_text(path, read_nonempty(path)?)?;
+    let text = prepare(&utf8_text(path, read_nonempty(path)?)?);
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -34,7 +37,8 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
             .chunks_exact(3)
             .enumerate()
             .map(|(i, c)| {
-                let p = DVec3::new(c[0], c[1], c[2]);
+                // Adding +0 turns -0 into 0 and changes nothing else.
+                let p = DVec3::new(c[0] + 0.0, c[1] + 0.0, c[2] + 0.0);
                 let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
                 *index.entry(key).or_insert_with(|| {
                     mesh.positions.push(p);
@@ -58,6 +62,39 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
         mesh.colors = Some(colors);
     }
     Ok(mesh)
+}
+
+/// The text with `\` continuations joined onto their first line (the lines they took left
+/// empty) and `mtllib`/`usemtl` records blanked, so line numbers stay those of the file.
+fn prepare(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut joined = 0usize;
+    for raw in text.lines() {
+        let line = raw.trim_end();
+        let (body, continues) = match line.strip_suffix('\\') {
+            Some(b) => (b, true),
+            None => (line, false),
+        };
+        let keyword = body.split_whitespace().next().unwrap_or("");
+        if joined == 0 && matches!(keyword, "mtllib" | "usemtl") && !continues {
+            out.push('\n');
+            continue;
+        }
+        if joined > 0 {
+            out.push(' ');
+        }
+        out.push_str(body);
+        if continues {
+            joined += 1;
+        } else {
+            out.push('\n');
+            for _ in 0..joined {
+                out.push('\n');
+            }
+            joined = 0;
+        }
+    }
+    out
 }
 
 /// Turns a tobj error into one that names the line.

@@ -1,13 +1,13 @@
 //! STL through stl_io. Binary is recognised by its size (84 + 50 × triangle count bytes), since
 //! some binary files also start with "solid"; ASCII otherwise. Written as binary.
 
-use std::io::Cursor;
 use std::path::Path;
 
 use glam::DVec3;
 use stl_io::{Normal, Triangle, Vertex};
 
 use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
+use crate::geom::merge::merge_points;
 use crate::geom::mix64 as mix;
 use crate::mesh::TriMesh;
 
@@ -50,37 +50,89 @@ fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
             soup(&bytes)
         });
     }
-    let indexed = stl_io::read_stl(&mut Cursor::new(&bytes)).map_err(|e| {
-        if is_binary {
-            ReadError::file(path, format!("cannot read binary STL: {e}"))
-        } else {
-            // stl_io does not say where; find the first line that is not ASCII STL.
-            match first_bad_ascii_line(&bytes) {
-                Some((line, msg)) => ReadError::line(path, line, msg),
-                None => ReadError::file(path, format!("cannot read ASCII STL: {e}")),
+    read_ascii(path, &bytes)
+}
+
+/// An ASCII STL: every `solid … endsolid` block (CAD programs write one per body), corners at
+/// the same point (with −0 read as +0) joined. Facets with more than three vertices are fanned.
+fn read_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh, ReadError> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| ReadError::file(path, format!("ASCII STL is not valid UTF-8: {e}")))?;
+    let mut corners: Vec<DVec3> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut facet: Vec<u32> = Vec::new();
+    let mut in_facet = false;
+    for (i, line) in text.lines().enumerate() {
+        let bad = |msg: String| ReadError::line(path, i + 1, msg);
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            [] | ["solid", ..] | ["endsolid", ..] | ["outer", "loop"] => {}
+            ["facet", "normal", ..] => {
+                in_facet = true;
+                facet.clear();
+            }
+            ["vertex", x, y, z] if in_facet => {
+                let mut p = [0.0; 3];
+                for (slot, w) in p.iter_mut().zip([x, y, z]) {
+                    *slot = w
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| {
+                            bad(format!(
+                                "vertex: `{}` is not a finite number",
+                                w.escape_debug()
+                            ))
+                        })?;
+                }
+                facet.push(corners.len() as u32);
+                corners.push(DVec3::from_array(p));
+            }
+            ["endloop"] => {}
+            ["endfacet"] => {
+                if facet.len() < 3 {
+                    return Err(bad(format!("a facet with {} vertices", facet.len())));
+                }
+                for k in 1..facet.len() - 1 {
+                    triangles.push([facet[0], facet[k], facet[k + 1]]);
+                }
+                in_facet = false;
+            }
+            _ => {
+                let shown: String = line.trim().chars().take(40).collect();
+                return Err(bad(format!("not ASCII STL: `{}`", shown.escape_debug())));
             }
         }
-    })?;
-    let positions = indexed
-        .vertices
-        .iter()
-        .map(|v| DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64))
-        .collect();
-    let mut triangles = Vec::with_capacity(indexed.faces.len());
-    for (k, f) in indexed.faces.iter().enumerate() {
-        let mut t = [0u32; 3];
-        for (slot, &i) in t.iter_mut().zip(&f.vertices) {
-            *slot = u32::try_from(i).map_err(|_| {
-                ReadError::record(path, format!("triangle {k}"), "too many vertices")
-            })?;
+        if corners.len() > u32::MAX as usize / 2 {
+            return Err(bad("too many vertices".into()));
         }
-        triangles.push(t);
     }
+    let (map, positions) = merge_points(&corners, 0.0);
     Ok(TriMesh {
         positions,
-        triangles,
+        triangles: triangles
+            .iter()
+            .map(|t| t.map(|c| map[c as usize]))
+            .collect(),
         colors: None,
     })
+}
+
+/// Bodies in an ASCII STL (its `solid` blocks); `None` for binary STL, which has no bodies.
+pub fn ascii_solids(bytes: &[u8]) -> Option<usize> {
+    if !bytes.starts_with(b"solid") {
+        return None;
+    }
+    let n = u32::from_le_bytes(bytes.get(80..84)?.try_into().ok()?) as u64;
+    if bytes.len() as u64 == 84 + 50 * n {
+        return None;
+    }
+    let text = String::from_utf8_lossy(bytes);
+    Some(
+        text.lines()
+            .filter(|l| l.trim_start().starts_with("solid"))
+            .count(),
+    )
 }
 
 /// A binary STL whose size has been checked: corners at the same point (bit for bit, with −0
@@ -204,33 +256,6 @@ impl std::hash::Hasher for MixHasher {
                 .wrapping_mul(0x517c_c1b7_2722_0a95);
         }
     }
-}
-
-/// The first line of an ASCII STL that breaks its grammar, with what is wrong.
-fn first_bad_ascii_line(bytes: &[u8]) -> Option<(usize, String)> {
-    let text = String::from_utf8_lossy(bytes);
-    let numbers = |words: &[&str], n: usize| {
-        words.len() == n
-            && words
-                .iter()
-                .all(|w| w.parse::<f32>().is_ok_and(|v| v.is_finite()))
-    };
-    for (i, line) in text.lines().enumerate() {
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let ok = match words.as_slice() {
-            [] => true,
-            ["solid", ..] | ["endsolid", ..] | ["endloop"] | ["endfacet"] => true,
-            ["outer", "loop"] => true,
-            ["facet", "normal", rest @ ..] => numbers(rest, 3),
-            ["vertex", rest @ ..] => numbers(rest, 3),
-            _ => false,
-        };
-        if !ok {
-            let shown: String = line.trim().chars().take(40).collect();
-            return Some((i + 1, format!("not ASCII STL: `{shown}`")));
-        }
-    }
-    None
 }
 
 pub fn write(mesh: &TriMesh, path: &Path) -> Result<(), WriteError> {

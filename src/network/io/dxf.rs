@@ -1,19 +1,23 @@
-//! Network DXF through the `dxf` crate. Read: LINE, LWPOLYLINE, POLYLINE (2D and 3D) and POINT,
-//! in any layer, model space; 2D entities are taken from their object coordinate system (OCS)
-//! to world coordinates. Everything else is counted as skipped; a file with nothing to read is an
-//! error. Write: R2000, layer NETWORK; one LINE per lone edge, one LWPOLYLINE per chain that lies
-//! at one height, one 3D POLYLINE per other chain, one POINT per isolated node.
+//! Network DXF through the `dxf` crate. Read: model-space LINE, POINT, LWPOLYLINE, POLYLINE (2D
+//! and 3D; bulges flattened), ARC, CIRCLE, ELLIPSE, SPLINE (flattened within the chord
+//! tolerance) and INSERT/MINSERT (blocks expanded), taken to millimetres from the file's units
+//! (see `units`); everything else is counted by its DXF name as skipped (`dxf_entities`). A file
+//! with nothing to read is an error. Write: R2000, layer NETWORK, millimetres; one LINE per lone
+//! edge, one LWPOLYLINE per chain that lies at one height, one 3D POLYLINE per other chain, one
+//! POINT per isolated node.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use dxf::entities::{Entity, EntityType, Line, LwPolyline, ModelPoint, Polyline, Vertex};
-use dxf::enums::AcadVersion;
+use dxf::enums::{AcadVersion, DrawingUnits, Units};
 use dxf::tables::Layer;
 use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
 use glam::DVec3;
 
+use super::dxf_entities::{collect, from_ocs, ocs_axes, Collected, Context, MAX_POINTS};
 use super::dxf_split::Part;
+use super::units::dxf_units;
 use super::{Imported, ReadOptions};
 use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
 use crate::network::{weld, Network};
@@ -38,52 +42,44 @@ pub(super) fn read_bytes(
     parts: usize,
     opts: &ReadOptions,
 ) -> Result<Imported, ReadError> {
+    let units = dxf_units(bytes, opts.units);
     let parts = match super::dxf_split::split(bytes, parts) {
         Some(parts) => parts,
         None => vec![Part::whole(bytes)],
     };
-    let pieces: Vec<Result<Collected, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = parts
+    let drawings = parse_parts(path, &parts)?;
+    // The header and the blocks are in the first part: the whole file, or its skeleton.
+    let ctx = Context::new(&drawings[0], opts.chord_tolerance / units.scale_to_mm);
+    let pieces: Vec<Collected> = std::thread::scope(|scope| {
+        let handles: Vec<_> = drawings
             .iter()
-            .map(|part| scope.spawn(|| load_and_collect(path, part)))
+            .map(|d| scope.spawn(|| collect(d, &ctx, MAX_POINTS)))
             .collect();
         handles
             .into_iter()
             .map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err((None, ReadError::file(path, "DXF parser thread failed")))
-                })
+                h.join()
+                    .map_err(|_| ReadError::file(path, "DXF reader thread failed"))
             })
-            .collect()
-    });
-    // The whole file fails to parse if any part does, whatever records come before; the
-    // parser stops at the first error in the file, so report the one on the earliest line.
-    let mut all = Vec::with_capacity(pieces.len());
-    let mut first_error: Option<(Option<usize>, ReadError)> = None;
-    for piece in pieces {
-        match piece {
-            Ok(c) => all.push(c),
-            Err((line, e)) => {
-                let earlier = match (&first_error, line) {
-                    (None, _) => true,
-                    (Some((Some(best), _)), Some(l)) => l < *best,
-                    (Some((None, _)), Some(_)) => true,
-                    _ => false,
-                };
-                if earlier {
-                    first_error = Some((line, e));
-                }
-            }
-        }
-    }
-    if let Some((_, e)) = first_error {
-        return Err(e);
-    }
+            .collect::<Result<_, _>>()
+    })?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    let mut inserts = 0;
     let mut base = 0usize;
-    for piece in all {
+    let total: usize = pieces.iter().map(|p| p.points.len()).sum();
+    if pieces.iter().any(|p| p.over_budget) || total > MAX_POINTS {
+        return Err(ReadError::file(
+            path,
+            format!(
+                "the drawing expands to more than {MAX_POINTS} points (curves flattened at \
+                 {} mm, blocks inserted): raise --chord-tolerance or explode the arrays",
+                opts.chord_tolerance
+            ),
+        ));
+    }
+    for piece in pieces {
         if let Some(bad) = piece.bad {
             return Err(ReadError::record(
                 path,
@@ -97,6 +93,7 @@ pub(super) fn read_bytes(
         for (k, n) in piece.skipped {
             *skipped.entry(k).or_default() += n;
         }
+        inserts += piece.inserts;
         base += piece.entities;
     }
     if points.is_empty() {
@@ -111,100 +108,81 @@ pub(super) fn read_bytes(
         };
         return Err(ReadError::file(
             path,
-            format!("no LINE, LWPOLYLINE, POLYLINE or POINT entities to read (found: {found})"),
+            format!(
+                "no LINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE, POINT or block geometry in \
+                 model space to read (found: {found})"
+            ),
         ));
+    }
+    if units.scale_to_mm != 1.0 {
+        for p in &mut points {
+            *p *= units.scale_to_mm;
+        }
+        if let Some(bad) = points.iter().position(|p| !p.is_finite()) {
+            return Err(ReadError::file(
+                path,
+                format!(
+                    "point {bad} is out of range once taken from {} to mm",
+                    units.unit
+                ),
+            ));
+        }
     }
     let (network, stats) = weld::assemble(&points, &segments, opts.weld);
     Ok(Imported {
         network,
         weld: Some(stats),
         skipped,
+        units: Some(units),
+        inserts,
+        split: None,
     })
 }
 
-/// What one drawing (or part of one) holds for a network.
-struct Collected {
-    points: Vec<DVec3>,
-    segments: Vec<(u32, u32)>,
-    skipped: BTreeMap<String, usize>,
-    entities: usize,
-    /// The first entity that cannot be read; the rest of the piece is not collected.
-    bad: Option<BadEntity>,
-}
-
-struct BadEntity {
-    index: usize,
-    what: String,
-    msg: String,
-}
-
-fn load_and_collect(path: &Path, part: &Part) -> Result<Collected, (Option<usize>, ReadError)> {
-    let drawing = Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))?;
-    Ok(collect(&drawing))
-}
-
-fn collect(drawing: &Drawing) -> Collected {
-    let mut c = Collected {
-        points: Vec::new(),
-        segments: Vec::new(),
-        skipped: BTreeMap::new(),
-        entities: 0,
-        bad: None,
-    };
-    for (index, entity) in drawing.entities().enumerate() {
-        c.entities = index + 1;
-        let fail = |msg: String| {
-            Some(BadEntity {
-                index,
-                what: format!(
-                    "{}, handle {:X}, layer \"{}\"",
-                    type_name(&entity.specific),
-                    entity.common.handle.0,
-                    entity.common.layer
-                ),
-                msg,
+/// Parses every part on its own thread. The whole file fails to parse if any part does,
+/// whatever records come before; the parser stops at the first error in the file, so report
+/// the one on the earliest line.
+fn parse_parts(path: &Path, parts: &[Part]) -> Result<Vec<Drawing>, ReadError> {
+    let parsed: Vec<Result<Drawing, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = parts
+            .iter()
+            .map(|part| {
+                scope.spawn(|| {
+                    Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))
+                })
             })
-        };
-        if entity.common.is_in_paper_space {
-            *c.skipped.entry("paper-space entity".into()).or_default() += 1;
-            continue;
-        }
-        let polyline: Vec<DVec3> = match &entity.specific {
-            EntityType::Line(l) => vec![wcs(&l.p1), wcs(&l.p2)],
-            EntityType::LwPolyline(pl) => match lw_polyline(pl, entity.common.elevation) {
-                Ok(p) => p,
-                Err(msg) => {
-                    c.bad = fail(msg);
-                    return c;
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err((None, ReadError::file(path, "DXF parser thread failed")))
+                })
+            })
+            .collect()
+    });
+    let mut drawings = Vec::with_capacity(parsed.len());
+    let mut first_error: Option<(Option<usize>, ReadError)> = None;
+    for piece in parsed {
+        match piece {
+            Ok(d) => drawings.push(d),
+            Err((line, e)) => {
+                let earlier = match (&first_error, line) {
+                    (None, _) => true,
+                    (Some((Some(best), _)), Some(l)) => l < *best,
+                    (Some((None, _)), Some(_)) => true,
+                    _ => false,
+                };
+                if earlier {
+                    first_error = Some((line, e));
                 }
-            },
-            EntityType::Polyline(pl) if pl.is_polyface_mesh() || pl.is_3d_polygon_mesh() => {
-                *c.skipped.entry("POLYLINE mesh".into()).or_default() += 1;
-                continue;
             }
-            EntityType::Polyline(pl) => match polyline(pl) {
-                Ok(p) => p,
-                Err(msg) => {
-                    c.bad = fail(msg);
-                    return c;
-                }
-            },
-            EntityType::ModelPoint(p) => vec![wcs(&p.location)],
-            other => {
-                *c.skipped.entry(type_name(other)).or_default() += 1;
-                continue;
-            }
-        };
-        if let Some(bad) = polyline.iter().position(|p| !p.is_finite()) {
-            c.bad = fail(format!("vertex {bad} has a non-finite coordinate"));
-            return c;
         }
-        let first = c.points.len() as u32;
-        c.segments
-            .extend((1..polyline.len() as u32).map(|k| (first + k - 1, first + k)));
-        c.points.extend(polyline);
     }
-    c
+    match first_error {
+        Some((_, e)) => Err(e),
+        None => Ok(drawings),
+    }
 }
 
 /// The error for the file, with the file line it is on (when the parser gave one).
@@ -256,44 +234,14 @@ fn describe_load_error(path: &Path, e: DxfError, part: &Part) -> ReadError {
     }
 }
 
-/// DXF name of an entity type, e.g. "CIRCLE", from the variant name.
-fn type_name(t: &EntityType) -> String {
-    let dbg = format!("{t:?}");
-    let name = dbg.split(['(', ' ', '{']).next().unwrap_or("ENTITY");
-    match name {
-        "ModelPoint" => "POINT".into(),
-        "LwPolyline" => "LWPOLYLINE".into(),
-        n => n.to_ascii_uppercase(),
-    }
-}
-
 fn wcs(p: &Point) -> DVec3 {
     DVec3::new(p.x, p.y, p.z)
 }
 
-/// World axes of the object coordinate system with normal `n` (the DXF "arbitrary axis
-/// algorithm"): a 2D entity's (x, y, elevation) are coordinates along these axes.
-fn ocs_axes(n: DVec3) -> Result<[DVec3; 3], String> {
-    let n = n
-        .try_normalize()
-        .ok_or("extrusion direction has zero length")?;
-    let limit = 1.0 / 64.0;
-    let ax = if n.x.abs() < limit && n.y.abs() < limit {
-        DVec3::Y.cross(n)
-    } else {
-        DVec3::Z.cross(n)
-    }
-    .normalize();
-    Ok([ax, n.cross(ax), n])
-}
-
-fn from_ocs(axes: &[DVec3; 3], x: f64, y: f64, z: f64) -> DVec3 {
-    axes[0] * x + axes[1] * y + axes[2] * z
-}
-
+/// A straight-segment LWPOLYLINE's corners in world coordinates (for panels, where an arc
+/// segment has no meaning): a bulge is refused.
 pub(crate) fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>, String> {
-    let ex = &pl.extrusion_direction;
-    let axes = ocs_axes(DVec3::new(ex.x, ex.y, ex.z))?;
+    let axes = ocs_axes(&pl.extrusion_direction)?;
     check_bulges(pl.vertices.iter().map(|v| v.bulge))?;
     let mut pts: Vec<DVec3> = pl
         .vertices
@@ -304,8 +252,8 @@ pub(crate) fn lw_polyline(pl: &LwPolyline, elevation: f64) -> Result<Vec<DVec3>,
     Ok(pts)
 }
 
+/// A straight-segment POLYLINE's corners in world coordinates; a bulge is refused.
 pub(crate) fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
-    // Spline-fit polylines list their frame control points too; the curve is the other vertices.
     let vertices: Vec<&Vertex> = pl
         .vertices()
         .filter(|v| !v.is_spline_frame_control_point())
@@ -314,8 +262,7 @@ pub(crate) fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
         vertices.iter().map(|v| wcs(&v.location)).collect()
     } else {
         check_bulges(vertices.iter().map(|v| v.bulge))?;
-        let n = &pl.normal;
-        let axes = ocs_axes(DVec3::new(n.x, n.y, n.z))?;
+        let axes = ocs_axes(&pl.normal)?;
         let elevation = pl.location.z;
         vertices
             .iter()
@@ -326,13 +273,12 @@ pub(crate) fn polyline(pl: &Polyline) -> Result<Vec<DVec3>, String> {
     Ok(pts)
 }
 
-/// Arc segments would need a chord tolerance we have no basis to choose; ask for polylines.
+/// A panel's outline is straight-sided; an arc segment is refused rather than guessed at.
 fn check_bulges(bulges: impl Iterator<Item = f64>) -> Result<(), String> {
     for (i, b) in bulges.enumerate() {
         if b != 0.0 {
             return Err(format!(
-                "vertex {i} starts an arc segment (bulge {b}); lamina reads straight segments \
-                 only: convert arcs to polylines in your CAD program"
+                "vertex {i} starts an arc segment (bulge {b}); a panel has straight sides"
             ));
         }
     }
@@ -345,8 +291,9 @@ fn close_if(pts: &mut Vec<DVec3>, closed: bool) {
     }
 }
 
-/// An empty R2000 drawing whose header holds no clock and no random GUIDs (the crate stamps
-/// both; they are set to the epoch and the nil GUID) so the same content gives the same bytes.
+/// An empty R2000 drawing in millimetres whose header holds no clock and no random GUIDs (the
+/// crate stamps both; they are set to the epoch and the nil GUID) so the same content gives the
+/// same bytes.
 pub(crate) fn fixed_drawing() -> Drawing {
     let mut drawing = Drawing::new();
     drawing.header.version = AcadVersion::R2000;
@@ -356,6 +303,9 @@ pub(crate) fn fixed_drawing() -> Drawing {
     drawing.header.update_date_universal = Default::default();
     drawing.header.fingerprint_guid = Default::default();
     drawing.header.version_guid = Default::default();
+    // Millimetres, said both ways: $INSUNITS = 4 and $MEASUREMENT = 1 (metric).
+    drawing.header.default_drawing_units = Units::Millimeters;
+    drawing.header.drawing_units = DrawingUnits::Metric;
     drawing
 }
 
@@ -426,37 +376,13 @@ pub fn write(net: &Network, path: &Path) -> Result<(), WriteError> {
             add(&mut drawing, EntityType::Polyline(pl));
         }
     }
-    write_atomic(path, |w| {
-        drawing
-            .save(w)
-            .map_err(|e| std::io::Error::other(e.to_string()))
-    })
+    write_atomic(path, |w| super::dxf_write::save(&mut drawing, w))
 }
 
 fn add(drawing: &mut Drawing, specific: EntityType) {
     let mut e = Entity::new(specific);
     e.common.layer = LAYER.into();
     drawing.add_entity(e);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ocs_of_world_z_is_identity() -> Result<(), String> {
-        let axes = ocs_axes(DVec3::Z)?;
-        assert_eq!(axes, [DVec3::X, DVec3::Y, DVec3::Z]);
-        Ok(())
-    }
-
-    #[test]
-    fn ocs_of_flipped_z_mirrors_x() -> Result<(), String> {
-        // A 2D entity drawn with extrusion (0,0,-1), as mirrored CAD geometry often is.
-        let axes = ocs_axes(-DVec3::Z)?;
-        assert_eq!(from_ocs(&axes, 1.0, 2.0, 3.0), DVec3::new(-1.0, 2.0, -3.0));
-        Ok(())
-    }
 }
 
 #[cfg(test)]

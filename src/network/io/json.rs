@@ -154,6 +154,9 @@ pub fn read(path: &Path) -> Result<Imported, ReadError> {
         },
         weld: None,
         skipped: BTreeMap::new(),
+        units: None,
+        inserts: 0,
+        split: None,
     })
 }
 

@@ -6,17 +6,22 @@
 //! Writers refuse a network with such hard problems and write through `files::write_atomic`.
 
 pub(crate) mod dxf;
+mod dxf_entities;
 mod dxf_split;
+pub(crate) mod dxf_write;
 mod json;
 mod obj;
 mod png;
 mod svg;
+pub mod units;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::arrangement::SplitStats;
 use super::{Network, Problem, Weld, WeldStats};
 use crate::files::{extension, ReadError, WriteError};
+use units::{LengthUnit, SourceUnits};
 
 pub use png::render_png_bytes;
 pub use svg::render_svg_string;
@@ -49,11 +54,31 @@ impl NetworkFormat {
 }
 
 /// Options for reading polyline formats.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct ReadOptions {
     /// Tolerance under which OBJ and DXF points become one node. Default: 1e-6 of the bounding
     /// box diagonal. JSON stores its nodes explicitly and is never welded.
     pub weld: Weld,
+    /// The unit the file is drawn in, overriding what a DXF header says (OBJ has no unit of its
+    /// own: millimetres unless given). Default: none.
+    pub units: Option<LengthUnit>,
+    /// Largest distance, in mm, between a curve (arc, bulge, ellipse, spline) and the chords
+    /// it is read as. Default 0.05 mm.
+    pub chord_tolerance: f64,
+}
+
+impl ReadOptions {
+    pub const DEFAULT_CHORD_TOLERANCE: f64 = 0.05;
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            weld: Weld::DEFAULT,
+            units: None,
+            chord_tolerance: Self::DEFAULT_CHORD_TOLERANCE,
+        }
+    }
 }
 
 /// Options for renders (SVG, PNG). Ignored by the other formats.
@@ -75,8 +100,23 @@ pub struct Imported {
     pub network: Network,
     /// Welding figures, for formats that weld (OBJ, DXF).
     pub weld: Option<WeldStats>,
-    /// Records read but not part of a network, by kind (e.g. DXF "CIRCLE" → 3).
+    /// Records read but not part of a network, by kind (e.g. DXF "3DFACE" → 3).
     pub skipped: BTreeMap<String, usize>,
+    /// The unit the file was read in (DXF and OBJ), taken to millimetres.
+    pub units: Option<SourceUnits>,
+    /// Blocks inserted (DXF INSERT, each MINSERT cell and nested inserts counted).
+    pub inserts: usize,
+    /// What `--split-crossings` did, when asked.
+    pub split: Option<SplitStats>,
+}
+
+impl Imported {
+    /// The distance under which two points of this network are one: the weld tolerance used
+    /// when the format welds, never below 1e-9 of the bounding-box diagonal.
+    pub fn point_tolerance(&self) -> f64 {
+        let floor = 1e-9 * self.network.bbox().diagonal();
+        self.weld.map_or(floor, |w| w.tolerance.max(floor))
+    }
 }
 
 /// Reads a network, choosing the format by extension.

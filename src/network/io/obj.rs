@@ -2,15 +2,21 @@
 //! reader and writer, since tobj reads `l` records as faces.
 //!
 //! Read: `v x y z [w | r g b]`, `l i j k ...` (1-based, negative = relative, `i/t` allowed),
-//! `p` points, `\` line continuations. Groups, objects, materials, normals and texture
-//! coordinates are skipped. A face record is an error: that file is a mesh, not a network.
+//! `p` points, `\` line continuations, and free-form curves as Rhino exports them (`cstype
+//! [rat] bspline`, `deg`, `curv u0 u1 i j ...`, `parm u ...`, `end`), flattened within the chord
+//! tolerance (degree 1: the control polygon). Groups, objects, materials (an empty `usemtl`
+//! too), normals, texture coordinates and surfaces are skipped and counted. A face record is an
+//! error: that file is a mesh, not a network.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
 use std::path::Path;
 
 use glam::DVec3;
 
+use crate::geom::curves::Nurbs;
+
+use super::units::{LengthUnit, SourceUnits};
 use super::{Imported, ReadOptions};
 use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
 use crate::network::{weld, Network};
@@ -20,13 +26,65 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
+    let mut weights: Vec<f64> = Vec::new();
+    let mut free = FreeForm::default();
+    // Vertices that curves use as control points: not nodes unless a polyline uses them too.
+    let mut control: BTreeSet<u32> = BTreeSet::new();
+    // Flattened curves, added after every `v` is read so that vertex numbers stay the file's.
+    let mut curve_points: Vec<Vec<DVec3>> = Vec::new();
+    let tol = opts.chord_tolerance / opts.units.map_or(1.0, |u| u.mm());
     for (line_no, line) in logical_lines(&text) {
         let mut words = line.split_whitespace();
         let Some(keyword) = words.next() else {
             continue;
         };
         match keyword {
-            "v" => points.push(parse_vertex(path, line_no, words)?),
+            "v" => {
+                let (p, w) = parse_vertex(path, line_no, words)?;
+                points.push(p);
+                weights.push(w);
+            }
+            "cstype" | "deg" | "curv" | "parm" | "end" => {
+                let at = |msg: String| ReadError::line(path, line_no, msg);
+                let vertices = points.len();
+                let words: Vec<&str> = words.collect();
+                let refs = |ws: &[&str]| {
+                    ws.iter()
+                        .map(|w| vertex_ref(path, line_no, w, vertices))
+                        .collect::<Result<Vec<u32>, _>>()
+                };
+                match keyword {
+                    "cstype" => free.cstype(&words).map_err(at)?,
+                    "deg" => free.degree(&words).map_err(at)?,
+                    "curv" => {
+                        let (range, ids) = match words.as_slice() {
+                            [u0, u1, ids @ ..] if ids.len() >= 2 => ((*u0, *u1), refs(ids)?),
+                            _ => {
+                                return Err(
+                                    at("`curv` needs u0 u1 and two or more vertices".into()),
+                                )
+                            }
+                        };
+                        for &i in &ids {
+                            control.insert(i);
+                        }
+                        free.curve(range, ids, line_no).map_err(at)?;
+                    }
+                    "parm" => free.parm(&words).map_err(at)?,
+                    _ => {
+                        if let Some(curve) = free.end().map_err(at)? {
+                            let flat = curve
+                                .flatten(&points, &weights, tol)
+                                .map_err(|m| ReadError::line(path, curve.line, m))?;
+                            curve_points.push(flat);
+                        }
+                    }
+                }
+            }
+            "curv2" | "surf" | "trim" | "hole" | "scrv" | "sp" | "con" | "bmat" | "step"
+            | "ctech" | "stech" | "vp" => {
+                *skipped.entry(keyword.to_string()).or_default() += 1;
+            }
             "l" | "p" => {
                 let ids = words
                     .map(|w| vertex_ref(path, line_no, w, points.len()))
@@ -52,7 +110,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
                      (use it as a surface)",
                 ))
             }
-            "vn" | "vt" | "vp" | "o" | "g" | "s" | "mtllib" | "usemtl" => {
+            "vn" | "vt" | "o" | "g" | "s" | "mtllib" | "usemtl" => {
                 *skipped.entry(keyword.to_string()).or_default() += 1;
             }
             k if k.starts_with('#') => {}
@@ -62,11 +120,26 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
                     line_no,
                     format!(
                         "unsupported OBJ record `{}`",
-                        other.chars().take(20).collect::<String>()
+                        other.chars().take(20).collect::<String>().escape_debug()
                     ),
                 ))
             }
         }
+    }
+    if let Some(line) = free.open_curve() {
+        return Err(ReadError::line(
+            path,
+            line,
+            "`curv` without its closing `end`",
+        ));
+    }
+    for flat in curve_points {
+        let first = points.len() as u32;
+        segments.extend((1..flat.len() as u32).map(|k| (first + k - 1, first + k)));
+        points.extend(flat);
+    }
+    if !control.is_empty() {
+        drop_control_points(&mut points, &mut segments, &control);
     }
     if points.is_empty() {
         return Err(ReadError::file(
@@ -74,11 +147,37 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
             "no vertices (`v` records): nothing to read",
         ));
     }
+    let units = match opts.units {
+        Some(u) => SourceUnits::new(u, "--units", false),
+        None => SourceUnits::new(
+            LengthUnit::Mm,
+            "assumed: OBJ has no units; --units to say otherwise",
+            true,
+        ),
+    };
+    if units.scale_to_mm != 1.0 {
+        for p in &mut points {
+            *p *= units.scale_to_mm;
+        }
+        if let Some(bad) = points.iter().position(|p| !p.is_finite()) {
+            return Err(ReadError::file(
+                path,
+                format!(
+                    "vertex {} is out of range once taken from {} to mm",
+                    bad + 1,
+                    units.unit
+                ),
+            ));
+        }
+    }
     let (network, stats) = weld::assemble(&points, &segments, opts.weld);
     Ok(Imported {
         network,
         weld: Some(stats),
         skipped,
+        units: Some(units),
+        inserts: 0,
+        split: None,
     })
 }
 
@@ -103,23 +202,57 @@ fn logical_lines(text: &str) -> Vec<(usize, String)> {
     out
 }
 
+/// Removes the curves' control points that no segment uses, renumbering the rest.
+fn drop_control_points(
+    points: &mut Vec<DVec3>,
+    segments: &mut [(u32, u32)],
+    control: &BTreeSet<u32>,
+) {
+    let mut used = vec![false; points.len()];
+    for &(a, b) in segments.iter() {
+        used[a as usize] = true;
+        used[b as usize] = true;
+    }
+    let mut new_id = vec![u32::MAX; points.len()];
+    let mut kept = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        if used[i] || !control.contains(&(i as u32)) {
+            new_id[i] = kept.len() as u32;
+            kept.push(*p);
+        }
+    }
+    for s in segments.iter_mut() {
+        *s = (new_id[s.0 as usize], new_id[s.1 as usize]);
+    }
+    *points = kept;
+}
+
+/// A vertex and its weight (the fourth value when there are exactly four, else 1).
 fn parse_vertex<'a>(
     path: &Path,
     line: usize,
     words: impl Iterator<Item = &'a str>,
-) -> Result<DVec3, ReadError> {
+) -> Result<(DVec3, f64), ReadError> {
     let mut xyz = [0.0f64; 3];
     let mut count = 0;
+    let mut w4 = 1.0;
     for (i, w) in words.enumerate() {
-        let v: f64 = w
-            .parse()
-            .map_err(|_| ReadError::line(path, line, format!("vertex: `{w}` is not a number")))?;
+        let v: f64 = w.parse().map_err(|_| {
+            ReadError::line(
+                path,
+                line,
+                format!("vertex: `{}` is not a number", w.escape_debug()),
+            )
+        })?;
+        if i == 3 {
+            w4 = v;
+        }
         if i < 3 {
             if !v.is_finite() {
                 return Err(ReadError::line(
                     path,
                     line,
-                    format!("vertex: coordinate `{w}` is not finite"),
+                    format!("vertex: coordinate `{}` is not finite", w.escape_debug()),
                 ));
             }
             xyz[i] = v;
@@ -133,7 +266,122 @@ fn parse_vertex<'a>(
             format!("vertex needs three coordinates, found {count}"),
         ));
     }
-    Ok(DVec3::from_array(xyz))
+    Ok((DVec3::from_array(xyz), if count == 4 { w4 } else { 1.0 }))
+}
+
+/// The free-form curve state of an OBJ file: `cstype` and `deg` hold until changed; `curv`
+/// opens a curve that `parm u` gives knots and `end` closes.
+#[derive(Default)]
+struct FreeForm {
+    rational: bool,
+    bspline: bool,
+    degree: Option<usize>,
+    open: Option<Curve>,
+}
+
+struct Curve {
+    rational: bool,
+    degree: usize,
+    range: (f64, f64),
+    ids: Vec<u32>,
+    knots: Vec<f64>,
+    line: usize,
+}
+
+fn number(w: &str) -> Result<f64, String> {
+    w.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("`{}` is not a finite number", w.escape_debug()))
+}
+
+impl FreeForm {
+    fn cstype(&mut self, words: &[&str]) -> Result<(), String> {
+        let (rational, kind) = match words {
+            ["rat", kind] => (true, *kind),
+            [kind] => (false, *kind),
+            _ => return Err("`cstype` needs a type (`bspline` or `rat bspline`)".into()),
+        };
+        if kind != "bspline" {
+            return Err(format!(
+                "curve type `{}` is not read (only `bspline` and `rat bspline`, as Rhino writes)",
+                kind.escape_debug()
+            ));
+        }
+        self.rational = rational;
+        self.bspline = true;
+        Ok(())
+    }
+
+    fn degree(&mut self, words: &[&str]) -> Result<(), String> {
+        let d = words
+            .first()
+            .and_then(|w| w.parse::<usize>().ok())
+            .filter(|d| (1..=32).contains(d))
+            .ok_or("`deg` needs a degree from 1 to 32")?;
+        self.degree = Some(d);
+        Ok(())
+    }
+
+    fn curve(&mut self, range: (&str, &str), ids: Vec<u32>, line: usize) -> Result<(), String> {
+        if self.open.is_some() {
+            return Err("`curv` inside another curve (no `end` before it)".into());
+        }
+        if !self.bspline {
+            return Err("`curv` before `cstype bspline`".into());
+        }
+        let degree = self.degree.ok_or("`curv` before `deg`")?;
+        self.open = Some(Curve {
+            rational: self.rational,
+            degree,
+            range: (number(range.0)?, number(range.1)?),
+            ids,
+            knots: Vec::new(),
+            line,
+        });
+        Ok(())
+    }
+
+    fn parm(&mut self, words: &[&str]) -> Result<(), String> {
+        let curve = self.open.as_mut().ok_or("`parm` outside a curve")?;
+        match words {
+            ["u", knots @ ..] => {
+                curve.knots = knots.iter().map(|w| number(w)).collect::<Result<_, _>>()?;
+                Ok(())
+            }
+            _ => Err("`parm` needs `u` and the knots".into()),
+        }
+    }
+
+    fn end(&mut self) -> Result<Option<Curve>, String> {
+        Ok(self.open.take())
+    }
+
+    fn open_curve(&self) -> Option<usize> {
+        self.open.as_ref().map(|c| c.line)
+    }
+}
+
+impl Curve {
+    fn flatten(&self, points: &[DVec3], weights: &[f64], tol: f64) -> Result<Vec<DVec3>, String> {
+        let control: Vec<DVec3> = self.ids.iter().map(|&i| points[i as usize]).collect();
+        let w: Vec<f64> = self.ids.iter().map(|&i| weights[i as usize]).collect();
+        let curve = Nurbs {
+            degree: self.degree,
+            knots: &self.knots,
+            control: &control,
+            weights: self.rational.then_some(w.as_slice()),
+        };
+        let (lo, hi) = self.range;
+        let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+        let mut flat = curve
+            .flatten_range(tol, lo, hi)
+            .map_err(|e| format!("curve: {e}"))?;
+        if self.range.0 > self.range.1 {
+            flat.reverse();
+        }
+        Ok(flat)
+    }
 }
 
 /// Resolves an OBJ vertex reference (1-based, or negative from the end; `i/t` forms allowed)

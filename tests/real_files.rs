@@ -1,0 +1,191 @@
+//! Files as CAD, modelling and scanning tools write them (fixtures made by ezdxf, trimesh and
+//! by hand in Rhino's style): units, curves, blocks, Rhino OBJ quirks, multi-body and jittered
+//! STLs. Each with the outcome a designer would expect, in counts, millimetres and topology.
+
+mod common;
+
+use common::{fixture, lamina, stderr, TestResult};
+use serde_json::Value;
+
+fn info(args: &[&str]) -> Result<Value, Box<dyn std::error::Error>> {
+    let mut all = vec!["info", "--json"];
+    all.extend_from_slice(args);
+    let o = lamina(&all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    Ok(serde_json::from_slice(&o.stdout)?)
+}
+
+fn path(rel: &str) -> Result<String, Box<dyn std::error::Error>> {
+    Ok(fixture(rel).to_str().ok_or("utf-8 path")?.to_string())
+}
+
+fn close(a: &Value, b: f64, tol: f64) -> bool {
+    a.as_f64().is_some_and(|a| (a - b).abs() <= tol)
+}
+
+#[test]
+fn an_inch_drawing_comes_in_at_its_size_in_mm() -> TestResult {
+    let dxf = path("networks/ezdxf_curves_in.dxf")?;
+    let v = info(&[&dxf])?;
+    assert_eq!(v["import"]["source_units"]["unit"], "in");
+    assert_eq!(v["import"]["source_units"]["from"], "$INSUNITS = 1");
+    // The ellipse reaches x = 12 in; the plate starts at 0; the flange circle (radius 1.5 in
+    // about y = 6 in) tops out at 7.5 in, its polygon within the chord tolerance below.
+    assert!(close(&v["bbox"]["min"][0], 0.0, 1e-9), "{}", v["bbox"]);
+    assert!(
+        close(&v["bbox"]["max"][0], 12.0 * 25.4, 1e-9),
+        "{}",
+        v["bbox"]
+    );
+    assert!(
+        close(&v["bbox"]["max"][1], 7.5 * 25.4 - 0.025, 0.025),
+        "{}",
+        v["bbox"]
+    );
+    // --units overrides the header: the same numbers, read as millimetres.
+    let mm = info(&["--units", "mm", &dxf])?;
+    assert!(close(&mm["bbox"]["max"][0], 12.0, 1e-12), "{}", mm["bbox"]);
+    assert_eq!(mm["import"]["source_units"]["from"], "--units");
+    Ok(())
+}
+
+#[test]
+fn curves_and_blocks_become_polylines_with_their_topology() -> TestResult {
+    let v = info(&[&path("networks/ezdxf_curves_in.dxf")?])?;
+    // Plate, arc, circle, ellipse, two splines, the flange (its circle and four nested bolts),
+    // and a 2 x 3 MINSERT of bolts: 17 pieces; every closed curve is one cycle (14).
+    assert_eq!(v["components"], 17);
+    assert_eq!(v["cycles"], 14);
+    assert_eq!(v["import"]["inserts"], 1 + 4 + 6);
+    assert_eq!(v["import"]["skipped"]["TEXT"], 1);
+    assert_eq!(v["import"]["skipped"]["paper-space entity"], 1);
+    assert_eq!(v["problems"].as_array().map(Vec::len), Some(0));
+    // Every degree is 2, but for the three open curves' (arc, two splines) six ends.
+    assert_eq!(v["degree_histogram"][1], 6);
+    Ok(())
+}
+
+#[test]
+fn a_finer_chord_tolerance_gives_more_points_and_a_bad_one_is_refused() -> TestResult {
+    let dxf = path("networks/ezdxf_curves_in.dxf")?;
+    let coarse = info(&["--chord-tolerance", "0.5", &dxf])?;
+    let fine = info(&["--chord-tolerance", "0.005", &dxf])?;
+    let (c, f) = (coarse["nodes"].as_u64(), fine["nodes"].as_u64());
+    assert!(c.zip(f).is_some_and(|(c, f)| f > 2 * c), "{c:?} {f:?}");
+    assert_eq!(coarse["components"], fine["components"]);
+    for bad in ["0", "-1", "nan", "inf", "1e-300"] {
+        let o = lamina(&["info", &format!("--chord-tolerance={bad}"), &dxf]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--chord-tolerance"), "{}", stderr(&o));
+    }
+    let o = lamina(&["info", "--units", "furlong", &dxf]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("`furlong` is not a unit"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}
+
+#[test]
+fn convert_says_what_it_dropped_and_strict_refuses_it() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let dxf = path("networks/ezdxf_curves_in.dxf")?;
+    let out = dir.path().join("plate.json");
+    let out = out.to_str().ok_or("path")?;
+    let o = lamina(&["convert", &dxf, out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("not read: 1 TEXT, 1 paper-space entity"),
+        "{err}"
+    );
+    assert!(
+        err.contains("units in ($INSUNITS = 1), ×25.4 to mm"),
+        "{err}"
+    );
+    std::fs::remove_file(out)?;
+    let o = lamina(&["convert", "--strict", &dxf, out]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--strict"), "{}", stderr(&o));
+    assert!(!std::path::Path::new(out).exists(), "no output on refusal");
+    Ok(())
+}
+
+#[test]
+fn a_drawing_without_units_is_read_as_mm_and_says_so() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let bare = dir.path().join("bare.dxf");
+    // The smallest DXF many tools write: no header at all.
+    std::fs::write(
+        &bare,
+        "  0\nSECTION\n  2\nENTITIES\n  0\nLINE\n  8\n0\n 10\n0\n 20\n0\n 30\n0\n 11\n2\n 21\n0\n 31\n0\n  0\nENDSEC\n  0\nEOF\n",
+    )?;
+    let bare = bare.to_str().ok_or("path")?;
+    let v = info(&[bare])?;
+    assert_eq!(v["import"]["source_units"]["assumed"], true);
+    assert!(close(&v["bbox"]["max"][0], 2.0, 0.0));
+    let o = lamina(&["convert", bare, &format!("{bare}.json")]);
+    assert!(stderr(&o).contains("assumed"), "{}", stderr(&o));
+    Ok(())
+}
+
+#[test]
+fn rhino_curves_in_obj_are_read_as_polylines() -> TestResult {
+    let v = info(&[&path("networks/rhino_curves.obj")?])?;
+    // A degree-1 curve (3 segments), a cubic and a rational quarter circle: three pieces; the
+    // cubic's inner control points are not nodes.
+    assert_eq!(v["components"], 3);
+    assert_eq!(v["cycles"], 0);
+    assert_eq!(v["degree_histogram"][1], 6);
+    assert_eq!(v["import"]["skipped"]["usemtl"], 1);
+    assert!(close(&v["bbox"]["max"][0], 40.0, 1e-12));
+    Ok(())
+}
+
+#[test]
+fn a_rhino_box_written_face_by_face_is_one_closed_body() -> TestResult {
+    let obj = path("surfaces/rhino_box.obj")?;
+    let v = info(&[&obj])?;
+    assert_eq!(v["topology"]["vertices"], 8);
+    assert_eq!(v["topology"]["closed"], true);
+    assert_eq!(v["topology"]["genus"], 0);
+    assert!(close(&v["topology"]["volume"], 8000.0, 1e-9));
+    // Converting keeps the topology.
+    let dir = tempfile::tempdir()?;
+    let stl = dir.path().join("box.stl");
+    let stl = stl.to_str().ok_or("path")?;
+    let o = lamina(&["convert", &obj, stl]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let back = info(&[stl])?;
+    assert_eq!(back["topology"], v["topology"]);
+    Ok(())
+}
+
+#[test]
+fn every_solid_of_an_ascii_stl_is_read() -> TestResult {
+    let v = info(&[&path("surfaces/two_bodies.stl")?])?;
+    assert_eq!(v["import"]["bodies"], 2);
+    assert_eq!(v["topology"]["components"], 2);
+    assert_eq!(v["topology"]["closed"], true);
+    assert!(close(&v["topology"]["volume"], 2000.0, 1e-6));
+    Ok(())
+}
+
+#[test]
+fn jittered_cad_corners_read_open_and_weld_closed() -> TestResult {
+    let stl = path("surfaces/cad_jitter.stl")?;
+    let raw = info(&[&stl])?;
+    assert_eq!(raw["topology"]["closed"], false);
+    assert_eq!(raw["topology"]["boundary_edges"], 36);
+    // Area and volume are given whatever the mesh's problems.
+    assert!(close(&raw["topology"]["area"], 600.0, 0.01));
+    assert!(close(&raw["topology"]["signed_volume"], 1000.0, 0.01));
+    let welded = info(&["--weld", "1e-3", &stl])?;
+    assert_eq!(welded["topology"]["closed"], true);
+    assert_eq!(welded["topology"]["vertices"], 8);
+    assert_eq!(welded["topology"]["genus"], 0);
+    assert_eq!(welded["import"]["weld"]["merged"], 28);
+    Ok(())
+}
