@@ -51,10 +51,23 @@ pub fn parse_root(s: &str) -> Result<Root> {
     Ok(Root::Point(DVec3::new(x, y, z)))
 }
 
+/// A surface to grow on, without the degenerate triangles (said on stderr) that no surface
+/// query can use.
 pub fn read_surface(path: &Path) -> Result<TriMesh> {
-    let mesh = read_mesh(path)?;
+    let mut mesh = read_mesh(path)?;
+    let dropped = mesh.drop_degenerate();
     if mesh.triangles.is_empty() {
-        bail!("--surface {}: has no triangles", path.display());
+        bail!(
+            "--surface {}: has no triangles with an area ({dropped} degenerate)",
+            path.display()
+        );
+    }
+    if dropped > 0 {
+        eprintln!(
+            "lamina: --surface {}: {dropped} degenerate triangles (a vertex used twice or no \
+             area) left out",
+            path.display()
+        );
     }
     Ok(mesh)
 }

@@ -129,13 +129,17 @@ pub struct Nesting {
     pub sheets: usize,
 }
 
+/// The largest sheet side, margin or spacing: 100 m. jagua-rs works in f32, whose step at this
+/// size is 8 µm; far larger sizes lose the part shapes or overflow.
+pub const MAX_SHEET_MM: f64 = 1e5;
+
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum NestError {
-    #[error("the sheet must be a positive size, got {0} × {1} mm")]
+    #[error("the sheet must be a positive size of at most {MAX_SHEET_MM} mm a side, got {} × {} mm", short(*.0), short(*.1))]
     Sheet(f64, f64),
-    #[error("--margin must be ≥ 0 mm, got {0}")]
+    #[error("--margin must be from 0 to {MAX_SHEET_MM} mm, got {}", short(*.0))]
     Margin(f64),
-    #[error("--spacing must be ≥ 0 mm, got {0}")]
+    #[error("--spacing must be from 0 to {MAX_SHEET_MM} mm, got {}", short(*.0))]
     Spacing(f64),
     #[error("a margin of {0} mm leaves nothing of the sheet")]
     NoRoom(f64),
@@ -152,6 +156,15 @@ pub enum NestError {
     TooLarge(Vec<(usize, DVec2)>),
     #[error("part {0}: jagua-rs refused its shape: {1}")]
     Engine(usize, String),
+}
+
+/// A number as a person reads it: plain when moderate, in exponent form when huge or tiny.
+fn short(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e9).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 pub trait Nester {
@@ -235,13 +248,14 @@ pub fn grown_hull(outline: &[DVec2], d: f64) -> Vec<DVec2> {
 
 fn check(opts: &NestOptions) -> Result<(), NestError> {
     let s = opts.sheet;
-    if !(s.x.is_finite() && s.y.is_finite() && s.x > 0.0 && s.y > 0.0) {
+    let size = |v: f64| v > 0.0 && v <= MAX_SHEET_MM;
+    if !(size(s.x) && size(s.y)) {
         return Err(NestError::Sheet(s.x, s.y));
     }
-    if !(opts.margin.is_finite() && opts.margin >= 0.0) {
+    if !(opts.margin >= 0.0 && opts.margin <= MAX_SHEET_MM) {
         return Err(NestError::Margin(opts.margin));
     }
-    if !(opts.spacing.is_finite() && opts.spacing >= 0.0) {
+    if !(opts.spacing >= 0.0 && opts.spacing <= MAX_SHEET_MM) {
         return Err(NestError::Spacing(opts.spacing));
     }
     if 2.0 * opts.margin >= s.x.min(s.y) {

@@ -63,6 +63,11 @@ struct File {
     plates: Vec<Record>,
 }
 
+/// The thickest plate a file may hold: 1 m of steel is no plate.
+pub const MAX_THICKNESS: f64 = 1000.0;
+/// The largest plate coordinate: 100 m, as for sheets.
+pub const MAX_COORD: f64 = 1e5;
+
 pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
     let text = utf8_text(path, read_nonempty(path)?)?;
     check_format(
@@ -87,11 +92,15 @@ pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
         if r.group == 0 {
             return Err(bad("groups count from 1"));
         }
-        if !(r.thickness.is_finite() && r.thickness > 0.0) {
-            return Err(bad("thickness must be a positive number of mm"));
+        if !(r.thickness > 0.0 && r.thickness <= MAX_THICKNESS) {
+            return Err(bad(&format!(
+                "thickness must be a positive number of mm, at most {MAX_THICKNESS}"
+            )));
         }
-        if r.outline.len() < 3 || r.outline.iter().flatten().any(|v| !v.is_finite()) {
-            return Err(bad("the outline needs at least 3 points, all finite"));
+        if r.outline.len() < 3 || r.outline.iter().flatten().any(|v| !(v.abs() <= MAX_COORD)) {
+            return Err(bad(&format!(
+                "the outline needs at least 3 points, all finite and within {MAX_COORD:e} mm"
+            )));
         }
         if r.matrix.iter().flatten().any(|v| !v.is_finite()) {
             return Err(bad("the matrix holds a value that is not a finite number"));

@@ -82,6 +82,12 @@ pub enum LeafError {
          distance or fewer sources"
     )]
     TooManySources { what: String, count: u64 },
+    #[error(
+        "sources {spacing} mm apart on this blade's bounding box need {cells} grid cells, more \
+         than {max}: the blade is too large (or too thin) for that spacing",
+        max = super::poisson::MAX_GRID_CELLS
+    )]
+    TooFineForBlade { spacing: f64, cells: u64 },
     #[error("--placement random needs --sources N")]
     RandomNeedsCount,
     #[error("--murray must be a finite exponent ≥ 1, got {0}")]
@@ -151,6 +157,17 @@ impl LeafOptions {
                 count: count as u64,
             });
         }
+        let spacing = match self.sources {
+            Some(n) => (POISSON_FILL * outline.area() / n as f64).sqrt(),
+            None => min,
+        };
+        let cells = super::poisson::grid_cells(outline, spacing);
+        if !(cells <= super::poisson::MAX_GRID_CELLS) {
+            return Err(LeafError::TooFineForBlade {
+                spacing,
+                cells: cells as u64,
+            });
+        }
         if self.placement == Placement::Random && self.sources.is_none() {
             return Err(LeafError::RandomNeedsCount);
         }
@@ -209,6 +226,8 @@ pub fn grow_leaf(
     opts: &LeafOptions,
     observer: Option<Observer>,
 ) -> Result<Leaf, LeafError> {
+    // The growth options first: the initial blade that sources are placed in depends on them.
+    venation::check(&opts.growth)?;
     opts.check(outline)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let first = *roots.first().ok_or(VenationError::NoRoot)?;

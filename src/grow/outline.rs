@@ -49,7 +49,13 @@ pub enum OutlineError {
     SelfIntersecting(usize, usize),
     #[error("outline encloses no area")]
     Degenerate,
+    #[error("outline spans {0:e} mm, more than the {MAX_EXTENT:e} mm a blade may (wrong units?)")]
+    TooLarge(f64),
 }
+
+/// The largest extent of a blade outline: 10 km. Past that, coordinates are surely not
+/// millimetres, and grids over the blade would not fit in memory.
+pub const MAX_EXTENT: f64 = 1e7;
 
 /// A simple polygon, counter-clockwise, without a repeated closing point.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,12 +139,20 @@ impl Outline {
         if points.len() > 1 && points.first() == points.last() {
             points.pop();
         }
+        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+            return Err(OutlineError::NonFinite(i));
+        }
         points.dedup();
         if points.len() < 3 {
             return Err(OutlineError::TooFewPoints(points.len()));
         }
-        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
-            return Err(OutlineError::NonFinite(i));
+        let (lo, hi) = points.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        let extent = (hi - lo).max_element();
+        if !(extent <= MAX_EXTENT) {
+            return Err(OutlineError::TooLarge(extent));
         }
         let n = points.len();
         for i in 0..n {
@@ -159,7 +173,7 @@ impl Outline {
         let bands = Bands::new(&points);
         let mut outline = Outline { points, bands };
         let area = outline.signed_area();
-        if area.abs() < 1e-12 {
+        if !(area.abs() >= 1e-12) {
             return Err(OutlineError::Degenerate);
         }
         if area < 0.0 {

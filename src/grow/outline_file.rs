@@ -70,10 +70,8 @@ pub fn read_polygon(path: &Path, option: &'static str) -> Result<Outline, Outlin
         .into_iter()
         .filter(|l| l.len() >= 3)
         .max_by(|a, b| {
-            polygon_area(a)
-                .abs()
-                .partial_cmp(&polygon_area(b).abs())
-                .expect("finite areas")
+            // Non-finite areas order last and first; Outline::new refuses them.
+            polygon_area(a).abs().total_cmp(&polygon_area(b).abs())
         })
         .ok_or_else(|| content("holds no closed outline with 3 or more points".into()))?;
     Outline::new(best).map_err(|source| OutlineFileError::Shape {

@@ -12,6 +12,17 @@ pub const CANDIDATES: usize = 30;
 
 /// Samples the blade. `radius(p)` must lie in `[r_min, r_max]`, both > 0. The result depends
 /// only on the inputs and the state of `rng`.
+/// The most grid cells `sample` may allocate (4 bytes each): 400 MB.
+pub const MAX_GRID_CELLS: f64 = 1e8;
+
+/// Grid cells `sample` allocates for `outline` at spacing `r_min`; callers check it against
+/// `MAX_GRID_CELLS` first (a thin outline with a huge box needs far more cells than samples).
+pub fn grid_cells(outline: &Outline, r_min: f64) -> f64 {
+    let (lo, hi) = outline.bounds();
+    let cell = r_min / std::f64::consts::SQRT_2;
+    (((hi.x - lo.x) / cell).ceil() + 1.0) * (((hi.y - lo.y) / cell).ceil() + 1.0)
+}
+
 pub fn sample(
     outline: &Outline,
     r_min: f64,
@@ -20,6 +31,7 @@ pub fn sample(
     rng: &mut impl Rng,
 ) -> Vec<DVec2> {
     debug_assert!(r_min > 0.0 && r_max >= r_min);
+    debug_assert!(grid_cells(outline, r_min) <= MAX_GRID_CELLS);
     let (lo, hi) = outline.bounds();
     let cell = r_min / std::f64::consts::SQRT_2;
     let cols = ((hi.x - lo.x) / cell).ceil() as usize + 1;

@@ -324,7 +324,7 @@ pub fn grow_in<D: Domain>(
     Ok(g.finish())
 }
 
-fn check(opts: &VenationOptions) -> Result<(), VenationError> {
+pub(crate) fn check(opts: &VenationOptions) -> Result<(), VenationError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if !positive(opts.step) {
         return Err(VenationError::Step(opts.step));

@@ -65,8 +65,11 @@ impl<'a> SurfaceIndex<'a> {
         }
     }
 
-    /// None for a mesh without triangles.
+    /// None for a mesh without triangles, or a query that is not a finite point.
     pub fn closest(&self, p: DVec3) -> Option<Closest> {
+        if !p.is_finite() {
+            return None;
+        }
         let mut best: Option<Closest> = None;
         for (cand, box_d2) in self
             .tree
@@ -81,6 +84,10 @@ impl<'a> SurfaceIndex<'a> {
             let [a, b, c] = self.mesh.corners(&self.mesh.triangles[t as usize]);
             let (q, bary) = closest_on_triangle(p, a, b, c);
             let d = q.distance(p);
+            // A degenerate triangle can give no point at all.
+            if d.is_nan() {
+                continue;
+            }
             if best.is_none_or(|b| d < b.distance) {
                 best = Some(Closest {
                     point: q,

@@ -47,10 +47,40 @@ impl TriMesh {
     }
 }
 
+impl TriMesh {
+    /// Removes triangles that use a vertex twice or have no area (below (1e-12 × the bounding
+    /// box's diagonal)², on three distinct but collinear corners): they have no normal and no
+    /// closest point, so they must not reach a surface query. Returns how many were removed.
+    pub fn drop_degenerate(&mut self) -> usize {
+        let diag = self.bbox().diagonal();
+        let floor = (1e-12 * diag).powi(2);
+        let before = self.triangles.len();
+        let positions = &self.positions;
+        self.triangles.retain(|t| {
+            let distinct = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            let twice_area = (b - a).cross(c - a).length();
+            distinct && twice_area.is_finite() && twice_area > floor
+        });
+        before - self.triangles.len()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use glam::DVec3;
+
+    #[test]
+    fn degenerate_triangles_are_dropped() {
+        let mut m = TriMesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::X * 2.0],
+            triangles: vec![[0, 1, 2], [0, 0, 1], [0, 1, 3]],
+            colors: None,
+        };
+        assert_eq!(m.drop_degenerate(), 2);
+        assert_eq!(m.triangles, vec![[0, 1, 2]]);
+    }
 
     #[test]
     fn near_corners_join_and_collapsed_triangles_go() {
