@@ -97,7 +97,12 @@ pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
                 "thickness must be a positive number of mm, at most {MAX_THICKNESS}"
             )));
         }
-        if r.outline.len() < 3 || r.outline.iter().flatten().any(|v| !(v.abs() <= MAX_COORD)) {
+        if r.outline.len() < 3
+            || r.outline
+                .iter()
+                .flatten()
+                .any(|v| v.is_nan() || v.abs() > MAX_COORD)
+        {
             return Err(bad(&format!(
                 "the outline needs at least 3 points, all finite and within {MAX_COORD:e} mm"
             )));

@@ -162,7 +162,7 @@ impl LeafOptions {
             None => min,
         };
         let cells = super::poisson::grid_cells(outline, spacing);
-        if !(cells <= super::poisson::MAX_GRID_CELLS) {
+        if cells.is_nan() || cells > super::poisson::MAX_GRID_CELLS {
             return Err(LeafError::TooFineForBlade {
                 spacing,
                 cells: cells as u64,

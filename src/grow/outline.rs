@@ -151,7 +151,7 @@ impl Outline {
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         );
         let extent = (hi - lo).max_element();
-        if !(extent <= MAX_EXTENT) {
+        if extent.is_nan() || extent > MAX_EXTENT {
             return Err(OutlineError::TooLarge(extent));
         }
         let n = points.len();
@@ -173,7 +173,7 @@ impl Outline {
         let bands = Bands::new(&points);
         let mut outline = Outline { points, bands };
         let area = outline.signed_area();
-        if !(area.abs() >= 1e-12) {
+        if area.is_nan() || area.abs() < 1e-12 {
             return Err(OutlineError::Degenerate);
         }
         if area < 0.0 {
