@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod network;
 pub mod rationalize;
 pub mod report;
+pub mod text;
 
 pub use files::{ReadError, WriteError};
 pub use mesh::TriMesh;

@@ -84,6 +84,14 @@ impl From<()> for Within {
 }
 
 fn main() -> ExitCode {
+    // The DXF parser's panics on values it cannot take are caught and reported as the file's
+    // error; print nothing for them here. Every other panic is a bug and prints as usual.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if std::thread::current().name() != Some(lamina::network::io::dxf::PARSER_THREAD) {
+            default_hook(info);
+        }
+    }));
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info(args) => cli::info::run(args).map(Within::from),
@@ -93,7 +101,7 @@ fn main() -> ExitCode {
         Command::Veins(args) => cli::veins::run(*args).map(Within::from),
         Command::Lsystem(args) => cli::lsystem::run(*args).map(Within::from),
         Command::Bifurcate(args) => cli::bifurcate::run(*args).map(Within::from),
-        Command::Buds(args) => cli::buds::run(*args).map(Within::from),
+        Command::Buds(args) => cli::buds::run(*args).map(within),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),

@@ -59,14 +59,23 @@ pub struct Args {
     pub json: bool,
 }
 
-pub fn run(args: Args) -> Result<()> {
+/// Ok(false) when the form meets itself: its outputs are written (to look at), and the exit
+/// status is 1, as for a tolerance not met.
+pub fn run(args: Args) -> Result<bool> {
     let report = execute(&args)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_summary(&report);
     }
-    Ok(())
+    let meets = report["skin"]["self_intersections"].as_u64().unwrap_or(0);
+    if meets > 0 {
+        eprintln!(
+            "lamina: the form meets itself at {meets} triangle pairs (outputs written); try a \
+             larger --clearance"
+        );
+    }
+    Ok(meets == 0)
 }
 
 /// Grows, skins and writes; returns the report.
@@ -80,8 +89,11 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             bail!("-o {}: the form is written as .stl or .obj", o.display());
         }
     }
-    if !(args.cell_mm.is_finite() && args.cell_mm > 0.0) {
-        bail!("--cell-mm {} must be a positive length", args.cell_mm);
+    if !(1e-3..=1e4).contains(&args.cell_mm) {
+        bail!(
+            "--cell-mm {} must be a length from 0.001 to 10000 mm",
+            lamina::text::num(args.cell_mm)
+        );
     }
     if args.every == 0 {
         bail!("--every 0: give at least 1 cell between frames");
@@ -97,7 +109,9 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
     }
     let bar = progress(args.cells as u64);
-    let mut growth = Growth::new(&program, options, args.seed)?;
+    let in_program =
+        |e: lamina::grow::buds::BudError| anyhow::anyhow!("{}: {e}", args.program.display());
+    let mut growth = Growth::new(&program, options, args.seed).map_err(in_program)?;
     let mut next_frame = 0;
     let mut frames = 0;
     loop {
@@ -109,7 +123,7 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             }
         }
         bar.set_position(growth.cells() as u64);
-        if !growth.round()? {
+        if !growth.round().map_err(in_program)? {
             break;
         }
     }
@@ -138,13 +152,6 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             serde_json::to_writer_pretty(&mut *w, &report)?;
             Ok(())
         })?;
-    }
-    if skin_report.self_intersections > 0 {
-        bail!(
-            "the form meets itself at {} triangle pairs (outputs written); try a larger \
-             --clearance",
-            skin_report.self_intersections
-        );
     }
     Ok(report)
 }

@@ -74,6 +74,13 @@ pub struct Args {
     pub out: OutputArgs,
 }
 
+/// The most rewriting steps: the derivation's cost grows with them even for a word that does
+/// not (`F -> F`), and no drawn L-system needs more.
+pub const MAX_ITERATIONS: u32 = 1000;
+/// The largest `--max-symbols`: ten times the default's budget of time is the most a drawing
+/// should take.
+pub const MAX_MAX_SYMBOLS: u64 = 1_000_000_000;
+
 /// The grammar and settings from the file and the command line.
 struct Setup {
     grammar: Grammar,
@@ -98,10 +105,36 @@ fn setup(args: &Args) -> Result<Setup> {
             .collect::<Result<Vec<_>, _>>()?
     };
     let axiom = args.axiom.clone().or(file.axiom).unwrap_or_default();
-    let grammar = Grammar::new(&axiom, rules)?;
+    // Errors in what came from the grammar file name the file.
+    let from_file = |what: &str| match &args.grammar {
+        Some(path) => format!("{}: {what}", path.display()),
+        None => format!("--{what}"),
+    };
+    let grammar = Grammar::new(&axiom, rules).map_err(|e| {
+        let source = if args.grammar.is_some() && (args.rules.is_empty() || args.axiom.is_none()) {
+            from_file("grammar")
+        } else {
+            "--axiom/--rule".to_string()
+        };
+        anyhow::anyhow!("{source}: {e}")
+    })?;
     let Some(iterations) = args.iterations.or(file.iterations) else {
         bail!("give --iterations (or an `iterations:` line in the grammar file)");
     };
+    if iterations > MAX_ITERATIONS {
+        let source = if args.iterations.is_some() {
+            "--iterations".to_string()
+        } else {
+            from_file("iterations")
+        };
+        bail!("{source}: {iterations} iterations, more than {MAX_ITERATIONS} (each costs time even when the word does not grow)");
+    }
+    if args.max_symbols > MAX_MAX_SYMBOLS {
+        bail!(
+            "--max-symbols {}: at most {MAX_MAX_SYMBOLS}",
+            args.max_symbols
+        );
+    }
     let angle = match (args.angle, &file.angle) {
         (Some(a), _) => a,
         (None, Some(text)) => text.parse().map_err(|e: String| {

@@ -11,9 +11,10 @@ use serde_json::json;
 use super::venation::write_json;
 use lamina::fabricate::archive::{Job, Sl1Writer};
 use lamina::fabricate::estimate::{estimate, Estimate, Resin};
-use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer};
+use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer, SliceError};
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_triangles;
+use lamina::network::io::units::LengthUnit;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -80,6 +81,33 @@ pub struct Args {
     /// Print the estimate as JSON on stdout
     #[arg(long)]
     pub json: bool,
+    /// Scale every model by this factor before slicing (after --units)
+    #[arg(long, value_name = "F")]
+    pub scale: Option<f64>,
+    /// The unit the models are in (mm, cm, m, in, ft): taken to mm before slicing [default: mm]
+    #[arg(long, value_name = "UNIT")]
+    pub units: Option<String>,
+}
+
+/// The factor every model is scaled by: `--units` to mm, then `--scale`.
+fn model_scale(args: &Args) -> Result<f64> {
+    let unit = match &args.units {
+        None => 1.0,
+        Some(name) => LengthUnit::parse(name)
+            .with_context(|| {
+                format!(
+                    "--units: `{}` is not a unit lamina knows ({})",
+                    name.escape_debug(),
+                    LengthUnit::NAMES
+                )
+            })?
+            .mm(),
+    };
+    let scale = args.scale.unwrap_or(1.0);
+    if !(scale.is_finite() && (1e-6..=1e6).contains(&scale)) {
+        bail!("--scale must be a factor from 1e-6 to 1e6, got {scale}");
+    }
+    Ok(unit * scale)
 }
 
 fn printer(args: &Args) -> Result<Printer> {
@@ -127,7 +155,63 @@ fn printer(args: &Args) -> Result<Printer> {
         p.lift_speed_mm_min = v;
         p.retract_speed_mm_min = v;
     }
-    p.check()?;
+    p.check().map_err(|e| {
+        let given = |flag: &str| anyhow::anyhow!("{flag}: {e}");
+        match (&e, &args) {
+            (
+                SliceError::Printer {
+                    field: "layer_mm", ..
+                },
+                a,
+            ) if a.layer.is_some() => given("--layer"),
+            (
+                SliceError::Printer {
+                    field: "pixel_mm", ..
+                },
+                a,
+            ) if a.pixel.is_some() => given("--pixel"),
+            (
+                SliceError::Printer {
+                    field: "pixels_x", ..
+                },
+                a,
+            ) if a.resolution.is_some() => given("--resolution"),
+            (
+                SliceError::Printer {
+                    field: "exposure_s",
+                    ..
+                },
+                a,
+            ) if a.exposure.is_some() => given("--exposure"),
+            (
+                SliceError::Printer {
+                    field: "bottom_exposure_s",
+                    ..
+                },
+                a,
+            ) if a.bottom_exposure.is_some() => given("--bottom-exposure"),
+            (
+                SliceError::Printer {
+                    field: "bottom_layers",
+                    ..
+                },
+                a,
+            ) if a.bottom_layers.is_some() => given("--bottom-layers"),
+            (
+                SliceError::Printer {
+                    field: "lift_mm", ..
+                },
+                a,
+            ) if a.lift.is_some() => given("--lift"),
+            (SliceError::Printer { field: f, .. }, a)
+                if a.lift_speed.is_some() && f.ends_with("speed_mm_min") =>
+            {
+                given("--lift-speed")
+            }
+            _ if args.printer == "dmp-sl" => given("--printer dmp-sl"),
+            _ => given(&args.printer),
+        }
+    })?;
     Ok(p)
 }
 
@@ -152,9 +236,25 @@ pub fn run(args: Args) -> Result<()> {
     if !(args.gap.is_finite() && args.gap >= 0.0) {
         bail!("--gap must be a number of mm ≥ 0, got {}", args.gap);
     }
+    let scale = model_scale(&args)?;
     let mut models = Vec::with_capacity(args.models.len());
     for path in &args.models {
-        let mesh = read_triangles(path)?;
+        let mut mesh = read_triangles(path)?;
+        if scale != 1.0 {
+            for p in &mut mesh.positions {
+                *p *= scale;
+            }
+        }
+        let height = mesh.bbox().size().z;
+        if height < 10.0 * printer.layer_mm {
+            eprintln!(
+                "lamina: {}: only {:.1} layers tall ({height:.4} mm at {} mm layers): is it in \
+                 metres? give --units or --scale",
+                path.display(),
+                height / printer.layer_mm,
+                printer.layer_mm
+            );
+        }
         models.push(Model {
             path: path.clone(),
             mesh,

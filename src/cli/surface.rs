@@ -14,8 +14,7 @@ use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions
 use lamina::grow::venation::{Frame, Mode, Observer};
 use lamina::grow::{frames, murray};
 use lamina::mesh::io::{
-    check_render_size, read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3,
-    BACKGROUND, VEIN,
+    read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, BACKGROUND, VEIN,
 };
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
@@ -181,12 +180,10 @@ fn grow_with_frames(
     roots: &[Root],
     opts: &SurfaceOptions,
 ) -> Result<surface::SurfaceVeins> {
-    if args.frames.is_some() {
-        check_render_size(args.frame_size).map_err(|m| anyhow::anyhow!("--frame-size: {m}"))?;
-    }
-    let Some(dir) = frames_dir(args)? else {
+    let Some(frames) = frames_dir(args)? else {
         return Ok(grow_on_surface(mesh, roots, opts, None)?);
     };
+    let dir = frames.path;
     let mut failure: Option<anyhow::Error> = None;
     let mut write = |f: &Frame<DVec3>| {
         if failure.is_none() {
@@ -206,7 +203,10 @@ fn grow_with_frames(
     )?;
     match failure {
         Some(e) => Err(e),
-        None => Ok(veins),
+        None => {
+            frames.keep();
+            Ok(veins)
+        }
     }
 }
 

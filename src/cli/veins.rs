@@ -66,7 +66,16 @@ pub struct Args {
 /// Sources sampled when none are given.
 pub const DEFAULT_SOURCES: usize = 300;
 
+/// The most points `--smooth` adds per mesh edge of a vein.
+pub const MAX_SMOOTH: usize = 64;
+
 pub fn run(args: Args) -> Result<()> {
+    if args.smooth > MAX_SMOOTH {
+        bail!(
+            "--smooth {}: at most {MAX_SMOOTH} points per span",
+            args.smooth
+        );
+    }
     let mesh = read_surface(&args.surface)?;
     let ctx = || format!("--surface {}", args.surface.display());
     let graph = MeshGraph::new(&mesh);
@@ -86,6 +95,14 @@ pub fn run(args: Args) -> Result<()> {
         let want = args.sources.unwrap_or(DEFAULT_SOURCES);
         if want == 0 {
             bail!("--sources must be at least 1");
+        }
+        // Sources are vertices: more than the mesh has only repeats them, at a cost.
+        if want > mesh.positions.len() {
+            bail!(
+                "--sources {want}: {} has only {} vertices to be sources",
+                args.surface.display(),
+                mesh.positions.len()
+            );
         }
         let sampled = geodesic::sample_sources(&mesh, &graph, root, want, density, args.seed)
             .with_context(ctx)?;

@@ -16,6 +16,7 @@ use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::outline_file::read_outline;
 use lamina::grow::surface::Channel;
 use lamina::grow::venation::{BladeGrowth, Frame, Mode, Observer, VenationOptions};
+use lamina::mesh::io::check_render_size;
 use lamina::network::io::{write_network, RenderOptions};
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -348,17 +349,45 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The folder `--frames` names, made, after checking `--every`; none without `--frames`.
-pub fn frames_dir(args: &Args) -> Result<Option<&Path>> {
+/// The folder `--frames` names, made after checking `--every` and `--frame-size`; none
+/// without `--frames`. A folder this run made is removed again if the run fails (drop the guard
+/// without `keep`).
+pub fn frames_dir(args: &Args) -> Result<Option<FramesDir<'_>>> {
     let Some(dir) = &args.frames else {
         return Ok(None);
     };
     if args.every == 0 {
         bail!("--every must be at least 1");
     }
+    check_render_size(args.frame_size).map_err(|m| anyhow::anyhow!("--frame-size: {m}"))?;
+    let created = !dir.exists();
     std::fs::create_dir_all(dir)
         .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
-    Ok(Some(dir))
+    Ok(Some(FramesDir {
+        path: dir,
+        remove: created,
+    }))
+}
+
+/// The frames folder of a run; removed on drop when this run made it and did not finish.
+pub struct FramesDir<'a> {
+    pub path: &'a Path,
+    remove: bool,
+}
+
+impl FramesDir<'_> {
+    /// The run finished: the folder stays.
+    pub fn keep(mut self) {
+        self.remove = false;
+    }
+}
+
+impl Drop for FramesDir<'_> {
+    fn drop(&mut self) {
+        if self.remove {
+            let _ = std::fs::remove_dir_all(self.path);
+        }
+    }
 }
 
 /// Writes one frame's PNG (or the render's failure) into the frames folder.
@@ -370,9 +399,10 @@ pub fn save_frame(dir: &Path, step: usize, png: Result<Vec<u8>, String>) -> Resu
 }
 
 fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
-    let Some(dir) = frames_dir(args)? else {
+    let Some(frames) = frames_dir(args)? else {
         return Ok(grow_leaf(&s.outline, &s.roots, &s.opts, None)?);
     };
+    let dir = frames.path;
     let (lo, hi) = s.outline.bounds();
     let view = View {
         lo,
@@ -398,6 +428,7 @@ fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
     if let Some(e) = failure {
         return Err(e);
     }
+    frames.keep();
     Ok(leaf)
 }
 

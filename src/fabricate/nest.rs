@@ -44,6 +44,8 @@ use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
+use crate::text::num;
+
 /// Extra clearance added to half the spacing, mm: it absorbs jagua-rs's f32 arithmetic, so parts
 /// end up at least the spacing apart in exact arithmetic.
 pub const SLACK: f64 = 0.01;
@@ -135,11 +137,11 @@ pub const MAX_SHEET_MM: f64 = 1e5;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum NestError {
-    #[error("the sheet must be a positive size of at most {MAX_SHEET_MM} mm a side, got {} × {} mm", short(*.0), short(*.1))]
+    #[error("the sheet must be a positive size of at most {MAX_SHEET_MM} mm a side, got {} × {} mm", num(*.0), num(*.1))]
     Sheet(f64, f64),
-    #[error("--margin must be from 0 to {MAX_SHEET_MM} mm, got {}", short(*.0))]
+    #[error("--margin must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
     Margin(f64),
-    #[error("--spacing must be from 0 to {MAX_SHEET_MM} mm, got {}", short(*.0))]
+    #[error("--spacing must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
     Spacing(f64),
     #[error("a margin of {0} mm leaves nothing of the sheet")]
     NoRoom(f64),
@@ -156,15 +158,6 @@ pub enum NestError {
     TooLarge(Vec<(usize, DVec2)>),
     #[error("part {0}: jagua-rs refused its shape: {1}")]
     Engine(usize, String),
-}
-
-/// A number as a person reads it: plain when moderate, in exponent form when huge or tiny.
-fn short(v: f64) -> String {
-    if v == 0.0 || (1e-4..1e9).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
 }
 
 pub trait Nester {

@@ -38,6 +38,9 @@ pub struct DensityMap {
     pub channel: Channel,
 }
 
+/// The largest side of a density map, in pixels: 8192 × 8192 decodes to 256 MiB.
+pub const MAX_SIDE: u32 = 8192;
+
 impl DensityMap {
     pub fn read(path: &Path) -> Result<Self, DensityError> {
         let bytes = std::fs::read(path).map_err(|source| DensityError::Io {
@@ -51,6 +54,18 @@ impl DensityMap {
     }
 
     pub fn from_png(bytes: &[u8]) -> Result<Self, String> {
+        // The header's size, checked before the decoder allocates for it (a 65535 × 65535
+        // header, or a small zlib stream that inflates to gigabytes).
+        if bytes.len() >= 24 && bytes.starts_with(b"\x89PNG\r\n\x1a\n") && &bytes[12..16] == b"IHDR"
+        {
+            let w = u32::from_be_bytes([bytes[16], bytes[17], bytes[18], bytes[19]]);
+            let h = u32::from_be_bytes([bytes[20], bytes[21], bytes[22], bytes[23]]);
+            if w > MAX_SIDE || h > MAX_SIDE {
+                return Err(format!(
+                    "the image is {w} × {h} pixels; a density map may be at most {MAX_SIDE} a side"
+                ));
+            }
+        }
         let pixmap = tiny_skia::Pixmap::decode_png(bytes).map_err(|e| e.to_string())?;
         let (width, height) = (pixmap.width() as usize, pixmap.height() as usize);
         let pixels = pixmap.pixels();

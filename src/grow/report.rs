@@ -9,6 +9,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::network::Network;
 
@@ -122,8 +123,11 @@ impl Quality {
             format!("nodes: {}", degrees.join(", ")),
             format!("open tips: {}", self.open_tips),
             format!(
-                "joints other than Y or I: {}; sharp joints (< {SHARP_JOINT}°): {}; crossing edges: {}",
-                self.not_y_or_i, self.sharp_joints, self.crossings
+                "joints other than Y or I: {}; sharp joints (< {SHARP_JOINT}°): {}; crossing edges: {}{}",
+                self.not_y_or_i,
+                self.sharp_joints,
+                if self.crossings >= MAX_CROSSINGS { "at least " } else { "" },
+                self.crossings
             ),
             format!(
                 "zigzag index: {:.2}° mean turn along veins (max {:.1}°)",
@@ -135,7 +139,11 @@ impl Quality {
 
 type EdgeBox = GeomWithData<Rectangle<[f64; 2]>, u32>;
 
-/// Edge pairs that cross or touch other than at a shared node, in the XY projection.
+/// Crossings are counted up to this many: past it the drawing is broken whatever the count.
+pub const MAX_CROSSINGS: usize = 1_000_000;
+
+/// Edge pairs that cross or touch other than at a shared node, in the XY projection, counted
+/// up to `MAX_CROSSINGS`.
 fn crossings(net: &Network) -> usize {
     let n = net.nodes.len() as u32;
     let seg = |i: u32| {
@@ -158,24 +166,31 @@ fn crossings(net: &Network) -> usize {
             })
             .collect(),
     );
-    // Each edge counts its pairs with later edges; the queries run in parallel.
-    ids.par_iter()
-        .map(|&i| {
-            let (a, b) = seg(i);
-            let ei = &net.edges[i as usize];
-            let bx = AABB::from_corners(a.to_array(), b.to_array());
-            tree.locate_in_envelope_intersecting(&bx)
-                .filter(|other| {
-                    let j = other.data;
-                    let ej = &net.edges[j as usize];
-                    // Legs of one node overlap only if collinear and pointing the same way.
-                    let shared = [ej.a, ej.b].iter().any(|x| *x == ei.a || *x == ei.b);
-                    let (c, d) = seg(j);
-                    j > i && !shared && crate::geom::segments_touch(a, b, c, d)
-                })
-                .count()
-        })
-        .sum()
+    // Each edge counts its pairs with later edges; the queries run in parallel. A drawing that
+    // retraces itself (k copies of a segment make k² pairs) stops counting at the cap.
+    let found = AtomicUsize::new(0);
+    ids.par_iter().for_each(|&i| {
+        if found.load(Ordering::Relaxed) >= MAX_CROSSINGS {
+            return;
+        }
+        let (a, b) = seg(i);
+        let ei = &net.edges[i as usize];
+        let bx = AABB::from_corners(a.to_array(), b.to_array());
+        let here = tree
+            .locate_in_envelope_intersecting(&bx)
+            .filter(|other| {
+                let j = other.data;
+                let ej = &net.edges[j as usize];
+                // Legs of one node overlap only if collinear and pointing the same way.
+                let shared = [ej.a, ej.b].iter().any(|x| *x == ei.a || *x == ei.b);
+                let (c, d) = seg(j);
+                j > i && !shared && crate::geom::segments_touch(a, b, c, d)
+            })
+            .take(MAX_CROSSINGS)
+            .count();
+        found.fetch_add(here, Ordering::Relaxed);
+    });
+    found.into_inner().min(MAX_CROSSINGS)
 }
 
 #[cfg(test)]

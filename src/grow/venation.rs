@@ -134,6 +134,8 @@ const DART_TRIES: usize = 30;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum VenationError {
+    #[error("--sources-per-step {0}: at most {MAX_SOURCES_PER_STEP}")]
+    SourcesPerStep(usize),
     #[error("--step must be a positive distance in mm, got {0}")]
     Step(f64),
     #[error("--kill must be a positive distance in mm, got {0}")]
@@ -324,6 +326,9 @@ pub fn grow_in<D: Domain>(
     Ok(g.finish())
 }
 
+/// The most darts thrown per step; each costs index queries every step of the growth.
+pub const MAX_SOURCES_PER_STEP: usize = 10_000;
+
 pub(crate) fn check(opts: &VenationOptions) -> Result<(), VenationError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if !positive(opts.step) {
@@ -337,6 +342,9 @@ pub(crate) fn check(opts: &VenationOptions) -> Result<(), VenationError> {
     }
     if !(opts.join_angle > 0.0 && opts.join_angle <= 180.0) {
         return Err(VenationError::JoinAngle(opts.join_angle));
+    }
+    if opts.sources_per_step > MAX_SOURCES_PER_STEP {
+        return Err(VenationError::SourcesPerStep(opts.sources_per_step));
     }
     if opts.blade != BladeGrowth::None {
         if !(positive(opts.initial_scale) && opts.initial_scale <= 1.0) {

@@ -48,19 +48,22 @@ impl TriMesh {
 }
 
 impl TriMesh {
-    /// Removes triangles that use a vertex twice or have no area (below (1e-12 × the bounding
-    /// box's diagonal)², on three distinct but collinear corners): they have no normal and no
-    /// closest point, so they must not reach a surface query. Returns how many were removed.
+    /// Removes triangles that use a vertex twice or have no area (twice the area below 1e-12 of
+    /// the longest side squared: three corners on a line, whatever the scale): they have no
+    /// normal and no closest point, so they must not reach a surface query. Returns how many
+    /// were removed.
     pub fn drop_degenerate(&mut self) -> usize {
-        let diag = self.bbox().diagonal();
-        let floor = (1e-12 * diag).powi(2);
         let before = self.triangles.len();
         let positions = &self.positions;
         self.triangles.retain(|t| {
             let distinct = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
             let [a, b, c] = t.map(|i| positions[i as usize]);
             let twice_area = (b - a).cross(c - a).length();
-            distinct && twice_area.is_finite() && twice_area > floor
+            let longest = (b - a)
+                .length_squared()
+                .max((c - b).length_squared())
+                .max((a - c).length_squared());
+            distinct && twice_area.is_finite() && twice_area > 1e-12 * longest
         });
         before - self.triangles.len()
     }

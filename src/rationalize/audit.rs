@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::panels::{polygon_deviation, quad_metrics, QuadMetrics};
 use crate::files::{extension, ReadError};
-use crate::network::io::dxf::{lw_polyline, polyline};
+use crate::network::io::dxf::{load_drawing, lw_polyline, polyline};
 use crate::network::io::units::dxf_units;
 
 /// One audited polygon.
@@ -116,8 +116,7 @@ fn read_obj(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
 fn read_dxf(path: &Path) -> Result<Vec<Vec<DVec3>>, ReadError> {
     let bytes = crate::files::read_nonempty(path)?;
     let scale = dxf_units(&bytes, None).scale_to_mm;
-    let drawing = Drawing::load(&mut &bytes[..])
-        .map_err(|e| ReadError::file(path, format!("not a DXF lamina can read: {e}")))?;
+    let drawing = load_drawing(path, &bytes)?;
     let mut out = read_drawing(path, &drawing)?;
     if scale != 1.0 {
         for c in out.iter_mut().flatten() {

@@ -13,6 +13,7 @@ mod raster;
 
 use std::path::PathBuf;
 
+use crate::text::num;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
@@ -72,28 +73,32 @@ impl Printer {
         DVec2::new(self.pixels_x as f64, self.pixels_y as f64) * self.pixel_mm
     }
 
+    /// Every field in its range; an error names the field (`layer_mm`, …).
     pub fn check(&self) -> Result<(), SliceError> {
-        let positive = [
-            ("pixel_mm", self.pixel_mm),
-            ("layer_mm", self.layer_mm),
-            ("lift_speed_mm_min", self.lift_speed_mm_min),
-            ("retract_speed_mm_min", self.retract_speed_mm_min),
-            ("max_height_mm", self.max_height_mm),
+        let bad = |field: &'static str, msg: String| Err(SliceError::Printer { field, msg });
+        // (field, value, least, most): lengths from 1 µm, no machine needs more than the most.
+        let ranged = [
+            ("pixel_mm", self.pixel_mm, 1e-3, 10.0),
+            ("layer_mm", self.layer_mm, 1e-3, 10.0),
+            ("lift_speed_mm_min", self.lift_speed_mm_min, 1e-3, 1e5),
+            ("retract_speed_mm_min", self.retract_speed_mm_min, 1e-3, 1e5),
+            ("max_height_mm", self.max_height_mm, 1e-3, 1e4),
+            ("exposure_s", self.exposure_s, 0.0, 3600.0),
+            ("bottom_exposure_s", self.bottom_exposure_s, 0.0, 3600.0),
+            ("lift_mm", self.lift_mm, 0.0, 1000.0),
+            ("settle_s", self.settle_s, 0.0, 3600.0),
         ];
-        let non_negative = [
-            ("exposure_s", self.exposure_s),
-            ("bottom_exposure_s", self.bottom_exposure_s),
-            ("lift_mm", self.lift_mm),
-            ("settle_s", self.settle_s),
-        ];
-        for (what, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(SliceError::Printer(format!("{what} must be > 0, got {v}")));
-            }
-        }
-        for (what, v) in non_negative {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(SliceError::Printer(format!("{what} must be ≥ 0, got {v}")));
+        for (field, v, least, most) in ranged {
+            if !(least..=most).contains(&v) {
+                return bad(
+                    field,
+                    format!(
+                        "must be from {} to {}, got {}",
+                        num(least),
+                        num(most),
+                        num(v)
+                    ),
+                );
             }
         }
         if self.pixels_x == 0
@@ -101,10 +106,19 @@ impl Printer {
             || self.pixels_x > 16384
             || self.pixels_y > 16384
         {
-            return Err(SliceError::Printer(format!(
-                "the display must be 1..16384 pixels each way, got {} × {}",
-                self.pixels_x, self.pixels_y
-            )));
+            return bad(
+                "pixels_x",
+                format!(
+                    "the display must be 1..16384 pixels each way, got {} × {}",
+                    self.pixels_x, self.pixels_y
+                ),
+            );
+        }
+        if self.bottom_layers > MAX_LAYERS as u32 {
+            return bad(
+                "bottom_layers",
+                format!("must be at most {MAX_LAYERS}, got {}", self.bottom_layers),
+            );
         }
         Ok(())
     }
@@ -122,8 +136,15 @@ impl Printer {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SliceError {
-    #[error("printer: {0}")]
-    Printer(String),
+    #[error("printer {field}: {msg}")]
+    Printer { field: &'static str, msg: String },
+    #[error("{}: {height:.2} mm tall at {layer} mm layers is {layers} layers, more than {MAX_LAYERS}", path.display())]
+    TooManyLayers {
+        path: PathBuf,
+        height: f64,
+        layer: f64,
+        layers: f64,
+    },
     #[error("{}: the mesh has no triangles", .0.display())]
     Empty(PathBuf),
     #[error(
@@ -218,6 +239,15 @@ pub fn arrange(
                 path: m.path.clone(),
                 height: size.z,
                 max: printer.max_height_mm,
+            });
+        }
+        let layers = size.z / printer.layer_mm;
+        if layers > MAX_LAYERS as f64 {
+            return Err(SliceError::TooManyLayers {
+                path: m.path.clone(),
+                height: size.z,
+                layer: printer.layer_mm,
+                layers: layers.ceil(),
             });
         }
         let fits = |w: f64, h: f64| w <= area.x && h <= area.y;
@@ -482,6 +512,9 @@ impl LayerIndex {
         &self.triangles[self.start[i] as usize..self.start[i + 1] as usize]
     }
 }
+
+/// The most layers a job may have: 5 m at 0.05 mm. Each layer is a full display image.
+pub const MAX_LAYERS: usize = 100_000;
 
 /// How many layers the placed models need.
 pub fn layer_count(models: &[Model], printer: &Printer) -> usize {

@@ -31,6 +31,8 @@ const B: usize = 8;
 const P: usize = B + 1;
 /// Largest grid size along an axis: brick keys pack three 21-bit numbers.
 const MAX_POINTS: usize = (1 << 21) * B;
+/// The most (brick, shape) pairs: 16 bytes each, 800 MB.
+const MAX_PAIRS: usize = 50_000_000;
 
 #[derive(Debug, thiserror::Error)]
 pub enum MarchError {
@@ -38,6 +40,11 @@ pub enum MarchError {
     TooFine(usize, usize, usize),
     #[error("the mesh would have {0} vertices, more than a 32-bit index holds; use a larger cell")]
     TooManyVertices(usize),
+    #[error(
+        "the shapes' boxes cover {0} grid bricks at this cell size, more than {MAX_PAIRS}: a \
+         node far from the rest, or a cell far too small for the network; use a larger cell"
+    )]
+    TooManyBricks(u128),
     #[error("internal meshing error: {0}")]
     Internal(String),
 }
@@ -127,8 +134,22 @@ pub fn mesh_union(
     let grid = Grid { origin, h, points };
     let nb = grid.bricks();
 
-    // Every brick a primitive's grown box reaches, with that primitive.
-    let mut pairs: Vec<(u64, u32)> = Vec::new();
+    // Every brick a primitive's grown box reaches, with that primitive: counted first, so a
+    // long diagonal member or a tiny cell is refused before the list is allocated.
+    let reach = |a: DVec3, b: DVec3| {
+        point_range(&grid, a - DVec3::splat(band), b + DVec3::splat(band)).map(|(i0, i1)| {
+            let (lo, hi) = (i0.saturating_sub(1) / B, i1 / B);
+            (hi.saturating_sub(lo) + 1) as u128
+        })
+    };
+    let total: u128 = bounds
+        .iter()
+        .map(|&(a, b)| reach(a, b).iter().product::<u128>())
+        .sum();
+    if total > MAX_PAIRS as u128 {
+        return Err(MarchError::TooManyBricks(total));
+    }
+    let mut pairs: Vec<(u64, u32)> = Vec::with_capacity(total as usize);
     for (k, &(a, b)) in bounds.iter().enumerate() {
         let first = point_range(&grid, a - DVec3::splat(band), b + DVec3::splat(band));
         let [(x0, x1), (y0, y1), (z0, z1)] = first.map(|(i0, i1)| {

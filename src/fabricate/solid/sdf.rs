@@ -17,6 +17,25 @@ pub enum Primitive {
 }
 
 impl Primitive {
+    /// The area of the shape's surface, or more (caps counted whole).
+    pub fn area_bound(&self) -> f64 {
+        use std::f64::consts::PI;
+        match self {
+            Primitive::Cone(c) => {
+                let (r0, r1) = (c.ra, c.rb);
+                PI * (r0 + r1) * (c.a.distance(c.b) + (r0 - r1).abs())
+                    + 4.0 * PI * r0.max(r1).powi(2)
+            }
+            Primitive::Prism(s) => {
+                let (lo, hi) = self.bounds();
+                let size = hi - lo;
+                // Two faces no larger than the box's, sides no longer than the outline's.
+                2.0 * size.x * size.y + s.outline.perimeter() * (s.z1 - s.z0)
+            }
+            Primitive::Cylinder(c) => 2.0 * PI * c.radius * (c.height.abs() + c.radius),
+        }
+    }
+
     /// Signed distance at `p`; values beyond `reach` may be reported as `±reach` (the sign is
     /// always right).
     pub fn eval(&self, p: DVec3, reach: f64) -> f64 {
@@ -166,6 +185,16 @@ pub struct Polygon {
     /// CSR: edges whose y-range meets bucket row r are `row_edges[row_start[r]..row_start[r + 1]]`.
     row_start: Vec<u32>,
     row_edges: Vec<u32>,
+}
+
+impl Polygon {
+    /// The outline's length.
+    pub fn perimeter(&self) -> f64 {
+        let n = self.points.len();
+        (0..n)
+            .map(|i| self.points[i].distance(self.points[(i + 1) % n]))
+            .sum()
+    }
 }
 
 impl Polygon {

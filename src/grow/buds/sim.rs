@@ -170,7 +170,14 @@ pub struct Growth<'p> {
     last_global: usize,
     timeline: Vec<Sample>,
     stopped_by: Option<String>,
+    /// Rounds in a row in which the form did not change (no division, hole or split) and no
+    /// bud slept.
+    idle: u64,
 }
+
+/// Rounds without a change to the form (and nobody asleep) after which a program is taken to
+/// never grow: buds that only create buds, forever.
+pub const MAX_IDLE_ROUNDS: u64 = 10_000;
 
 const START_COLOUR: [f32; 3] = [0.85, 0.82, 0.76];
 
@@ -225,6 +232,7 @@ impl<'p> Growth<'p> {
             last_global: 4,
             timeline: Vec::new(),
             stopped_by: None,
+            idle: 0,
         };
         g.add_bud(0, 0, None);
         g.sample();
@@ -261,15 +269,30 @@ impl<'p> Growth<'p> {
             return Ok(false);
         }
         let n = self.buds.len();
+        let before = (self.graph.len(), self.divisions, self.holes);
+        let mut slept = false;
         for b in 0..n {
             if self.graph.len() >= self.options.max_cells {
                 break;
             }
             if self.buds[b].state == State::Live {
+                slept |= self.buds[b].sleeping > 0;
                 self.turn(b)?;
             }
         }
         self.rounds += 1;
+        if (self.graph.len(), self.divisions, self.holes) == before && !slept {
+            self.idle += 1;
+            if self.idle >= MAX_IDLE_ROUNDS {
+                return Err(BudError::Options(format!(
+                    "{} live buds ran {MAX_IDLE_ROUNDS} rounds without dividing a cell: the \
+                     program never grows (a bud that only creates buds?)",
+                    self.live_buds()
+                )));
+            }
+        } else {
+            self.idle = 0;
+        }
         if self.graph.len() >= self.last_global + self.last_global / GLOBAL_EVERY {
             self.relax_all(1);
             self.last_global = self.graph.len();

@@ -147,17 +147,19 @@ fn parse_parts(path: &Path, parts: &[Part]) -> Result<Vec<Drawing>, ReadError> {
         let handles: Vec<_> = parts
             .iter()
             .map(|part| {
-                scope.spawn(|| {
-                    Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))
-                })
+                std::thread::Builder::new()
+                    .name(PARSER_THREAD.into())
+                    .spawn_scoped(scope, || {
+                        Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))
+                    })
             })
             .collect();
         handles
             .into_iter()
-            .map(|h| {
-                h.join().unwrap_or_else(|_| {
-                    Err((None, ReadError::file(path, "DXF parser thread failed")))
-                })
+            .map(|h| match h.map(|h| h.join()) {
+                Ok(Ok(parsed)) => parsed,
+                Ok(Err(panic)) => Err((None, parser_panic(path, panic))),
+                Err(e) => Err((None, ReadError::io(path, e))),
             })
             .collect()
     });
@@ -183,6 +185,46 @@ fn parse_parts(path: &Path, parts: &[Part]) -> Result<Vec<Drawing>, ReadError> {
         Some((_, e)) => Err(e),
         None => Ok(drawings),
     }
+}
+
+/// The name of the threads that run the `dxf` crate's parser. A value it cannot take (a header
+/// date of 1e12 days overflows its date arithmetic) makes it panic; the panic is caught and
+/// reported as this file's error, and the CLI's panic hook keeps quiet for threads of this name.
+pub const PARSER_THREAD: &str = "lamina-dxf-parser";
+
+/// Loads a whole drawing on a parser thread, the crate's panics turned into errors.
+pub(crate) fn load_drawing(path: &Path, bytes: &[u8]) -> Result<Drawing, ReadError> {
+    let part = Part::whole(bytes);
+    std::thread::scope(|scope| {
+        let handle = std::thread::Builder::new()
+            .name(PARSER_THREAD.into())
+            .spawn_scoped(scope, || {
+                Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, &part).1)
+            })
+            .map_err(|e| ReadError::io(path, e))?;
+        handle.join().map_err(|panic| parser_panic(path, panic))?
+    })
+}
+
+/// The error for a panic inside the `dxf` crate, with its message.
+fn parser_panic(path: &Path, panic: Box<dyn std::any::Any + Send>) -> ReadError {
+    let what = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".into());
+    let hint = if what.contains("TimeDelta") || what.contains("date") {
+        " (a header date such as $TDUPDATE is out of range)"
+    } else {
+        ""
+    };
+    ReadError::file(
+        path,
+        format!(
+            "not a readable DXF: the parser failed on a value: {}{hint}",
+            what.escape_debug()
+        ),
+    )
 }
 
 /// The error for the file, with the file line it is on (when the parser gave one).

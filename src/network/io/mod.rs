@@ -5,7 +5,7 @@
 //! Softer problems (repeated edges, self-loops) are kept for `Network::validate` to report.
 //! Writers refuse a network with such hard problems and write through `files::write_atomic`.
 
-pub(crate) mod dxf;
+pub mod dxf;
 mod dxf_entities;
 mod dxf_split;
 pub(crate) mod dxf_write;
