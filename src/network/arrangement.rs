@@ -8,6 +8,7 @@
 use std::collections::HashSet;
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
@@ -142,73 +143,86 @@ fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
             .map(|(i, p)| GeomWithData::new([p.x, p.y], i as u32))
             .collect(),
     );
-    let mut defects = Vec::new();
-    let mut cuts = Vec::new();
-    for (k, e) in net.edges.iter().enumerate() {
-        if e.a == e.b {
-            continue;
-        }
-        let k = k as u32;
-        let (a, b) = flat.seg(e);
-        let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
-        let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
-        // Nodes on this edge.
-        let mut on: Vec<(u32, f64)> = points
-            .locate_in_envelope(&env)
-            .filter(|p| p.data != e.a && p.data != e.b)
-            .filter_map(|p| {
-                let q = flat.pts[p.data as usize];
-                interior_param(a, b, q, tol).map(|t| (p.data, t))
-            })
-            .collect();
-        on.sort_by_key(|&(n, _)| n);
-        for (n, t) in on {
-            let at = net.nodes[n as usize].p;
-            defects.push(Defect::TJunction {
-                node: n,
-                edge: k,
-                at: at.to_array(),
-            });
-            cuts.push(Cut {
-                edge: k,
-                t,
-                node: Some(n),
-                at,
-            });
-        }
-        // Proper crossings with later edges (each pair once).
-        let mut others: Vec<u32> = tree
-            .locate_in_envelope_intersecting(&env)
-            .map(|g| g.data)
-            .filter(|&j| j > k)
-            .collect();
-        others.sort_unstable();
-        for j in others {
-            let f = &net.edges[j as usize];
-            if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
-                continue;
+    // Each edge's T-junctions and its crossings with later edges, found in parallel and joined
+    // in edge order.
+    let per_edge: Vec<(Vec<Defect>, Vec<Cut>)> = (0..net.edges.len())
+        .into_par_iter()
+        .map(|k| {
+            let e = &net.edges[k];
+            let mut defects = Vec::new();
+            let mut cuts = Vec::new();
+            if e.a == e.b {
+                return (defects, cuts);
             }
-            let (c, d) = flat.seg(f);
-            if let Some((t, s)) = crossing(a, b, c, d, tol) {
-                let at = to3(a + (b - a) * t);
-                defects.push(Defect::Crossing {
-                    edges: [k, j],
+            let k = k as u32;
+            let (a, b) = flat.seg(e);
+            let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
+            let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
+            // Nodes on this edge.
+            let mut on: Vec<(u32, f64)> = points
+                .locate_in_envelope(&env)
+                .filter(|p| p.data != e.a && p.data != e.b)
+                .filter_map(|p| {
+                    let q = flat.pts[p.data as usize];
+                    interior_param(a, b, q, tol).map(|t| (p.data, t))
+                })
+                .collect();
+            on.sort_by_key(|&(n, _)| n);
+            for (n, t) in on {
+                let at = net.nodes[n as usize].p;
+                defects.push(Defect::TJunction {
+                    node: n,
+                    edge: k,
                     at: at.to_array(),
                 });
                 cuts.push(Cut {
                     edge: k,
                     t,
-                    node: None,
-                    at,
-                });
-                cuts.push(Cut {
-                    edge: j,
-                    t: s,
-                    node: None,
+                    node: Some(n),
                     at,
                 });
             }
-        }
+            // Proper crossings with later edges (each pair once).
+            let mut others: Vec<u32> = tree
+                .locate_in_envelope_intersecting(&env)
+                .map(|g| g.data)
+                .filter(|&j| j > k)
+                .collect();
+            others.sort_unstable();
+            for j in others {
+                let f = &net.edges[j as usize];
+                if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
+                    continue;
+                }
+                let (c, d) = flat.seg(f);
+                if let Some((t, s)) = crossing(a, b, c, d, tol) {
+                    let at = to3(a + (b - a) * t);
+                    defects.push(Defect::Crossing {
+                        edges: [k, j],
+                        at: at.to_array(),
+                    });
+                    cuts.push(Cut {
+                        edge: k,
+                        t,
+                        node: None,
+                        at,
+                    });
+                    cuts.push(Cut {
+                        edge: j,
+                        t: s,
+                        node: None,
+                        at,
+                    });
+                }
+            }
+            (defects, cuts)
+        })
+        .collect();
+    let mut defects = Vec::new();
+    let mut cuts = Vec::new();
+    for (d, c) in per_edge {
+        defects.extend(d);
+        cuts.extend(c);
     }
     Some((defects, cuts))
 }
