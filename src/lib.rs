@@ -5,6 +5,7 @@
 
 pub mod fabricate;
 pub mod files;
+pub mod fuzz;
 pub mod geom;
 pub mod grow;
 pub mod mesh;

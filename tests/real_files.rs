@@ -189,3 +189,38 @@ fn jittered_cad_corners_read_open_and_weld_closed() -> TestResult {
     assert_eq!(welded["import"]["weld"]["merged"], 28);
     Ok(())
 }
+
+#[test]
+fn growth_on_several_bodies_needs_a_root_on_each_and_says_so() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let stl = path("surfaces/two_bodies.stl")?;
+    let one = dir.path().join("one.json");
+    let one = one.to_str().ok_or("path")?;
+    let o = lamina(&["venation", "--surface", &stl, "--sources", "200", "-o", one]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("1 of its 2 bodies have no root"),
+        "{}",
+        stderr(&o)
+    );
+    let both = dir.path().join("both.json");
+    let both = both.to_str().ok_or("path")?;
+    let o = lamina(&[
+        "venation",
+        "--surface",
+        &stl,
+        "--sources",
+        "200",
+        "--root",
+        "0,0,-5",
+        "--root",
+        "30,0,-5",
+        "-o",
+        both,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("no root"), "{}", stderr(&o));
+    assert_eq!(info(&[both])?["components"], 2);
+    assert_eq!(info(&[one])?["components"], 1);
+    Ok(())
+}

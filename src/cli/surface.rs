@@ -120,6 +120,17 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
     opts.seed = args.seed;
     let veins = grow_with_frames(args, &mesh, &roots, &opts)
         .with_context(|| format!("--surface {}", path.display()))?;
+    let u = veins.quality.unrooted;
+    if u.bodies_without_root > 0 {
+        eprintln!(
+            "lamina: --surface {}: {} of its {} bodies have no root, so growth cannot reach \
+             them: {} sources there left out (give a --root on each body to grow on it)",
+            path.display(),
+            u.bodies_without_root,
+            u.bodies,
+            u.sources_left_out
+        );
+    }
     let mut net = veins.network;
     net.meta
         .parameters

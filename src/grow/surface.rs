@@ -369,6 +369,8 @@ impl Domain for Surface<'_> {
 pub struct SurfaceQuality {
     #[serde(flatten)]
     pub quality: Quality,
+    /// Bodies (connected pieces) of the mesh, and what growth left out on those without a root.
+    pub unrooted: Unrooted,
     pub sources_placed: usize,
     pub sources_left: usize,
     /// The mesh's bounding-box diagonal, mm.
@@ -424,6 +426,20 @@ pub fn grow_on_surface(
     let roots = root_points(mesh, &surface, roots)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let sources = poisson(&surface, &mut rng);
+    // Growth stays on the body it starts on: sources on a body without a root are left out.
+    let bodies = Bodies::new(mesh);
+    let rooted: std::collections::BTreeSet<u32> =
+        roots.iter().filter_map(|p| bodies.of(*p)).collect();
+    let before = sources.len();
+    let sources: Vec<DVec3> = sources
+        .into_iter()
+        .filter(|p| bodies.of(*p).is_some_and(|b| rooted.contains(&b)))
+        .collect();
+    let unrooted = Unrooted {
+        bodies: bodies.count,
+        bodies_without_root: bodies.count - rooted.len(),
+        sources_left_out: before - sources.len(),
+    };
     let (growth, surface) =
         venation::grow_in(surface, &roots, &sources, &opts.growth, &mut rng, observer)?;
     let size = mesh.bbox().diagonal();
@@ -462,6 +478,7 @@ pub fn grow_on_surface(
     quality.crossings = crossings(&network, surface.touch);
     let quality = SurfaceQuality {
         quality,
+        unrooted,
         sources_placed: growth.sources_placed,
         sources_left: growth.sources_left,
         mesh_size: size,
@@ -551,6 +568,64 @@ pub fn lowest_vertex(mesh: &TriMesh) -> Option<u32> {
                 .unwrap_or(std::cmp::Ordering::Equal)
         })
         .map(|v| v as u32)
+}
+
+/// The mesh's bodies and the sources placed on bodies no root is on (growth cannot reach them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Unrooted {
+    pub bodies: usize,
+    pub bodies_without_root: usize,
+    pub sources_left_out: usize,
+}
+
+/// The body (connected piece of triangles) of each used vertex, and a point's body by its
+/// nearest vertex.
+struct Bodies {
+    label: Vec<u32>,
+    count: usize,
+    tree: rstar::RTree<rstar::primitives::GeomWithData<[f64; 3], u32>>,
+}
+
+impl Bodies {
+    fn new(mesh: &TriMesh) -> Self {
+        let n = mesh.positions.len();
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        for t in &mesh.triangles {
+            crate::mesh::union(&mut parent, t[0], t[1]);
+            crate::mesh::union(&mut parent, t[0], t[2]);
+        }
+        let used = used_vertices(mesh);
+        let mut label = vec![u32::MAX; n];
+        let mut count = 0usize;
+        let mut root_label = std::collections::HashMap::new();
+        for v in 0..n {
+            if used[v] {
+                let r = crate::mesh::find(&mut parent, v as u32);
+                label[v] = *root_label.entry(r).or_insert_with(|| {
+                    count += 1;
+                    count as u32 - 1
+                });
+            }
+        }
+        let tree = rstar::RTree::bulk_load(
+            (0..n)
+                .filter(|&v| used[v])
+                .map(|v| {
+                    rstar::primitives::GeomWithData::new(mesh.positions[v].to_array(), v as u32)
+                })
+                .collect(),
+        );
+        Bodies { label, count, tree }
+    }
+
+    fn of(&self, p: DVec3) -> Option<u32> {
+        if !p.is_finite() {
+            return None;
+        }
+        self.tree
+            .nearest_neighbor(&p.to_array())
+            .map(|g| self.label[g.data as usize])
+    }
 }
 
 /// Root positions on the surface; the lowest vertex on a triangle when none are given.

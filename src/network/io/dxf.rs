@@ -17,7 +17,7 @@ use glam::DVec3;
 
 use super::dxf_entities::{collect, from_ocs, ocs_axes, Collected, Context, MAX_POINTS};
 use super::dxf_split::Part;
-use super::units::dxf_units;
+use super::units::{dxf_units, scale_to_mm};
 use super::{Imported, ReadOptions};
 use crate::files::{read_nonempty, write_atomic, ReadError, WriteError};
 use crate::network::{weld, Network};
@@ -114,19 +114,14 @@ pub(super) fn read_bytes(
             ),
         ));
     }
-    if units.scale_to_mm != 1.0 {
-        for p in &mut points {
-            *p *= units.scale_to_mm;
-        }
-        if let Some(bad) = points.iter().position(|p| !p.is_finite()) {
-            return Err(ReadError::file(
-                path,
-                format!(
-                    "point {bad} is out of range once taken from {} to mm",
-                    units.unit
-                ),
-            ));
-        }
+    if let Err(bad) = scale_to_mm(&mut points, &units) {
+        return Err(ReadError::file(
+            path,
+            format!(
+                "point {bad} is out of range once taken from {} to mm",
+                units.unit
+            ),
+        ));
     }
     let (network, stats) = weld::assemble(&points, &segments, opts.weld);
     Ok(Imported {

@@ -433,10 +433,21 @@ fn lw_polyline(pl: &LwPolyline, elevation: f64, tol: f64) -> Result<Vec<DVec3>, 
         .iter()
         .map(|v| (DVec2::new(v.x, v.y), v.bulge))
         .collect();
-    let flat = bulged(&v, pl.is_closed(), tol)?;
+    in_world(&v, pl.is_closed(), tol, &axes, elevation)
+}
+
+/// Bulged OCS vertices at `elevation`, flattened and taken to world coordinates.
+fn in_world(
+    v: &[(DVec2, f64)],
+    closed: bool,
+    tol: f64,
+    axes: &[DVec3; 3],
+    elevation: f64,
+) -> Result<Vec<DVec3>, String> {
+    let flat = bulged(v, closed, tol)?;
     Ok(flat
         .iter()
-        .map(|p| from_ocs(&axes, p.x, p.y, elevation))
+        .map(|p| from_ocs(axes, p.x, p.y, elevation))
         .collect())
 }
 
@@ -459,11 +470,7 @@ fn polyline(pl: &Polyline, tol: f64) -> Result<Vec<DVec3>, String> {
         .iter()
         .map(|v| (DVec2::new(v.location.x, v.location.y), v.bulge))
         .collect();
-    let flat = bulged(&v, pl.is_closed(), tol)?;
-    Ok(flat
-        .iter()
-        .map(|p| from_ocs(&axes, p.x, p.y, elevation))
-        .collect())
+    in_world(&v, pl.is_closed(), tol, &axes, elevation)
 }
 
 fn spline(s: &Spline, tol: f64) -> Result<Vec<DVec3>, String> {

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use crate::geom::curves::Nurbs;
 
-use super::units::{LengthUnit, SourceUnits};
+use super::units::{scale_to_mm, LengthUnit, SourceUnits};
 use super::{Imported, ReadOptions};
 use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
 use crate::network::{weld, Network};
@@ -155,20 +155,15 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
             true,
         ),
     };
-    if units.scale_to_mm != 1.0 {
-        for p in &mut points {
-            *p *= units.scale_to_mm;
-        }
-        if let Some(bad) = points.iter().position(|p| !p.is_finite()) {
-            return Err(ReadError::file(
-                path,
-                format!(
-                    "vertex {} is out of range once taken from {} to mm",
-                    bad + 1,
-                    units.unit
-                ),
-            ));
-        }
+    if let Err(bad) = scale_to_mm(&mut points, &units) {
+        return Err(ReadError::file(
+            path,
+            format!(
+                "vertex {} is out of range once taken from {} to mm",
+                bad + 1,
+                units.unit
+            ),
+        ));
     }
     let (network, stats) = weld::assemble(&points, &segments, opts.weld);
     Ok(Imported {

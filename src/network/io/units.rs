@@ -152,6 +152,21 @@ impl SourceUnits {
     }
 }
 
+/// Multiplies every point by the unit's millimetres; `Err(i)` names the first point that is no
+/// longer finite (a coordinate too large for the unit).
+pub(super) fn scale_to_mm(points: &mut [glam::DVec3], units: &SourceUnits) -> Result<(), usize> {
+    if units.scale_to_mm == 1.0 {
+        return Ok(());
+    }
+    for p in points.iter_mut() {
+        *p *= units.scale_to_mm;
+    }
+    match points.iter().position(|p| !p.is_finite()) {
+        Some(bad) => Err(bad),
+        None => Ok(()),
+    }
+}
+
 /// The DXF header's `$INSUNITS` and `$MEASUREMENT` values, when present. Reads the group codes
 /// of an ASCII DXF up to the end of its HEADER section; for binary DXF, finds the variable names
 /// and reads the 16-bit value that follows their group code.
