@@ -132,3 +132,87 @@ fn mistyped_options_are_errors_not_defaults() {
     }
     assert!(!std::path::Path::new("x.png").exists());
 }
+
+/// Values that once ran for ever or exhausted memory (found by examples/fuzz_flags.rs and the
+/// fuzz cases): refused at once, naming the flag.
+#[test]
+fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let out = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let loop_json = fixture("networks/small_loop.json");
+    let loop_json = loop_json.to_str().ok_or("path")?;
+    let plates = fixture("../fuzz/corpus/plates/tree.json");
+    let plates = plates.to_str().ok_or("path")?;
+    let torus = fixture("surfaces/torus.obj");
+    let torus = torus.to_str().ok_or("path")?;
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "nest".into(),
+                plates.into(),
+                "-o".into(),
+                out("n"),
+                "--tries".into(),
+                "4294967296".into(),
+            ],
+            "--tries",
+        ),
+        (
+            vec![
+                "solid".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("s.stl"),
+                "--cell".into(),
+                "1e-300".into(),
+            ],
+            "--cell",
+        ),
+        (
+            vec![
+                "venation".into(),
+                "-o".into(),
+                out("v.json"),
+                "--sources-per-step".into(),
+                "4294967295".into(),
+            ],
+            "--sources-per-step",
+        ),
+        (
+            vec![
+                "veins".into(),
+                "--surface".into(),
+                torus.into(),
+                "-o".into(),
+                out("v.json"),
+                "--smooth".into(),
+                "100000".into(),
+            ],
+            "--smooth",
+        ),
+        (
+            vec![
+                "lsystem".into(),
+                "--axiom".into(),
+                "F".into(),
+                "-n".into(),
+                "4294967295".into(),
+                "--derive-only".into(),
+            ],
+            "--iterations",
+        ),
+    ];
+    for (args, flag) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = lamina(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(flag),
+            "{args:?}: the error does not name {flag}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path())?.count(), 0, "nothing written");
+    Ok(())
+}

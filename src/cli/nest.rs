@@ -115,6 +115,9 @@ impl Outcome {
     }
 }
 
+/// The most seeded tries: each is a whole nesting of every part.
+pub const MAX_TRIES: usize = 1000;
+
 fn thickness_name(t: f64) -> String {
     let s = format!("{t:.3}");
     s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -133,8 +136,8 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         seed: args.seed,
         pair: !args.no_pairs,
     };
-    if opts.tries == 0 {
-        bail!("--tries must be at least 1");
+    if !(1..=MAX_TRIES).contains(&opts.tries) {
+        bail!("--tries must be from 1 to {MAX_TRIES}, got {}", opts.tries);
     }
     // Families: thickness (as its bits: positive floats order as their bits do), then group.
     let keys: Vec<(u64, u32)> = plates

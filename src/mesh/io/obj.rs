@@ -15,6 +15,17 @@ use crate::mesh::TriMesh;
 
 pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
     let text = prepare(&utf8_text(path, read_nonempty(path)?)?);
+    // tobj drops a face of fewer than three corners without a word.
+    if let Some(line) = text.lines().position(|l| {
+        let mut w = l.split_whitespace();
+        w.next() == Some("f") && w.count() < 3
+    }) {
+        return Err(ReadError::line(
+            path,
+            line + 1,
+            "a face needs at least three vertices",
+        ));
+    }
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -121,13 +132,23 @@ fn locate(path: &Path, text: &str, e: tobj::LoadError) -> ReadError {
             ("f", L::FaceParseError | L::FaceVertexOutOfBounds | L::InvalidPolygon) => {
                 fields.len() < 3
                     || fields.iter().any(|w| {
-                        let head = w.split('/').next().unwrap_or("");
-                        match head.parse::<i64>() {
-                            Ok(k) if k > 0 => k > total_v,
-                            Ok(k) if k < 0 => -k > seen_v,
-                            _ => true,
-                        }
+                        let mut parts = w.split('/');
+                        let head = parts.next().unwrap_or("");
+                        // Texture and normal indices: empty or integers.
+                        let rest_bad = parts.any(|p| !p.is_empty() && p.parse::<i64>().is_err());
+                        rest_bad
+                            || match head.parse::<i64>() {
+                                Ok(k) if k > 0 => k > total_v,
+                                Ok(k) if k < 0 => -k > seen_v,
+                                _ => true,
+                            }
                     })
+            }
+            ("vn", L::NormalParseError) => {
+                fields.len() < 3 || fields.iter().any(|w| w.parse::<f64>().is_err())
+            }
+            ("vt", L::TexcoordParseError) => {
+                fields.is_empty() || fields.iter().any(|w| w.parse::<f64>().is_err())
             }
             _ => false,
         };
