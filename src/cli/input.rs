@@ -204,6 +204,8 @@ pub struct MeshNotes {
 /// Reads a network or a mesh; `quiet` leaves the notes on units and skipped records to the
 /// caller (`info` prints them in its summary).
 pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
+    // Every reader flag is checked, whichever kind of file this turns out to be.
+    let opts = args.options()?;
     let ext = extension(path);
     let is_mesh = match ext.as_str() {
         "stl" => true,
@@ -225,7 +227,7 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         let weld = match (args.weld, args.weld_rel) {
             (None, None) => None,
             _ => {
-                let tol = args.options()?.weld.tolerance_for(&mesh.bbox());
+                let tol = opts.weld.tolerance_for(&mesh.bbox());
                 Some(mesh.weld(tol))
             }
         };
@@ -243,7 +245,7 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         }
         Loaded::Mesh(mesh, notes)
     } else {
-        let mut imported = read_network(path, &args.options()?)?;
+        let mut imported = read_network(path, &opts)?;
         args.check_units_flag(path)?;
         if !quiet {
             say_import(path, &imported);

@@ -14,6 +14,12 @@ use glam::{DVec2, DVec3, DVec4};
 /// tolerance takes about 22,000; a million points means a tolerance the drawing cannot mean.
 pub const MAX_CURVE_POINTS: usize = 1_000_000;
 
+/// The most control points of one NURBS curve: splitting it into Bézier pieces costs about the
+/// square of this, a fraction of a second at the limit. CAD splines hold tens to thousands.
+pub const MAX_CONTROL_POINTS: usize = 10_000;
+/// The highest NURBS degree read; CAD writes 1 to 5 (the DXF limit is 25).
+pub const MAX_DEGREE: usize = 32;
+
 /// Why a curve could not be flattened.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum CurveError {
