@@ -101,8 +101,8 @@ impl ReadArgs {
     /// Reads a network, says on stderr what was assumed or left out (one line each), and
     /// with `--strict` refuses a file that held anything not read.
     pub fn network(&self, path: &Path) -> Result<Imported> {
-        let mut imported = read_network(path, &self.options()?)?;
         self.check_units_flag(path)?;
+        let mut imported = read_network(path, &self.options()?)?;
         say_import(path, &imported);
         self.check_strict(path, &imported)?;
         self.split(path, &mut imported, false)?;
@@ -245,8 +245,8 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         }
         Loaded::Mesh(mesh, notes)
     } else {
-        let mut imported = read_network(path, &opts)?;
         args.check_units_flag(path)?;
+        let mut imported = read_network(path, &opts)?;
         if !quiet {
             say_import(path, &imported);
         }
