@@ -1,14 +1,12 @@
 //! Turning loose polylines into a network: points that coincide within a tolerance become one
 //! node. Polyline formats (OBJ `l`, DXF) repeat shared endpoints; this is where they meet.
 
-use std::collections::HashSet;
-use std::hash::BuildHasherDefault;
-
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::{Edge, Network, Node};
 use crate::geom::merge::merge_points;
-use crate::geom::{Aabb, KeyHasher};
+use crate::geom::Aabb;
 
 /// How close two points must be to become one node.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,29 +62,73 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
         merged: points.len() - nodes.len(),
         ..Default::default()
     };
-    let mut seen: FastSet<(u32, u32)> = FastSet::default();
-    seen.reserve(segments.len());
+    let ends: Vec<(u32, u32)> = segments
+        .par_iter()
+        .map(|&(a, b)| {
+            let (a, b) = (map[a as usize], map[b as usize]);
+            (a.min(b), a.max(b))
+        })
+        .collect();
+    let repeated = repeated_segments(&ends, nodes.len());
     let mut edges = Vec::with_capacity(segments.len());
-    for &(a, b) in segments {
+    for (k, &(a, b)) in segments.iter().enumerate() {
         let (a, b) = (map[a as usize], map[b as usize]);
         if a == b {
             stats.zero_length_segments += 1;
-        } else if !seen.insert((a.min(b), a.max(b))) {
+        } else if repeated[k] {
             stats.duplicate_segments += 1;
         } else {
-            edges.push(Edge::new(a, b));
+            edges.push(Edge::new(a, b)); // in the direction drawn
         }
     }
     let network = Network {
-        nodes: nodes.into_iter().map(Node::at).collect(),
+        nodes: nodes.into_par_iter().map(Node::at).collect(),
         edges,
         ..Default::default()
     };
     (network, stats)
 }
 
-// Welding hashes every point read, and the default SipHash costs a third of a large import.
-type FastSet<K> = HashSet<K, BuildHasherDefault<KeyHasher>>;
+/// Marks every segment whose two ends (lower node first) an earlier segment already joins.
+/// Segments are grouped by their lower end with a counting sort (node order follows the
+/// drawing, so this reads memory nearly in order); a group is sorted only when it has more
+/// than one member.
+fn repeated_segments(ends: &[(u32, u32)], nodes: usize) -> Vec<bool> {
+    let mut start = vec![0u32; nodes + 1];
+    for &(a, b) in ends {
+        if a != b {
+            start[a as usize + 1] += 1;
+        }
+    }
+    for k in 1..start.len() {
+        start[k] += start[k - 1];
+    }
+    let mut fill = start.clone();
+    let mut by_lower = vec![0u32; start[nodes] as usize];
+    for (k, &(a, b)) in ends.iter().enumerate() {
+        if a != b {
+            by_lower[fill[a as usize] as usize] = k as u32;
+            fill[a as usize] += 1;
+        }
+    }
+    let mut repeated = vec![false; ends.len()];
+    let mut group: Vec<(u32, u32)> = Vec::new();
+    for a in 0..nodes {
+        let members = &by_lower[start[a] as usize..start[a + 1] as usize];
+        if members.len() < 2 {
+            continue;
+        }
+        group.clear();
+        group.extend(members.iter().map(|&k| (ends[k as usize].1, k)));
+        group.sort_unstable();
+        for pair in group.windows(2) {
+            if pair[0].0 == pair[1].0 {
+                repeated[pair[1].1 as usize] = true;
+            }
+        }
+    }
+    repeated
+}
 
 #[cfg(test)]
 mod tests {

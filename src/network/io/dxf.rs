@@ -47,22 +47,7 @@ pub(super) fn read_bytes(
         Some(parts) => parts,
         None => vec![Part::whole(bytes)],
     };
-    let drawings = parse_parts(path, &parts)?;
-    // The header and the blocks are in the first part: the whole file, or its skeleton.
-    let ctx = Context::new(&drawings[0], opts.chord_tolerance / units.scale_to_mm);
-    let pieces: Vec<Collected> = std::thread::scope(|scope| {
-        let handles: Vec<_> = drawings
-            .iter()
-            .map(|d| scope.spawn(|| collect(d, &ctx, MAX_POINTS)))
-            .collect();
-        handles
-            .into_iter()
-            .map(|h| {
-                h.join()
-                    .map_err(|_| ReadError::file(path, "DXF reader thread failed"))
-            })
-            .collect::<Result<_, _>>()
-    })?;
+    let pieces = parse_and_collect(path, &parts, opts.chord_tolerance / units.scale_to_mm)?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
@@ -79,6 +64,8 @@ pub(super) fn read_bytes(
             ),
         ));
     }
+    points.reserve_exact(total);
+    segments.reserve_exact(pieces.iter().map(|p| p.segments.len()).sum());
     for piece in pieces {
         if let Some(bad) = piece.bad {
             return Err(ReadError::record(
@@ -134,52 +121,89 @@ pub(super) fn read_bytes(
     })
 }
 
-/// Parses every part on its own thread. The whole file fails to parse if any part does,
-/// whatever records come before; the parser stops at the first error in the file, so report
-/// the one on the earliest line.
-fn parse_parts(path: &Path, parts: &[Part]) -> Result<Vec<Drawing>, ReadError> {
-    let parsed: Vec<Result<Drawing, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = parts
+/// Parses the first part (the header and the blocks: the whole file, or its skeleton), then
+/// every other part on its own thread, each walked into points as soon as it is parsed and
+/// dropped. The whole file fails to parse if any part does, whatever records come before; the
+/// parser stops at the first error in the file, so report the one on the earliest line.
+fn parse_and_collect(
+    path: &Path,
+    parts: &[Part],
+    chord_tolerance: f64,
+) -> Result<Vec<Collected>, ReadError> {
+    let first = match parse_part(path, &parts[0]) {
+        Ok(d) => d,
+        // An error after the entities can be later in the file than one inside them.
+        Err(e) if parts.len() == 1 => return Err(e.1),
+        Err(_) => {
+            return Err(first_error(
+                path,
+                parts.iter().map(|p| parse_part(path, p).err()),
+            ))
+        }
+    };
+    let ctx = Context::new(&first, chord_tolerance);
+    let rest: Vec<Result<Collected, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = parts[1..]
             .iter()
             .map(|part| {
-                std::thread::Builder::new()
-                    .name(PARSER_THREAD.into())
-                    .spawn_scoped(scope, || {
-                        Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))
-                    })
+                let ctx = &ctx;
+                scope.spawn(move || parse_part(path, part).map(|d| collect(&d, ctx, MAX_POINTS)))
             })
             .collect();
         handles
             .into_iter()
-            .map(|h| match h.map(|h| h.join()) {
-                Ok(Ok(parsed)) => parsed,
-                Ok(Err(panic)) => Err((None, parser_panic(path, panic))),
-                Err(e) => Err((None, ReadError::io(path, e))),
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err((None, ReadError::file(path, "DXF reader thread failed")))
+                })
             })
             .collect()
     });
-    let mut drawings = Vec::with_capacity(parsed.len());
-    let mut first_error: Option<(Option<usize>, ReadError)> = None;
-    for piece in parsed {
-        match piece {
-            Ok(d) => drawings.push(d),
-            Err((line, e)) => {
-                let earlier = match (&first_error, line) {
-                    (None, _) => true,
-                    (Some((Some(best), _)), Some(l)) => l < *best,
-                    (Some((None, _)), Some(_)) => true,
-                    _ => false,
-                };
-                if earlier {
-                    first_error = Some((line, e));
-                }
-            }
+    if rest.iter().any(|r| r.is_err()) {
+        return Err(first_error(path, rest.into_iter().map(|r| r.err())));
+    }
+    let mut pieces = vec![collect(&first, &ctx, MAX_POINTS)];
+    pieces.extend(rest.into_iter().flatten());
+    Ok(pieces)
+}
+
+/// Parses one part on a parser thread, the crate's panics turned into errors.
+fn parse_part(path: &Path, part: &Part) -> Result<Drawing, (Option<usize>, ReadError)> {
+    std::thread::scope(|scope| {
+        let handle = std::thread::Builder::new()
+            .name(PARSER_THREAD.into())
+            .spawn_scoped(scope, || {
+                Drawing::load(&mut &part.text[..]).map_err(|e| load_error(path, e, part))
+            })
+            .map_err(|e| (None, ReadError::io(path, e)))?;
+        handle
+            .join()
+            .unwrap_or_else(|panic| Err((None, parser_panic(path, panic))))
+    })
+}
+
+/// Of the parts' errors, the one on the earliest file line (one without a line counts as
+/// later than any with one, and the first of those is kept).
+fn first_error(
+    path: &Path,
+    errors: impl Iterator<Item = Option<(Option<usize>, ReadError)>>,
+) -> ReadError {
+    let mut first: Option<(Option<usize>, ReadError)> = None;
+    for (line, e) in errors.flatten() {
+        let earlier = match (&first, line) {
+            (None, _) => true,
+            (Some((Some(best), _)), Some(l)) => l < *best,
+            (Some((None, _)), Some(_)) => true,
+            _ => false,
+        };
+        if earlier {
+            first = Some((line, e));
         }
     }
-    match first_error {
-        Some((_, e)) => Err(e),
-        None => Ok(drawings),
-    }
+    first.map_or_else(
+        || ReadError::file(path, "DXF reader thread failed"),
+        |(_, e)| e,
+    )
 }
 
 /// The name of the threads that run the `dxf` crate's parser. A value it cannot take (a header

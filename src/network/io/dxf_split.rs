@@ -125,10 +125,7 @@ fn scan(bytes: &[u8]) -> Option<Scan> {
             return None;
         }
         let start = *pos;
-        let end = bytes[start..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .map_or(bytes.len(), |i| start + i);
+        let end = memchr::memchr(b'\n', &bytes[start..]).map_or(bytes.len(), |i| start + i);
         *pos = (end + 1).min(bytes.len() + 1);
         *line += 1;
         Some((start, bytes[start..end].trim_ascii()))
@@ -142,7 +139,7 @@ fn scan(bytes: &[u8]) -> Option<Scan> {
         let code_line_no = line;
         let (code_at, code) = next_line(&mut pos, &mut line)?;
         let (_, value) = next_line(&mut pos, &mut line)?;
-        let code: i32 = std::str::from_utf8(code).ok()?.parse().ok()?;
+        let code = group_code(code)?;
         match (body, code) {
             (None, 9) => {
                 want = match value {
@@ -179,6 +176,26 @@ fn scan(bytes: &[u8]) -> Option<Scan> {
             last_section = false;
         }
     }
+}
+
+/// A group code: decimal digits, optionally signed, as `str::parse` would take them.
+fn group_code(text: &[u8]) -> Option<i32> {
+    let (negative, digits) = match text.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, text),
+    };
+    if digits.is_empty() || digits.len() > 9 {
+        return None;
+    }
+    let mut v = 0i32;
+    for &d in digits {
+        if !d.is_ascii_digit() {
+            return None;
+        }
+        v = v * 10 + (d - b'0') as i32;
+    }
+    Some(if negative { -v } else { v })
 }
 
 #[cfg(test)]
