@@ -272,15 +272,21 @@ fn main() {
             if busy.load(Ordering::Relaxed)
                 && clock.elapsed().as_millis() as u64 > t + TIME_LIMIT.as_millis() as u64
             {
+                // The input file is named after its target (`dxf.dxf`): keep it where the
+                // replay test finds it.
                 let path = current.lock().map(|p| p.clone()).unwrap_or_default();
-                let dest = root.join("fuzz/crashes/hangs");
-                let _ = std::fs::create_dir_all(&dest);
-                let kept = dest.join(path.file_name().unwrap_or_default());
-                let _ = std::fs::copy(&path, &kept);
-                eprintln!(
-                    "fuzz: an input ran over {TIME_LIMIT:?}; kept as {}",
-                    kept.display()
-                );
+                let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+                let input = std::fs::read(&path).unwrap_or_default();
+                match TARGETS.iter().find(|t| t.name == name) {
+                    Some(target) => eprintln!(
+                        "fuzz: an input ran over {TIME_LIMIT:?}; kept as {}",
+                        keep(&root, target, &input, "hang").display()
+                    ),
+                    None => eprintln!(
+                        "fuzz: an input ran over {TIME_LIMIT:?}; it is {}",
+                        path.display()
+                    ),
+                }
                 std::process::exit(3);
             }
         });

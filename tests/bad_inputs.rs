@@ -40,6 +40,14 @@ const EXPECTED: &[(&str, &[&str])] = &[
         "minsert_bomb.dxf",
         &["expands to more than 20000000 points"],
     ),
+    (
+        "huge_bulge.dxf",
+        &[
+            "entity 0 (LWPOLYLINE",
+            "vertex 3 starts an arc segment",
+            "limit 100000 for this curve",
+        ],
+    ),
 ];
 
 #[test]

@@ -5,14 +5,31 @@
 //! two consecutive points stays within `tol` of the curve piece it replaces. Arcs and ellipses
 //! get that from a closed-form step; NURBS curves from the convex-hull property of their Bézier
 //! pieces (subdivided until every control point lies within `tol` of the piece's chord), which
-//! holds for any positive weights. A curve that would need more than `MAX_CURVE_POINTS` points is
-//! refused rather than flattened coarser than asked.
+//! holds for any positive weights. A curve that would need more points than its budget (see
+//! `MAX_ARC_POINTS`, `POINTS_PER_CONTROL_POINT`) is refused rather than flattened coarser than
+//! asked.
 
 use glam::{DVec2, DVec3, DVec4};
 
 /// The most points one curve may flatten to. A circle of radius 1 km at the default 0.05 mm
 /// tolerance takes about 22,000; a million points means a tolerance the drawing cannot mean.
 pub const MAX_CURVE_POINTS: usize = 1_000_000;
+
+/// The most points one circular or elliptic arc may flatten to: a whole circle of radius 100 km
+/// at the default 0.05 mm takes about 99,000. More means a radius no drawing means (a bulge of
+/// 2³² on a 9 mm chord is a circle of radius 10⁴ km), and a million such points in an 18 KB file
+/// cost a second to read.
+pub const MAX_ARC_POINTS: usize = 100_000;
+
+/// Points a spline may flatten to per control (or fit) point, up to `MAX_CURVE_POINTS`: a span
+/// of a CAD spline takes a few to a few hundred at 0.05 mm.
+pub const POINTS_PER_CONTROL_POINT: usize = 1_000;
+
+/// The point budget of a spline of `n` control or fit points.
+fn spline_budget(n: usize) -> usize {
+    n.saturating_mul(POINTS_PER_CONTROL_POINT)
+        .clamp(MAX_ARC_POINTS, MAX_CURVE_POINTS)
+}
 
 /// The most control points of one NURBS curve: splitting it into Bézier pieces costs about the
 /// square of this, a fraction of a second at the limit. CAD splines hold tens to thousands.
@@ -25,8 +42,14 @@ pub const MAX_DEGREE: usize = 32;
 pub enum CurveError {
     #[error("a non-finite value ({0})")]
     NonFinite(&'static str),
-    #[error("needs {needed} points at chord tolerance {tol} (limit {MAX_CURVE_POINTS}): raise the chord tolerance")]
-    TooManyPoints { needed: f64, tol: f64 },
+    // `tol` is in the drawing's units, which the reader's message would have to say: left out.
+    #[error("needs {needed} points within the chord tolerance (limit {limit} for this curve): raise --chord-tolerance")]
+    TooManyPoints {
+        /// A count, or "more than N" where subdivision stopped at the limit.
+        needed: String,
+        tol: f64,
+        limit: usize,
+    },
     #[error("{0}")]
     Invalid(String),
 }
@@ -41,8 +64,12 @@ fn arc_segments(radius: f64, sweep: f64, tol: f64) -> Result<usize, CurveError> 
         let step = 2.0 * (1.0 - tol / radius).acos();
         (sweep.abs() / step).ceil().max(quarter)
     };
-    if n.is_nan() || n > MAX_CURVE_POINTS as f64 {
-        return Err(CurveError::TooManyPoints { needed: n, tol });
+    if n.is_nan() || n > MAX_ARC_POINTS as f64 {
+        return Err(CurveError::TooManyPoints {
+            needed: format!("{n}"),
+            tol,
+            limit: MAX_ARC_POINTS,
+        });
     }
     Ok(n as usize)
 }
@@ -119,8 +146,12 @@ pub fn ellipse(
     };
     let quarter = (sweep.abs() / std::f64::consts::FRAC_PI_2).ceil().max(1.0);
     let n = (sweep.abs() / step).ceil().max(quarter);
-    if n.is_nan() || n > MAX_CURVE_POINTS as f64 {
-        return Err(CurveError::TooManyPoints { needed: n, tol });
+    if n.is_nan() || n > MAX_ARC_POINTS as f64 {
+        return Err(CurveError::TooManyPoints {
+            needed: format!("{n}"),
+            tol,
+            limit: MAX_ARC_POINTS,
+        });
     }
     let n = n as usize;
     Ok((0..=n)
@@ -226,10 +257,12 @@ impl Nurbs<'_> {
             }
         }
         let mut out = vec![project(ctrl[p_start(&knots, p, lo)])];
-        let mut budget = MAX_CURVE_POINTS;
+        let limit = spline_budget(self.control.len());
+        let mut budget = limit;
         for i in p..knots.len() - p - 1 {
             if knots[i] < knots[i + 1] && lo <= knots[i] && knots[i + 1] <= hi {
-                subdivide(&ctrl[i - p..=i], tol, 0, &mut out, &mut budget)?;
+                subdivide(&ctrl[i - p..=i], tol, 0, &mut out, &mut budget)
+                    .map_err(|Exhausted| too_many(tol, limit))?;
             }
         }
         Ok(out)
@@ -274,17 +307,14 @@ fn subdivide(
     depth: u32,
     out: &mut Vec<DVec3>,
     budget: &mut usize,
-) -> Result<(), CurveError> {
+) -> Result<(), Exhausted> {
     let (a, z) = (project(b[0]), project(b[b.len() - 1]));
     let flat = b[1..b.len() - 1]
         .iter()
         .all(|c| segment_distance(project(*c), a, z) <= tol);
     if flat || depth >= 48 {
         if *budget == 0 {
-            return Err(CurveError::TooManyPoints {
-                needed: MAX_CURVE_POINTS as f64 + 1.0,
-                tol,
-            });
+            return Err(Exhausted);
         }
         *budget -= 1;
         out.push(z);
@@ -305,6 +335,17 @@ fn subdivide(
     right.reverse();
     subdivide(&left, tol, depth + 1, out, budget)?;
     subdivide(&right, tol, depth + 1, out, budget)
+}
+
+/// Subdivision spent the curve's point budget.
+struct Exhausted;
+
+fn too_many(tol: f64, limit: usize) -> CurveError {
+    CurveError::TooManyPoints {
+        needed: format!("more than {limit}"),
+        tol,
+        limit,
+    }
 }
 
 fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
@@ -344,7 +385,8 @@ pub fn through_points(points: &[DVec3], closed: bool, tol: f64) -> Result<Vec<DV
     };
     let spans = if closed { n } else { n - 1 };
     let mut out = vec![pts[0]];
-    let mut budget = MAX_CURVE_POINTS;
+    let limit = spline_budget(n);
+    let mut budget = limit;
     for s in 0..spans as isize {
         let (p0, p1, p2, p3) = (at(s - 1), at(s), at(s + 1), at(s + 2));
         // Centripetal parametrisation (alpha 1/2): no cusps or self-loops within a span.
@@ -354,7 +396,7 @@ pub fn through_points(points: &[DVec3], closed: bool, tol: f64) -> Result<Vec<DV
         let m2 = (p2 - p1) / d1 - (p3 - p1) / (d1 + d2) + (p3 - p2) / d2;
         let (t1, t2) = (m1 * d1, m2 * d1);
         let bez = [p1, p1 + t1 / 3.0, p2 - t2 / 3.0, p2].map(|c| c.extend(1.0));
-        subdivide(&bez, tol, 0, &mut out, &mut budget)?;
+        subdivide(&bez, tol, 0, &mut out, &mut budget).map_err(|Exhausted| too_many(tol, limit))?;
     }
     Ok(out)
 }
@@ -495,6 +537,50 @@ mod tests {
             Err(CurveError::TooManyPoints { .. })
         ));
         assert!(bulge_arc(DVec2::ZERO, DVec2::X, f64::NAN, 0.1).is_err());
+    }
+
+    #[test]
+    fn budgets_follow_what_a_curve_can_mean() {
+        // A whole circle of radius 100 km flattens at 0.05 mm; a bulge of 2^32 on a 9 mm
+        // chord (a circle of radius 10,000 km, found by the fuzzer) does not.
+        assert!(arc(DVec2::ZERO, 1e8, 0.0, std::f64::consts::TAU, 0.05).is_ok());
+        let Err(CurveError::TooManyPoints { limit, .. }) =
+            bulge_arc(DVec2::ZERO, DVec2::new(9.0, 0.0), 2f64.powi(32), 0.05)
+        else {
+            panic!("a bulge of 2^32 is flattened");
+        };
+        assert_eq!(limit, MAX_ARC_POINTS);
+        // A spline's budget grows with its control points, between the two limits.
+        assert_eq!(spline_budget(3), MAX_ARC_POINTS);
+        assert_eq!(spline_budget(500), 500_000);
+        assert_eq!(spline_budget(5_000), MAX_CURVE_POINTS);
+        // A quarter circle of radius 10,000 km as a rational spline of three control points
+        // spends its budget and is refused.
+        let r = 1e10;
+        let control = [
+            DVec3::new(r, 0.0, 0.0),
+            DVec3::new(r, r, 0.0),
+            DVec3::new(0.0, r, 0.0),
+        ];
+        let knots = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+        let weights = [1.0, std::f64::consts::FRAC_1_SQRT_2, 1.0];
+        let c = Nurbs {
+            degree: 2,
+            knots: &knots,
+            control: &control,
+            weights: Some(&weights),
+        };
+        let got = c.flatten(0.05).map(|p| p.len());
+        assert!(
+            matches!(
+                got,
+                Err(CurveError::TooManyPoints {
+                    limit: MAX_ARC_POINTS,
+                    ..
+                })
+            ),
+            "{got:?}"
+        );
     }
 
     #[test]
