@@ -1,6 +1,7 @@
 //! File plumbing shared by every reader and writer: errors that say which file, which line or
 //! record, and what was wrong; and writes that never leave a half-written file behind.
 
+use crate::text::printable;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -14,19 +15,19 @@ pub enum ReadError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{}: line {line}: {msg}", path.display())]
+    #[error("{}: line {line}: {}", path.display(), printable(.msg))]
     Line {
         path: PathBuf,
         line: usize,
         msg: String,
     },
-    #[error("{}: {record}: {msg}", path.display())]
+    #[error("{}: {}: {}", path.display(), printable(.record), printable(.msg))]
     Record {
         path: PathBuf,
         record: String,
         msg: String,
     },
-    #[error("{}: {msg}", path.display())]
+    #[error("{}: {}", path.display(), printable(.msg))]
     File { path: PathBuf, msg: String },
 }
 

@@ -75,8 +75,9 @@ fn grammar(path: &Path) -> Result<(), String> {
 
 fn printer(path: &Path) -> Result<(), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
-    let p: crate::fabricate::slice::Printer =
-        serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    // The profile is read by the CLI, which prints serde's message through `printable`.
+    let p: crate::fabricate::slice::Printer = serde_json::from_str(&text)
+        .map_err(|e| crate::text::printable(&e.to_string()).into_owned())?;
     p.check().map_err(|e| e.to_string())
 }
 

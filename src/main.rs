@@ -124,7 +124,7 @@ fn main() -> ExitCode {
                     msg = format!("{msg}: {c}");
                 }
             }
-            eprintln!("lamina: error: {msg}");
+            eprintln!("lamina: error: {}", lamina::text::printable(&msg));
             // Bad input and failed writes alike: 2, as clap uses for bad arguments.
             ExitCode::from(2)
         }

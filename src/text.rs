@@ -9,9 +9,34 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// Text from an input file made safe to print in a one-line message: control characters
+/// (escape sequences, NUL, CR, line breaks, DEL) are shown escaped, as `\u{1b}`, `\0`, `\n`;
+/// everything else, quotes and non-ASCII letters included, is kept.
+pub fn printable(s: &str) -> std::borrow::Cow<'_, str> {
+    if !s.chars().any(char::is_control) {
+        return std::borrow::Cow::Borrowed(s);
+    }
+    let mut out = String::with_capacity(s.len() + 8);
+    for c in s.chars() {
+        if c.is_control() {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn control_characters_are_shown_escaped() {
+        assert_eq!(printable("a \u{1b}[31mred\u{7}"), "a \\u{1b}[31mred\\u{7}");
+        assert_eq!(printable("x\0y\r\nz"), "x\\0y\\r\\nz");
+        assert_eq!(printable("`naïve` \"q\""), "`naïve` \"q\"");
+    }
 
     #[test]
     fn huge_and_tiny_numbers_stay_short() {

@@ -7,6 +7,7 @@
 //! `transform` attributes of the element and its ancestors apply, user units are mm, and y is
 //! flipped so the drawing's top stays the leaf's top.
 
+use crate::text::printable;
 use std::path::{Path, PathBuf};
 
 use glam::DVec2;
@@ -28,7 +29,7 @@ pub enum OutlineFileError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("{option} {path}: {msg}")]
+    #[error("{option} {}: {}", .path.display(), printable(.msg))]
     Content {
         option: &'static str,
         path: PathBuf,

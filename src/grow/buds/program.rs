@@ -11,6 +11,7 @@
 //! `head up|down|none|X,Y,Z`, `create TYPE [K]`, `sleep N`, `split`, `line`, `hole`. The end of
 //! a bud's list is its death.
 
+use crate::text::printable;
 use std::path::Path;
 
 use glam::DVec3;
@@ -23,9 +24,9 @@ pub const SIZE_RANGE: (f64, f64) = (0.05, 20.0);
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ProgramError {
-    #[error("{file}: cannot read: {msg}")]
+    #[error("{file}: cannot read: {}", printable(.msg))]
     Io { file: String, msg: String },
-    #[error("{file} line {line}, column {column}: {problem}")]
+    #[error("{file} line {line}, column {column}: {}", printable(.problem))]
     Syntax {
         file: String,
         line: usize,

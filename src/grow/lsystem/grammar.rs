@@ -14,6 +14,7 @@
 //! - anything else, text: one `key: value` (`axiom`, `iterations`, `angle`, `step`) or one
 //!   production per line, `#` starts a comment.
 
+use crate::text::printable;
 use std::path::{Path, PathBuf};
 
 /// A production's separator: `->`, `=` or `→`.
@@ -63,9 +64,9 @@ pub struct Grammar {
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum GrammarError {
     /// `at` names the place: `--rule 2, column 5` or `tree.txt line 3, column 5`.
-    #[error("{at}: {problem}")]
+    #[error("{}: {}", printable(.at), printable(.problem))]
     Syntax { at: String, problem: String },
-    #[error("{path}: cannot read the grammar: {msg}")]
+    #[error("{}: cannot read the grammar: {}", .path.display(), printable(.msg))]
     Io { path: PathBuf, msg: String },
     #[error("the grammar has no axiom (give --axiom or an `axiom:` line)")]
     NoAxiom,
