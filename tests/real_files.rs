@@ -191,6 +191,37 @@ fn jittered_cad_corners_read_open_and_weld_closed() -> TestResult {
 }
 
 #[test]
+fn veins_on_a_jittered_cad_mesh_need_the_weld_and_grow_with_it() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let stl = path("surfaces/cad_jitter.stl")?;
+    let out = dir.path().join("veins.json");
+    let out = out.to_str().ok_or("path")?;
+    let base = ["veins", "--surface", &stl, "--sources", "6", "-o", out];
+    // Cracked at every edge: twelve loose triangles, and nothing to grow to from the root's.
+    let o = lamina(&base);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        !std::path::Path::new(out).exists(),
+        "no output on a refusal"
+    );
+    let mut welded = base.to_vec();
+    welded.extend(["--weld", "1e-3"]);
+    let o = lamina(&welded);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("welded 28 vertices"), "{}", stderr(&o));
+    let net = info(&[out])?;
+    assert_eq!(net["nodes"], 6);
+    assert_eq!(net["components"], 1);
+    // The flag is checked like every reader's --weld, and refused where there is no mesh.
+    let mut bad = base.to_vec();
+    bad.extend(["--weld", "-1"]);
+    assert_eq!(lamina(&bad).status.code(), Some(2));
+    let o = lamina(&["venation", "--weld", "1", "-o", out]);
+    assert!(stderr(&o).contains("there is none"), "{}", stderr(&o));
+    Ok(())
+}
+
+#[test]
 fn growth_on_several_bodies_needs_a_root_on_each_and_says_so() -> TestResult {
     let dir = tempfile::tempdir()?;
     let stl = path("surfaces/two_bodies.stl")?;

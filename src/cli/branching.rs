@@ -63,6 +63,8 @@ pub struct FacadeArgs {
     /// Project the result onto this surface (.obj .stl) along --direction
     #[arg(long, value_name = "MESH")]
     pub onto: Option<PathBuf>,
+    #[command(flatten)]
+    pub onto_weld: super::surface::SurfaceWeld,
     /// Direction of projection [default: +Z, or +Y with --upright]
     #[arg(
         long,
@@ -221,8 +223,11 @@ pub fn finish(
         }
     }
     let mut surface = None;
+    if facade.onto.is_none() {
+        facade.onto_weld.only_with("--onto")?;
+    }
     if let Some(mesh_path) = &facade.onto {
-        let mesh = read_surface(mesh_path)
+        let mesh = read_surface(mesh_path, &facade.onto_weld)
             .map_err(|e| anyhow::anyhow!("{e}"))
             .with_context(|| format!("--onto {}", mesh_path.display()))?;
         let direction = match &facade.direction {

@@ -8,6 +8,7 @@ use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use serde_json::json;
 
+use super::input::ReadArgs;
 use super::venation::{frames_dir, save_frame, write_json, Args, ModeArg};
 use lamina::files::extension;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
@@ -17,7 +18,7 @@ use lamina::mesh::io::{
     read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, BACKGROUND, VEIN,
 };
 use lamina::network::io::{write_network, RenderOptions};
-use lamina::network::Network;
+use lamina::network::{Network, Weld};
 use lamina::TriMesh;
 use tiny_skia::{Pixmap, PixmapPaint, Transform};
 
@@ -52,8 +53,20 @@ pub fn parse_root(s: &str) -> Result<Root> {
 
 /// A surface to grow on, without the degenerate triangles (said on stderr) that no surface
 /// query can use.
-pub fn read_surface(path: &Path) -> Result<TriMesh> {
+pub fn read_surface(path: &Path, weld: &SurfaceWeld) -> Result<TriMesh> {
+    let tolerance = weld.weld()?;
     let mut mesh = read_mesh(path)?;
+    if let Some(w) = tolerance {
+        let tol = w.tolerance_for(&mesh.bbox());
+        let stats = mesh.weld(tol);
+        eprintln!(
+            "lamina: {}: welded {} vertices within {} mm, {} triangles collapsed and dropped",
+            path.display(),
+            stats.merged,
+            lamina::text::num(stats.tolerance),
+            stats.collapsed_triangles
+        );
+    }
     let dropped = mesh.drop_degenerate();
     if mesh.triangles.is_empty() {
         bail!(
@@ -71,9 +84,45 @@ pub fn read_surface(path: &Path) -> Result<TriMesh> {
     Ok(mesh)
 }
 
+/// Welding a surface mesh before anything grows on it: CAD STLs whose shared corners differ in
+/// the last bits read as cracked, and growth stops at a crack.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct SurfaceWeld {
+    /// Weld mesh vertices closer than this, in mm (CAD meshes whose shared corners differ in
+    /// the last bits) [default: none: only equal coordinates are one vertex]
+    #[arg(long, value_name = "MM", conflicts_with = "weld_rel")]
+    pub weld: Option<f64>,
+    /// Weld mesh vertices closer than this fraction of the bounding-box diagonal
+    #[arg(long, value_name = "FRACTION")]
+    pub weld_rel: Option<f64>,
+}
+
+impl SurfaceWeld {
+    /// The weld asked for, checked as every reader's `--weld` is; `None` when not asked.
+    pub fn weld(&self) -> Result<Option<Weld>> {
+        if self.weld.is_none() && self.weld_rel.is_none() {
+            return Ok(None);
+        }
+        let read = ReadArgs {
+            weld: self.weld,
+            weld_rel: self.weld_rel,
+            ..ReadArgs::default()
+        };
+        Ok(Some(read.options()?.weld))
+    }
+
+    /// Refuses the flags where there is no mesh for them to weld.
+    pub fn only_with(&self, mesh_flag: &str) -> Result<()> {
+        if self.weld.is_some() || self.weld_rel.is_some() {
+            bail!("--weld and --weld-rel weld the mesh given with {mesh_flag}; there is none");
+        }
+        Ok(())
+    }
+}
+
 /// `lamina venation --surface MESH`.
 pub fn venation(args: &Args, path: &Path) -> Result<()> {
-    let mesh = read_surface(path)?;
+    let mesh = read_surface(path, &args.surface_weld)?;
     let roots: Vec<Root> = args
         .root
         .iter()

@@ -17,6 +17,8 @@ pub struct Args {
     /// The mesh (.obj .stl) the veins follow
     #[arg(long, value_name = "MESH")]
     pub surface: PathBuf,
+    #[command(flatten)]
+    pub weld: super::surface::SurfaceWeld,
     /// Output network (.json .obj .dxf .svg; .png renders the veins on the surface)
     #[arg(short, long)]
     pub output: PathBuf,
@@ -76,7 +78,7 @@ pub fn run(args: Args) -> Result<()> {
             args.smooth
         );
     }
-    let mesh = read_surface(&args.surface)?;
+    let mesh = read_surface(&args.surface, &args.weld)?;
     let ctx = || format!("--surface {}", args.surface.display());
     let graph = MeshGraph::new(&mesh);
     let root = match args.root {

@@ -98,6 +98,8 @@ pub struct Args {
     /// the largest birth distance]
     #[arg(long, requires = "surface")]
     pub reach: Option<f64>,
+    #[command(flatten)]
+    pub surface_weld: super::surface::SurfaceWeld,
     /// On a surface: a step or loop edge whose chord leaves the surface by more than this is
     /// not made, mm [default: D / 4]
     #[arg(long, requires = "surface")]
@@ -327,6 +329,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(mesh) = &args.surface {
         return super::surface::venation(&args, mesh);
     }
+    args.surface_weld.only_with("--surface")?;
     let s = setup(&args)?;
     if !args.sweep_r.is_empty() {
         return sweep(&args, s);

@@ -111,6 +111,14 @@ struct Cut {
     at: DVec3,
 }
 
+/// Edges per parallel task in the crossing search.
+const EDGE_CHUNK: usize = 4096;
+
+/// A node on an edge's interior: (edge, node, parameter along the edge).
+type OnEdge = (u32, u32, f64);
+/// A proper crossing: (edge, later edge, parameter on each, the point).
+type Crossing = (u32, u32, f64, f64, DVec3);
+
 fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
     let (o, u, v) = plane(net, tol)?;
     let flat = Flat {
@@ -135,94 +143,127 @@ fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
             )
         })
         .collect();
+    // Nodes no edge ends at can still lie on an edge: they get an index of their own (most
+    // drawings have none). Every other node on an edge is the end of an edge whose box meets it.
+    let mut ends = vec![false; net.nodes.len()];
+    for e in net.edges.iter().filter(|e| e.a != e.b) {
+        ends[e.a as usize] = true;
+        ends[e.b as usize] = true;
+    }
+    let lonely: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
+        .filter(|&i| !ends[i])
+        .map(|i| GeomWithData::new(flat.pts[i].to_array(), i as u32))
+        .collect();
+    let lonely = RTree::bulk_load(lonely);
     let tree = RTree::bulk_load(boxes);
-    let points = RTree::bulk_load(
-        flat.pts
-            .iter()
-            .enumerate()
-            .map(|(i, p)| GeomWithData::new([p.x, p.y], i as u32))
-            .collect(),
-    );
-    // Each edge's T-junctions and its crossings with later edges, found in parallel and joined
-    // in edge order.
-    let per_edge: Vec<(Vec<Defect>, Vec<Cut>)> = (0..net.edges.len())
-        .into_par_iter()
-        .map(|k| {
-            let e = &net.edges[k];
-            let mut defects = Vec::new();
-            let mut cuts = Vec::new();
-            if e.a == e.b {
-                return (defects, cuts);
-            }
-            let k = k as u32;
-            let (a, b) = flat.seg(e);
-            let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
-            let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
-            // Nodes on this edge.
-            let mut on: Vec<(u32, f64)> = points
-                .locate_in_envelope(&env)
-                .filter(|p| p.data != e.a && p.data != e.b)
-                .filter_map(|p| {
-                    let q = flat.pts[p.data as usize];
-                    interior_param(a, b, q, tol).map(|t| (p.data, t))
-                })
-                .collect();
-            on.sort_by_key(|&(n, _)| n);
-            for (n, t) in on {
-                let at = net.nodes[n as usize].p;
-                defects.push(Defect::TJunction {
-                    node: n,
-                    edge: k,
-                    at: at.to_array(),
-                });
-                cuts.push(Cut {
-                    edge: k,
-                    t,
-                    node: Some(n),
-                    at,
-                });
-            }
-            // Proper crossings with later edges (each pair once).
-            let mut others: Vec<u32> = tree
-                .locate_in_envelope_intersecting(&env)
-                .map(|g| g.data)
-                .filter(|&j| j > k)
-                .collect();
-            others.sort_unstable();
-            for j in others {
-                let f = &net.edges[j as usize];
-                if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
+    // Each edge against the later edges whose boxes meet its own, in parallel a chunk of edges
+    // at a time: both edges' ends on the other (T-junctions) and proper crossings.
+    let per_chunk: Vec<(Vec<OnEdge>, Vec<Crossing>)> = net
+        .edges
+        .par_chunks(EDGE_CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| {
+            let mut on = Vec::new();
+            let mut crossings = Vec::new();
+            let mut others: Vec<u32> = Vec::new();
+            for (i, e) in chunk.iter().enumerate() {
+                if e.a == e.b {
                     continue;
                 }
-                let (c, d) = flat.seg(f);
-                if let Some((t, s)) = crossing(a, b, c, d, tol) {
-                    let at = to3(a + (b - a) * t);
-                    defects.push(Defect::Crossing {
-                        edges: [k, j],
-                        at: at.to_array(),
-                    });
-                    cuts.push(Cut {
-                        edge: k,
-                        t,
-                        node: None,
-                        at,
-                    });
-                    cuts.push(Cut {
-                        edge: j,
-                        t: s,
-                        node: None,
-                        at,
-                    });
+                let k = (c * EDGE_CHUNK + i) as u32;
+                let (a, b) = flat.seg(e);
+                let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
+                let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
+                for p in lonely.locate_in_envelope(&env) {
+                    if let Some(t) = interior_param(a, b, flat.pts[p.data as usize], tol) {
+                        on.push((k, p.data, t));
+                    }
+                }
+                others.clear();
+                others.extend(
+                    tree.locate_in_envelope_intersecting(&env)
+                        .map(|g| g.data)
+                        .filter(|&j| j > k),
+                );
+                others.sort_unstable();
+                for &j in &others {
+                    let f = &net.edges[j as usize];
+                    let (c, d) = flat.seg(f);
+                    for n in [f.a, f.b] {
+                        if n != e.a && n != e.b {
+                            if let Some(t) = interior_param(a, b, flat.pts[n as usize], tol) {
+                                on.push((k, n, t));
+                            }
+                        }
+                    }
+                    for n in [e.a, e.b] {
+                        if n != f.a && n != f.b {
+                            if let Some(t) = interior_param(c, d, flat.pts[n as usize], tol) {
+                                on.push((j, n, t));
+                            }
+                        }
+                    }
+                    if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
+                        continue;
+                    }
+                    if let Some((t, s)) = crossing(a, b, c, d, tol) {
+                        crossings.push((k, j, t, s, to3(a + (b - a) * t)));
+                    }
                 }
             }
-            (defects, cuts)
+            (on, crossings)
         })
         .collect();
+    let mut on: Vec<OnEdge> = Vec::new();
+    let mut crossings: Vec<Crossing> = Vec::new();
+    for (o, c) in per_chunk {
+        on.extend(o);
+        crossings.extend(c);
+    }
+    // A node on an edge is found once per edge ending at it: once is enough.
+    on.sort_unstable_by_key(|&(edge, node, _)| (edge, node));
+    on.dedup_by_key(|&mut (edge, node, _)| (edge, node));
+    // In edge order: each edge's T-junctions (by node), then its crossings with later edges.
     let mut defects = Vec::new();
     let mut cuts = Vec::new();
-    for (d, c) in per_edge {
-        defects.extend(d);
-        cuts.extend(c);
+    let (mut i, mut j) = (0, 0);
+    while i < on.len() || j < crossings.len() {
+        let take_on = j == crossings.len() || (i < on.len() && on[i].0 <= crossings[j].0);
+        if take_on {
+            let (edge, node, t) = on[i];
+            let at = net.nodes[node as usize].p;
+            defects.push(Defect::TJunction {
+                node,
+                edge,
+                at: at.to_array(),
+            });
+            cuts.push(Cut {
+                edge,
+                t,
+                node: Some(node),
+                at,
+            });
+            i += 1;
+        } else {
+            let (k, other, t, s, at) = crossings[j];
+            defects.push(Defect::Crossing {
+                edges: [k, other],
+                at: at.to_array(),
+            });
+            cuts.push(Cut {
+                edge: k,
+                t,
+                node: None,
+                at,
+            });
+            cuts.push(Cut {
+                edge: other,
+                t: s,
+                node: None,
+                at,
+            });
+            j += 1;
+        }
     }
     Some((defects, cuts))
 }
