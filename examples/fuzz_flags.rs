@@ -97,6 +97,8 @@ const COMMANDS: &[(&[&str], &[&str])] = &[
             "--murray",
             "--smooth",
             "--seed",
+            "--weld",
+            "--weld-rel",
         ],
     ),
     (
@@ -158,7 +160,13 @@ const COMMANDS: &[(&[&str], &[&str])] = &[
             "ROOT/fixtures/networks/ezdxf_curves_in.dxf",
             "OUT/c.json",
         ],
-        &["--weld", "--weld-rel", "--chord-tolerance", "--size"],
+        &[
+            "--weld",
+            "--weld-rel",
+            "--chord-tolerance",
+            "--max-points",
+            "--size",
+        ],
     ),
     (
         &[

@@ -42,7 +42,10 @@ fn refusals_never_echo_control_characters() {
         let path = dir.path().join(format!("input.{}", target.ext));
         // The seeds proper: kept crash inputs are replayed above, and some take a second each.
         let seeds = seed_files(root, target);
-        for file in seeds.iter().filter(|f| !f.starts_with(root.join("fuzz/crashes"))) {
+        for file in seeds
+            .iter()
+            .filter(|f| !f.starts_with(root.join("fuzz/crashes")))
+        {
             let seed = std::fs::read(file).expect("read the seed");
             // Spliced in at 24 places spread over the file (over names, numbers, keywords),
             // replacing the byte there or inserted before it.

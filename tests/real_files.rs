@@ -255,3 +255,52 @@ fn growth_on_several_bodies_needs_a_root_on_each_and_says_so() -> TestResult {
     assert_eq!(info(&[one])?["components"], 1);
     Ok(())
 }
+
+#[test]
+fn a_small_file_that_means_millions_of_points_says_how_to_read_it() -> TestResult {
+    // 16 KB: an outline and a MINSERT of 180,000 holes, about 2 M points at 0.05 mm.
+    let dir = tempfile::tempdir()?;
+    let dxf = path("networks/perforated_panel.dxf")?;
+    let out = dir.path().join("panel.json");
+    let out = out.to_str().ok_or("path")?;
+    let o = lamina(&["convert", &dxf, out]);
+    assert_eq!(o.status.code(), Some(2));
+    for part in [
+        "expands to more than",
+        "--max-points",
+        "is the default for a file of",
+    ] {
+        assert!(stderr(&o).contains(part), "{}", stderr(&o));
+    }
+    assert!(!std::path::Path::new(out).exists());
+    // Coarser curves fit the default budget: four chords a hole.
+    let o = lamina(&["convert", "--chord-tolerance", "0.5", &dxf, out]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let net: Value = serde_json::from_slice(&std::fs::read(out)?)?;
+    assert_eq!(net["nodes"].as_array().map(Vec::len), Some(180_000 * 4 + 4));
+    // The flag is checked, and a budget given is the one held.
+    for bad in ["0", "-5", "NaN", "1.5", "1e300"] {
+        let flag = format!("--max-points={bad}");
+        let o = lamina(&["convert", &flag, &dxf, out]);
+        assert!(
+            stderr(&o).contains("--max-points: must be"),
+            "{bad}: {}",
+            stderr(&o)
+        );
+    }
+    let o = lamina(&[
+        "convert",
+        "--max-points",
+        "1000",
+        "--chord-tolerance",
+        "0.5",
+        &dxf,
+        out,
+    ]);
+    assert!(
+        stderr(&o).contains("more than 1000 points"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}

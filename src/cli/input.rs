@@ -12,7 +12,7 @@ use lamina::mesh::io::{read_mesh, stl_bodies};
 use lamina::mesh::MeshWeld;
 use lamina::network::arrangement::split_crossings;
 use lamina::network::io::units::LengthUnit;
-use lamina::network::io::{read_network, Imported, ReadOptions};
+use lamina::network::io::{read_network, Imported, ReadOptions, MAX_DXF_POINTS};
 use lamina::network::Weld;
 
 use lamina::mesh::closest::SurfaceIndex;
@@ -41,6 +41,10 @@ pub struct ReadArgs {
     /// Node a flat drawing: every crossing and T-junction becomes a shared node, edges split
     #[arg(long)]
     pub split_crossings: bool,
+    /// The most points a DXF may expand to, curves flattened and blocks inserted [default: a
+    /// million plus 20 per byte of the file, at most 20 million]
+    #[arg(long, value_name = "N")]
+    pub max_points: Option<f64>,
 }
 
 impl Default for ReadArgs {
@@ -52,6 +56,7 @@ impl Default for ReadArgs {
             chord_tolerance: ReadOptions::DEFAULT_CHORD_TOLERANCE,
             strict: false,
             split_crossings: false,
+            max_points: None,
         }
     }
 }
@@ -91,10 +96,21 @@ impl ReadArgs {
                 )
             })?),
         };
+        let max_points = match self.max_points {
+            None => None,
+            Some(n) if n.fract() == 0.0 && (1.0..=MAX_DXF_POINTS as f64).contains(&n) => {
+                Some(n as usize)
+            }
+            Some(n) => bail!(
+                "--max-points: must be a whole number from 1 to {MAX_DXF_POINTS}, got {}",
+                lamina::text::num(n)
+            ),
+        };
         Ok(ReadOptions {
             weld,
             units,
             chord_tolerance: c,
+            max_points,
         })
     }
 

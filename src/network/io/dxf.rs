@@ -15,7 +15,9 @@ use dxf::tables::Layer;
 use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
 use glam::DVec3;
 
-use super::dxf_entities::{collect, from_ocs, ocs_axes, Collected, Context, MAX_POINTS};
+use super::dxf_entities::{
+    collect, default_max_points, from_ocs, ocs_axes, Collected, Context, MAX_POINTS,
+};
 use super::dxf_split::Part;
 use super::units::{dxf_units, scale_to_mm};
 use super::{Imported, ReadOptions};
@@ -47,20 +49,34 @@ pub(super) fn read_bytes(
         Some(parts) => parts,
         None => vec![Part::whole(bytes)],
     };
-    let pieces = parse_and_collect(path, &parts, opts.chord_tolerance / units.scale_to_mm)?;
+    let budget = opts
+        .max_points
+        .unwrap_or_else(|| default_max_points(bytes.len()))
+        .min(MAX_POINTS);
+    let tol = opts.chord_tolerance / units.scale_to_mm;
+    let pieces = parse_and_collect(path, &parts, tol, budget)?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
     let mut inserts = 0;
     let mut base = 0usize;
     let total: usize = pieces.iter().map(|p| p.points.len()).sum();
-    if pieces.iter().any(|p| p.over_budget) || total > MAX_POINTS {
+    if pieces.iter().any(|p| p.over_budget) || total > budget {
         return Err(ReadError::file(
             path,
             format!(
-                "the drawing expands to more than {MAX_POINTS} points (curves flattened at \
-                 {} mm, blocks inserted): raise --chord-tolerance or explode the arrays",
-                opts.chord_tolerance
+                "the drawing expands to more than {budget} points (curves flattened at {} mm, \
+                 blocks inserted): raise --chord-tolerance, explode the arrays, or allow more \
+                 with --max-points (at most {MAX_POINTS}){}",
+                opts.chord_tolerance,
+                if opts.max_points.is_none() && budget < MAX_POINTS {
+                    format!(
+                        "; {budget} is the default for a file of {} bytes",
+                        bytes.len()
+                    )
+                } else {
+                    String::new()
+                }
             ),
         ));
     }
@@ -129,6 +145,7 @@ fn parse_and_collect(
     path: &Path,
     parts: &[Part],
     chord_tolerance: f64,
+    budget: usize,
 ) -> Result<Vec<Collected>, ReadError> {
     let first = match parse_part(path, &parts[0]) {
         Ok(d) => d,
@@ -147,7 +164,7 @@ fn parse_and_collect(
             .iter()
             .map(|part| {
                 let ctx = &ctx;
-                scope.spawn(move || parse_part(path, part).map(|d| collect(&d, ctx, MAX_POINTS)))
+                scope.spawn(move || parse_part(path, part).map(|d| collect(&d, ctx, budget)))
             })
             .collect();
         handles
@@ -162,7 +179,7 @@ fn parse_and_collect(
     if rest.iter().any(|r| r.is_err()) {
         return Err(first_error(path, rest.into_iter().map(|r| r.err())));
     }
-    let mut pieces = vec![collect(&first, &ctx, MAX_POINTS)];
+    let mut pieces = vec![collect(&first, &ctx, budget)];
     pieces.extend(rest.into_iter().flatten());
     Ok(pieces)
 }

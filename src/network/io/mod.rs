@@ -7,6 +7,7 @@
 
 pub mod dxf;
 mod dxf_entities;
+pub use dxf_entities::{default_max_points, MAX_POINTS as MAX_DXF_POINTS};
 mod dxf_split;
 pub(crate) mod dxf_write;
 mod json;
@@ -65,6 +66,9 @@ pub struct ReadOptions {
     /// Largest distance, in mm, between a curve (arc, bulge, ellipse, spline) and the chords
     /// it is read as. Default 0.05 mm.
     pub chord_tolerance: f64,
+    /// The most points a DXF may expand to (curves flattened, blocks inserted), at most
+    /// `dxf_entities::MAX_POINTS`. Default: `default_max_points` of the file's size.
+    pub max_points: Option<usize>,
 }
 
 impl ReadOptions {
@@ -77,6 +81,7 @@ impl Default for ReadOptions {
             weld: Weld::DEFAULT,
             units: None,
             chord_tolerance: Self::DEFAULT_CHORD_TOLERANCE,
+            max_points: None,
         }
     }
 }
