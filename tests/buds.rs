@@ -332,3 +332,33 @@ fn frames_show_the_growth() -> TestResult {
     assert!(frames.join("frame-00001.png").exists() && png.exists());
     Ok(())
 }
+
+#[test]
+fn a_refused_run_leaves_no_frames_folder() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let frames = dir.path().join("frames");
+    let frames = frames.to_str().ok_or("path")?;
+    let program = fixture("buds/split.bud");
+    let program = program.to_str().ok_or("path")?;
+    let form = dir.path().join("form.stl");
+    let form = form.to_str().ok_or("path")?;
+    let unwritable = dir.path().join("missing/form.stl");
+    let unwritable = unwritable.to_str().ok_or("path")?;
+    // Refused before growing (a cap below four cells, a render size of 0), and after growing
+    // (the form cannot be written): the folder this run made is gone each time.
+    for args in [
+        vec!["--cells", "0", "-o", form],
+        vec!["--size", "0", "-o", form],
+        vec!["--cells", "200", "-o", unwritable],
+    ] {
+        let mut all = vec!["buds", program, "--frames", frames, "--every", "50"];
+        all.extend(args);
+        let o = lamina(&all);
+        assert_eq!(o.status.code(), Some(2), "{all:?}: {}", stderr(&o));
+        assert!(
+            !std::path::Path::new(frames).exists(),
+            "{all:?} left the frames folder"
+        );
+    }
+    Ok(())
+}

@@ -3,11 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
+use super::venation::FramesDir;
 use lamina::grow::buds::{
     read_program, skin, Form, Growth, GrowthOptions, SkinOptions, SkinReport,
 };
@@ -98,27 +99,26 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
     if args.every == 0 {
         bail!("--every 0: give at least 1 cell between frames");
     }
+    lamina::mesh::io::check_render_size(args.size).map_err(|m| anyhow::anyhow!("--size: {m}"))?;
     let program = read_program(&args.program)?;
     let options = GrowthOptions {
         max_cells: args.cells,
         clearance: args.clearance,
         ..GrowthOptions::default()
     };
-    if let Some(dir) = &args.frames {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
-    }
-    let bar = progress(args.cells as u64);
     let in_program =
         |e: lamina::grow::buds::BudError| anyhow::anyhow!("{}: {e}", args.program.display());
     let mut growth = Growth::new(&program, options, args.seed).map_err(in_program)?;
+    // Made once everything is checked; removed again if the run fails before its outputs.
+    let frames_dir = args.frames.as_deref().map(FramesDir::create).transpose()?;
+    let bar = progress(args.cells as u64);
     let mut next_frame = 0;
     let mut frames = 0;
     loop {
-        if let Some(dir) = &args.frames {
+        if let Some(dir) = &frames_dir {
             if growth.cells() >= next_frame {
                 frames += 1;
-                write_frame(&growth, dir, frames, args.size.min(1024))?;
+                write_frame(&growth, dir.path, frames, args.size.min(1024))?;
                 next_frame = growth.cells() + args.every;
             }
         }
@@ -152,6 +152,9 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             serde_json::to_writer_pretty(&mut *w, &report)?;
             Ok(())
         })?;
+    }
+    if let Some(dir) = frames_dir {
+        dir.keep();
     }
     Ok(report)
 }

@@ -363,13 +363,7 @@ pub fn frames_dir(args: &Args) -> Result<Option<FramesDir<'_>>> {
         bail!("--every must be at least 1");
     }
     check_render_size(args.frame_size).map_err(|m| anyhow::anyhow!("--frame-size: {m}"))?;
-    let created = !dir.exists();
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("--frames {}: cannot create the folder", dir.display()))?;
-    Ok(Some(FramesDir {
-        path: dir,
-        remove: created,
-    }))
+    Ok(Some(FramesDir::create(dir)?))
 }
 
 /// The frames folder of a run; removed on drop when this run made it and did not finish.
@@ -379,6 +373,17 @@ pub struct FramesDir<'a> {
 }
 
 impl FramesDir<'_> {
+    /// Makes the folder (if missing) for a run that has checked all its flags.
+    pub fn create(path: &Path) -> Result<FramesDir<'_>> {
+        let created = !path.exists();
+        std::fs::create_dir_all(path)
+            .with_context(|| format!("--frames {}: cannot create the folder", path.display()))?;
+        Ok(FramesDir {
+            path,
+            remove: created,
+        })
+    }
+
     /// The run finished: the folder stays.
     pub fn keep(mut self) {
         self.remove = false;
