@@ -242,23 +242,12 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         let mut mesh = read_mesh(path)?;
         let weld = match (args.weld, args.weld_rel) {
             (None, None) => None,
-            _ => {
-                let tol = opts.weld.tolerance_for(&mesh.bbox());
-                Some(mesh.weld(tol))
-            }
+            _ => Some(weld_mesh(path, &mut mesh, opts.weld, quiet)),
         };
         let notes = MeshNotes {
             bodies: stl_bodies(path),
             weld,
         };
-        if !quiet {
-            if let Some(w) = &notes.weld {
-                eprintln!(
-                    "lamina: {}: welded {} vertices within {:e} mm, {} triangles collapsed and dropped",
-                    path.display(), w.merged, w.tolerance, w.collapsed_triangles
-                );
-            }
-        }
         Loaded::Mesh(mesh, notes)
     } else {
         args.check_units_flag(path)?;
@@ -270,6 +259,21 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         args.split(path, &mut imported, quiet)?;
         Loaded::Network(Box::new(imported))
     })
+}
+
+/// Welds a mesh read from `path` and says what it joined (unless `quiet`).
+pub fn weld_mesh(path: &Path, mesh: &mut TriMesh, weld: Weld, quiet: bool) -> MeshWeld {
+    let w = mesh.weld(weld.tolerance_for(&mesh.bbox()));
+    if !quiet {
+        eprintln!(
+            "lamina: {}: welded {} vertices within {} mm, {} triangles collapsed and dropped",
+            path.display(),
+            w.merged,
+            lamina::text::num(w.tolerance),
+            w.collapsed_triangles
+        );
+    }
+    w
 }
 
 /// An OBJ with `f` records and no `l` records is a mesh; anything else is read as a network.

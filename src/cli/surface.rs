@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use glam::DVec3;
 use serde_json::json;
 
-use super::input::ReadArgs;
+use super::input::{weld_mesh, ReadArgs};
 use super::venation::{frames_dir, save_frame, write_json, Args, ModeArg};
 use lamina::files::extension;
 use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
@@ -57,15 +57,7 @@ pub fn read_surface(path: &Path, weld: &SurfaceWeld) -> Result<TriMesh> {
     let tolerance = weld.weld()?;
     let mut mesh = read_mesh(path)?;
     if let Some(w) = tolerance {
-        let tol = w.tolerance_for(&mesh.bbox());
-        let stats = mesh.weld(tol);
-        eprintln!(
-            "lamina: {}: welded {} vertices within {} mm, {} triangles collapsed and dropped",
-            path.display(),
-            stats.merged,
-            lamina::text::num(stats.tolerance),
-            stats.collapsed_triangles
-        );
+        weld_mesh(path, &mut mesh, w, false);
     }
     let dropped = mesh.drop_degenerate();
     if mesh.triangles.is_empty() {

@@ -21,8 +21,8 @@ pub const MAX_CURVE_POINTS: usize = 1_000_000;
 /// cost a second to read.
 pub const MAX_ARC_POINTS: usize = 100_000;
 
-/// Points a spline may flatten to per control (or fit) point, up to `MAX_CURVE_POINTS`: a span
-/// of a CAD spline takes a few to a few hundred at 0.05 mm.
+/// Points a spline may flatten to per control (or fit) point, at least `MAX_ARC_POINTS` and at
+/// most `MAX_CURVE_POINTS` in all: a span of a CAD spline takes a few to a few hundred at 0.05 mm.
 pub const POINTS_PER_CONTROL_POINT: usize = 1_000;
 
 /// The point budget of a spline of `n` control or fit points.
@@ -42,12 +42,11 @@ pub const MAX_DEGREE: usize = 32;
 pub enum CurveError {
     #[error("a non-finite value ({0})")]
     NonFinite(&'static str),
-    // `tol` is in the drawing's units, which the reader's message would have to say: left out.
+    // The tolerance is in the drawing's units, which this message cannot say: left out.
     #[error("needs {needed} points within the chord tolerance (limit {limit} for this curve): raise --chord-tolerance")]
     TooManyPoints {
         /// A count, or "more than N" where subdivision stopped at the limit.
         needed: String,
-        tol: f64,
         limit: usize,
     },
     #[error("{0}")]
@@ -67,7 +66,6 @@ fn arc_segments(radius: f64, sweep: f64, tol: f64) -> Result<usize, CurveError> 
     if n.is_nan() || n > MAX_ARC_POINTS as f64 {
         return Err(CurveError::TooManyPoints {
             needed: format!("{n}"),
-            tol,
             limit: MAX_ARC_POINTS,
         });
     }
@@ -149,7 +147,6 @@ pub fn ellipse(
     if n.is_nan() || n > MAX_ARC_POINTS as f64 {
         return Err(CurveError::TooManyPoints {
             needed: format!("{n}"),
-            tol,
             limit: MAX_ARC_POINTS,
         });
     }
@@ -262,7 +259,7 @@ impl Nurbs<'_> {
         for i in p..knots.len() - p - 1 {
             if knots[i] < knots[i + 1] && lo <= knots[i] && knots[i + 1] <= hi {
                 subdivide(&ctrl[i - p..=i], tol, 0, &mut out, &mut budget)
-                    .map_err(|Exhausted| too_many(tol, limit))?;
+                    .map_err(|Exhausted| too_many(limit))?;
             }
         }
         Ok(out)
@@ -340,10 +337,9 @@ fn subdivide(
 /// Subdivision spent the curve's point budget.
 struct Exhausted;
 
-fn too_many(tol: f64, limit: usize) -> CurveError {
+fn too_many(limit: usize) -> CurveError {
     CurveError::TooManyPoints {
         needed: format!("more than {limit}"),
-        tol,
         limit,
     }
 }
@@ -396,7 +392,7 @@ pub fn through_points(points: &[DVec3], closed: bool, tol: f64) -> Result<Vec<DV
         let m2 = (p2 - p1) / d1 - (p3 - p1) / (d1 + d2) + (p3 - p2) / d2;
         let (t1, t2) = (m1 * d1, m2 * d1);
         let bez = [p1, p1 + t1 / 3.0, p2 - t2 / 3.0, p2].map(|c| c.extend(1.0));
-        subdivide(&bez, tol, 0, &mut out, &mut budget).map_err(|Exhausted| too_many(tol, limit))?;
+        subdivide(&bez, tol, 0, &mut out, &mut budget).map_err(|Exhausted| too_many(limit))?;
     }
     Ok(out)
 }

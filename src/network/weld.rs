@@ -62,17 +62,14 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
         merged: points.len() - nodes.len(),
         ..Default::default()
     };
+    // Node pairs in the direction drawn.
     let ends: Vec<(u32, u32)> = segments
         .par_iter()
-        .map(|&(a, b)| {
-            let (a, b) = (map[a as usize], map[b as usize]);
-            (a.min(b), a.max(b))
-        })
+        .map(|&(a, b)| (map[a as usize], map[b as usize]))
         .collect();
     let repeated = repeated_segments(&ends, nodes.len());
     let mut edges = Vec::with_capacity(segments.len());
-    for (k, &(a, b)) in segments.iter().enumerate() {
-        let (a, b) = (map[a as usize], map[b as usize]);
+    for (k, &(a, b)) in ends.iter().enumerate() {
         if a == b {
             stats.zero_length_segments += 1;
         } else if repeated[k] {
@@ -89,13 +86,14 @@ pub fn assemble(points: &[DVec3], segments: &[(u32, u32)], weld: Weld) -> (Netwo
     (network, stats)
 }
 
-/// Marks every segment whose two ends (lower node first) an earlier segment already joins.
+/// Marks every segment whose two nodes, in either order, an earlier segment already joins.
 /// Segments are grouped by their lower end with a counting sort (node order follows the
 /// drawing, so this reads memory nearly in order); a group is sorted only when it has more
 /// than one member.
 fn repeated_segments(ends: &[(u32, u32)], nodes: usize) -> Vec<bool> {
+    let lower = |&(a, b): &(u32, u32)| (a.min(b), a.max(b));
     let mut start = vec![0u32; nodes + 1];
-    for &(a, b) in ends {
+    for (a, b) in ends.iter().map(lower) {
         if a != b {
             start[a as usize + 1] += 1;
         }
@@ -105,7 +103,7 @@ fn repeated_segments(ends: &[(u32, u32)], nodes: usize) -> Vec<bool> {
     }
     let mut fill = start.clone();
     let mut by_lower = vec![0u32; start[nodes] as usize];
-    for (k, &(a, b)) in ends.iter().enumerate() {
+    for (k, (a, b)) in ends.iter().map(lower).enumerate() {
         if a != b {
             by_lower[fill[a as usize] as usize] = k as u32;
             fill[a as usize] += 1;
@@ -119,7 +117,7 @@ fn repeated_segments(ends: &[(u32, u32)], nodes: usize) -> Vec<bool> {
             continue;
         }
         group.clear();
-        group.extend(members.iter().map(|&k| (ends[k as usize].1, k)));
+        group.extend(members.iter().map(|&k| (lower(&ends[k as usize]).1, k)));
         group.sort_unstable();
         for pair in group.windows(2) {
             if pair[0].0 == pair[1].0 {
