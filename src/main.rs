@@ -107,7 +107,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
-        Command::Plates(args) => cli::plates::run(args).map(Within::from),
+        Command::Plates(args) => cli::plates::run(args).map(within),
         Command::Nest(args) => cli::nest::run(*args).map(Within::from),
         Command::Audit(args) => cli::planarize::audit_run(args).map(within),
     };

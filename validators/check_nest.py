@@ -2,8 +2,14 @@
 with lamina.
 
 - Every sheet DXF audits clean, is R2000 or later in mm ($INSUNITS = 4), has its sheet outline
-  on SHEET, parts as closed LWPOLYLINEs on CUT, tag strokes as LINEs on ETCH, and no TEXT or
-  MTEXT anywhere.
+  on SHEET, parts as closed counter-clockwise LWPOLYLINEs on CUT_OUTER, holes as closed
+  clockwise ones on CUT_INNER, etching as LWPOLYLINEs on ETCH, lead lines only on LEAD,
+  remnants on REMNANT, and no TEXT or MTEXT anywhere.
+- File order per part: its etching, then its inner contours, then its outer contour (each inside
+  the outer one that follows).
+- Every placement's rotation is one of the allowed angles, bit for bit, and the part on the
+  sheet is the plate's outline turned by it and moved by the offset (within 1e-6 mm).
+- Remnants lie on their sheet, at least the spacing from every part, at least the minimum size.
 - Every part lies inside its sheet less the margin; any two parts on a sheet are at least the
   spacing apart (shapely distances, an STRtree for neighbours).
 - Parts in all sheets = BOM rows = plates in plates.json; the part areas match the plates'
@@ -21,7 +27,7 @@ from pathlib import Path
 import ezdxf
 from ezdxf import recover
 from shapely import STRtree
-from shapely.geometry import Polygon, box
+from shapely.geometry import LineString, Polygon, box
 
 DENSITY = 7.9  # g/cm³, stainless
 
@@ -29,6 +35,14 @@ DENSITY = 7.9  # g/cm³, stainless
 def fail(msg):
     print(f"check_nest: FAILED: {msg}", file=sys.stderr)
     sys.exit(1)
+
+
+def flat(e):
+    return [(v.x, v.y) for v in ezdxf.path.make_path(e).flattening(0.001)]
+
+
+def signed_area(pts):
+    return 0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))
 
 
 def sheet_polygons(path, width, height):
@@ -48,23 +62,49 @@ def sheet_polygons(path, width, height):
     s = Polygon([(x, y) for x, y, *_ in sheet[0].get_points()])
     if abs(s.area - width * height) > 1e-6 * width * height:
         fail(f"{path}: sheet outline area {s.area} is not {width} × {height}")
-    parts = []
+    parts, holes, remnants = [], [], []
+    etch, inner, etched = [], [], 0
     for e in msp:
         layer = e.dxf.layer
-        if layer == "CUT":
-            if e.dxftype() != "LWPOLYLINE" or not e.closed:
-                fail(f"{path}: CUT holds a {e.dxftype()} that is not a closed LWPOLYLINE")
-            p = Polygon([(x, y) for x, y, *_ in e.get_points()])
+        if layer in ("CUT_OUTER", "CUT_INNER", "ETCH", "LEAD", "REMNANT") and e.dxftype() != "LWPOLYLINE":
+            fail(f"{path}: {layer} holds a {e.dxftype()}")
+        if layer == "CUT_OUTER":
+            if not e.closed:
+                fail(f"{path}: an outer contour is not closed")
+            pts = [(x, y) for x, y, *_ in e.get_points()]
+            if signed_area(pts) <= 0:
+                fail(f"{path}: an outer contour runs clockwise")
+            p = Polygon(pts)
             if not p.is_valid or p.area <= 0:
-                fail(f"{path}: a CUT outline is not a valid polygon")
-            parts.append(p)
+                fail(f"{path}: a CUT_OUTER outline is not a valid polygon")
+            for h in inner:
+                if not p.contains(h):
+                    fail(f"{path}: an inner contour before part {len(parts)} is not inside it")
+            for line in etch:
+                if not p.buffer(1e-6).contains(line):
+                    fail(f"{path}: etching before part {len(parts)} is not on it")
+            holes.extend(inner)
+            parts.append(Polygon(pts, [list(h.exterior.coords) for h in inner]))
+            etch, inner = [], []
+        elif layer == "CUT_INNER":
+            if not e.closed:
+                fail(f"{path}: an inner contour is not closed")
+            pts = flat(e)
+            if signed_area(pts) >= 0:
+                fail(f"{path}: an inner contour runs counter-clockwise")
+            inner.append(Polygon(pts))
         elif layer == "ETCH":
-            if e.dxftype() != "LINE":
-                fail(f"{path}: ETCH holds a {e.dxftype()}, expected LINE strokes")
-        elif layer != "SHEET":
+            if inner:
+                fail(f"{path}: etching after an inner contour of part {len(parts)}: etch comes first")
+            etch.append(LineString([(x, y) for x, y, *_ in e.get_points()]))
+            etched += 1
+        elif layer == "REMNANT":
+            remnants.append(Polygon([(x, y) for x, y, *_ in e.get_points()]))
+        elif layer not in ("SHEET", "LEAD"):
             fail(f"{path}: unexpected layer {layer}")
-    etched = len(msp.query("LINE"))
-    return parts, etched
+    if etch or inner:
+        fail(f"{path}: etching or inner contours after the last outer contour")
+    return parts, etched, remnants
 
 
 def main():
@@ -74,23 +114,54 @@ def main():
     ap.add_argument("--sheet", required=True, help="WIDTHxHEIGHT, mm")
     ap.add_argument("--margin", type=float, required=True)
     ap.add_argument("--spacing", type=float, required=True)
+    ap.add_argument("--rotations", default="0,90,180,270", help="allowed angles, or any")
+    ap.add_argument("--remnant-min", default="300x300")
     args = ap.parse_args()
     folder = Path(args.folder)
     width, height = (float(v) for v in args.sheet.lower().split("x"))
 
-    plates = {p["id"]: p for p in json.load(open(args.plates))["plates"]}
+    plates_doc = json.load(open(args.plates))
+    plates = {p["id"]: p for p in plates_doc["plates"]}
+    segments = plates_doc.get("hole_segments", 48)
+
+    def plate_area(p):
+        """The outline less its holes, each the file's hole_segments-gon."""
+        if not p["holes"]:
+            return Polygon(p["outline"]).area
+        r = p["bolt"]["hole_diameter"] / 2
+        gon = 0.5 * segments * r * r * math.sin(2 * math.pi / segments)
+        return Polygon(p["outline"]).area - len(p["holes"]) * gon
     nest = json.load(open(folder / "nest.json"))
     with open(folder / "bom.csv", newline="") as f:
-        bom = list(csv.DictReader(f))
+        rows = list(csv.DictReader(f))
+    bom = [r for r in rows if r["kind"] == "plate"]
 
-    inner = box(args.margin, args.margin, width - args.margin, height - args.margin)
+    allowed = None if args.rotations == "any" else [float(a) % 360.0 for a in args.rotations.split(",")]
+    rmin = sorted(float(v) for v in args.remnant_min.lower().split("x"))
     all_areas = []
+    n_remnants = 0
+    total_used = total_stock = 0.0
     worst_gap = math.inf
     strokes = 0
     sheet_area = width * height
     for s in nest["sheets"]:
-        parts, etched = sheet_polygons(folder / s["file"], width, height)
+        width, height = s["size"]
+        sheet_area = width * height
+        inner = box(args.margin, args.margin, width - args.margin, height - args.margin)
+        parts, etched, remnants = sheet_polygons(folder / s["file"], width, height)
         strokes += etched
+        sheet_box = box(0, 0, width, height).buffer(1e-9)
+        if len(remnants) != len(s["remnants"]):
+            fail(f"{s['file']}: {len(remnants)} remnants drawn, nest.json lists {len(s['remnants'])}")
+        for r in remnants:
+            n_remnants += 1
+            x0, y0, x1, y1 = r.bounds
+            if not sheet_box.contains(r) or sorted((x1 - x0, y1 - y0))[0] < rmin[0] - 1e-9 \
+                    or sorted((x1 - x0, y1 - y0))[1] < rmin[1] - 1e-9:
+                fail(f"{s['file']}: remnant {r.bounds} is off the sheet or under {args.remnant_min}")
+            for p in parts:
+                if p.distance(r) < args.spacing - 1e-6:
+                    fail(f"{s['file']}: remnant {r.bounds} is {p.distance(r):.3f} mm from a part")
         if len(parts) != len(s["parts"]):
             fail(f"{s['file']}: {len(parts)} outlines on CUT, nest.json lists {len(s['parts'])}")
         for k, p in enumerate(parts):
@@ -105,10 +176,12 @@ def main():
                 worst_gap = min(worst_gap, d)
                 if d < args.spacing - 1e-9:
                     fail(f"{s['file']}: parts {k} and {j} are {d:.6f} mm apart (< {args.spacing})")
-        used = sum(p.area for p in parts)
+        used = sum(plate_area(plates[pid]) for pid in s["parts"])
         if abs(used / sheet_area - s["utilisation"]) > 1e-9:
-            fail(f"{s['file']}: utilisation {s['utilisation']} but the DXF gives {used / sheet_area}")
-        all_areas.extend(p.area for p in parts)
+            fail(f"{s['file']}: utilisation {s['utilisation']} but the plates give {used / sheet_area}")
+        total_used += used
+        total_stock += sheet_area
+        all_areas.extend(Polygon(p.exterior).area for p in parts)
 
     if not (len(all_areas) == len(bom) == len(plates)):
         fail(f"{len(all_areas)} parts on sheets, {len(bom)} BOM rows, {len(plates)} plates")
@@ -116,11 +189,28 @@ def main():
     for a, b in zip(sorted(all_areas), want):
         if abs(a - b) > 1e-6 * max(b, 1.0):
             fail(f"part areas on the sheets do not match the plates' ({a} vs {b})")
-    total = sum(all_areas) / (len(nest["sheets"]) * sheet_area)
+    total = total_used / total_stock
     if abs(total - nest["total"]["utilisation"]) > 1e-9:
         fail(f"total utilisation {nest['total']['utilisation']}, recomputed {total}")
 
     sheet_of = {pid: s["file"] for s in nest["sheets"] for pid in s["parts"]}
+    # Rotations: exactly an allowed angle, and the geometry on the sheet turned by it.
+    drawn = {}
+    for s in nest["sheets"]:
+        width, height = s["size"]
+        for p in sheet_polygons(folder / s["file"], width, height)[0]:
+            drawn.setdefault(s["file"], []).append(p)
+    for pl in nest["placements"]:
+        a = pl["rotation_deg"]
+        if allowed is not None and a not in allowed:
+            fail(f"{pl['id']}: rotation {a!r}° is not one of {allowed}")
+        c, sn = math.cos(math.radians(a)), math.sin(math.radians(a))
+        pts = [(c * x - sn * y + pl["offset"][0], sn * x + c * y + pl["offset"][1])
+               for x, y in plates[pl["id"]]["outline"]]
+        want = Polygon(pts)
+        match = [p for p in drawn[pl["sheet"]] if p.exterior.hausdorff_distance(want.exterior) < 1e-6]
+        if not match:
+            fail(f"{pl['id']}: no part on {pl['sheet']} is its outline turned {a}° and moved by the offset")
     for row in bom:
         p = plates.get(row["id"])
         if p is None:
@@ -129,15 +219,16 @@ def main():
             fail(f"BOM row {row['id']}: sheet {row['sheet']}, nest.json says {sheet_of.get(row['id'])}")
         if float(row["thickness_mm"]) != p["thickness"]:
             fail(f"BOM row {row['id']}: thickness {row['thickness_mm']} is not {p['thickness']}")
-        mass = Polygon(p["outline"]).area * p["thickness"] * DENSITY * 1e-6
+        mass = plate_area(p) * p["thickness"] * DENSITY * 1e-6
         if abs(float(row["mass_kg"]) - mass) > 1e-4 + 1e-4 * mass:
             fail(f"BOM row {row['id']}: mass {row['mass_kg']} kg, expected {mass:.4f}")
     if strokes == 0:
-        fail("no tag strokes on ETCH in any sheet")
+        fail("no etching on ETCH in any sheet")
     print(
         f"{folder}: ok ({len(all_areas)} parts on {len(nest['sheets'])} sheets, "
+        f"rotations {'any' if allowed is None else 'exactly ' + args.rotations}, "
         f"closest pair {worst_gap:.3f} mm (spacing {args.spacing}), "
-        f"utilisation {100 * total:.1f} %, {strokes} tag strokes)"
+        f"utilisation {100 * total:.1f} %, {strokes} etched polylines, {n_remnants} remnants)"
     )
 
 

@@ -369,6 +369,12 @@ fn steel(out: &Path) -> Result<Entry> {
         thickness: None,
         edge_thickness: vec![(EdgeSelector::parse("z<1").map_err(anyhow::Error::msg)?, 6.0)],
         weld_gap: 1.0,
+        weld_gap_tolerance: 0.5,
+        node_core: Some(
+            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4").map_err(anyhow::Error::msg)?,
+        ),
+        min_weld_angle: None,
+        bolt: None,
         groups: 7,
         output: dir.join("plates"),
         json: false,
@@ -376,7 +382,11 @@ fn steel(out: &Path) -> Result<Entry> {
     let sheet = DVec2::new(3000.0, 1500.0);
     let nest = super::nest::execute(&super::nest::Args {
         input: dir.join("plates/plates.json"),
-        sheet,
+        sheet: Some(sheet),
+        stock: None,
+        remnant_min: DVec2::new(300.0, 300.0),
+        lead_in: Some(2.0),
+        speeds: None,
         margin: 10.0,
         spacing: 5.0,
         rotations: Rotations::Listed(vec![0.0, 90.0, 180.0, 270.0]),
@@ -387,7 +397,7 @@ fn steel(out: &Path) -> Result<Entry> {
         output: dir.join("cut"),
         json: false,
     })?;
-    let p = &plates.plates;
+    let p = &plates.set.plates;
     let seams = p.iter().filter(|q| q.bolted_to.is_some()).count() / 2;
     let mass: f64 = p
         .iter()

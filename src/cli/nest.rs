@@ -9,30 +9,42 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use glam::DVec2;
+use glam::{DVec2, DVec3};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
-use lamina::fabricate::assembly::{write_scad_from_sheets, SheetPart};
-use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn};
+use lamina::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
+use lamina::fabricate::cutplan::{remnants, times, SpeedTable};
+use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn, Hole};
 use lamina::fabricate::nest::{
-    grown_hull, nest_families, BottomLeft, NestError, NestOptions, Nesting, Rotations, SLACK,
+    grown_hull, BottomLeft, NestError, NestOptions, Nester, Place, Rotations, SLACK,
 };
-use lamina::fabricate::plates_file::{read_plates, PlateRecord};
+use lamina::fabricate::plates_file::{read_plates, CoreRecord, PlateRecord};
 use lamina::fabricate::preview::{sheets_svg, SheetView};
-use lamina::fabricate::tags::etch;
+use lamina::fabricate::tags::part_marks;
 use lamina::files::write_atomic;
 
 /// Stainless steel, g/cm³.
 pub const DENSITY: f64 = 7.9;
 
+/// A stock sheet size and what one costs (any currency; 0 when only sizes matter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stock {
+    pub size: DVec2,
+    pub cost: f64,
+}
+
 #[derive(ClapArgs)]
 pub struct Args {
     /// The plates file `lamina plates` wrote
     pub input: PathBuf,
-    /// Stock sheet, width x height in mm
-    #[arg(long, default_value = "3000x1500", value_parser = parse_sheet)]
-    pub sheet: DVec2,
+    /// Stock sheet, width x height in mm [default: 3000x1500]
+    #[arg(long, value_parser = parse_sheet, conflicts_with = "stock")]
+    pub sheet: Option<DVec2>,
+    /// Stock sheets to choose from per thickness, with the cost of one:
+    /// `3000x1500:120,2500x1250:85`; the cheapest mix per thickness is cut
+    #[arg(long, value_parser = parse_stock)]
+    pub stock: Option<Vec<Stock>>,
     /// Kept clear along every sheet edge, mm
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub margin: f64,
@@ -53,6 +65,17 @@ pub struct Args {
     /// Do not pair congruent quads turned 180°
     #[arg(long)]
     pub no_pairs: bool,
+    /// Free rectangles at least this big are reported as remnants (either way round), mm
+    #[arg(long, default_value = "300x300", value_parser = parse_sheet)]
+    pub remnant_min: DVec2,
+    /// Lead-in and lead-out lines this long in the scrap (LEAD layer), mm; at most half the
+    /// spacing, and shortened inside small holes
+    #[arg(long, allow_negative_numbers = true)]
+    pub lead_in: Option<f64>,
+    /// Cutting, pierce and marking speeds by thickness for the time estimate (JSON like the
+    /// built-in table nest.json repeats) [default: typical stainless steel figures]
+    #[arg(long)]
+    pub speeds: Option<PathBuf>,
     /// Output folder (made if missing)
     #[arg(short, long)]
     pub output: PathBuf,
@@ -64,7 +87,7 @@ pub struct Args {
 fn parse_sheet(s: &str) -> Result<DVec2, String> {
     let (w, h) = s
         .split_once(['x', 'X', '×'])
-        .ok_or_else(|| format!("`{s}`: give the sheet as WIDTHxHEIGHT in mm, like 3000x1500"))?;
+        .ok_or_else(|| format!("`{s}`: give the size as WIDTHxHEIGHT in mm, like 3000x1500"))?;
     let num = |t: &str| {
         t.trim()
             .parse::<f64>()
@@ -73,6 +96,22 @@ fn parse_sheet(s: &str) -> Result<DVec2, String> {
             .ok_or_else(|| format!("`{s}`: `{t}` is not a positive size in mm"))
     };
     Ok(DVec2::new(num(w)?, num(h)?))
+}
+
+fn parse_stock(s: &str) -> Result<Stock, String> {
+    let (size, cost) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: give a stock sheet as WIDTHxHEIGHT:COST, like 3000x1500:120"))?;
+    let cost: f64 = cost
+        .trim()
+        .parse()
+        .ok()
+        .filter(|c: &f64| c.is_finite() && *c >= 0.0 && *c <= 1e12)
+        .ok_or_else(|| format!("`{s}`: `{cost}` is not a cost from 0 to 1e12"))?;
+    Ok(Stock {
+        size: parse_sheet(size)?,
+        cost,
+    })
 }
 
 fn parse_rotations(s: &str) -> Result<Rotations, String> {
@@ -97,21 +136,34 @@ pub struct SheetInfo {
     pub thickness: f64,
     /// Set with --keep-groups.
     pub group: Option<u32>,
+    pub stock: Stock,
     pub parts: Vec<usize>,
     pub area: f64,
+    pub remnants: Vec<[DVec2; 2]>,
+    pub cut_mm: f64,
+    pub pierces: usize,
+    pub etch_mm: f64,
+    pub lead_mm: f64,
+    /// Seconds: laser, plasma.
+    pub time_s: (f64, f64),
 }
 
 pub struct Outcome {
     pub plates: Vec<PlateRecord>,
-    pub nesting: Nesting,
+    pub cores: Vec<CoreRecord>,
+    pub places: Vec<Place>,
     pub sheets: Vec<SheetInfo>,
-    pub sheet_size: DVec2,
 }
 
 impl Outcome {
     pub fn utilisation(&self) -> f64 {
         let used: f64 = self.sheets.iter().map(|s| s.area).sum();
-        used / (self.sheets.len() as f64 * self.sheet_size.x * self.sheet_size.y)
+        let stock: f64 = self
+            .sheets
+            .iter()
+            .map(|s| s.stock.size.x * s.stock.size.y)
+            .sum();
+        used / stock
     }
 }
 
@@ -123,10 +175,94 @@ fn thickness_name(t: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+/// One family's parts on the cheapest stock: every size tried alone, then the last sheet of the
+/// best moved to a cheaper size that takes all its parts. Places are family-local (sheets from
+/// 0), with each sheet's stock.
+fn nest_family(
+    nester: &BottomLeft,
+    outlines: &[Vec<DVec2>],
+    stock: &[Stock],
+    opts: &NestOptions,
+) -> Result<(Vec<Place>, Vec<Stock>), NestError> {
+    let mut best: Option<(f64, Vec<Place>, Vec<Stock>)> = None;
+    let mut too_large = None;
+    for st in stock {
+        let o = NestOptions {
+            sheet: st.size,
+            ..opts.clone()
+        };
+        let n = match nester.nest(outlines, &o) {
+            Ok(n) => n,
+            Err(NestError::TooLarge(list)) => {
+                too_large.get_or_insert(NestError::TooLarge(list));
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        let mut sheets = vec![*st; n.sheets];
+        let mut places = n.places;
+        // The last sheet on a cheaper stock, if one takes all its parts.
+        let last = n.sheets - 1;
+        let on_last: Vec<usize> = (0..places.len()).filter(|&i| places[i].sheet == last).collect();
+        let mut cheapest_first: Vec<&Stock> = stock.iter().collect();
+        cheapest_first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        for cheaper in cheapest_first {
+            if cheaper.cost >= sheets[last].cost {
+                break;
+            }
+            let o = NestOptions {
+                sheet: cheaper.size,
+                ..opts.clone()
+            };
+            let these: Vec<Vec<DVec2>> = on_last.iter().map(|&i| outlines[i].clone()).collect();
+            if let Ok(m) = nester.nest(&these, &o) {
+                if m.sheets == 1 {
+                    for (&i, p) in on_last.iter().zip(m.places) {
+                        places[i] = Place { sheet: last, ..p };
+                    }
+                    sheets[last] = *cheaper;
+                    break;
+                }
+            }
+        }
+        let cost: f64 = sheets.iter().map(|s| s.cost).sum();
+        let area: f64 = sheets.iter().map(|s| s.size.x * s.size.y).sum();
+        // Cheapest, then least stock area.
+        let key = cost + area * 1e-12;
+        if best.as_ref().is_none_or(|b| key < b.0) {
+            best = Some((key, places, sheets));
+        }
+    }
+    match best {
+        Some((_, places, sheets)) => Ok((places, sheets)),
+        None => Err(too_large.unwrap_or(NestError::NoRotations)),
+    }
+}
+
 pub fn execute(args: &Args) -> Result<Outcome> {
-    let plates = read_plates(&args.input)?;
+    let (plates, cores) = read_plates(&args.input)?;
+    let stock: Vec<Stock> = match (&args.stock, args.sheet) {
+        (Some(s), _) => s.clone(),
+        (None, Some(size)) => vec![Stock { size, cost: 0.0 }],
+        (None, None) => vec![Stock {
+            size: DVec2::new(3000.0, 1500.0),
+            cost: 0.0,
+        }],
+    };
+    let speeds = match &args.speeds {
+        Some(p) => SpeedTable::read(p)?,
+        None => SpeedTable::default(),
+    };
+    if let Some(l) = args.lead_in {
+        if !(l > 0.0 && l <= 0.5 * args.spacing) {
+            bail!(
+                "--lead-in must be more than 0 and at most half the spacing ({} mm), so that it stays in the scrap between parts; got {l}",
+                0.5 * args.spacing
+            );
+        }
+    }
     let opts = NestOptions {
-        sheet: args.sheet,
+        sheet: stock[0].size,
         margin: args.margin,
         spacing: args.spacing,
         rotations: args.rotations.clone(),
@@ -149,8 +285,9 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             )
         })
         .collect();
-    let outlines: Vec<Vec<DVec2>> = plates.iter().map(|p| p.outline.clone()).collect();
-    let bar = progress(plates.len() as u64 * opts.tries as u64);
+    let mut order: Vec<usize> = (0..plates.len()).collect();
+    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
+    let bar = progress(plates.len() as u64 * opts.tries as u64 * stock.len() as u64);
     let nester = BottomLeft {
         progress: Some({
             let bar = bar.clone();
@@ -158,9 +295,48 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         }),
         ..Default::default()
     };
-    let result = nest_families(&nester, &outlines, &keys, &opts);
+    let mut places = vec![
+        Place {
+            sheet: 0,
+            angle: 0.0,
+            offset: DVec2::ZERO
+        };
+        plates.len()
+    ];
+    let mut sheets: Vec<SheetInfo> = Vec::new();
+    for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
+        let outlines: Vec<Vec<DVec2>> = family.iter().map(|&i| plates[i].outline.clone()).collect();
+        let (local, stocks) = nest_family(&nester, &outlines, &stock, &opts).map_err(|e| {
+            bar.finish_and_clear();
+            named(e, family, &plates, &stock, args.margin, &args.input)
+        })?;
+        let first = sheets.len();
+        let (bits, group) = keys[family[0]];
+        for st in stocks {
+            let t = f64::from_bits(bits);
+            sheets.push(SheetInfo {
+                file: format!("sheet-{:02}-{}mm.dxf", sheets.len() + 1, thickness_name(t)),
+                thickness: t,
+                group: args.keep_groups.then_some(group),
+                stock: st,
+                parts: Vec::new(),
+                area: 0.0,
+                remnants: Vec::new(),
+                cut_mm: 0.0,
+                pierces: 0,
+                etch_mm: 0.0,
+                lead_mm: 0.0,
+                time_s: (0.0, 0.0),
+            });
+        }
+        for (&i, p) in family.iter().zip(local) {
+            places[i] = Place {
+                sheet: p.sheet + first,
+                ..p
+            };
+        }
+    }
     bar.finish_and_clear();
-    let (nesting, sheet_keys) = result.map_err(|e| named(e, &plates, &opts, &args.input))?;
 
     if args.output.exists() && !args.output.is_dir() {
         bail!("{}: exists and is not a folder", args.output.display());
@@ -168,62 +344,59 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
 
-    let mut sheets: Vec<SheetInfo> = sheet_keys
-        .iter()
-        .enumerate()
-        .map(|(k, &(bits, group))| {
-            let t = f64::from_bits(bits);
-            SheetInfo {
-                file: format!("sheet-{:02}-{}mm.dxf", k + 1, thickness_name(t)),
-                thickness: t,
-                group: args.keep_groups.then_some(group),
-                parts: Vec::new(),
-                area: 0.0,
-            }
-        })
-        .collect();
-    for (i, place) in nesting.places.iter().enumerate() {
+    for (i, place) in places.iter().enumerate() {
         sheets[place.sheet].parts.push(i);
         sheets[place.sheet].area += plates[i].area();
     }
-    let on_sheet: Vec<Vec<DVec2>> = plates
+    let drawn: Vec<Drawn> = plates
         .iter()
-        .zip(&nesting.places)
-        .map(|(p, place)| p.outline.iter().map(|q| place.apply(*q)).collect())
+        .zip(&places)
+        .map(|(p, place)| on_sheet(p, place, args.lead_in))
         .collect();
 
-    // Cut DXFs.
-    for sheet in &sheets {
-        let mut strokes = Vec::with_capacity(sheet.parts.len());
-        for &i in &sheet.parts {
-            let lines = etch(&plates[i].id, &plates[i].outline)
-                .map(|(_, l)| l)
-                .unwrap_or_default();
-            let place = nesting.places[i];
-            strokes.push(
-                lines
-                    .iter()
-                    .map(|[a, b]| [place.apply(*a), place.apply(*b)])
-                    .collect::<Vec<_>>(),
-            );
-        }
-        let drawn: Vec<Drawn> = sheet
-            .parts
+    // Cut DXFs, remnants and machine time.
+    for sheet in &mut sheets {
+        let parts: Vec<Drawn> = sheet.parts.iter().map(|&i| drawn[i].clone()).collect();
+        let hulls: Vec<Vec<DVec2>> = parts.iter().map(|d| d.outline.clone()).collect();
+        sheet.remnants = remnants(sheet.stock.size, &hulls, args.spacing, args.remnant_min);
+        sheet.cut_mm = parts.iter().map(|d| d.cut_length()).sum();
+        sheet.pierces = parts.iter().map(|d| d.pierces()).sum();
+        sheet.etch_mm = parts.iter().map(|d| d.etch_length()).sum();
+        sheet.lead_mm = parts
             .iter()
-            .zip(&strokes)
-            .map(|(&i, s)| Drawn {
-                outline: &on_sheet[i],
-                strokes: s,
-            })
-            .collect();
-        write_cut_dxf(&drawn, Some(args.sheet), &args.output.join(&sheet.file))?;
+            .flat_map(|d| d.leads.iter())
+            .map(|[a, b]| a.distance(*b))
+            .sum();
+        sheet.time_s = times(
+            &speeds,
+            sheet.thickness,
+            sheet.cut_mm + sheet.lead_mm,
+            sheet.pierces,
+            sheet.etch_mm,
+        )
+        .with_context(|| {
+            format!(
+                "{}: the time estimate for {}",
+                args.speeds
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_else(|| "the built-in speed table".into()),
+                sheet.file
+            )
+        })?;
+        write_cut_dxf(
+            &parts,
+            Some(sheet.stock.size),
+            &sheet.remnants,
+            &args.output.join(&sheet.file),
+        )?;
     }
 
     // The assembly, from the sheets.
     let clip_d = 0.5 * args.spacing + SLACK;
     let scad: Vec<SheetPart> = plates
         .iter()
-        .zip(&nesting.places)
+        .zip(&places)
         .enumerate()
         .map(|(i, (p, place))| SheetPart {
             id: &p.id,
@@ -232,36 +405,50 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             matrix: p.matrix,
             angle: place.angle,
             offset: place.offset,
-            clip: grown_hull(&on_sheet[i], clip_d),
+            clip: grown_hull(&drawn[i].outline, clip_d),
         })
         .collect();
-    write_scad_from_sheets(&scad, &args.output.join("assembly.scad"))?;
+    let scad_cores: Vec<ScadCore> = cores
+        .iter()
+        .map(|c| ScadCore {
+            id: &c.id,
+            outer: c.outer_diameter,
+            inner: c.outer_diameter - 2.0 * c.wall,
+            length: c.length,
+            matrix: axis_frame(DVec3::from_array(c.base), DVec3::from_array(c.axis)),
+        })
+        .collect();
+    write_scad_from_sheets(&scad, &scad_cores, &args.output.join("assembly.scad"))?;
 
-    write_bom(&plates, &nesting, &sheets, &args.output.join("bom.csv"))?;
     let outcome = Outcome {
         plates,
-        nesting,
+        cores,
+        places,
         sheets,
-        sheet_size: args.sheet,
     };
-    write_nest_json(&outcome, &opts, &args.output.join("nest.json"))?;
+    write_bom(&outcome, &drawn, &args.output.join("bom.csv"))?;
+    write_nest_json(&outcome, &opts, &speeds, &args.output.join("nest.json"))?;
     let views: Vec<SheetView> = outcome
         .sheets
         .iter()
         .map(|s| SheetView {
             title: format!(
-                "{}: {} mm, {} parts, {:.1} % used",
+                "{}: {} mm, {} × {} mm, {} parts, {:.1} % used",
                 s.file,
                 thickness_name(s.thickness),
+                s.stock.size.x,
+                s.stock.size.y,
                 s.parts.len(),
-                100.0 * s.area / (args.sheet.x * args.sheet.y)
+                100.0 * s.area / (s.stock.size.x * s.stock.size.y)
             ),
+            size: s.stock.size,
+            remnants: s.remnants.clone(),
             parts: s
                 .parts
                 .iter()
                 .map(|&i| {
                     (
-                        on_sheet[i].as_slice(),
+                        drawn[i].outline.as_slice(),
                         outcome.plates[i].id.as_str(),
                         outcome.plates[i].group,
                     )
@@ -269,29 +456,93 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                 .collect(),
         })
         .collect();
-    let svg = sheets_svg(args.sheet, &views, 1000.0);
+    let svg = sheets_svg(&views, 1000.0);
     write_atomic(&args.output.join("sheets.svg"), |w| {
         w.write_all(svg.as_bytes())
     })?;
     Ok(outcome)
 }
 
-/// Library errors with plate ids instead of indices.
-fn named(e: NestError, plates: &[PlateRecord], opts: &NestOptions, path: &Path) -> anyhow::Error {
+/// A plate as cut on its sheet: the outline counter-clockwise from its pierce point (the middle
+/// of its longest side), holes, marks upright on the sheet, and leads when asked for.
+fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>) -> Drawn {
+    let mut outline: Vec<DVec2> = p.outline.iter().map(|q| place.apply(*q)).collect();
+    let n = outline.len();
+    let longest = (0..n)
+        .max_by(|&a, &b| {
+            let la = outline[a].distance(outline[(a + 1) % n]);
+            let lb = outline[b].distance(outline[(b + 1) % n]);
+            la.total_cmp(&lb).then(b.cmp(&a))
+        })
+        .expect("an outline has points");
+    let (a, b) = (outline[longest], outline[(longest + 1) % n]);
+    let pierce = 0.5 * (a + b);
+    outline.rotate_left((longest + 1) % n);
+    outline.insert(0, pierce);
+    let r = 0.5 * p.hole_diameter();
+    let holes: Vec<Hole> = p
+        .holes
+        .iter()
+        .map(|c| Hole {
+            centre: place.apply(*c),
+            diameter: p.hole_diameter(),
+        })
+        .collect();
+    let keep: Vec<(DVec2, f64)> = p.holes.iter().map(|c| (*c, r)).collect();
+    let nodes = [p.ends[0].0, p.ends[1].0];
+    let marks = part_marks(&p.id, &p.outline, &keep, nodes, &|q| place.apply(q));
+    let mut leads = Vec::new();
+    if let Some(l) = lead {
+        // Holes: from inside the hole to its pierce point (+x), and back in.
+        for h in &holes {
+            let rr = 0.5 * h.diameter;
+            let len = l.min(0.8 * rr);
+            let start = h.centre + DVec2::X * rr;
+            leads.push([start - DVec2::X * len, start]);
+            leads.push([start, start - DVec2::new(len, len).normalize() * len]);
+        }
+        // The outline: square in from the scrap, out at 45° ahead.
+        let along = (b - a).normalize();
+        let out = DVec2::new(along.y, -along.x);
+        leads.push([pierce + out * l, pierce]);
+        leads.push([pierce, pierce + (out + along).normalize() * l]);
+    }
+    Drawn {
+        outline,
+        holes,
+        etch: marks.etch,
+        leads,
+    }
+}
+
+/// Library errors with plate ids instead of indices (`family` maps the nester's indices).
+fn named(
+    e: NestError,
+    family: &[usize],
+    plates: &[PlateRecord],
+    stock: &[Stock],
+    margin: f64,
+    path: &Path,
+) -> anyhow::Error {
     match e {
         NestError::TooLarge(list) => {
-            let usable = opts.sheet - DVec2::splat(2.0 * opts.margin);
+            let biggest = stock
+                .iter()
+                .map(|s| s.size)
+                .max_by(|a, b| (a.x * a.y).total_cmp(&(b.x * b.y)))
+                .unwrap_or(DVec2::ZERO);
+            let usable = biggest - DVec2::splat(2.0 * margin);
             let names: Vec<String> = list
                 .iter()
                 .take(8)
-                .map(|(i, s)| format!("{} ({:.1} × {:.1} mm)", plates[*i].id, s.x, s.y))
+                .map(|(i, s)| format!("{} ({:.1} × {:.1} mm)", plates[family[*i]].id, s.x, s.y))
                 .collect();
             anyhow::anyhow!(
                 "{}: {} plate(s) fit no {} × {} mm sheet ({:.0} × {:.0} mm inside the margin) at any allowed rotation: {}{}",
                 path.display(),
                 list.len(),
-                opts.sheet.x,
-                opts.sheet.y,
+                biggest.x,
+                biggest.y,
                 usable.x,
                 usable.y,
                 names.join(", "),
@@ -299,7 +550,7 @@ fn named(e: NestError, plates: &[PlateRecord], opts: &NestOptions, path: &Path) 
             )
         }
         NestError::Degenerate(i) | NestError::NotFinite(i) | NestError::Engine(i, _) => {
-            anyhow::anyhow!("{}: plate {}: {e}", path.display(), plates[i].id)
+            anyhow::anyhow!("{}: plate {}: {e}", path.display(), plates[family[i]].id)
         }
         e => anyhow::Error::new(e),
     }
@@ -309,7 +560,7 @@ fn progress(len: u64) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
     bar.set_style(
         ProgressStyle::with_template(
-            "nesting {bar:40} {pos}/{len} parts placed (all tries) {elapsed}",
+            "nesting {bar:40} {pos}/{len} parts placed (all tries and stock sizes) {elapsed}",
         )
         .expect("template"),
     );
@@ -323,28 +574,39 @@ fn size(p: &[DVec2]) -> DVec2 {
     hi - lo
 }
 
-fn write_bom(
-    plates: &[PlateRecord],
-    nesting: &Nesting,
-    sheets: &[SheetInfo],
-    path: &Path,
-) -> Result<()> {
+/// bom.csv: a row per plate (kind `plate`), per bolted seam (kind `bolts`) and per node core
+/// (kind `tube`). A plate's position is the lower-left corner of its bounding box on the
+/// sheet (`bbox_x_mm`, `bbox_y_mm`), its rotation the turn from its own frame.
+fn write_bom(out: &Outcome, drawn: &[Drawn], path: &Path) -> Result<()> {
     write_atomic(path, |w| {
         writeln!(
             w,
-            "id,group,thickness_mm,length_mm,width_mm,area_mm2,mass_kg,sheet,x_mm,y_mm,rotation_deg,bolted_to,welded_at_a,welded_at_b"
+            "kind,id,group,thickness_mm,length_mm,width_mm,area_mm2,mass_kg,sheet,bbox_x_mm,bbox_y_mm,rotation_deg,holes,bolted_to,bolts,welded_at_a,welded_at_b"
         )?;
-        for (p, place) in plates.iter().zip(&nesting.places) {
+        for (i, (p, place)) in out.plates.iter().zip(&out.places).enumerate() {
             let s = size(&p.outline);
             let mass = p.area() * p.thickness * DENSITY * 1e-6;
             let ends: Vec<String> = p
                 .ends
                 .iter()
-                .map(|(node, with)| format!("\"node {}: {}\"", node, with.join(" ")))
+                .zip(&p.end_cores)
+                .map(|((node, with), core)| match core {
+                    Some(c) => format!("\"node {node}: core {c}\""),
+                    None => format!("\"node {}: {}\"", node, with.join(" ")),
+                })
                 .collect();
+            let lo = drawn[i]
+                .outline
+                .iter()
+                .fold(DVec2::INFINITY, |m, q| m.min(*q));
+            let bolts = p
+                .bolt
+                .as_ref()
+                .map(|b| format!("{} x {}x{}", p.holes.len(), b.size, b.length))
+                .unwrap_or_default();
             writeln!(
                 w,
-                "\"{}\",{},{},{:.2},{:.2},{:.1},{:.4},\"{}\",{:.3},{:.3},{:.3},\"{}\",{},{}",
+                "plate,\"{}\",{},{},{:.2},{:.2},{:.1},{:.4},\"{}\",{:.3},{:.3},{},{},\"{}\",\"{}\",{},{}",
                 p.id,
                 p.group,
                 p.thickness,
@@ -352,13 +614,46 @@ fn write_bom(
                 s.y,
                 p.area(),
                 mass,
-                sheets[place.sheet].file,
-                place.offset.x,
-                place.offset.y,
-                place.angle.to_degrees(),
+                out.sheets[place.sheet].file,
+                lo.x,
+                lo.y,
+                place.angle,
+                p.holes.len(),
                 p.bolted_to.as_deref().unwrap_or(""),
+                bolts,
                 ends[0],
                 ends[1]
+            )?;
+        }
+        // One row per seam: the bolts to order for it.
+        for p in &out.plates {
+            let (Some(b), Some(other)) = (&p.bolt, &p.bolted_to) else {
+                continue;
+            };
+            if other.as_str() < p.id.as_str() {
+                continue;
+            }
+            writeln!(
+                w,
+                "bolts,\"{}+{}\",{},{},,,,,,,,,{},,\"{} x {}x{} with 2 washers and a nut, grip {} mm\",,",
+                p.id, other, p.group, b.grip, p.holes.len(), p.holes.len(), b.size, b.length, b.grip
+            )?;
+        }
+        for c in &out.cores {
+            let area = std::f64::consts::PI * (c.outer_diameter - c.wall) * c.wall;
+            writeln!(
+                w,
+                "tube,\"{}\",{},{},{:.2},{},{:.1},{:.4},,,,,,,\"tube {} x {} at node {}\",,",
+                c.id,
+                c.group,
+                c.wall,
+                c.length,
+                c.outer_diameter,
+                area,
+                area * c.length * DENSITY * 1e-6,
+                c.outer_diameter,
+                c.wall,
+                c.node
             )?;
         }
         Ok(())
@@ -366,18 +661,28 @@ fn write_bom(
     Ok(())
 }
 
-fn write_nest_json(out: &Outcome, opts: &NestOptions, path: &Path) -> Result<()> {
-    let sheet_area = out.sheet_size.x * out.sheet_size.y;
-    // Positive thicknesses order as their bits do.
-    let mut families: BTreeMap<u64, usize> = BTreeMap::new();
+fn write_nest_json(out: &Outcome, opts: &NestOptions, speeds: &SpeedTable, path: &Path) -> Result<()> {
+    // Per thickness (positive thicknesses order as their bits do).
+    let mut families: BTreeMap<u64, (usize, f64, f64, f64)> = BTreeMap::new();
     for s in &out.sheets {
-        *families.entry(s.thickness.to_bits()).or_default() += 1;
+        let f = families.entry(s.thickness.to_bits()).or_default();
+        f.0 += 1;
+        f.1 += s.area;
+        f.2 += s.stock.size.x * s.stock.size.y;
+        f.3 += s.stock.cost;
     }
+    let placed = |i: usize| {
+        let lo = out.plates[i]
+            .outline
+            .iter()
+            .map(|q| out.places[i].apply(*q))
+            .fold(DVec2::INFINITY, |m, q| m.min(q));
+        [lo.x, lo.y]
+    };
     let doc = json!({
         "format": "lamina-nest",
-        "version": 1,
+        "version": 2,
         "units": "mm",
-        "sheet": [out.sheet_size.x, out.sheet_size.y],
         "margin": opts.margin,
         "spacing": opts.spacing,
         "rotations": match &opts.rotations {
@@ -388,26 +693,63 @@ fn write_nest_json(out: &Outcome, opts: &NestOptions, path: &Path) -> Result<()>
         "seed": opts.seed,
         "pairs": opts.pair,
         "plates": out.plates.len(),
+        "definitions": {
+            "offset": "sheet point = R(rotation_deg) · plate point + offset, the plate point in the plate's own frame (plates.json)",
+            "bbox_min": "lower-left corner of the part's bounding box on the sheet",
+            "cut_mm": "outer and inner contours (and lead lines when asked for)",
+            "time_s": "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed (speed_table)",
+            "remnants": "free rectangles [lower-left, upper-right] at least remnant_min, the spacing clear of every part",
+        },
         "sheets": out.sheets.iter().map(|s| json!({
             "file": s.file,
             "thickness": s.thickness,
             "group": s.group,
+            "size": [s.stock.size.x, s.stock.size.y],
+            "cost": s.stock.cost,
             "parts": s.parts.iter().map(|&i| &out.plates[i].id).collect::<Vec<_>>(),
             "part_area_mm2": s.area,
-            "utilisation": s.area / sheet_area,
+            "utilisation": s.area / (s.stock.size.x * s.stock.size.y),
+            "remnants": s.remnants.iter().map(|[a, b]| [[a.x, a.y], [b.x, b.y]]).collect::<Vec<_>>(),
+            "cut_mm": s.cut_mm + s.lead_mm,
+            "pierces": s.pierces,
+            "etch_mm": s.etch_mm,
+            "time_s": {"laser": s.time_s.0, "plasma": s.time_s.1},
         })).collect::<Vec<_>>(),
-        "families": families.iter().map(|(t, n)| json!({"thickness": f64::from_bits(*t), "sheets": n})).collect::<Vec<_>>(),
+        "families": families.iter().map(|(t, f)| json!({
+            "thickness": f64::from_bits(*t),
+            "sheets": f.0,
+            "part_area_mm2": f.1,
+            "utilisation": f.1 / f.2,
+            "cost": f.3,
+        })).collect::<Vec<_>>(),
         "total": {
             "sheets": out.sheets.len(),
             "part_area_mm2": out.sheets.iter().map(|s| s.area).sum::<f64>(),
             "utilisation": out.utilisation(),
+            "cost": out.sheets.iter().map(|s| s.stock.cost).sum::<f64>(),
+            "cut_mm": out.sheets.iter().map(|s| s.cut_mm + s.lead_mm).sum::<f64>(),
+            "pierces": out.sheets.iter().map(|s| s.pierces).sum::<usize>(),
+            "etch_mm": out.sheets.iter().map(|s| s.etch_mm).sum::<f64>(),
+            "time_s": {
+                "laser": out.sheets.iter().map(|s| s.time_s.0).sum::<f64>(),
+                "plasma": out.sheets.iter().map(|s| s.time_s.1).sum::<f64>(),
+            },
         },
-        "placements": out.plates.iter().zip(&out.nesting.places).map(|(p, pl)| json!({
+        "not_nested": out.cores.iter().map(|c| json!({
+            "id": c.id,
+            "kind": "tube",
+            "outer_diameter": c.outer_diameter,
+            "wall": c.wall,
+            "length": c.length,
+        })).collect::<Vec<_>>(),
+        "placements": out.plates.iter().zip(&out.places).enumerate().map(|(i, (p, pl))| json!({
             "id": p.id,
             "sheet": out.sheets[pl.sheet].file,
-            "rotation_deg": pl.angle.to_degrees(),
+            "rotation_deg": pl.angle,
             "offset": [pl.offset.x, pl.offset.y],
+            "bbox_min": placed(i),
         })).collect::<Vec<_>>(),
+        "speed_table": speeds,
     });
     let text = serde_json::to_string_pretty(&doc)?;
     write_atomic(path, |w| writeln!(w, "{text}"))?;
@@ -416,6 +758,7 @@ fn write_nest_json(out: &Outcome, opts: &NestOptions, path: &Path) -> Result<()>
 
 pub fn run(args: Args) -> Result<()> {
     let out = execute(&args)?;
+    let cost: f64 = out.sheets.iter().map(|s| s.stock.cost).sum();
     if args.json {
         println!(
             "{}",
@@ -424,30 +767,50 @@ pub fn run(args: Args) -> Result<()> {
                 "plates": out.plates.len(),
                 "sheets": out.sheets.len(),
                 "utilisation": out.utilisation(),
+                "cost": cost,
             })
         );
         return Ok(());
     }
     println!(
-        "{}: {} plates on {} sheet(s) of {} × {} mm, {:.1} % used",
+        "{}: {} plates on {} sheet(s), {:.1} % used{}",
         args.output.display(),
         out.plates.len(),
         out.sheets.len(),
-        args.sheet.x,
-        args.sheet.y,
-        100.0 * out.utilisation()
+        100.0 * out.utilisation(),
+        if cost > 0.0 {
+            format!(", stock cost {cost}")
+        } else {
+            String::new()
+        }
     );
     let mut t_prev = None;
     for s in &out.sheets {
         if t_prev != Some(s.thickness.to_bits()) {
-            let n = out
+            let these: Vec<&SheetInfo> = out
                 .sheets
                 .iter()
                 .filter(|o| o.thickness == s.thickness)
-                .count();
-            println!("  {} mm: {n} sheet(s)", thickness_name(s.thickness));
+                .collect();
+            let used: f64 = these.iter().map(|o| o.area).sum();
+            let stock: f64 = these.iter().map(|o| o.stock.size.x * o.stock.size.y).sum();
+            let remnants: usize = these.iter().map(|o| o.remnants.len()).sum();
+            let laser: f64 = these.iter().map(|o| o.time_s.0).sum();
+            println!(
+                "  {} mm: {} sheet(s), {:.1} % used, {remnants} remnant(s), laser about {:.0} min",
+                thickness_name(s.thickness),
+                these.len(),
+                100.0 * used / stock,
+                laser / 60.0
+            );
             t_prev = Some(s.thickness.to_bits());
         }
+    }
+    if !out.cores.is_empty() {
+        println!(
+            "  {} node core(s) are tubes, not nested: cut from tube stock (rows `tube` in bom.csv)",
+            out.cores.len()
+        );
     }
     Ok(())
 }

@@ -4,6 +4,7 @@
 
 pub mod archive;
 pub mod assembly;
+pub mod cutplan;
 pub mod cutsheet;
 pub mod estimate;
 pub mod nest;

@@ -107,7 +107,9 @@ impl Default for NestOptions {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Place {
     pub sheet: usize,
-    /// Radians, counter-clockwise.
+    /// Degrees counter-clockwise in [0, 360): exactly one of the listed rotations when a list
+    /// was given (sums of listed angles and the 180° of a pair are formed in degrees, exact
+    /// for whole degrees).
     pub angle: f64,
     pub offset: DVec2,
 }
@@ -120,7 +122,23 @@ impl Place {
     };
 
     pub fn apply(&self, p: DVec2) -> DVec2 {
-        DVec2::from_angle(self.angle).rotate(p) + self.offset
+        turn(self.angle).rotate(p) + self.offset
+    }
+}
+
+/// (cos, sin) of an angle in degrees, exact for quarter turns.
+pub fn turn(deg: f64) -> DVec2 {
+    let d = deg.rem_euclid(360.0);
+    if d == 0.0 {
+        DVec2::X
+    } else if d == 90.0 {
+        DVec2::Y
+    } else if d == 180.0 {
+        DVec2::NEG_X
+    } else if d == 270.0 {
+        DVec2::NEG_Y
+    } else {
+        DVec2::from_angle(d.to_radians())
     }
 }
 
@@ -265,7 +283,7 @@ fn check(opts: &NestOptions) -> Result<(), NestError> {
     Ok(())
 }
 
-/// A part as placed within an item: item point = R(angle)·p + offset.
+/// A part as placed within an item: item point = R(angle)·p + offset (degrees).
 #[derive(Clone, Copy, Debug)]
 struct Member {
     part: usize,
@@ -285,6 +303,7 @@ struct Item {
 
 /// An item at one rotation, its grown hull moved so that its bounding box starts at the origin.
 struct Shape {
+    /// Degrees.
     angle: f64,
     /// Container point = R(angle)·item point − shift + position.
     shift: DVec2,
@@ -605,10 +624,10 @@ fn outward(e: DVec2) -> DVec2 {
     DVec2::new(e.y, -e.x).normalize()
 }
 
-/// The angles (radians) tried for an item.
+/// The angles (degrees) tried for an item.
 fn angles(grown: &[DVec2], rotations: &Rotations) -> Vec<f64> {
     let mut out: Vec<f64> = match rotations {
-        Rotations::Listed(r) => r.iter().map(|a| a.to_radians()).collect(),
+        Rotations::Listed(r) => r.clone(),
         Rotations::Any => {
             let mut edges: Vec<(f64, f64)> = (0..grown.len())
                 .map(|k| {
@@ -620,14 +639,14 @@ fn angles(grown: &[DVec2], rotations: &Rotations) -> Vec<f64> {
             let mut a = vec![0.0];
             for &(_, phi) in edges.iter().take(2) {
                 for k in 0..4 {
-                    a.push(-phi + k as f64 * std::f64::consts::FRAC_PI_2);
+                    a.push(-phi.to_degrees() + 90.0 * k as f64);
                 }
             }
             a
         }
     };
     for a in &mut out {
-        *a = a.rem_euclid(std::f64::consts::TAU);
+        *a = a.rem_euclid(360.0);
     }
     out.sort_by(f64::total_cmp);
     out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
@@ -635,7 +654,7 @@ fn angles(grown: &[DVec2], rotations: &Rotations) -> Vec<f64> {
 }
 
 fn shape(grown: &[DVec2], angle: f64) -> Result<Shape, String> {
-    let r = DVec2::from_angle(angle);
+    let r = turn(angle);
     let turned: Vec<DVec2> = grown.iter().map(|p| r.rotate(*p)).collect();
     let lo = turned.iter().fold(DVec2::INFINITY, |m, p| m.min(*p));
     let hi = turned.iter().fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
@@ -676,13 +695,17 @@ fn congruent(a: &[DVec2], b: &[DVec2]) -> Option<usize> {
 }
 
 /// Two congruent quads, the second turned 180° and set against the edge of the first that
-/// wastes least, `gap` apart. Returns the members and the pair's hull, if it wastes little.
+/// wastes least, at least `gap` apart. With `exact`, the second quad's rotation is exactly
+/// 180° (the quads' frames may differ by a hair, or by a listed rotation too far to pair);
+/// otherwise whatever lays it exactly against the first. Returns the members and the pair's
+/// hull, if it wastes little.
 fn pair(
     i: usize,
     a: &[DVec2],
     j: usize,
     b: &[DVec2],
     gap: f64,
+    exact: bool,
 ) -> Option<(Vec<Member>, Vec<DVec2>)> {
     let k = congruent(a, b)?;
     // Rigid motion taking b's corner k.. onto a's corners 0..: rotation by the edge angles.
@@ -691,6 +714,16 @@ fn pair(
     let rot = eb.y.atan2(eb.x);
     let to_a = ea.y.atan2(ea.x) - rot;
     let onto = |p: DVec2| DVec2::from_angle(to_a).rotate(p - b[k]) + a[0];
+    let ideal = (to_a + std::f64::consts::PI).to_degrees().rem_euclid(360.0);
+    let angle = if exact {
+        if (ideal - 180.0).abs() > 1.0 {
+            return None;
+        }
+        180.0
+    } else {
+        ideal
+    };
+    let centroid_b = b.iter().copied().sum::<DVec2>() / b.len() as f64;
     let mut best: Option<(f64, Vec<Member>, Vec<DVec2>)> = None;
     for e in 0..4 {
         // Turn the copy 180° about the midpoint of edge e, then push it off the edge's line by
@@ -706,15 +739,28 @@ fn pair(
             if along < 0.2 {
                 continue;
             }
-            // Every point of the copy ends at least `gap` beyond the edge's line.
-            let push = dir * (gap / along);
-            // b point → a frame (onto) → half turn about mid → pushed.
-            let angle = to_a + std::f64::consts::PI;
-            let offset = 2.0 * mid - onto(DVec2::ZERO) + push;
-            let placed: Vec<DVec2> = b
-                .iter()
-                .map(|p| DVec2::from_angle(angle).rotate(*p) + offset)
-                .collect();
+            // Where the ideal motion (b → a's frame → half turn about mid → pushed) puts b's
+            // centroid; the copy at the chosen angle is centred there.
+            let ideal_centroid = 2.0 * mid - onto(centroid_b) + dir * (gap / along);
+            let r = turn(angle);
+            let mut offset = ideal_centroid - r.rotate(centroid_b);
+            let place = |offset: DVec2| -> Vec<DVec2> {
+                b.iter().map(|p| r.rotate(*p) + offset).collect()
+            };
+            let mut placed = place(offset);
+            // Near-congruent quads, or the exact angle, can bring the copy closer than the gap:
+            // push it on along the same direction until it is not.
+            for _ in 0..4 {
+                let d = distance(a, &placed);
+                if d >= gap {
+                    break;
+                }
+                offset += dir * ((gap - d) / along + 1e-9 * gap.max(1.0));
+                placed = place(offset);
+            }
+            if distance(a, &placed) < gap {
+                continue;
+            }
             let mut all = a.to_vec();
             all.extend(&placed);
             let hull = convex_hull(&all);
@@ -738,6 +784,43 @@ fn pair(
     (waste < PAIR_WASTE).then_some((members, hull))
 }
 
+/// Distance between two convex polygons, or a negative number (a separating-axis depth) if
+/// they overlap.
+pub fn distance(a: &[DVec2], b: &[DVec2]) -> f64 {
+    let mut separation = f64::NEG_INFINITY;
+    for (p, q) in [(a, b), (b, a)] {
+        for k in 0..p.len() {
+            let e = p[(k + 1) % p.len()] - p[k];
+            if e.length() == 0.0 {
+                continue;
+            }
+            let n = outward(e);
+            let lo = q
+                .iter()
+                .map(|x| (*x - p[k]).dot(n))
+                .fold(f64::INFINITY, f64::min);
+            separation = separation.max(lo);
+        }
+    }
+    if separation <= 0.0 {
+        return separation;
+    }
+    let to_segment = |x: DVec2, s: DVec2, t: DVec2| {
+        let e = t - s;
+        let u = ((x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+        x.distance(s + e * u)
+    };
+    let mut d = f64::INFINITY;
+    for (p, q) in [(a, b), (b, a)] {
+        for x in q {
+            for k in 0..p.len() {
+                d = d.min(to_segment(*x, p[k], p[(k + 1) % p.len()]));
+            }
+        }
+    }
+    d
+}
+
 impl BottomLeft {
     fn items(&self, hulls: &[Vec<DVec2>], opts: &NestOptions) -> Vec<(Vec<Member>, Vec<DVec2>)> {
         let single = |i: usize| {
@@ -750,7 +833,17 @@ impl BottomLeft {
                 hulls[i].clone(),
             )
         };
-        if !opts.pair {
+        // A pair turns as one item, so its second part's rotation is a listed angle plus 180°:
+        // pairs only where the list holds each angle's half turn too.
+        let exact = matches!(opts.rotations, Rotations::Listed(_));
+        let closed = match &opts.rotations {
+            Rotations::Any => true,
+            Rotations::Listed(r) => r.iter().all(|a| {
+                let h = (a + 180.0).rem_euclid(360.0);
+                r.iter().any(|b| b.rem_euclid(360.0) == h)
+            }),
+        };
+        if !opts.pair || !closed {
             return (0..hulls.len()).map(single).collect();
         }
         // Quads bucketed by rounded perimeter; each pairs with the next congruent one.
@@ -771,7 +864,9 @@ impl BottomLeft {
                 let found = list
                     .iter()
                     .enumerate()
-                    .find_map(|(pos, &j)| pair(j, &hulls[j], i, h, gap).map(|p| (pos, p)));
+                    .find_map(|(pos, &j)| {
+                        pair(j, &hulls[j], i, h, gap, exact).map(|p| (pos, p))
+                    });
                 if let Some((pos, p)) = found {
                     list.remove(pos);
                     paired = Some(p);
@@ -998,11 +1093,11 @@ impl Nester for BottomLeft {
         let mut places = vec![Place::ORIGIN; parts.len()];
         for (item, &(sheet, s, pos)) in items.iter().zip(&at) {
             let shape = &item.shapes[s];
-            let r = DVec2::from_angle(shape.angle);
+            let r = turn(shape.angle);
             for m in &item.members {
                 places[m.part] = Place {
                     sheet,
-                    angle: (shape.angle + m.angle).rem_euclid(std::f64::consts::TAU),
+                    angle: (shape.angle + m.angle).rem_euclid(360.0),
                     offset: r.rotate(m.offset) - shape.shift + pos + container.corner,
                 };
             }
@@ -1073,40 +1168,8 @@ mod tests {
         ]
     }
 
-    /// Distance between two convex polygons, or a negative number if they overlap.
     fn gap(a: &[DVec2], b: &[DVec2]) -> f64 {
-        let mut separation = f64::NEG_INFINITY;
-        for (p, q) in [(a, b), (b, a)] {
-            for k in 0..p.len() {
-                let e = p[(k + 1) % p.len()] - p[k];
-                if e.length() == 0.0 {
-                    continue;
-                }
-                let n = outward(e);
-                let lo = q
-                    .iter()
-                    .map(|x| (*x - p[k]).dot(n))
-                    .fold(f64::INFINITY, f64::min);
-                separation = separation.max(lo);
-            }
-        }
-        if separation <= 0.0 {
-            return separation;
-        }
-        let to_segment = |x: DVec2, s: DVec2, t: DVec2| {
-            let e = t - s;
-            let u = ((x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-            x.distance(s + e * u)
-        };
-        let mut d = f64::INFINITY;
-        for (p, q) in [(a, b), (b, a)] {
-            for x in q {
-                for k in 0..p.len() {
-                    d = d.min(to_segment(*x, p[k], p[(k + 1) % p.len()]));
-                }
-            }
-        }
-        d
+        distance(a, b)
     }
 
     fn placed(parts: &[Vec<DVec2>], n: &Nesting) -> Vec<Vec<DVec2>> {
@@ -1193,12 +1256,12 @@ mod tests {
         // twice the area plus gap × leg.
         let t = convex_hull(&trapezoid(400.0, 100.0, 80.0));
         let gap = 5.0;
-        let (members, hull) = pair(0, &t, 1, &t, gap).expect("congruent quads pair");
+        let (members, hull) = pair(0, &t, 1, &t, gap, true).expect("congruent quads pair");
         assert_eq!(members.len(), 2);
         assert_eq!(hull.len(), 4, "{hull:?}");
         let leg = DVec2::new(80.0, 100.0).length();
         assert!((area(&hull) - (2.0 * area(&t) + gap * leg)).abs() < 1e-6);
-        assert!(pair(0, &t, 1, &convex_hull(&rect(400.0, 100.0)), gap).is_none());
+        assert!(pair(0, &t, 1, &convex_hull(&rect(400.0, 100.0)), gap, true).is_none());
         let parts = vec![trapezoid(400.0, 100.0, 80.0); 40];
         let opts = NestOptions {
             sheet: DVec2::new(1500.0, 1000.0),

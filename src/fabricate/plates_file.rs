@@ -1,5 +1,5 @@
-//! Reading `plates.json` (format `lamina-plates`, version 1, written by `lamina plates`): what
-//! nesting, the BOM and the assembly need of each plate.
+//! Reading `plates.json` (format `lamina-plates`, version 2, written by `lamina plates`): what
+//! nesting, the BOM and the assembly need of each plate, and the node cores.
 
 use std::collections::HashSet;
 use std::path::Path;
@@ -10,7 +10,7 @@ use serde::Deserialize;
 use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
 
 pub const FORMAT: &str = "lamina-plates";
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// One plate as the file holds it.
 #[derive(Clone, Debug, PartialEq)]
@@ -26,15 +26,53 @@ pub struct PlateRecord {
     /// Per end: the node and the plates welded to it there.
     pub ends: [(u32, Vec<String>); 2],
     pub bolted_to: Option<String>,
+    /// Per end: the node core the plate welds to there, if any.
+    pub end_cores: [Option<String>; 2],
+    /// Bolt hole centres in the plate's frame.
+    pub holes: Vec<DVec2>,
+    /// Size, d0 and ordered length of the bolts through them.
+    pub bolt: Option<BoltRecord>,
+}
+
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct BoltRecord {
+    pub size: String,
+    pub d: f64,
+    pub hole_diameter: f64,
+    pub grip: f64,
+    pub length: f64,
+}
+
+/// A node core: a tube cut from tube stock, not a sheet part.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct CoreRecord {
+    pub id: String,
+    pub node: u32,
+    pub group: u32,
+    pub outer_diameter: f64,
+    pub wall: f64,
+    pub base: [f64; 3],
+    pub axis: [f64; 3],
+    pub length: f64,
 }
 
 impl PlateRecord {
+    pub fn hole_diameter(&self) -> f64 {
+        self.bolt.as_ref().map(|b| b.hole_diameter).unwrap_or(0.0)
+    }
+
+    /// The outline's area less the holes (as the `hole_segments`-gons the file says), mm².
     pub fn area(&self) -> f64 {
         let p = &self.outline;
-        0.5 * (0..p.len())
-            .map(|k| p[k].perp_dot(p[(k + 1) % p.len()]))
-            .sum::<f64>()
-            .abs()
+        let outer = 0.5
+            * (0..p.len())
+                .map(|k| p[k].perp_dot(p[(k + 1) % p.len()]))
+                .sum::<f64>()
+                .abs();
+        let r = 0.5 * self.hole_diameter();
+        let n = crate::rationalize::plates::HOLE_SEGMENTS as f64;
+        let hole = 0.5 * n * r * r * (std::f64::consts::TAU / n).sin();
+        outer - hole * self.holes.len() as f64
     }
 }
 
@@ -45,6 +83,7 @@ struct End {
     #[allow(dead_code)]
     setback: f64,
     welded_to: Vec<String>,
+    core: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -54,6 +93,8 @@ struct Record {
     thickness: f64,
     ends: [End; 2],
     bolted_to: Option<String>,
+    bolt: Option<BoltRecord>,
+    holes: Vec<[f64; 2]>,
     matrix: [[f64; 4]; 4],
     outline: Vec<[f64; 2]>,
 }
@@ -61,14 +102,18 @@ struct Record {
 #[derive(Deserialize)]
 struct File {
     plates: Vec<Record>,
+    cores: Vec<CoreRecord>,
 }
 
 /// The thickest plate a file may hold: 1 m of steel is no plate.
 pub const MAX_THICKNESS: f64 = 1000.0;
 /// The largest plate coordinate: 100 m, as for sheets.
 pub const MAX_COORD: f64 = 1e5;
+/// The most bolt holes in one plate.
+pub const MAX_HOLES: usize = 10_000;
 
-pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
+/// The plates and the node cores.
+pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
     let text = utf8_text(path, read_nonempty(path)?)?;
     check_format(
         path,
@@ -110,6 +155,27 @@ pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
         if r.matrix.iter().flatten().any(|v| !v.is_finite()) {
             return Err(bad("the matrix holds a value that is not a finite number"));
         }
+        if r.holes.len() > MAX_HOLES
+            || r.holes.iter().flatten().any(|v| !(v.abs() <= MAX_COORD))
+        {
+            return Err(bad(&format!(
+                "at most {MAX_HOLES} holes, every coordinate finite and within {MAX_COORD:e} mm"
+            )));
+        }
+        match &r.bolt {
+            None if !r.holes.is_empty() => return Err(bad("it has holes but no bolt")),
+            Some(b)
+                if !(b.hole_diameter > 0.0
+                    && b.hole_diameter <= MAX_THICKNESS
+                    && b.d > 0.0
+                    && b.d < b.hole_diameter
+                    && b.length.is_finite()
+                    && b.grip.is_finite()) =>
+            {
+                return Err(bad("the bolt needs a hole wider than its shank, both positive"))
+            }
+            _ => {}
+        }
         let outline: Vec<DVec2> = r.outline.iter().map(|p| DVec2::from_array(*p)).collect();
         let [a, b] = r.ends;
         let rec = PlateRecord {
@@ -118,8 +184,11 @@ pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
             thickness: r.thickness,
             outline,
             matrix: r.matrix,
+            end_cores: [a.core, b.core],
             ends: [(a.node, a.welded_to), (b.node, b.welded_to)],
             bolted_to: r.bolted_to,
+            holes: r.holes.iter().map(|p| DVec2::from_array(*p)).collect(),
+            bolt: r.bolt,
         };
         if rec.area() < 1e-9 {
             return Err(ReadError::record(
@@ -130,5 +199,23 @@ pub fn read_plates(path: &Path) -> Result<Vec<PlateRecord>, ReadError> {
         }
         out.push(rec);
     }
-    Ok(out)
+    for (k, c) in file.cores.iter().enumerate() {
+        let ok = !c.id.is_empty()
+            && c.outer_diameter > 0.0
+            && c.outer_diameter <= MAX_THICKNESS
+            && c.wall > 0.0
+            && 2.0 * c.wall < c.outer_diameter
+            && c.length > 0.0
+            && c.length <= MAX_COORD
+            && c.base.iter().all(|v| v.abs() <= MAX_COORD)
+            && (glam::DVec3::from_array(c.axis).length() - 1.0).abs() < 1e-6;
+        if !ok {
+            return Err(ReadError::record(
+                path,
+                format!("core {k} ({})", c.id),
+                "needs an id, a wall under half its outer diameter, a positive length, a base within 1e5 mm and a unit axis",
+            ));
+        }
+    }
+    Ok((out, file.cores))
 }

@@ -8,6 +8,10 @@ use glam::DVec2;
 /// One sheet as drawn.
 pub struct SheetView<'a> {
     pub title: String,
+    /// Width and height, mm.
+    pub size: DVec2,
+    /// Free rectangles kept (lower-left, upper-right), drawn hatched.
+    pub remnants: Vec<[DVec2; 2]>,
     /// Outline in sheet coordinates (mm), tag, assembly group (from 1).
     pub parts: Vec<(&'a [DVec2], &'a str, u32)>,
 }
@@ -17,20 +21,24 @@ const PALETTE: [&str; 10] = [
     "#9c755f", "#bab0ac",
 ];
 
-/// The sheets, `width` pixels wide, one below the other.
-pub fn sheets_svg(sheet: DVec2, sheets: &[SheetView], width: f64) -> String {
-    let scale = width / sheet.x;
+/// The sheets, the widest `width` pixels wide, one below the other, to one scale.
+pub fn sheets_svg(sheets: &[SheetView], width: f64) -> String {
+    let widest = sheets.iter().map(|s| s.size.x).fold(1.0, f64::max);
+    let scale = width / widest;
     let title_h = 28.0;
     let gap = 16.0;
-    let block = title_h + sheet.y * scale + gap;
-    let height = block * sheets.len() as f64;
+    let height: f64 = sheets
+        .iter()
+        .map(|s| title_h + s.size.y * scale + gap)
+        .sum();
     let mut s = String::new();
     let _ = writeln!(
         s,
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.1} {height:.1}" font-family="sans-serif">"#
     );
-    for (k, sh) in sheets.iter().enumerate() {
-        let top = k as f64 * block;
+    let mut top = 0.0;
+    for sh in sheets {
+        let sheet = sh.size;
         // Sheet y points up; the picture's y points down.
         let map = |p: DVec2| DVec2::new(p.x * scale, top + title_h + (sheet.y - p.y) * scale);
         let _ = writeln!(
@@ -46,6 +54,19 @@ pub fn sheets_svg(sheet: DVec2, sheets: &[SheetView], width: f64) -> String {
             sheet.x * scale,
             sheet.y * scale
         );
+        for [lo, hi] in &sh.remnants {
+            let (a, b) = (map(DVec2::new(lo.x, hi.y)), map(DVec2::new(hi.x, lo.y)));
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="none" stroke="#888" stroke-dasharray="6 4"><title>remnant {:.0} × {:.0} mm</title></rect>"##,
+                a.x,
+                a.y,
+                b.x - a.x,
+                b.y - a.y,
+                hi.x - lo.x,
+                hi.y - lo.y
+            );
+        }
         for (outline, id, group) in &sh.parts {
             let pts: Vec<String> = outline
                 .iter()
@@ -76,6 +97,7 @@ pub fn sheets_svg(sheet: DVec2, sheets: &[SheetView], width: f64) -> String {
                 );
             }
         }
+        top += title_h + sheet.y * scale + gap;
     }
     s.push_str("</svg>\n");
     s

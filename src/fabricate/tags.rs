@@ -158,6 +158,164 @@ pub fn fit(
     Some((lo, place(lo)))
 }
 
+/// What is etched on a part, in drawing coordinates.
+pub struct Marks {
+    /// The tag's character height, None when the part is too small for it.
+    pub tag_height: Option<f64>,
+    /// Strokes chained into polylines: the tag, then the arrow to the outer edge, then the
+    /// node at each end.
+    pub etch: Vec<Vec<DVec2>>,
+}
+
+/// A part's marks: its tag upright in the drawing (read left to right along +x whatever the
+/// part's rotation), followed by an arrow pointing to the part's outer edge (`out`, its
+/// frame's +y in the drawing), and `N<node>` at each end where there is room (so a welder
+/// knows which end meets which node). Holes are kept clear by the margin.
+///
+/// `outline` is counter-clockwise in the plate's frame (x from its first node to its second);
+/// `to_drawing` places plate points in the drawing by a rotation and a shift.
+pub fn part_marks(
+    id: &str,
+    outline: &[DVec2],
+    holes: &[(DVec2, f64)],
+    nodes: [u32; 2],
+    to_drawing: &dyn Fn(DVec2) -> DVec2,
+) -> Marks {
+    let lo = outline.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
+    let hi = outline.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
+    let quarter = 0.25 * (hi - lo);
+    let band = |a: f64, b: f64| -> Vec<DVec2> {
+        let p = clip_x(outline, a, 1.0);
+        clip_x(&p, b, -1.0).iter().map(|q| to_drawing(*q)).collect()
+    };
+    let keep: Vec<(DVec2, f64)> = holes.iter().map(|(c, r)| (to_drawing(*c), *r)).collect();
+    let out = (to_drawing(DVec2::Y) - to_drawing(DVec2::ZERO)).normalize();
+    // The tag and two cells for the arrow.
+    let text = format!("{id}  ");
+    let middle = band(lo + quarter, hi - quarter);
+    let whole: Vec<DVec2> = outline.iter().map(|q| to_drawing(*q)).collect();
+    let mut segments = Vec::new();
+    let mut ends_free = true;
+    let mut placed = None;
+    if middle.len() >= 3 {
+        placed = fit_clear(&text, &middle, &keep, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
+    }
+    if placed.is_none() {
+        placed = fit_clear(&text, &whole, &keep, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
+        ends_free = false;
+    }
+    if placed.is_none() {
+        // Small parts: the tag alone.
+        let tag = fit_clear(id, &whole, &keep, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
+        if let Some((h, o)) = tag {
+            segments.extend(strokes(id, o, h));
+        }
+        return Marks {
+            tag_height: tag.map(|(h, _)| h),
+            etch: crate::fabricate::cutsheet::chain(&segments),
+        };
+    }
+    if let Some((h, o)) = placed {
+        segments.extend(strokes(id, o, h));
+        // The arrow in the last cell: a stem and a head, pointing along `out`.
+        let unit = h / 2.0;
+        let centre = o + DVec2::new(1.5 * unit * (text.chars().count() - 1) as f64 + 0.5 * unit, h / 2.0);
+        let (tip, tail) = (centre + out * (0.45 * h), centre - out * (0.45 * h));
+        let side = out.perp() * (0.25 * h);
+        let back = tip - out * (0.3 * h);
+        segments.extend([[tail, tip], [back + side, tip], [back - side, tip]]);
+    }
+    if ends_free && placed.is_some() {
+        for (end, region) in [(0, band(lo, lo + quarter)), (1, band(hi - quarter, hi))] {
+            if region.len() < 3 {
+                continue;
+            }
+            let label = format!("N{}", nodes[end]);
+            let height = placed.map(|(h, _)| 0.6 * h).unwrap_or(TAG_HEIGHT.0);
+            if let Some((h, o)) = fit_clear(&label, &region, &keep, TAG_MARGIN, TAG_HEIGHT.0, height.max(TAG_HEIGHT.0)) {
+                segments.extend(strokes(&label, o, h));
+            }
+        }
+    }
+    Marks {
+        tag_height: placed.map(|(h, _)| h),
+        etch: crate::fabricate::cutsheet::chain(&segments),
+    }
+}
+
+/// The part of a convex polygon with `sign`·(x − at) ≥ 0.
+fn clip_x(poly: &[DVec2], at: f64, sign: f64) -> Vec<DVec2> {
+    let side = |q: DVec2| sign * (q.x - at);
+    let mut out = Vec::new();
+    for (k, &q) in poly.iter().enumerate() {
+        let r = poly[(k + 1) % poly.len()];
+        let (sq, sr) = (side(q), side(r));
+        if sq >= 0.0 {
+            out.push(q);
+        }
+        if (sq >= 0.0) != (sr >= 0.0) {
+            out.push(q + (r - q) * (sq / (sq - sr)));
+        }
+    }
+    out
+}
+
+/// As [`fit`], but also `margin` clear of round holes (centre, radius), trying the centroid
+/// and the points between neighbouring holes as the tag's centre; the largest height wins.
+pub fn fit_clear(
+    text: &str,
+    outline: &[DVec2],
+    holes: &[(DVec2, f64)],
+    margin: f64,
+    min_height: f64,
+    max_height: f64,
+) -> Option<(f64, DVec2)> {
+    let n = text.chars().count();
+    let centroid = outline.iter().copied().sum::<DVec2>() / outline.len() as f64;
+    let mut centres = vec![centroid];
+    centres.extend(holes.windows(2).map(|w| 0.5 * (w[0].0 + w[1].0)));
+    let mut best: Option<(f64, DVec2)> = None;
+    for centre in centres {
+        let place = |h: f64| centre - DVec2::new(text_width(n) * h / 2.0, h) / 2.0;
+        let fits = |h: f64| {
+            let o = place(h);
+            let size = DVec2::new(text_width(n) * h / 2.0, h);
+            let corners = [
+                o,
+                o + DVec2::new(size.x, 0.0),
+                o + size,
+                o + DVec2::new(0.0, size.y),
+            ];
+            corners.iter().all(|&c| inside_by(outline, c, margin))
+                && holes.iter().all(|(c, r)| {
+                    let nearest = c.clamp(o, o + size);
+                    nearest.distance(*c) >= r + margin
+                })
+        };
+        if !fits(min_height) {
+            continue;
+        }
+        let (mut lo, mut hi) = (min_height, max_height);
+        let h = if fits(hi) {
+            hi
+        } else {
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if fits(mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            lo
+        };
+        if best.is_none_or(|b| h > b.0 + 1e-9) {
+            best = Some((h, place(h)));
+        }
+    }
+    best
+}
+
 /// Whether `p` lies inside the convex counter-clockwise polygon at least `margin` from every
 /// edge.
 fn inside_by(poly: &[DVec2], p: DVec2, margin: f64) -> bool {

@@ -3,8 +3,10 @@
 
 pub mod audit;
 pub mod axes;
+pub mod bolts;
 pub mod cells;
 pub mod groups;
 pub mod panels;
 pub mod planarize;
 pub mod plates;
+pub mod welds;

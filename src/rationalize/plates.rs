@@ -4,11 +4,16 @@
 //!
 //! The plates at a node all contain the node's axis line, so their cross-section in the plane
 //! ⊥ the axis is the same at every height: half-strips leaving the axis in directions u_k, each
-//! t_k thick. Two half-strips at angle θ are kept apart by the bisector of their directions
-//! when each starts at least s_k = (t_k/2)·cot(θ/2) + g/(2·sin(θ/2)) from the axis, g being the
-//! weld gap left between them at the bisector. A plate's setback at a node is the largest such
-//! s_k over the other plates there (g/2 for a straight continuation, nothing at a tip). The cut
-//! is a line parallel to the axis in the plate's plane.
+//! t_k thick. Each plate is cut back from the axis by a setback chosen so that every pair of
+//! angularly adjacent plates has the weld gap between them within its tolerance (see
+//! `welds.rs`); a node where no setbacks can do that is reported, or given a node core (a tube
+//! on the axis the plates butt against) when asked. The cut is a line parallel to the axis in
+//! the plate's plane.
+//!
+//! Seam plates (between assembly groups) are two plates from the gauge list, the thinnest pair
+//! that adds up to the plate's thickness, bolted face to face through a row of holes that
+//! keeps EN 1993-1-8's end, edge and pitch distances (`bolts.rs`); the holes of both halves
+//! are the same in the plate's frame, so they coincide in 3D.
 //!
 //! Each plate is stored as a 2D outline in its own frame (origin at the first node, x along the
 //! edge, y toward the axis, z the plate normal) and the rigid transform placing it; the
@@ -18,7 +23,9 @@
 use glam::{DVec2, DVec3};
 
 use super::axes::Axes;
+use super::bolts::{self, BoltSize};
 use super::planarize::Selector;
+use super::welds::{self, Strip};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Thickness {
@@ -68,10 +75,49 @@ pub struct PlateOptions {
     pub thickness: Thickness,
     /// Per-edge thicknesses over the rule, in order (a later match wins).
     pub overrides: Vec<(EdgeSelector, f64)>,
-    /// Gap left between plates meeting at a node, mm.
+    /// Root gap between plates meeting at a node, mm.
     pub weld_gap: f64,
-    /// Assembly groups (see `groups.rs`); seam plates are split in two of half thickness.
+    /// How far a root gap may be from `weld_gap`, mm.
+    pub weld_gap_tolerance: f64,
+    /// Assembly groups (see `groups.rs`); seam plates are split in two, bolted face to face.
     pub groups: usize,
+    /// Bolt size through the seam plates [default: by the grip, smaller where the plate is
+    /// small].
+    pub bolt: Option<BoltSize>,
+    /// A tube at every node whose gaps cannot be evened by setbacks alone.
+    pub node_core: Option<CoreSize>,
+}
+
+/// A node core's tube, mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoreSize {
+    pub diameter: f64,
+    pub wall: f64,
+}
+
+impl CoreSize {
+    /// `tube:D,T` (outer diameter and wall, mm).
+    pub fn parse(s: &str) -> Result<CoreSize, String> {
+        let body = s
+            .trim()
+            .strip_prefix("tube:")
+            .ok_or_else(|| format!("`{s}`: give the node core as tube:DIAMETER,WALL in mm"))?;
+        let (d, t) = body
+            .split_once(',')
+            .ok_or_else(|| format!("`{s}`: give the node core as tube:DIAMETER,WALL in mm"))?;
+        let num = |v: &str| {
+            v.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && *x > 0.0 && *x <= 1000.0)
+                .ok_or_else(|| format!("`{s}`: `{v}` is not a size in mm from 0 to 1000"))
+        };
+        let (diameter, wall) = (num(d)?, num(t)?);
+        if 2.0 * wall >= diameter {
+            return Err(format!("`{s}`: the wall must be less than half the diameter"));
+        }
+        Ok(CoreSize { diameter, wall })
+    }
 }
 
 impl Default for PlateOptions {
@@ -81,7 +127,10 @@ impl Default for PlateOptions {
             thickness: Thickness::FromRadius,
             overrides: Vec::new(),
             weld_gap: 1.0,
+            weld_gap_tolerance: 0.5,
             groups: 1,
+            bolt: None,
+            node_core: None,
         }
     }
 }
@@ -100,8 +149,23 @@ pub enum PlateError {
     OverrideEdge(usize, usize),
     #[error("thickness override {0} (counting from 1) matches no edge")]
     OverrideUnused(usize),
-    #[error("--weld-gap must be ≥ 0 mm, got {0}")]
+    #[error("--weld-gap must be from 0 to 100 mm, got {0}")]
     WeldGap(f64),
+    #[error("--weld-gap-tolerance must be from 0 to 100 mm, got {0}")]
+    WeldGapTolerance(f64),
+    #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with --gauges")]
+    OffGauge {
+        what: &'static str,
+        t: f64,
+        gauges: Vec<f64>,
+    },
+    #[error("edge {edge} (nodes {} and {}): the seam plate is too small for one {bolt} bolt ({:.1} mm from every edge)", .nodes[0], .nodes[1], .edge_distance)]
+    NoRoomForBolt {
+        edge: usize,
+        nodes: [u32; 2],
+        bolt: &'static str,
+        edge_distance: f64,
+    },
     #[error("node {0} has no usable axis or height")]
     Axis(u32),
     #[error("edge {0} has zero length or lies along its node's axis: it has no plate")]
@@ -166,42 +230,149 @@ pub struct Plate {
     /// Cut back from each node's axis, mm.
     pub setback: [f64; 2],
     /// Plates (by index) welded to this one at each node: every other plate there except its
-    /// own other half.
+    /// own other half; none where the node has a core.
     pub partners: [Vec<usize>; 2],
-    /// On a seam between groups: the other half-thickness plate, bolted face to face.
+    /// The core (index into `PlateSet::cores`) this plate welds to at each node, if any.
+    pub core: [Option<usize>; 2],
+    /// On a seam between groups: the other half, bolted face to face.
     pub bolted_to: Option<usize>,
+    /// Bolt hole centres in the plate's frame (seam plates only); both halves share them.
+    pub holes: Vec<DVec2>,
+    pub bolt: Option<Bolting>,
     /// Distance of the panel's fourth corner from the plate's plane, mm.
     pub flattening: f64,
 }
 
+/// The bolts through a seam.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bolting {
+    pub size: BoltSize,
+    /// Both halves together, mm.
+    pub grip: f64,
+    /// Standard length to order, mm.
+    pub length: f64,
+}
+
+/// Sides of the polygon standing for a hole in meshes and plates.json's areas.
+pub const HOLE_SEGMENTS: usize = 48;
+
+/// A hole as a polygon: `HOLE_SEGMENTS` corners on the circle, counter-clockwise from +x.
+pub fn hole_polygon(centre: DVec2, diameter: f64) -> Vec<DVec2> {
+    (0..HOLE_SEGMENTS)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / HOLE_SEGMENTS as f64;
+            centre + DVec2::from_angle(a) * (0.5 * diameter)
+        })
+        .collect()
+}
+
 impl Plate {
+    /// Outline less the holes (as their polygons), mm².
     pub fn area(&self) -> f64 {
-        polygon_area(&self.outline)
+        let holes: f64 = self
+            .holes
+            .iter()
+            .map(|c| polygon_area(&hole_polygon(*c, self.hole_diameter())))
+            .sum();
+        polygon_area(&self.outline) - holes
     }
 
-    /// The plate as a closed prism: outline at z = ±t/2, fan-triangulated caps (the outline
-    /// is convex), outward-facing triangles.
+    /// d0 of the bolt holes, or 0 without bolts.
+    pub fn hole_diameter(&self) -> f64 {
+        self.bolt.map(|b| b.size.hole).unwrap_or(0.0)
+    }
+
+    /// The plate as a closed prism: outline at z = ±t/2, holes as `HOLE_SEGMENTS`-gons through
+    /// it, caps by constrained Delaunay, outward-facing triangles.
     pub fn prism(&self) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let n = self.outline.len() as u32;
+        let mut loops = vec![self.outline.clone()];
+        loops.extend(
+            self.holes
+                .iter()
+                .map(|c| hole_polygon(*c, self.hole_diameter())),
+        );
+        let flat: Vec<DVec2> = loops.iter().flatten().copied().collect();
+        let n = flat.len() as u32;
         let h = self.thickness / 2.0;
-        let mut v: Vec<DVec3> = self
-            .outline
-            .iter()
-            .map(|p| self.placement.world(*p, -h))
-            .collect();
-        v.extend(self.outline.iter().map(|p| self.placement.world(*p, h)));
+        let mut v: Vec<DVec3> = flat.iter().map(|p| self.placement.world(*p, -h)).collect();
+        v.extend(flat.iter().map(|p| self.placement.world(*p, h)));
         let mut t = Vec::new();
-        for k in 1..n - 1 {
-            t.push([0, k + 1, k]); // bottom, facing −z
-            t.push([n, n + k, n + k + 1]); // top, facing +z
+        for [a, b, c] in cap_triangles(&loops) {
+            t.push([a, c, b]); // bottom, facing −z
+            t.push([n + a, n + b, n + c]); // top, facing +z
         }
-        for k in 0..n {
-            let j = (k + 1) % n;
-            t.push([k, j, n + j]);
-            t.push([k, n + j, n + k]);
+        let mut base = 0u32;
+        for (k, l) in loops.iter().enumerate() {
+            let m = l.len() as u32;
+            for i in 0..m {
+                let (p, q) = (base + i, base + (i + 1) % m);
+                // The outline runs counter-clockwise, the holes too: their walls face inward.
+                if k == 0 {
+                    t.push([p, q, n + q]);
+                    t.push([p, n + q, n + p]);
+                } else {
+                    t.push([q, p, n + p]);
+                    t.push([q, n + p, n + q]);
+                }
+            }
+            base += m;
         }
         (v, t)
     }
+}
+
+/// Counter-clockwise triangles covering the first loop less the others (holes inside it), as
+/// indices into the loops' points laid end to end. A convex loop without holes is a fan.
+fn cap_triangles(loops: &[Vec<DVec2>]) -> Vec<[u32; 3]> {
+    use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+    if loops.len() == 1 {
+        let n = loops[0].len() as u32;
+        return (1..n.saturating_sub(1)).map(|k| [0, k, k + 1]).collect();
+    }
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::new();
+    let mut index = std::collections::HashMap::new();
+    let mut handles = Vec::new();
+    let mut next = 0u32;
+    for l in loops {
+        let mut hs = Vec::with_capacity(l.len());
+        for p in l {
+            let h = cdt
+                .insert(Point2::new(p.x, p.y))
+                .expect("plate coordinates are finite");
+            index.entry(h).or_insert(next);
+            next += 1;
+            hs.push(h);
+        }
+        handles.push(hs);
+    }
+    for hs in &handles {
+        for k in 0..hs.len() {
+            let (a, b) = (hs[k], hs[(k + 1) % hs.len()]);
+            if a != b && !cdt.exists_constraint(a, b) {
+                cdt.add_constraint(a, b);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for f in cdt.inner_faces() {
+        let vs = f.vertices();
+        let p = vs.map(|v| DVec2::new(v.position().x, v.position().y));
+        let c = (p[0] + p[1] + p[2]) / 3.0;
+        let inside = |l: &[DVec2]| {
+            (0..l.len()).all(|k| (l[(k + 1) % l.len()] - l[k]).perp_dot(c - l[k]) > 0.0)
+        };
+        if !inside(&loops[0]) || loops[1..].iter().any(|h| inside(h)) {
+            continue;
+        }
+        let tri = vs.map(|v| index[&v.fix()]);
+        if (p[1] - p[0]).perp_dot(p[2] - p[0]) > 0.0 {
+            out.push(tri);
+        } else {
+            out.push([tri[0], tri[2], tri[1]]);
+        }
+    }
+    out
 }
 
 pub fn polygon_area(p: &[DVec2]) -> f64 {
@@ -236,8 +407,25 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
             }
         }
     }
-    if !(opts.weld_gap.is_finite() && opts.weld_gap >= 0.0) {
+    if !(opts.weld_gap >= 0.0 && opts.weld_gap <= 100.0) {
         return Err(PlateError::WeldGap(opts.weld_gap));
+    }
+    if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
+        return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
+    }
+    let on_list = |t: f64| opts.gauges.iter().any(|g| (g - t).abs() < 1e-9);
+    let off = |what: &'static str, t: f64| PlateError::OffGauge {
+        what,
+        t,
+        gauges: opts.gauges.clone(),
+    };
+    if let Thickness::Constant(t) = opts.thickness {
+        if !on_list(t) {
+            return Err(off("--thickness", t));
+        }
+    }
+    if let Some((_, t)) = opts.overrides.iter().find(|(_, t)| !on_list(*t)) {
+        return Err(off("the thickness override", *t));
     }
     let n = axes.positions.len();
     if axes.axes.len() != n || axes.heights.len() != n || axes.edge_radii.len() != axes.edges.len()
@@ -307,10 +495,97 @@ fn by_rule(axes: &Axes, opts: &PlateOptions) -> Vec<f64> {
     }
 }
 
-pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<Vec<Plate>, PlateError> {
+/// The two gauges a seam plate of thickness `t` is split into: the thinnest pair adding up to
+/// at least `t`, the most even of those; thinner first.
+pub fn seam_gauges(t: f64, gauges: &[f64]) -> Option<(f64, f64)> {
+    let mut best: Option<(f64, f64)> = None;
+    for (i, &a) in gauges.iter().enumerate() {
+        for &b in &gauges[i..] {
+            if a + b < t - 1e-9 {
+                continue;
+            }
+            let better = best.is_none_or(|(x, y)| {
+                let (sum, old) = (a + b, x + y);
+                sum < old - 1e-9 || ((sum - old).abs() <= 1e-9 && b - a < y - x)
+            });
+            if better {
+                best = Some((a, b));
+            }
+        }
+    }
+    best
+}
+
+/// A tube at a node the plates weld to, mm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Core {
+    pub id: String,
+    pub node: u32,
+    pub group: u32,
+    pub size: CoreSize,
+    /// From the node along its axis, `length` long.
+    pub base: DVec3,
+    pub axis: DVec3,
+    pub length: f64,
+}
+
+/// Two plates side by side at a node and the wedge between them (see `welds::Wedge`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WeldPair {
+    /// Edges (the plates on them).
+    pub edges: [usize; 2],
+    /// Dihedral angle on this side, degrees.
+    pub angle_deg: f64,
+    /// Root gap between the two plates (a seam counts as its stack), mm.
+    pub gap: f64,
+}
+
+/// The welds at one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeWelds {
+    pub node: u32,
+    /// Edges meeting here.
+    pub edges: Vec<usize>,
+    /// Setback of each of those edges' plates here, mm.
+    pub setbacks: Vec<f64>,
+    pub pairs: Vec<WeldPair>,
+    /// Every adjacent pair's root gap within the tolerance.
+    pub even: bool,
+    /// Index into `PlateSet::cores`, when the node has one.
+    pub core: Option<usize>,
+}
+
+/// Everything `plates` makes.
+#[derive(Clone, Debug)]
+pub struct PlateSet {
+    pub plates: Vec<Plate>,
+    /// Per edge: its plate, or a seam's two halves.
+    pub by_edge: Vec<Vec<usize>>,
+    /// Nodes where two or more plates meet.
+    pub welds: Vec<NodeWelds>,
+    pub cores: Vec<Core>,
+}
+
+pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> {
     check(axes, opts)?;
     let n = axes.positions.len();
     let t = thicknesses(axes, opts)?;
+    let group = super::groups::partition(&axes.positions, &axes.edges, opts.groups)?;
+    // A seam's two plies, and the stack every plate's cut allows for.
+    let plies: Vec<Option<(f64, f64)>> = axes
+        .edges
+        .iter()
+        .zip(&t)
+        .map(|(&[a, b], &tk)| {
+            (group[a as usize] != group[b as usize])
+                .then(|| seam_gauges(tk, &opts.gauges).expect("two of the largest gauge hold it"))
+        })
+        .collect();
+    let stack: Vec<f64> = t
+        .iter()
+        .zip(&plies)
+        .map(|(&tk, p)| p.map(|(a, b)| a + b).unwrap_or(tk))
+        .collect();
     // Incident edges per node, and each edge's in-section direction u at each end.
     let mut at: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n]; // (edge, end)
     let mut dir = vec![[DVec3::ZERO; 2]; axes.edges.len()];
@@ -324,55 +599,202 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<Vec<Plate>, PlateError
             at[v as usize].push((k, end));
         }
     }
-    let mut out = Vec::with_capacity(axes.edges.len());
-    for (k, &[a, b]) in axes.edges.iter().enumerate() {
-        let mut setback = [0.0; 2];
-        for (end, v) in [a, b].into_iter().enumerate() {
-            for &(m, m_end) in &at[v as usize] {
-                if m == k {
-                    continue;
-                }
-                let cos = dir[k][end].dot(dir[m][m_end]).clamp(-1.0, 1.0);
-                let theta = cos.acos();
-                let half = 0.5 * theta;
-                if half.sin() < 1e-6 {
-                    return Err(PlateError::TooClose {
-                        edge: k,
-                        node: v,
-                        angle_deg: theta.to_degrees(),
-                    });
-                }
-                let s = 0.5 * t[k] / half.tan() + opts.weld_gap / (2.0 * half.sin());
-                setback[end] = f64::max(setback[end], s);
-            }
-        }
-        out.push(plate(axes, k, t[k], setback)?);
-    }
-    let group = super::groups::partition(&axes.positions, &axes.edges, opts.groups)?;
-    Ok(split_and_tag(out, &group))
-}
-
-/// Seam plates into two halves, one per group, offset ±t/4 across the plate so that they lie
-/// face to face within the original thickness; then partners by plate and tags.
-fn split_and_tag(per_edge: Vec<Plate>, group: &[u32]) -> Vec<Plate> {
-    let mut out: Vec<Plate> = Vec::with_capacity(per_edge.len());
-    for mut p in per_edge {
-        let [ga, gb] = p.nodes.map(|v| group[v as usize]);
-        if ga == gb {
-            p.group = ga;
-            out.push(p);
+    let mut setback = vec![[0.0f64; 2]; axes.edges.len()];
+    let mut welds = Vec::new();
+    let mut cores = Vec::new();
+    for v in 0..n {
+        if at[v].len() < 2 {
             continue;
         }
-        let quarter = p.thickness / 4.0;
+        let node = node_welds(axes, opts, v, &at[v], &dir, &stack, &mut cores, &group)?;
+        for (&(k, end), s) in at[v].iter().zip(&node.setbacks) {
+            setback[k][end] = *s;
+        }
+        welds.push(node);
+    }
+    let mut whole = Vec::with_capacity(axes.edges.len());
+    for (k, ply) in plies.iter().enumerate() {
+        let (mut p, mid) = plate(axes, k, stack[k], setback[k])?;
+        if let Some((a, b)) = ply {
+            bolt_seam(&mut p, mid, opts.bolt, a.min(*b))?;
+        }
+        whole.push(p);
+    }
+    let (plates, by_edge) = split_and_tag(whole, &plies, &group);
+    let mut set = PlateSet {
+        plates,
+        by_edge,
+        welds,
+        cores,
+    };
+    core_partners(&mut set);
+    Ok(set)
+}
+
+/// The setbacks, wedges and gaps at node `v`, with a core when it needs one and one is asked
+/// for.
+#[allow(clippy::too_many_arguments)]
+fn node_welds(
+    axes: &Axes,
+    opts: &PlateOptions,
+    v: usize,
+    here: &[(usize, usize)],
+    dir: &[[DVec3; 2]],
+    stack: &[f64],
+    cores: &mut Vec<Core>,
+    group: &[u32],
+) -> Result<NodeWelds, PlateError> {
+    let d = axes.axes[v];
+    let e1 = dir[here[0].0][here[0].1];
+    let e2 = d.cross(e1);
+    let strips: Vec<Strip> = here
+        .iter()
+        .map(|&(k, end)| {
+            let u = dir[k][end];
+            let [a, b] = axes.edges[k];
+            Strip {
+                u: DVec2::new(u.dot(e1), u.dot(e2)),
+                thickness: stack[k],
+                reach: axes.positions[a as usize].distance(axes.positions[b as usize]),
+            }
+        })
+        .collect();
+    let cut = welds::even_gaps(&strips, opts.weld_gap, opts.weld_gap_tolerance).ok_or_else(
+        || {
+            // Two plates leave the axis in the same direction: name the pair.
+            let (k, angle) = closest_pair(&strips);
+            PlateError::TooClose {
+                edge: here[k].0,
+                node: v as u32,
+                angle_deg: angle.to_degrees(),
+            }
+        },
+    )?;
+    let mut setbacks = cut.setbacks;
+    let mut core = None;
+    if let (false, Some(size)) = (cut.even, opts.node_core) {
+        setbacks = welds::core_setbacks(&strips, 0.5 * size.diameter, opts.weld_gap);
+        core = Some(cores.len());
+        cores.push(Core {
+            id: format!("{}-C{v}", group[v] + 1),
+            node: v as u32,
+            group: group[v],
+            size,
+            base: axes.positions[v],
+            axis: d,
+            length: axes.heights[v],
+        });
+    }
+    let pairs = welds::wedges(&strips)
+        .iter()
+        .map(|w| WeldPair {
+            edges: [here[w.a].0, here[w.b].0],
+            angle_deg: w.angle.to_degrees(),
+            gap: welds::root_gap(
+                &strips[w.a],
+                setbacks[w.a],
+                &strips[w.b],
+                setbacks[w.b],
+            ),
+        })
+        .collect();
+    Ok(NodeWelds {
+        node: v as u32,
+        edges: here.iter().map(|h| h.0).collect(),
+        setbacks,
+        pairs,
+        even: cut.even,
+        core,
+    })
+}
+
+/// A strip of the two whose directions are closest, and their angle.
+fn closest_pair(strips: &[Strip]) -> (usize, f64) {
+    let mut best = (0, f64::INFINITY);
+    for a in 0..strips.len() {
+        for b in a + 1..strips.len() {
+            let angle = strips[a].u.angle_to(strips[b].u).abs();
+            if angle < best.1 {
+                best = (a, angle);
+            }
+        }
+    }
+    best
+}
+
+/// Holes along the seam plate's mid-height line `mid`, of the given size or the largest that
+/// fits from the grip's default down.
+fn bolt_seam(
+    p: &mut Plate,
+    mid: [DVec2; 2],
+    size: Option<BoltSize>,
+    thinner: f64,
+) -> Result<(), PlateError> {
+    let grip = p.thickness;
+    let tried: Vec<BoltSize> = match size {
+        Some(b) => vec![b],
+        None => {
+            let top = bolts::for_grip(grip);
+            bolts::SIZES
+                .iter()
+                .rev()
+                .filter(|b| b.d <= top.d)
+                .copied()
+                .collect()
+        }
+    };
+    for b in &tried {
+        if let Some(holes) = bolts::row(&p.outline, mid[0], mid[1], b, thinner) {
+            p.holes = holes;
+            p.bolt = Some(Bolting {
+                size: *b,
+                grip,
+                length: bolts::length(b, grip).unwrap_or(f64::NAN),
+            });
+            return Ok(());
+        }
+    }
+    let last = tried.last().expect("at least one size");
+    Err(PlateError::NoRoomForBolt {
+        edge: p.edge,
+        nodes: p.nodes,
+        bolt: last.name,
+        edge_distance: bolts::edge_distance(last),
+    })
+}
+
+/// Seam plates into two plies, one per group, face to face within the stack; then partners by
+/// plate and tags.
+fn split_and_tag(
+    per_edge: Vec<Plate>,
+    plies: &[Option<(f64, f64)>],
+    group: &[u32],
+) -> (Vec<Plate>, Vec<Vec<usize>>) {
+    let mut out: Vec<Plate> = Vec::with_capacity(per_edge.len());
+    let mut by_edge = Vec::with_capacity(per_edge.len());
+    for (mut p, ply) in per_edge.into_iter().zip(plies) {
+        let [ga, gb] = p.nodes.map(|v| group[v as usize]);
+        let Some((ta, tb)) = *ply else {
+            p.group = ga;
+            by_edge.push(vec![out.len()]);
+            out.push(p);
+            continue;
+        };
         let first = out.len();
-        for (g, side) in [(ga, -1.0), (gb, 1.0)] {
+        let stack = p.thickness;
+        // Ply a on the −z side of the stack, ply b on the +z side.
+        for (g, t, centre, other) in [
+            (ga, ta, -0.5 * stack + 0.5 * ta, first + 1),
+            (gb, tb, 0.5 * stack - 0.5 * tb, first),
+        ] {
             let mut half = p.clone();
-            half.thickness = p.thickness / 2.0;
-            half.placement.origin += p.placement.z * (side * quarter);
+            half.thickness = t;
+            half.placement.origin += p.placement.z * centre;
             half.group = g;
-            half.bolted_to = Some(if side < 0.0 { first + 1 } else { first });
+            half.bolted_to = Some(other);
             out.push(half);
         }
+        by_edge.push(vec![first, first + 1]);
     }
     let mut at: std::collections::HashMap<u32, Vec<usize>> = Default::default();
     for (i, p) in out.iter().enumerate() {
@@ -401,10 +823,37 @@ fn split_and_tag(per_edge: Vec<Plate>, group: &[u32]) -> Vec<Plate> {
         p.partners = partners;
         p.id = id;
     }
-    out
+    (out, by_edge)
 }
 
-fn plate(axes: &Axes, k: usize, thickness: f64, setback: [f64; 2]) -> Result<Plate, PlateError> {
+/// At a node with a core, every plate welds to the core rather than to the other plates.
+fn core_partners(set: &mut PlateSet) {
+    for w in &set.welds {
+        if w.core.is_none() {
+            continue;
+        }
+        for &k in &w.edges {
+            for &i in &set.by_edge[k] {
+                let p = &mut set.plates[i];
+                for end in 0..2 {
+                    if p.nodes[end] == w.node {
+                        p.partners[end].clear();
+                        p.core[end] = w.core;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The plate on edge `k`, and its mid-height line (from the middle of its side at the first
+/// node to the middle of the side at the second), where bolts go.
+fn plate(
+    axes: &Axes,
+    k: usize,
+    thickness: f64,
+    setback: [f64; 2],
+) -> Result<(Plate, [DVec2; 2]), PlateError> {
     let [a, b] = axes.edges[k];
     let (a, b) = (a as usize, b as usize);
     let (va, vb) = (axes.positions[a], axes.positions[b]);
@@ -446,10 +895,13 @@ fn plate(axes: &Axes, k: usize, thickness: f64, setback: [f64; 2]) -> Result<Pla
     if poly.len() < 3 || polygon_area(&poly) < 1e-9 {
         return Err(PlateError::TooShort(k, setback[0], setback[1]));
     }
-    Ok(Plate {
+    let mid = [0.5 * (quad[0] + quad[3]), 0.5 * (quad[1] + quad[2])];
+    let plate = Plate {
         id: String::new(),
         group: 0,
         bolted_to: None,
+        holes: Vec::new(),
+        bolt: None,
         edge: k,
         nodes: [a as u32, b as u32],
         thickness,
@@ -457,8 +909,10 @@ fn plate(axes: &Axes, k: usize, thickness: f64, setback: [f64; 2]) -> Result<Pla
         placement,
         setback,
         partners: [Vec::new(), Vec::new()],
+        core: [None, None],
         flattening,
-    })
+    };
+    Ok((plate, mid))
 }
 
 fn convex_ccw(p: &[DVec2]) -> bool {
@@ -519,13 +973,15 @@ mod tests {
             weld_gap: 2.0,
             ..Default::default()
         };
-        let p = plates(&y_joint(), &opts).expect("valid");
+        let p = plates(&y_joint(), &opts).expect("valid").plates;
         let want = 3.0 / 60f64.to_radians().tan() + 2.0 / (2.0 * 60f64.to_radians().sin());
         for plate in &p {
-            assert!((plate.setback[0] - want).abs() < 1e-12);
+            // The gap solve starts from the bisector rule, which is exact here; it may move by
+            // its bisection's step.
+            assert!((plate.setback[0] - want).abs() < 1e-6);
             assert_eq!(plate.setback[1], 0.0, "a tip is not cut");
             // A rectangle (100 − setback) × 50.
-            assert!((plate.area() - (100.0 - want) * 50.0).abs() < 1e-9);
+            assert!((plate.area() - (100.0 - plate.setback[0]) * 50.0).abs() < 1e-9);
             assert_eq!(plate.partners[0].len(), 2);
         }
         // The plates' corners nearest the node are at least the weld gap apart at the
@@ -537,7 +993,9 @@ mod tests {
 
     #[test]
     fn prisms_are_closed_with_the_plate_volume() {
-        let p = plates(&y_joint(), &PlateOptions::default()).expect("valid");
+        let p = plates(&y_joint(), &PlateOptions::default())
+            .expect("valid")
+            .plates;
         let (v, t) = p[0].prism();
         let mesh = crate::mesh::TriMesh {
             positions: v,
@@ -548,6 +1006,90 @@ mod tests {
         assert!(topo.closed, "{topo:?}");
         let vol = topo.volume.expect("closed");
         assert!((vol - p[0].area() * p[0].thickness).abs() < 1e-6, "{vol}");
+    }
+
+    /// A straight run of four 300 mm edges along x, axes +Z, 100 mm high.
+    fn run() -> Axes {
+        let positions: Vec<DVec3> = (0..5).map(|k| DVec3::X * (300.0 * k as f64)).collect();
+        Axes {
+            positions,
+            edges: vec![[0, 1], [1, 2], [2, 3], [3, 4]],
+            axes: vec![DVec3::Z; 5],
+            heights: vec![100.0; 5],
+            reference: vec![DVec3::Z; 5],
+            fixed_normals: vec![None; 4],
+            edge_radii: vec![0.0; 4],
+        }
+    }
+
+    #[test]
+    fn seams_are_two_gauges_bolted_through_the_same_holes() {
+        let opts = PlateOptions {
+            thickness: Thickness::Constant(5.0),
+            groups: 2,
+            ..Default::default()
+        };
+        let set = plates(&run(), &opts).expect("valid");
+        let seam: Vec<&Plate> = set.plates.iter().filter(|p| p.bolted_to.is_some()).collect();
+        assert_eq!(seam.len(), 2, "one seam in two plies");
+        let (a, b) = (seam[0], seam[1]);
+        // 5 mm: 2 + 3 from the default gauges, stacked face to face about the panel plane.
+        assert_eq!((a.thickness, b.thickness), (2.0, 3.0));
+        let gap = (b.placement.origin - a.placement.origin).dot(a.placement.z);
+        assert!((gap - 2.5).abs() < 1e-12, "{gap}");
+        let bolt = a.bolt.expect("bolted");
+        // Unwin: 10 (√2.5 − 0.2) = 13.8 mm, nearest M12.
+        assert_eq!(bolt.size.name, "M12");
+        assert!(!a.holes.is_empty() && a.holes == b.holes);
+        // Every hole 1.2 d0 inside every edge, neighbours 2.2 d0 apart.
+        let e = 1.2 * bolt.size.hole;
+        for h in &a.holes {
+            for k in 0..a.outline.len() {
+                let (p, q) = (a.outline[k], a.outline[(k + 1) % a.outline.len()]);
+                assert!((q - p).normalize().perp_dot(*h - p) >= e - 1e-9);
+            }
+        }
+        for w in a.holes.windows(2) {
+            assert!(w[0].distance(w[1]) >= 2.2 * bolt.size.hole - 1e-9);
+        }
+        // The prism has its holes: closed, with the holes' volume taken out.
+        let (v, t) = a.prism();
+        let mesh = crate::mesh::TriMesh {
+            positions: v,
+            triangles: t,
+            colors: None,
+        };
+        let topo = mesh.check_manifold();
+        assert!(topo.closed, "{topo:?}");
+        assert_eq!(topo.genus, Some(a.holes.len() as i64));
+        let vol = topo.volume.expect("closed");
+        assert!((vol - a.area() * a.thickness).abs() < 1e-6, "{vol}");
+        // A bolt too big for the plate is an error naming the edge.
+        let huge = PlateOptions {
+            bolt: Some(crate::rationalize::bolts::parse("M30").expect("listed")),
+            ..opts.clone()
+        };
+        let mut low = run();
+        low.heights = vec![60.0; 5];
+        assert!(matches!(
+            plates(&low, &huge),
+            Err(PlateError::NoRoomForBolt { .. })
+        ));
+    }
+
+    #[test]
+    fn gauges_hold_every_thickness() {
+        assert_eq!(seam_gauges(6.0, &[1.5, 2.0, 3.0, 4.0, 5.0, 6.0]), Some((3.0, 3.0)));
+        assert_eq!(seam_gauges(1.5, &[1.5, 2.0, 3.0]), Some((1.5, 1.5)));
+        assert_eq!(seam_gauges(4.0, &[1.5, 2.0, 3.0, 4.0]), Some((2.0, 2.0)));
+        let off = PlateOptions {
+            thickness: Thickness::Constant(2.5),
+            ..Default::default()
+        };
+        assert!(matches!(
+            plates(&y_joint(), &off),
+            Err(PlateError::OffGauge { .. })
+        ));
     }
 
     #[test]
