@@ -40,7 +40,7 @@ fn calyx_plates() -> Vec<Vec<DVec2>> {
         },
     )
     .expect("plates");
-    p.into_iter().map(|p| p.outline).collect()
+    p.plates.into_iter().map(|p| p.outline).collect()
 }
 
 fn job(base: &[Vec<DVec2>], n: usize) -> Vec<Vec<DVec2>> {

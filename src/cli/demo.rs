@@ -371,7 +371,8 @@ fn steel(out: &Path) -> Result<Entry> {
         weld_gap: 1.0,
         weld_gap_tolerance: 0.5,
         node_core: Some(
-            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4").map_err(anyhow::Error::msg)?,
+            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4")
+                .map_err(anyhow::Error::msg)?,
         ),
         min_weld_angle: None,
         bolt: None,

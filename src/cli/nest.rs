@@ -99,9 +99,9 @@ fn parse_sheet(s: &str) -> Result<DVec2, String> {
 }
 
 fn parse_stock(s: &str) -> Result<Stock, String> {
-    let (size, cost) = s
-        .split_once(':')
-        .ok_or_else(|| format!("`{s}`: give a stock sheet as WIDTHxHEIGHT:COST, like 3000x1500:120"))?;
+    let (size, cost) = s.split_once(':').ok_or_else(|| {
+        format!("`{s}`: give a stock sheet as WIDTHxHEIGHT:COST, like 3000x1500:120")
+    })?;
     let cost: f64 = cost
         .trim()
         .parse()
@@ -203,7 +203,9 @@ fn nest_family(
         let mut places = n.places;
         // The last sheet on a cheaper stock, if one takes all its parts.
         let last = n.sheets - 1;
-        let on_last: Vec<usize> = (0..places.len()).filter(|&i| places[i].sheet == last).collect();
+        let on_last: Vec<usize> = (0..places.len())
+            .filter(|&i| places[i].sheet == last)
+            .collect();
         let mut cheapest_first: Vec<&Stock> = stock.iter().collect();
         cheapest_first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
         for cheaper in cheapest_first {
@@ -661,7 +663,12 @@ fn write_bom(out: &Outcome, drawn: &[Drawn], path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn write_nest_json(out: &Outcome, opts: &NestOptions, speeds: &SpeedTable, path: &Path) -> Result<()> {
+fn write_nest_json(
+    out: &Outcome,
+    opts: &NestOptions,
+    speeds: &SpeedTable,
+    path: &Path,
+) -> Result<()> {
     // Per thickness (positive thicknesses order as their bits do).
     let mut families: BTreeMap<u64, (usize, f64, f64, f64)> = BTreeMap::new();
     for s in &out.sheets {

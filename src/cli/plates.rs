@@ -249,9 +249,7 @@ pub fn run(args: Args) -> Result<bool> {
         .map(|(_, p)| p.holes.len())
         .sum();
     let groups = plates.iter().map(|p| p.group + 1).max().unwrap_or(0);
-    let ok = args
-        .min_weld_angle
-        .is_none_or(|_| weld.below_min == 0);
+    let ok = args.min_weld_angle.is_none_or(|_| weld.below_min == 0);
     if args.json {
         println!(
             "{}",
@@ -371,10 +369,34 @@ pub fn tube(c: &Core) -> (Vec<DVec3>, Vec<[u32; 3]>) {
             t.push([a, c, d]);
         };
         // Outer wall faces out, inner wall in, bottom down, top up.
-        quad(&mut t, ring(0, k), ring(0, k + 1), ring(1, k + 1), ring(1, k));
-        quad(&mut t, ring(2, k + 1), ring(2, k), ring(3, k), ring(3, k + 1));
-        quad(&mut t, ring(0, k + 1), ring(0, k), ring(2, k), ring(2, k + 1));
-        quad(&mut t, ring(1, k), ring(1, k + 1), ring(3, k + 1), ring(3, k));
+        quad(
+            &mut t,
+            ring(0, k),
+            ring(0, k + 1),
+            ring(1, k + 1),
+            ring(1, k),
+        );
+        quad(
+            &mut t,
+            ring(2, k + 1),
+            ring(2, k),
+            ring(3, k),
+            ring(3, k + 1),
+        );
+        quad(
+            &mut t,
+            ring(0, k + 1),
+            ring(0, k),
+            ring(2, k),
+            ring(2, k + 1),
+        );
+        quad(
+            &mut t,
+            ring(1, k),
+            ring(1, k + 1),
+            ring(3, k + 1),
+            ring(3, k),
+        );
     }
     (v, t)
 }
@@ -383,7 +405,10 @@ pub fn tube(c: &Core) -> (Vec<DVec3>, Vec<[u32; 3]>) {
 /// face, so in the STL they share a face; here they stay apart).
 fn write_assembly_obj(set: &PlateSet, path: &Path) -> Result<()> {
     write_atomic(path, |w| {
-        writeln!(w, "# lamina plates: one closed prism per plate, one tube per node core, units mm")?;
+        writeln!(
+            w,
+            "# lamina plates: one closed prism per plate, one tube per node core, units mm"
+        )?;
         let mut base = 1;
         let shapes = set
             .plates
@@ -414,8 +439,16 @@ fn write_plates_json(set: &PlateSet, opts: &PlateOptions, path: &Path) -> Result
         writeln!(w, "  \"units\": \"mm\",")?;
         writeln!(w, "  \"gauges\": {},", json!(opts.gauges))?;
         writeln!(w, "  \"weld_gap\": {},", json!(opts.weld_gap))?;
-        writeln!(w, "  \"weld_gap_tolerance\": {},", json!(opts.weld_gap_tolerance))?;
-        writeln!(w, "  \"hole_segments\": {},", lamina::rationalize::plates::HOLE_SEGMENTS)?;
+        writeln!(
+            w,
+            "  \"weld_gap_tolerance\": {},",
+            json!(opts.weld_gap_tolerance)
+        )?;
+        writeln!(
+            w,
+            "  \"hole_segments\": {},",
+            lamina::rationalize::plates::HOLE_SEGMENTS
+        )?;
         writeln!(w, "  \"core_segments\": {CORE_SEGMENTS},")?;
         let cores: Vec<_> = set
             .cores

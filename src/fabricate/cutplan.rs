@@ -95,7 +95,10 @@ impl SpeedTable {
             .map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
         for (machine, rows) in [("laser", &table.laser), ("plasma", &table.plasma)] {
             if rows.is_empty() {
-                return Err(ReadError::file(path, format!("the {machine} table is empty")));
+                return Err(ReadError::file(
+                    path,
+                    format!("the {machine} table is empty"),
+                ));
             }
             for (k, r) in rows.iter().enumerate() {
                 let positive = |v: f64| v > 0.0 && v <= 1e7;
@@ -208,7 +211,13 @@ fn band_extent(poly: &[DVec2], y0: f64, y1: f64) -> Option<(f64, f64)> {
         let (a, b) = (poly[k], poly[(k + 1) % n]);
         // The part of the edge inside the band.
         let (ya, yb) = (a.y, b.y);
-        let t_in = |y: f64| if (yb - ya).abs() < 1e-15 { None } else { Some((y - ya) / (yb - ya)) };
+        let t_in = |y: f64| {
+            if (yb - ya).abs() < 1e-15 {
+                None
+            } else {
+                Some((y - ya) / (yb - ya))
+            }
+        };
         let mut ts = vec![0.0, 1.0];
         for y in [y0, y1] {
             if let Some(t) = t_in(y) {
@@ -270,7 +279,12 @@ mod tests {
             DVec2::new(1000.0, 1490.0),
             DVec2::new(10.0, 1490.0),
         ];
-        let r = remnants(DVec2::new(3000.0, 1500.0), &[part], 5.0, DVec2::new(300.0, 300.0));
+        let r = remnants(
+            DVec2::new(3000.0, 1500.0),
+            &[part],
+            5.0,
+            DVec2::new(300.0, 300.0),
+        );
         assert_eq!(r.len(), 1, "{r:?}");
         assert_eq!(r[0], [DVec2::new(1005.0, 0.0), DVec2::new(3000.0, 1500.0)]);
     }

@@ -17,8 +17,8 @@
 use std::path::Path;
 
 use dxf::entities::{Entity, EntityType, LwPolyline};
-use dxf::LwPolylineVertex;
 use dxf::tables::Layer;
+use dxf::LwPolylineVertex;
 use glam::DVec2;
 
 use crate::files::{write_atomic, WriteError};
@@ -105,7 +105,11 @@ pub fn write_cut_dxf(
     let rect = |lo: DVec2, hi: DVec2| [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
     if let Some(s) = sheet {
         let r = rect(DVec2::ZERO, s);
-        drawing.add_entity(lw_polyline_entity(r.iter().map(|p| (p.x, p.y)), true, SHEET));
+        drawing.add_entity(lw_polyline_entity(
+            r.iter().map(|p| (p.x, p.y)),
+            true,
+            SHEET,
+        ));
     }
     for [lo, hi] in remnants {
         let r = rect(*lo, *hi);

@@ -744,9 +744,8 @@ fn pair(
             let ideal_centroid = 2.0 * mid - onto(centroid_b) + dir * (gap / along);
             let r = turn(angle);
             let mut offset = ideal_centroid - r.rotate(centroid_b);
-            let place = |offset: DVec2| -> Vec<DVec2> {
-                b.iter().map(|p| r.rotate(*p) + offset).collect()
-            };
+            let place =
+                |offset: DVec2| -> Vec<DVec2> { b.iter().map(|p| r.rotate(*p) + offset).collect() };
             let mut placed = place(offset);
             // Near-congruent quads, or the exact angle, can bring the copy closer than the gap:
             // push it on along the same direction until it is not.
@@ -864,9 +863,7 @@ impl BottomLeft {
                 let found = list
                     .iter()
                     .enumerate()
-                    .find_map(|(pos, &j)| {
-                        pair(j, &hulls[j], i, h, gap, exact).map(|p| (pos, p))
-                    });
+                    .find_map(|(pos, &j)| pair(j, &hulls[j], i, h, gap, exact).map(|p| (pos, p)));
                 if let Some((pos, p)) = found {
                     list.remove(pos);
                     paired = Some(p);

@@ -83,6 +83,7 @@ struct End {
     #[allow(dead_code)]
     setback: f64,
     welded_to: Vec<String>,
+    #[serde(default)]
     core: Option<String>,
 }
 
@@ -93,7 +94,9 @@ struct Record {
     thickness: f64,
     ends: [End; 2],
     bolted_to: Option<String>,
+    #[serde(default)]
     bolt: Option<BoltRecord>,
+    #[serde(default)]
     holes: Vec<[f64; 2]>,
     matrix: [[f64; 4]; 4],
     outline: Vec<[f64; 2]>,
@@ -102,6 +105,7 @@ struct Record {
 #[derive(Deserialize)]
 struct File {
     plates: Vec<Record>,
+    #[serde(default)]
     cores: Vec<CoreRecord>,
 }
 
@@ -115,13 +119,10 @@ pub const MAX_HOLES: usize = 10_000;
 /// The plates and the node cores.
 pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
     let text = utf8_text(path, read_nonempty(path)?)?;
-    check_format(
-        path,
-        &text,
-        FORMAT,
-        VERSION,
-        "the plates file `lamina plates` writes",
-    )?;
+    // Version 1 (before bolts and cores) reads as plates without holes.
+    let what = "the plates file `lamina plates` writes";
+    check_format(path, &text, FORMAT, VERSION, what)
+        .or_else(|e| check_format(path, &text, FORMAT, 1, what).map_err(|_| e))?;
     let file: File =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     if file.plates.is_empty() {
@@ -156,7 +157,10 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
             return Err(bad("the matrix holds a value that is not a finite number"));
         }
         if r.holes.len() > MAX_HOLES
-            || r.holes.iter().flatten().any(|v| !(v.abs() <= MAX_COORD))
+            || r.holes
+                .iter()
+                .flatten()
+                .any(|v| v.is_nan() || v.abs() > MAX_COORD)
         {
             return Err(bad(&format!(
                 "at most {MAX_HOLES} holes, every coordinate finite and within {MAX_COORD:e} mm"
@@ -172,7 +176,9 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
                     && b.length.is_finite()
                     && b.grip.is_finite()) =>
             {
-                return Err(bad("the bolt needs a hole wider than its shank, both positive"))
+                return Err(bad(
+                    "the bolt needs a hole wider than its shank, both positive",
+                ))
             }
             _ => {}
         }

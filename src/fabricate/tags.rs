@@ -182,7 +182,10 @@ pub fn part_marks(
     to_drawing: &dyn Fn(DVec2) -> DVec2,
 ) -> Marks {
     let lo = outline.iter().map(|p| p.x).fold(f64::INFINITY, f64::min);
-    let hi = outline.iter().map(|p| p.x).fold(f64::NEG_INFINITY, f64::max);
+    let hi = outline
+        .iter()
+        .map(|p| p.x)
+        .fold(f64::NEG_INFINITY, f64::max);
     let quarter = 0.25 * (hi - lo);
     let band = |a: f64, b: f64| -> Vec<DVec2> {
         let p = clip_x(outline, a, 1.0);
@@ -198,7 +201,14 @@ pub fn part_marks(
     let mut ends_free = true;
     let mut placed = None;
     if middle.len() >= 3 {
-        placed = fit_clear(&text, &middle, &keep, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
+        placed = fit_clear(
+            &text,
+            &middle,
+            &keep,
+            TAG_MARGIN,
+            TAG_HEIGHT.0,
+            TAG_HEIGHT.1,
+        );
     }
     if placed.is_none() {
         placed = fit_clear(&text, &whole, &keep, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1);
@@ -219,7 +229,10 @@ pub fn part_marks(
         segments.extend(strokes(id, o, h));
         // The arrow in the last cell: a stem and a head, pointing along `out`.
         let unit = h / 2.0;
-        let centre = o + DVec2::new(1.5 * unit * (text.chars().count() - 1) as f64 + 0.5 * unit, h / 2.0);
+        let centre = o + DVec2::new(
+            1.5 * unit * (text.chars().count() - 1) as f64 + 0.5 * unit,
+            h / 2.0,
+        );
         let (tip, tail) = (centre + out * (0.45 * h), centre - out * (0.45 * h));
         let side = out.perp() * (0.25 * h);
         let back = tip - out * (0.3 * h);
@@ -232,7 +245,14 @@ pub fn part_marks(
             }
             let label = format!("N{}", nodes[end]);
             let height = placed.map(|(h, _)| 0.6 * h).unwrap_or(TAG_HEIGHT.0);
-            if let Some((h, o)) = fit_clear(&label, &region, &keep, TAG_MARGIN, TAG_HEIGHT.0, height.max(TAG_HEIGHT.0)) {
+            if let Some((h, o)) = fit_clear(
+                &label,
+                &region,
+                &keep,
+                TAG_MARGIN,
+                TAG_HEIGHT.0,
+                height.max(TAG_HEIGHT.0),
+            ) {
                 segments.extend(strokes(&label, o, h));
             }
         }
@@ -274,6 +294,21 @@ pub fn fit_clear(
     let centroid = outline.iter().copied().sum::<DVec2>() / outline.len() as f64;
     let mut centres = vec![centroid];
     centres.extend(holes.windows(2).map(|w| 0.5 * (w[0].0 + w[1].0)));
+    // Beside a row of holes: off the centroid across the row, either side.
+    if let (Some(first), Some(last)) = (holes.first(), holes.last()) {
+        let along = (last.0 - first.0).try_normalize().unwrap_or(DVec2::X);
+        let across = along.perp();
+        let (lo, hi) = outline
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                let d = (*p - centroid).dot(across);
+                (l.min(d), h.max(d))
+            });
+        for f in [0.3, 0.25, 0.2] {
+            centres.push(centroid + across * (f * (hi - lo)));
+            centres.push(centroid - across * (f * (hi - lo)));
+        }
+    }
     let mut best: Option<(f64, DVec2)> = None;
     for centre in centres {
         let place = |h: f64| centre - DVec2::new(text_width(n) * h / 2.0, h) / 2.0;

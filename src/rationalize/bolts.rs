@@ -26,7 +26,14 @@ pub struct BoltSize {
     pub washer: f64,
 }
 
-const fn size(name: &'static str, d: f64, hole: f64, pitch: f64, nut: f64, washer: f64) -> BoltSize {
+const fn size(
+    name: &'static str,
+    d: f64,
+    hole: f64,
+    pitch: f64,
+    nut: f64,
+    washer: f64,
+) -> BoltSize {
     BoltSize {
         name,
         d,
@@ -53,8 +60,8 @@ pub const SIZES: [BoltSize; 10] = [
 
 /// Standard bolt lengths (ISO 4017/4014), mm.
 const LENGTHS: [f64; 25] = [
-    8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0, 65.0, 70.0,
-    80.0, 90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 180.0,
+    8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 55.0, 60.0, 65.0, 70.0, 80.0,
+    90.0, 100.0, 110.0, 120.0, 130.0, 140.0, 150.0, 160.0, 180.0,
 ];
 
 /// `M12`, `m16`, …: one of [`SIZES`].
@@ -134,7 +141,7 @@ pub fn row(
             hi = hi.min(-base / rate);
         }
     }
-    if !(lo <= hi) || !lo.is_finite() || !hi.is_finite() {
+    if lo > hi || !lo.is_finite() || !hi.is_finite() {
         return None;
     }
     let (a, b) = (from + dir * lo, from + dir * hi);
@@ -170,8 +177,14 @@ mod tests {
         let m12 = parse("m12").expect("listed");
         assert_eq!(m12.hole, 13.0);
         let plate = rect(300.0, 100.0);
-        let holes = row(&plate, DVec2::new(0.0, 50.0), DVec2::new(300.0, 50.0), &m12, 3.0)
-            .expect("fits");
+        let holes = row(
+            &plate,
+            DVec2::new(0.0, 50.0),
+            DVec2::new(300.0, 50.0),
+            &m12,
+            3.0,
+        )
+        .expect("fits");
         // Span 300 − 2·15.6 = 268.8; max pitch 42 → 7 gaps, 8 bolts, pitch 38.4 ≥ 28.6.
         assert_eq!(holes.len(), 8);
         assert!((holes[0].x - 15.6).abs() < 1e-9 && (holes[7].x - 284.4).abs() < 1e-9);
@@ -179,12 +192,24 @@ mod tests {
         assert!(pitch >= min_pitch(&m12) && pitch <= max_pitch(3.0));
         // Too short for two at the least pitch, long enough for one.
         let short = rect(40.0, 100.0);
-        let one = row(&short, DVec2::new(0.0, 50.0), DVec2::new(40.0, 50.0), &m12, 3.0);
+        let one = row(
+            &short,
+            DVec2::new(0.0, 50.0),
+            DVec2::new(40.0, 50.0),
+            &m12,
+            3.0,
+        );
         assert_eq!(one, Some(vec![DVec2::new(20.0, 50.0)]));
         // Too low for e2 on both sides: 2·15.6 > 30.
         let low = rect(300.0, 30.0);
         assert_eq!(
-            row(&low, DVec2::new(0.0, 15.0), DVec2::new(300.0, 15.0), &m12, 3.0),
+            row(
+                &low,
+                DVec2::new(0.0, 15.0),
+                DVec2::new(300.0, 15.0),
+                &m12,
+                3.0
+            ),
             None
         );
     }

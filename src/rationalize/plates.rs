@@ -114,7 +114,9 @@ impl CoreSize {
         };
         let (diameter, wall) = (num(d)?, num(t)?);
         if 2.0 * wall >= diameter {
-            return Err(format!("`{s}`: the wall must be less than half the diameter"));
+            return Err(format!(
+                "`{s}`: the wall must be less than half the diameter"
+            ));
         }
         Ok(CoreSize { diameter, wall })
     }
@@ -602,12 +604,12 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
     let mut setback = vec![[0.0f64; 2]; axes.edges.len()];
     let mut welds = Vec::new();
     let mut cores = Vec::new();
-    for v in 0..n {
-        if at[v].len() < 2 {
+    for (v, here) in at.iter().enumerate() {
+        if here.len() < 2 {
             continue;
         }
-        let node = node_welds(axes, opts, v, &at[v], &dir, &stack, &mut cores, &group)?;
-        for (&(k, end), s) in at[v].iter().zip(&node.setbacks) {
+        let node = node_welds(axes, opts, v, here, &dir, &stack, &mut cores, &group)?;
+        for (&(k, end), s) in here.iter().zip(&node.setbacks) {
             setback[k][end] = *s;
         }
         welds.push(node);
@@ -659,8 +661,8 @@ fn node_welds(
             }
         })
         .collect();
-    let cut = welds::even_gaps(&strips, opts.weld_gap, opts.weld_gap_tolerance).ok_or_else(
-        || {
+    let cut =
+        welds::even_gaps(&strips, opts.weld_gap, opts.weld_gap_tolerance).ok_or_else(|| {
             // Two plates leave the axis in the same direction: name the pair.
             let (k, angle) = closest_pair(&strips);
             PlateError::TooClose {
@@ -668,8 +670,7 @@ fn node_welds(
                 node: v as u32,
                 angle_deg: angle.to_degrees(),
             }
-        },
-    )?;
+        })?;
     let mut setbacks = cut.setbacks;
     let mut core = None;
     if let (false, Some(size)) = (cut.even, opts.node_core) {
@@ -690,12 +691,7 @@ fn node_welds(
         .map(|w| WeldPair {
             edges: [here[w.a].0, here[w.b].0],
             angle_deg: w.angle.to_degrees(),
-            gap: welds::root_gap(
-                &strips[w.a],
-                setbacks[w.a],
-                &strips[w.b],
-                setbacks[w.b],
-            ),
+            gap: welds::root_gap(&strips[w.a], setbacks[w.a], &strips[w.b], setbacks[w.b]),
         })
         .collect();
     Ok(NodeWelds {
@@ -1030,7 +1026,11 @@ mod tests {
             ..Default::default()
         };
         let set = plates(&run(), &opts).expect("valid");
-        let seam: Vec<&Plate> = set.plates.iter().filter(|p| p.bolted_to.is_some()).collect();
+        let seam: Vec<&Plate> = set
+            .plates
+            .iter()
+            .filter(|p| p.bolted_to.is_some())
+            .collect();
         assert_eq!(seam.len(), 2, "one seam in two plies");
         let (a, b) = (seam[0], seam[1]);
         // 5 mm: 2 + 3 from the default gauges, stacked face to face about the panel plane.
@@ -1079,7 +1079,10 @@ mod tests {
 
     #[test]
     fn gauges_hold_every_thickness() {
-        assert_eq!(seam_gauges(6.0, &[1.5, 2.0, 3.0, 4.0, 5.0, 6.0]), Some((3.0, 3.0)));
+        assert_eq!(
+            seam_gauges(6.0, &[1.5, 2.0, 3.0, 4.0, 5.0, 6.0]),
+            Some((3.0, 3.0))
+        );
         assert_eq!(seam_gauges(1.5, &[1.5, 2.0, 3.0]), Some((1.5, 1.5)));
         assert_eq!(seam_gauges(4.0, &[1.5, 2.0, 3.0, 4.0]), Some((2.0, 2.0)));
         let off = PlateOptions {

@@ -175,8 +175,11 @@ pub fn even_gaps(strips: &[Strip], gap: f64, tolerance: f64) -> Option<Cut> {
     let mut best: Option<(f64, Vec<f64>)> = None;
     // Starts: the bisector setbacks, then the plates laid in one at a time in each order (the
     // first runs to the axis, each next one stops at the gap from those before it).
-    let starts = std::iter::once(Some(start.clone()))
-        .chain(orders(strips.len()).take(ORDERS).map(|o| insert(strips, &o, gap)));
+    let starts = std::iter::once(Some(start.clone())).chain(
+        orders(strips.len())
+            .take(ORDERS)
+            .map(|o| insert(strips, &o, gap)),
+    );
     for s in starts.flatten() {
         let mut s = s;
         let identity: Vec<usize> = (0..strips.len()).collect();
@@ -380,10 +383,11 @@ fn damped_step(jac: &[Vec<f64>], r: &[f64], lambda: f64) -> Option<Vec<f64>> {
             return None;
         }
         a.swap(c, p);
-        for i in c + 1..n {
-            let f = a[i][c] / a[c][c];
-            for j in c..=n {
-                a[i][j] -= f * a[c][j];
+        let pivot = a[c].clone();
+        for row in a.iter_mut().skip(c + 1) {
+            let f = row[c] / pivot[c];
+            for (x, p) in row.iter_mut().zip(&pivot).skip(c) {
+                *x -= f * p;
             }
         }
     }
@@ -403,7 +407,10 @@ fn orders(n: usize) -> impl Iterator<Item = Vec<usize>> {
         let mut p = cur.clone();
         // Next permutation.
         if let Some(i) = (0..n.saturating_sub(1)).rev().find(|&i| p[i] < p[i + 1]) {
-            let j = (i + 1..n).rev().find(|&j| p[j] > p[i]).expect("p[i+1] > p[i]");
+            let j = (i + 1..n)
+                .rev()
+                .find(|&j| p[j] > p[i])
+                .expect("p[i+1] > p[i]");
             p.swap(i, j);
             p[i + 1..].reverse();
             next = Some(p);
