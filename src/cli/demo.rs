@@ -383,8 +383,22 @@ fn steel(out: &Path) -> Result<Entry> {
     let sheet = DVec2::new(3000.0, 1500.0);
     let nest = super::nest::execute(&super::nest::Args {
         input: dir.join("plates/plates.json"),
-        sheet: Some(sheet),
-        stock: None,
+        sheet: None,
+        // Illustrative prices per sheet: the cheapest mix per thickness is cut.
+        stock: Some(vec![
+            super::nest::Stock {
+                size: sheet,
+                cost: 240.0,
+            },
+            super::nest::Stock {
+                size: DVec2::new(2000.0, 1000.0),
+                cost: 115.0,
+            },
+            super::nest::Stock {
+                size: DVec2::new(1000.0, 1000.0),
+                cost: 62.0,
+            },
+        ]),
         remnant_min: DVec2::new(300.0, 300.0),
         lead_in: Some(2.0),
         speeds: None,
@@ -405,8 +419,17 @@ fn steel(out: &Path) -> Result<Entry> {
         .map(|q| q.area() * q.thickness * super::nest::DENSITY * 1e-6)
         .sum();
     let mut facts = format!(
-        "{} plates in 7 groups, {seams} seams split into bolted half-thickness pairs, {mass:.1} kg          of stainless steel. Nested on {} sheets, one family per thickness: ",
+        "{} plates in 7 groups, {seams} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
         p.len(),
+        p.iter()
+            .enumerate()
+            .filter(|(i, q)| q.bolted_to.is_some_and(|o| o > *i))
+            .map(|(_, q)| q.holes.len())
+            .sum::<usize>(),
+        plates.weld.nodes,
+        plates.weld.nodes - plates.weld.uneven.len() - plates.weld.cores,
+        plates.weld.cores,
+        plates.weld.smallest_angle,
         nest.sheets.len()
     );
     let per: Vec<String> = nest
@@ -414,10 +437,13 @@ fn steel(out: &Path) -> Result<Entry> {
         .iter()
         .map(|s| {
             format!(
-                "{} mm: {} parts, {:.1} %",
+                "{} mm: {} parts on {} × {}, {:.1} %, laser {:.0} min",
                 s.thickness,
                 s.parts.len(),
-                100.0 * s.area / (sheet.x * sheet.y)
+                s.stock.size.x,
+                s.stock.size.y,
+                100.0 * s.area / (s.stock.size.x * s.stock.size.y),
+                s.time_s.0 / 60.0
             )
         })
         .collect();
@@ -427,6 +453,8 @@ fn steel(out: &Path) -> Result<Entry> {
         per.join("; ")
     );
     let mut outputs: Vec<String> = [
+        "plates/welds.html",
+        "plates/welds.json",
         "plates/plates.json",
         "plates/assembly.stl",
         "plates/assembly.obj",
@@ -441,8 +469,8 @@ fn steel(out: &Path) -> Result<Entry> {
     .collect();
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
     Ok(Entry {
-        name: "Calyx: plates, assembly groups and cut sheets".into(),
-        about: "`lamina plates` on the L-BFGS axes (gauges 1.5–6 mm by vein radius, the base                 ring at 6 mm with `--edge-thickness 'z<1:6'`, weld gap 1 mm, `--groups 7`), then                 `lamina nest` on 3000 × 1500 mm sheets, margin 10 mm, spacing 5 mm: a cut DXF per                 sheet with etched tags, the BOM, nest.json and the OpenSCAD assembly"
+        name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
+        about: "`lamina plates` on the L-BFGS axes (gauges 1.5–6 mm by vein radius, the base                 ring at 6 mm with `--edge-thickness 'z<1:6'`, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

@@ -43,7 +43,7 @@ pub struct Args {
     pub sheet: Option<DVec2>,
     /// Stock sheets to choose from per thickness, with the cost of one:
     /// `3000x1500:120,2500x1250:85`; the cheapest mix per thickness is cut
-    #[arg(long, value_parser = parse_stock)]
+    #[arg(long, value_parser = parse_stock, value_delimiter = ',')]
     pub stock: Option<Vec<Stock>>,
     /// Kept clear along every sheet edge, mm
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
