@@ -21,7 +21,7 @@ def main():
     if solid.status() != m3d.Error.NoError:
         problems.append(f"OpenSCAD's solid is not a manifold: {solid.status()}")
     rel = abs(solid.volume() - ours.volume) / ours.volume
-    if rel > 0.005:
+    if rel > 1e-4:
         problems.append(f"volume {solid.volume():.1f} mm³ vs {ours.volume:.1f} mm³ ({rel:.2%})")
     lo, hi = solid.bounding_box()[:3], solid.bounding_box()[3:]
     gap = max(np.abs(np.array(lo) - ours.bounds[0]).max(), np.abs(np.array(hi) - ours.bounds[1]).max())

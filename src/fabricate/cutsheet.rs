@@ -2,8 +2,8 @@
 //!
 //! - CUT_OUTER: each part's outline, a closed LWPOLYLINE, counter-clockwise, starting at its
 //!   pierce point.
-//! - CUT_INNER: holes, closed LWPOLYLINEs of two clockwise half-circle arcs (bulge −1),
-//!   starting at their pierce point.
+//! - CUT_INNER: holes, closed clockwise LWPOLYLINEs (64-gons on the circle), starting at
+//!   their pierce point.
 //! - ETCH: tags and marks in our single-stroke font, strokes chained into open LWPOLYLINEs
 //!   (never live TEXT).
 //! - LEAD: lead-in and lead-out lines in the scrap, when asked for.
@@ -16,9 +16,8 @@
 
 use std::path::Path;
 
-use dxf::entities::{Entity, EntityType, LwPolyline};
+use dxf::entities::Entity;
 use dxf::tables::Layer;
-use dxf::LwPolylineVertex;
 use glam::DVec2;
 
 use crate::files::{write_atomic, WriteError};
@@ -156,23 +155,13 @@ pub fn write_cut_dxf(
     })
 }
 
-/// A hole as two clockwise half circles, starting (and pierced into) at its +x point.
+/// A hole as a clockwise `HOLE_SEGMENTS`-gon on its circle, starting (and pierced into) at its
+/// +x point. Not bulge arcs: OpenSCAD's DXF import drops bulges, and the assembly rebuilt from
+/// the cut files must have its holes (the chord error is r·(1 − cos(π/64)), 0.008 mm for M12).
 fn hole_entity(h: &Hole) -> Entity {
-    let r = 0.5 * h.diameter;
-    let mut pl = LwPolyline::default();
-    pl.set_is_closed(true);
-    pl.vertices = [h.centre + DVec2::X * r, h.centre - DVec2::X * r]
-        .iter()
-        .map(|p| LwPolylineVertex {
-            x: p.x,
-            y: p.y,
-            bulge: -1.0,
-            ..Default::default()
-        })
-        .collect();
-    let mut e = Entity::new(EntityType::LwPolyline(pl));
-    e.common.layer = CUT_INNER.into();
-    e
+    let mut pts = crate::rationalize::plates::hole_polygon(h.centre, h.diameter);
+    pts[1..].reverse();
+    lw_polyline_entity(pts.iter().map(|p| (p.x, p.y)), true, CUT_INNER)
 }
 
 /// Segments chained into polylines: each walk starts at a point with an odd number of

@@ -256,7 +256,7 @@ pub struct Bolting {
 }
 
 /// Sides of the polygon standing for a hole in meshes and plates.json's areas.
-pub const HOLE_SEGMENTS: usize = 48;
+pub const HOLE_SEGMENTS: usize = 64;
 
 /// A hole as a polygon: `HOLE_SEGMENTS` corners on the circle, counter-clockwise from +x.
 pub fn hole_polygon(centre: DVec2, diameter: f64) -> Vec<DVec2> {
