@@ -6,6 +6,12 @@ within 0.1 mm. The OpenSCAD solid must be a manifold (manifold3d).
 """
 import sys
 
+# Relative volume difference allowed; `--tolerance R` as the last argument overrides.
+TOLERANCE = 1e-4
+if len(sys.argv) > 3 and sys.argv[-2] == "--tolerance":
+    TOLERANCE = float(sys.argv[-1])
+    del sys.argv[-2:]
+
 import manifold3d as m3d
 import numpy as np
 import trimesh
@@ -21,7 +27,7 @@ def main():
     if solid.status() != m3d.Error.NoError:
         problems.append(f"OpenSCAD's solid is not a manifold: {solid.status()}")
     rel = abs(solid.volume() - ours.volume) / ours.volume
-    if rel > 1e-4:
+    if rel > TOLERANCE:
         problems.append(f"volume {solid.volume():.1f} mm³ vs {ours.volume:.1f} mm³ ({rel:.2%})")
     lo, hi = solid.bounding_box()[:3], solid.bounding_box()[3:]
     gap = max(np.abs(np.array(lo) - ours.bounds[0]).max(), np.abs(np.array(hi) - ours.bounds[1]).max())
