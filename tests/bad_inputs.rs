@@ -224,3 +224,29 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
     assert_eq!(std::fs::read_dir(dir.path())?.count(), 0, "nothing written");
     Ok(())
 }
+
+#[test]
+fn a_speed_table_without_a_row_for_a_thickness_writes_nothing() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let table = dir.path().join("speeds.json");
+    let row =
+        r#"{"thickness": 0.5, "cut_mm_per_min": 1000, "pierce_s": 1, "etch_mm_per_min": 1000}"#;
+    std::fs::write(
+        &table,
+        format!(r#"{{"material": "by hand", "laser": [{row}], "plasma": [{row}]}}"#),
+    )?;
+    let out = dir.path().join("cut");
+    let plates = fixture("../fuzz/corpus/plates/tree.json");
+    let o = lamina(&[
+        "nest",
+        plates.to_str().ok_or("path")?,
+        "-o",
+        out.to_str().ok_or("path")?,
+        "--speeds",
+        table.to_str().ok_or("path")?,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no row for"), "{}", stderr(&o));
+    assert!(!out.exists(), "a partial cut folder was left");
+    Ok(())
+}

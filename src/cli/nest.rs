@@ -16,8 +16,9 @@ use serde_json::json;
 use lamina::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
 use lamina::fabricate::cutplan::{remnants, times, SpeedTable};
 use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn, Hole};
+pub use lamina::fabricate::nest::Stock;
 use lamina::fabricate::nest::{
-    grown_hull, BottomLeft, NestError, NestOptions, Nester, Place, Rotations, SLACK,
+    grown_hull, nest_families, BottomLeft, NestError, NestOptions, Place, Rotations, SLACK,
 };
 use lamina::fabricate::plates_file::{read_plates, CoreRecord, PlateRecord};
 use lamina::fabricate::preview::{sheets_svg, SheetView};
@@ -26,13 +27,6 @@ use lamina::files::write_atomic;
 
 /// Stainless steel, g/cm³.
 pub const DENSITY: f64 = 7.9;
-
-/// A stock sheet size and what one costs (any currency; 0 when only sizes matter).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Stock {
-    pub size: DVec2,
-    pub cost: f64,
-}
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -175,72 +169,6 @@ fn thickness_name(t: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// One family's parts on the cheapest stock: every size tried alone, then the last sheet of the
-/// best moved to a cheaper size that takes all its parts. Places are family-local (sheets from
-/// 0), with each sheet's stock.
-fn nest_family(
-    nester: &BottomLeft,
-    outlines: &[Vec<DVec2>],
-    stock: &[Stock],
-    opts: &NestOptions,
-) -> Result<(Vec<Place>, Vec<Stock>), NestError> {
-    let mut best: Option<(f64, Vec<Place>, Vec<Stock>)> = None;
-    let mut too_large = None;
-    for st in stock {
-        let o = NestOptions {
-            sheet: st.size,
-            ..opts.clone()
-        };
-        let n = match nester.nest(outlines, &o) {
-            Ok(n) => n,
-            Err(NestError::TooLarge(list)) => {
-                too_large.get_or_insert(NestError::TooLarge(list));
-                continue;
-            }
-            Err(e) => return Err(e),
-        };
-        let mut sheets = vec![*st; n.sheets];
-        let mut places = n.places;
-        // The last sheet on a cheaper stock, if one takes all its parts.
-        let last = n.sheets - 1;
-        let on_last: Vec<usize> = (0..places.len())
-            .filter(|&i| places[i].sheet == last)
-            .collect();
-        let mut cheapest_first: Vec<&Stock> = stock.iter().collect();
-        cheapest_first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-        for cheaper in cheapest_first {
-            if cheaper.cost >= sheets[last].cost {
-                break;
-            }
-            let o = NestOptions {
-                sheet: cheaper.size,
-                ..opts.clone()
-            };
-            let these: Vec<Vec<DVec2>> = on_last.iter().map(|&i| outlines[i].clone()).collect();
-            if let Ok(m) = nester.nest(&these, &o) {
-                if m.sheets == 1 {
-                    for (&i, p) in on_last.iter().zip(m.places) {
-                        places[i] = Place { sheet: last, ..p };
-                    }
-                    sheets[last] = *cheaper;
-                    break;
-                }
-            }
-        }
-        let cost: f64 = sheets.iter().map(|s| s.cost).sum();
-        let area: f64 = sheets.iter().map(|s| s.size.x * s.size.y).sum();
-        // Cheapest, then least stock area.
-        let key = cost + area * 1e-12;
-        if best.as_ref().is_none_or(|b| key < b.0) {
-            best = Some((key, places, sheets));
-        }
-    }
-    match best {
-        Some((_, places, sheets)) => Ok((places, sheets)),
-        None => Err(too_large.unwrap_or(NestError::NoRotations)),
-    }
-}
-
 pub fn execute(args: &Args) -> Result<Outcome> {
     let (plates, cores) = read_plates(&args.input)?;
     let stock: Vec<Stock> = match (&args.stock, args.sheet) {
@@ -258,8 +186,9 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     if let Some(l) = args.lead_in {
         if !(l > 0.0 && l <= 0.5 * args.spacing) {
             bail!(
-                "--lead-in must be more than 0 and at most half the spacing ({} mm), so that it stays in the scrap between parts; got {l}",
-                0.5 * args.spacing
+                "--lead-in must be more than 0 and at most half the spacing ({} mm), so that it stays in the scrap between parts; got {}",
+                0.5 * args.spacing,
+                lamina::text::num(l)
             );
         }
     }
@@ -287,8 +216,6 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             )
         })
         .collect();
-    let mut order: Vec<usize> = (0..plates.len()).collect();
-    order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
     let bar = progress(plates.len() as u64 * opts.tries as u64 * stock.len() as u64);
     let nester = BottomLeft {
         progress: Some({
@@ -297,27 +224,19 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         }),
         ..Default::default()
     };
-    let mut places = vec![
-        Place {
-            sheet: 0,
-            angle: 0.0,
-            offset: DVec2::ZERO
-        };
-        plates.len()
-    ];
-    let mut sheets: Vec<SheetInfo> = Vec::new();
-    for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
-        let outlines: Vec<Vec<DVec2>> = family.iter().map(|&i| plates[i].outline.clone()).collect();
-        let (local, stocks) = nest_family(&nester, &outlines, &stock, &opts).map_err(|e| {
-            bar.finish_and_clear();
-            named(e, family, &plates, &stock, args.margin, &args.input)
-        })?;
-        let first = sheets.len();
-        let (bits, group) = keys[family[0]];
-        for st in stocks {
+    let outlines: Vec<Vec<DVec2>> = plates.iter().map(|p| p.outline.clone()).collect();
+    let result = nest_families(&nester, &outlines, &keys, &stock, &opts);
+    bar.finish_and_clear();
+    let (nesting, sheet_keys) =
+        result.map_err(|e| named(e, &plates, &stock, args.margin, &args.input))?;
+    let places = nesting.places;
+    let mut sheets: Vec<SheetInfo> = sheet_keys
+        .iter()
+        .enumerate()
+        .map(|(k, &((bits, group), st))| {
             let t = f64::from_bits(bits);
-            sheets.push(SheetInfo {
-                file: format!("sheet-{:02}-{}mm.dxf", sheets.len() + 1, thickness_name(t)),
+            SheetInfo {
+                file: format!("sheet-{:02}-{}mm.dxf", k + 1, thickness_name(t)),
                 thickness: t,
                 group: args.keep_groups.then_some(group),
                 stock: st,
@@ -329,22 +248,13 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                 etch_mm: 0.0,
                 lead_mm: 0.0,
                 time_s: (0.0, 0.0),
-            });
-        }
-        for (&i, p) in family.iter().zip(local) {
-            places[i] = Place {
-                sheet: p.sheet + first,
-                ..p
-            };
-        }
-    }
-    bar.finish_and_clear();
+            }
+        })
+        .collect();
 
     if args.output.exists() && !args.output.is_dir() {
         bail!("{}: exists and is not a folder", args.output.display());
     }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
 
     for (i, place) in places.iter().enumerate() {
         sheets[place.sheet].parts.push(i);
@@ -356,9 +266,10 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         .map(|(p, place)| on_sheet(p, place, args.lead_in))
         .collect();
 
-    // Cut DXFs, remnants and machine time.
+    // Remnants and machine time, all before anything is written (a speed table without a row
+    // for some thickness leaves no partial output).
     for sheet in &mut sheets {
-        let parts: Vec<Drawn> = sheet.parts.iter().map(|&i| drawn[i].clone()).collect();
+        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &drawn[i]).collect();
         let hulls: Vec<Vec<DVec2>> = parts.iter().map(|d| d.outline.clone()).collect();
         sheet.remnants = remnants(sheet.stock.size, &hulls, args.spacing, args.remnant_min);
         sheet.cut_mm = parts.iter().map(|d| d.cut_length()).sum();
@@ -386,6 +297,11 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                 sheet.file
             )
         })?;
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
+    for sheet in &sheets {
+        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &drawn[i]).collect();
         write_cut_dxf(
             &parts,
             Some(sheet.stock.size),
@@ -517,10 +433,9 @@ fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>) -> Drawn {
     }
 }
 
-/// Library errors with plate ids instead of indices (`family` maps the nester's indices).
+/// Library errors with plate ids instead of indices.
 fn named(
     e: NestError,
-    family: &[usize],
     plates: &[PlateRecord],
     stock: &[Stock],
     margin: f64,
@@ -537,7 +452,7 @@ fn named(
             let names: Vec<String> = list
                 .iter()
                 .take(8)
-                .map(|(i, s)| format!("{} ({:.1} × {:.1} mm)", plates[family[*i]].id, s.x, s.y))
+                .map(|(i, s)| format!("{} ({:.1} × {:.1} mm)", plates[*i].id, s.x, s.y))
                 .collect();
             anyhow::anyhow!(
                 "{}: {} plate(s) fit no {} × {} mm sheet ({:.0} × {:.0} mm inside the margin) at any allowed rotation: {}{}",
@@ -552,7 +467,7 @@ fn named(
             )
         }
         NestError::Degenerate(i) | NestError::NotFinite(i) | NestError::Engine(i, _) => {
-            anyhow::anyhow!("{}: plate {}: {e}", path.display(), plates[family[i]].id)
+            anyhow::anyhow!("{}: plate {}: {e}", path.display(), plates[i].id)
         }
         e => anyhow::Error::new(e),
     }

@@ -86,7 +86,7 @@ pub struct Outcome {
 }
 
 /// A part as its DXF draws it, in the plate's own frame.
-pub fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
+fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
     let r = 0.5 * p.hole_diameter();
     let holes: Vec<(DVec2, f64)> = p.holes.iter().map(|c| (*c, r)).collect();
     let marks = part_marks(&p.id, &p.outline, &holes, p.nodes, &|q| q);
@@ -117,7 +117,7 @@ fn write_parts(set: &PlateSet, dir: &Path) -> Result<Vec<Option<f64>>> {
     for p in &set.plates {
         let (part, tag) = drawn(p);
         let name = format!("parts/{}.dxf", p.id);
-        write_cut_dxf(&[part], None, &[], &dir.join(&name))?;
+        write_cut_dxf(&[&part], None, &[], &dir.join(&name))?;
         tags.push(tag);
         names.push(name);
     }
@@ -137,7 +137,7 @@ fn write_parts(set: &PlateSet, dir: &Path) -> Result<Vec<Option<f64>>> {
     Ok(tags)
 }
 
-pub fn scad_core(c: &Core) -> ScadCore<'_> {
+fn scad_core(c: &Core) -> ScadCore<'_> {
     ScadCore {
         id: &c.id,
         outer: c.size.diameter,
@@ -148,7 +148,7 @@ pub fn scad_core(c: &Core) -> ScadCore<'_> {
 }
 
 /// Every bolt once (from the ply on the −z side of each seam), as a shank through both plies.
-pub fn scad_bolts(set: &PlateSet) -> Vec<ScadBolt> {
+fn scad_bolts(set: &PlateSet) -> Vec<ScadBolt> {
     let mut out = Vec::new();
     for (i, p) in set.plates.iter().enumerate() {
         let (Some(b), Some(other)) = (p.bolt, p.bolted_to) else {
@@ -187,7 +187,7 @@ pub struct WeldSummary {
 /// Weld access by the dihedral angle, degrees: below 60° no prequalified fillet weld; 60–120°
 /// prequalified (EN 1993-1-8 §4.3.2.1); 120–135° AWS D1.1 only; above, the plates meet end to
 /// end (a butt weld).
-pub fn weld_class(angle: f64) -> (usize, &'static str) {
+fn weld_class(angle: f64) -> (usize, &'static str) {
     if angle < 60.0 {
         (0, "below 60°: no prequalified fillet weld")
     } else if angle <= 120.0 {
@@ -203,7 +203,10 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let axes = read_axes(&args.input)?;
     if let Some(a) = args.min_weld_angle {
         if !(0.0..=180.0).contains(&a) {
-            bail!("--min-weld-angle must be from 0 to 180 degrees, got {a}");
+            bail!(
+                "--min-weld-angle must be from 0 to 180 degrees, got {}",
+                lamina::text::num(a)
+            );
         }
     }
     let opts = PlateOptions {
@@ -345,7 +348,7 @@ pub fn assembly(set: &PlateSet) -> TriMesh {
 pub const CORE_SEGMENTS: usize = 48;
 
 /// A core as a closed tube: outer and inner `CORE_SEGMENTS`-gons from its base along its axis.
-pub fn tube(c: &Core) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+fn tube(c: &Core) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let m = axis_frame(c.base, c.axis);
     let (x, y) = (
         DVec3::new(m[0][0], m[1][0], m[2][0]),

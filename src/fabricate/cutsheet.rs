@@ -80,7 +80,7 @@ impl Drawn {
 
 /// Writes the parts, and the sheet rectangle from the origin and remnant rectangles if given.
 pub fn write_cut_dxf(
-    parts: &[Drawn],
+    parts: &[&Drawn],
     sheet: Option<DVec2>,
     remnants: &[[DVec2; 2]],
     path: &Path,

@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
+use crate::geom::convex_distance;
 use crate::text::num;
 
 /// Extra clearance added to half the spacing, mm: it absorbs jagua-rs's f32 arithmetic, so parts
@@ -183,30 +184,43 @@ pub trait Nester {
     fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError>;
 }
 
+/// A stock sheet size and what one costs (any currency; 0 when only sizes matter).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stock {
+    pub size: DVec2,
+    pub cost: f64,
+}
+
 /// Sheets per family: parts with equal keys share sheets (one stock thickness, or one
-/// assembly group), families take sheets in key order. Returns the nesting and each sheet's key.
+/// assembly group), families take sheets in key order. Each family is nested on every stock
+/// size (`opts.sheet` is not used) and the cheapest result kept, then the least stock area;
+/// its last sheet goes to the cheapest size that takes all that sheet's parts. Parts too large
+/// for every size are reported together, over all families. Returns the nesting and each
+/// sheet's key and stock.
 pub fn nest_families<K: Ord + Clone>(
     nester: &dyn Nester,
     parts: &[Vec<DVec2>],
     keys: &[K],
+    stock: &[Stock],
     opts: &NestOptions,
-) -> Result<(Nesting, Vec<K>), NestError> {
+) -> Result<(Nesting, Vec<(K, Stock)>), NestError> {
     let mut order: Vec<usize> = (0..parts.len()).collect();
     order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
     let mut places = vec![Place::ORIGIN; parts.len()];
-    let mut sheet_keys = Vec::new();
+    let mut sheets: Vec<(K, Stock)> = Vec::new();
     let mut too_large = Vec::new();
     for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
         let these: Vec<Vec<DVec2>> = family.iter().map(|&i| parts[i].clone()).collect();
-        match nester.nest(&these, opts) {
-            Ok(n) => {
-                for (&i, p) in family.iter().zip(n.places) {
+        match cheapest(nester, &these, stock, opts) {
+            Ok((local, stocks)) => {
+                for (&i, p) in family.iter().zip(local) {
                     places[i] = Place {
-                        sheet: p.sheet + sheet_keys.len(),
+                        sheet: p.sheet + sheets.len(),
                         ..p
                     };
                 }
-                sheet_keys.extend(std::iter::repeat_n(keys[family[0]].clone(), n.sheets));
+                let key = &keys[family[0]];
+                sheets.extend(stocks.into_iter().map(|st| (key.clone(), st)));
             }
             Err(NestError::TooLarge(list)) => {
                 too_large.extend(list.into_iter().map(|(k, s)| (family[k], s)));
@@ -224,10 +238,70 @@ pub fn nest_families<K: Ord + Clone>(
     Ok((
         Nesting {
             places,
-            sheets: sheet_keys.len(),
+            sheets: sheets.len(),
         },
-        sheet_keys,
+        sheets,
     ))
+}
+
+/// One family on the cheapest stock (see [`nest_families`]): places with family-local sheets,
+/// and each sheet's stock.
+fn cheapest(
+    nester: &dyn Nester,
+    parts: &[Vec<DVec2>],
+    stock: &[Stock],
+    opts: &NestOptions,
+) -> Result<(Vec<Place>, Vec<Stock>), NestError> {
+    let on = |st: &Stock| NestOptions {
+        sheet: st.size,
+        ..opts.clone()
+    };
+    let mut cheapest_first: Vec<&Stock> = stock.iter().collect();
+    cheapest_first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    // (cost, stock area), places, stock per sheet.
+    type Choice = ((f64, f64), Vec<Place>, Vec<Stock>);
+    let mut best: Option<Choice> = None;
+    let mut too_large = None;
+    for st in stock {
+        let n = match nester.nest(parts, &on(st)) {
+            Ok(n) => n,
+            Err(NestError::TooLarge(list)) => {
+                too_large.get_or_insert(NestError::TooLarge(list));
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        let mut sheets = vec![*st; n.sheets];
+        let mut places = n.places;
+        let last = n.sheets - 1;
+        let on_last: Vec<usize> = (0..places.len())
+            .filter(|&i| places[i].sheet == last)
+            .collect();
+        let these: Vec<Vec<DVec2>> = on_last.iter().map(|&i| parts[i].clone()).collect();
+        for cheaper in cheapest_first.iter().take_while(|c| c.cost < st.cost) {
+            if let Ok(m) = nester.nest(&these, &on(cheaper)) {
+                if m.sheets == 1 {
+                    for (&i, p) in on_last.iter().zip(m.places) {
+                        places[i] = Place { sheet: last, ..p };
+                    }
+                    sheets[last] = **cheaper;
+                    break;
+                }
+            }
+        }
+        // Cheapest, then least stock area.
+        let key = (
+            sheets.iter().map(|s| s.cost).sum::<f64>(),
+            sheets.iter().map(|s| s.size.x * s.size.y).sum::<f64>(),
+        );
+        if best.as_ref().is_none_or(|b| key < b.0) {
+            best = Some((key, places, sheets));
+        }
+    }
+    match best {
+        Some((_, places, sheets)) => Ok((places, sheets)),
+        None => Err(too_large.unwrap_or(NestError::NoRotations)),
+    }
 }
 
 /// Told the number of parts just placed (every try places all of them).
@@ -750,14 +824,14 @@ fn pair(
             // Near-congruent quads, or the exact angle, can bring the copy closer than the gap:
             // push it on along the same direction until it is not.
             for _ in 0..4 {
-                let d = distance(a, &placed);
+                let d = convex_distance(a, &placed);
                 if d >= gap {
                     break;
                 }
                 offset += dir * ((gap - d) / along + 1e-9 * gap.max(1.0));
                 placed = place(offset);
             }
-            if distance(a, &placed) < gap {
+            if convex_distance(a, &placed) < gap {
                 continue;
             }
             let mut all = a.to_vec();
@@ -781,43 +855,6 @@ fn pair(
     }
     let (waste, members, hull) = best?;
     (waste < PAIR_WASTE).then_some((members, hull))
-}
-
-/// Distance between two convex polygons, or a negative number (a separating-axis depth) if
-/// they overlap.
-pub fn distance(a: &[DVec2], b: &[DVec2]) -> f64 {
-    let mut separation = f64::NEG_INFINITY;
-    for (p, q) in [(a, b), (b, a)] {
-        for k in 0..p.len() {
-            let e = p[(k + 1) % p.len()] - p[k];
-            if e.length() == 0.0 {
-                continue;
-            }
-            let n = outward(e);
-            let lo = q
-                .iter()
-                .map(|x| (*x - p[k]).dot(n))
-                .fold(f64::INFINITY, f64::min);
-            separation = separation.max(lo);
-        }
-    }
-    if separation <= 0.0 {
-        return separation;
-    }
-    let to_segment = |x: DVec2, s: DVec2, t: DVec2| {
-        let e = t - s;
-        let u = ((x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-        x.distance(s + e * u)
-    };
-    let mut d = f64::INFINITY;
-    for (p, q) in [(a, b), (b, a)] {
-        for x in q {
-            for k in 0..p.len() {
-                d = d.min(to_segment(*x, p[k], p[(k + 1) % p.len()]));
-            }
-        }
-    }
-    d
 }
 
 impl BottomLeft {
@@ -1166,7 +1203,7 @@ mod tests {
     }
 
     fn gap(a: &[DVec2], b: &[DVec2]) -> f64 {
-        distance(a, b)
+        convex_distance(a, b)
     }
 
     fn placed(parts: &[Vec<DVec2>], n: &Nesting) -> Vec<Vec<DVec2>> {
@@ -1324,13 +1361,18 @@ mod tests {
             rotations: Rotations::Any,
             ..Default::default()
         };
+        let stock = [Stock {
+            size: opts.sheet,
+            cost: 0.0,
+        }];
         let (n, sheet_keys) =
-            nest_families(&BottomLeft::default(), &parts, &keys, &opts).expect("fits");
+            nest_families(&BottomLeft::default(), &parts, &keys, &stock, &opts).expect("fits");
         assert_valid(&parts, &n, &opts);
         for (p, k) in n.places.iter().zip(&keys) {
-            assert_eq!(sheet_keys[p.sheet], *k);
+            assert_eq!(sheet_keys[p.sheet].0, *k);
         }
-        let (again, _) = nest_families(&BottomLeft::default(), &parts, &keys, &opts).expect("fits");
+        let (again, _) =
+            nest_families(&BottomLeft::default(), &parts, &keys, &stock, &opts).expect("fits");
         assert_eq!(n.places, again.places);
     }
 

@@ -8,6 +8,8 @@
 
 use glam::DVec2;
 
+use crate::geom::clip_convex;
+
 type Seg = ((f64, f64), (f64, f64));
 
 // The segments, by name.
@@ -105,13 +107,6 @@ pub const TAG_MARGIN: f64 = 5.0;
 /// Tag character heights tried, mm.
 pub const TAG_HEIGHT: (f64, f64) = (3.0, 25.0);
 
-/// A plate's etched tag in the plate's frame: character height and strokes, or None when the
-/// plate is too small for the smallest tag.
-pub fn etch(id: &str, outline: &[DVec2]) -> Option<(f64, Vec<[DVec2; 2]>)> {
-    let (h, origin) = fit(id, outline, TAG_MARGIN, TAG_HEIGHT.0, TAG_HEIGHT.1)?;
-    Some((h, strokes(id, origin, h)))
-}
-
 /// The largest character height, up to `max_height`, at which `text` (left to right along +x)
 /// fits inside the convex counter-clockwise `outline` with `margin` to every edge, centred on
 /// the outline's centroid; with the box's lower-left corner. None when not even
@@ -123,39 +118,7 @@ pub fn fit(
     min_height: f64,
     max_height: f64,
 ) -> Option<(f64, DVec2)> {
-    let n = text.chars().count();
-    let centre = outline.iter().copied().sum::<DVec2>() / outline.len() as f64;
-    let place = |h: f64| {
-        let (w, hh) = (text_width(n) * h / 2.0, h);
-        centre - DVec2::new(w, hh) / 2.0
-    };
-    let fits = |h: f64| {
-        let o = place(h);
-        let w = text_width(n) * h / 2.0;
-        let corners = [
-            o,
-            o + DVec2::new(w, 0.0),
-            o + DVec2::new(w, h),
-            o + DVec2::new(0.0, h),
-        ];
-        corners.iter().all(|&c| inside_by(outline, c, margin))
-    };
-    if !fits(min_height) {
-        return None;
-    }
-    let (mut lo, mut hi) = (min_height, max_height);
-    if fits(hi) {
-        return Some((hi, place(hi)));
-    }
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if fits(mid) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Some((lo, place(lo)))
+    fit_clear(text, outline, &[], margin, min_height, max_height)
 }
 
 /// What is etched on a part, in drawing coordinates.
@@ -188,8 +151,11 @@ pub fn part_marks(
         .fold(f64::NEG_INFINITY, f64::max);
     let quarter = 0.25 * (hi - lo);
     let band = |a: f64, b: f64| -> Vec<DVec2> {
-        let p = clip_x(outline, a, 1.0);
-        clip_x(&p, b, -1.0).iter().map(|q| to_drawing(*q)).collect()
+        let p = clip_convex(outline, DVec2::new(a, 0.0), DVec2::X);
+        clip_convex(&p, DVec2::new(b, 0.0), DVec2::NEG_X)
+            .iter()
+            .map(|q| to_drawing(*q))
+            .collect()
     };
     let keep: Vec<(DVec2, f64)> = holes.iter().map(|(c, r)| (to_drawing(*c), *r)).collect();
     let out = (to_drawing(DVec2::Y) - to_drawing(DVec2::ZERO)).normalize();
@@ -261,23 +227,6 @@ pub fn part_marks(
         tag_height: placed.map(|(h, _)| h),
         etch: crate::fabricate::cutsheet::chain(&segments),
     }
-}
-
-/// The part of a convex polygon with `sign`·(x − at) ≥ 0.
-fn clip_x(poly: &[DVec2], at: f64, sign: f64) -> Vec<DVec2> {
-    let side = |q: DVec2| sign * (q.x - at);
-    let mut out = Vec::new();
-    for (k, &q) in poly.iter().enumerate() {
-        let r = poly[(k + 1) % poly.len()];
-        let (sq, sr) = (side(q), side(r));
-        if sq >= 0.0 {
-            out.push(q);
-        }
-        if (sq >= 0.0) != (sr >= 0.0) {
-            out.push(q + (r - q) * (sq / (sq - sr)));
-        }
-    }
-    out
 }
 
 /// As [`fit`], but also `margin` clear of round holes (centre, radius), trying the centroid

@@ -4,6 +4,65 @@ use glam::{DVec2, DVec3};
 pub mod curves;
 pub mod merge;
 
+/// The part of a convex polygon on the side of the line through `p` that `normal` points to
+/// (the line itself included); repeated points a cut exactly through a corner leaves are
+/// dropped.
+pub fn clip_convex(poly: &[DVec2], p: DVec2, normal: DVec2) -> Vec<DVec2> {
+    let side = |q: DVec2| (q - p).dot(normal);
+    let mut out = Vec::new();
+    for (k, &q) in poly.iter().enumerate() {
+        let r = poly[(k + 1) % poly.len()];
+        let (sq, sr) = (side(q), side(r));
+        if sq >= 0.0 {
+            out.push(q);
+        }
+        if (sq >= 0.0) != (sr >= 0.0) {
+            out.push(q + (r - q) * (sq / (sq - sr)));
+        }
+    }
+    out.dedup_by(|a, b| a.distance(*b) < 1e-12);
+    if out.len() > 1 && out[0].distance(out[out.len() - 1]) < 1e-12 {
+        out.pop();
+    }
+    out
+}
+
+/// Distance between two convex counter-clockwise polygons, or, when they overlap, minus the
+/// least overlap along an edge normal (a separating-axis depth).
+pub fn convex_distance(a: &[DVec2], b: &[DVec2]) -> f64 {
+    let mut separation = f64::NEG_INFINITY;
+    for (p, q) in [(a, b), (b, a)] {
+        for k in 0..p.len() {
+            let e = p[(k + 1) % p.len()] - p[k];
+            let Some(n) = DVec2::new(e.y, -e.x).try_normalize() else {
+                continue;
+            };
+            let lo = q
+                .iter()
+                .map(|x| (*x - p[k]).dot(n))
+                .fold(f64::INFINITY, f64::min);
+            separation = separation.max(lo);
+        }
+    }
+    if separation <= 0.0 {
+        return separation;
+    }
+    let to_segment = |x: DVec2, s: DVec2, t: DVec2| {
+        let e = t - s;
+        let u = ((x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
+        x.distance(s + e * u)
+    };
+    let mut d = f64::INFINITY;
+    for (p, q) in [(a, b), (b, a)] {
+        for x in q {
+            for k in 0..p.len() {
+                d = d.min(to_segment(*x, p[k], p[(k + 1) % p.len()]));
+            }
+        }
+    }
+    d
+}
+
 /// An axis-aligned bounding box. `empty()` holds no point; extending it with one makes it that point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {

@@ -26,6 +26,7 @@ use super::axes::Axes;
 use super::bolts::{self, BoltSize};
 use super::planarize::Selector;
 use super::welds::{self, Strip};
+use crate::geom::clip_convex;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Thickness {
@@ -151,9 +152,9 @@ pub enum PlateError {
     OverrideEdge(usize, usize),
     #[error("thickness override {0} (counting from 1) matches no edge")]
     OverrideUnused(usize),
-    #[error("--weld-gap must be from 0 to 100 mm, got {0}")]
+    #[error("--weld-gap must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGap(f64),
-    #[error("--weld-gap-tolerance must be from 0 to 100 mm, got {0}")]
+    #[error("--weld-gap-tolerance must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGapTolerance(f64),
     #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with --gauges")]
     OffGauge {
@@ -884,7 +885,7 @@ fn plate(
         if (toward - p).dot(normal) < 0.0 {
             normal = -normal;
         }
-        clip(&poly, p + normal * s, normal)
+        clip_convex(&poly, p + normal * s, normal)
     };
     let poly = cut(quad.to_vec(), quad[0], quad[3], quad[1], setback[0]);
     let poly = cut(poly, quad[1], quad[2], quad[0], setback[1]);
@@ -916,28 +917,6 @@ fn convex_ccw(p: &[DVec2]) -> bool {
         let (a, b, c) = (p[k], p[(k + 1) % p.len()], p[(k + 2) % p.len()]);
         (b - a).perp_dot(c - b) > 0.0
     })
-}
-
-/// The part of a convex polygon on the side of the line through `p` that `normal` points to.
-fn clip(poly: &[DVec2], p: DVec2, normal: DVec2) -> Vec<DVec2> {
-    let side = |q: DVec2| (q - p).dot(normal);
-    let mut out = Vec::new();
-    for (k, &q) in poly.iter().enumerate() {
-        let r = poly[(k + 1) % poly.len()];
-        let (sq, sr) = (side(q), side(r));
-        if sq >= 0.0 {
-            out.push(q);
-        }
-        if (sq >= 0.0) != (sr >= 0.0) {
-            out.push(q + (r - q) * (sq / (sq - sr)));
-        }
-    }
-    // Drop repeated points a cut exactly through a corner leaves.
-    out.dedup_by(|a, b| a.distance(*b) < 1e-12);
-    if out.len() > 1 && out[0].distance(out[out.len() - 1]) < 1e-12 {
-        out.pop();
-    }
-    out
 }
 
 #[cfg(test)]

@@ -18,6 +18,8 @@
 
 use glam::DVec2;
 
+use crate::geom::convex_distance;
+
 /// One plate at a node, in the section's 2D basis.
 #[derive(Clone, Copy, Debug)]
 pub struct Strip {
@@ -46,40 +48,6 @@ impl Strip {
 /// of the shallowest separating direction) when they overlap.
 pub fn root_gap(a: &Strip, sa: f64, b: &Strip, sb: f64) -> f64 {
     convex_distance(&a.corners(sa), &b.corners(sb))
-}
-
-/// Distance between two convex counter-clockwise polygons, or minus the least overlap along
-/// an edge normal when they intersect.
-fn convex_distance(p: &[DVec2], q: &[DVec2]) -> f64 {
-    let mut separation = f64::NEG_INFINITY;
-    for (a, b) in [(p, q), (q, p)] {
-        for k in 0..a.len() {
-            let e = a[(k + 1) % a.len()] - a[k];
-            let Some(n) = DVec2::new(e.y, -e.x).try_normalize() else {
-                continue;
-            };
-            let lo = b
-                .iter()
-                .map(|x| (*x - a[k]).dot(n))
-                .fold(f64::INFINITY, f64::min);
-            separation = separation.max(lo);
-        }
-    }
-    if separation <= 0.0 {
-        return separation;
-    }
-    let mut d = f64::INFINITY;
-    for (a, b) in [(p, q), (q, p)] {
-        for x in b {
-            for k in 0..a.len() {
-                let (s, t) = (a[k], a[(k + 1) % a.len()]);
-                let e = t - s;
-                let w = ((*x - s).dot(e) / e.length_squared()).clamp(0.0, 1.0);
-                d = d.min(x.distance(s + e * w));
-            }
-        }
-    }
-    d
 }
 
 /// Two plates side by side around the axis, and the wedge between them.
