@@ -284,6 +284,12 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
         vec!["--sheet", "3000"],
         vec!["--margin", "800"],
         vec!["--rotations", "0,ninety"],
+        vec!["--micro-joints", "0"],
+        vec!["--micro-joints", "9"],
+        vec!["--micro-joints", "2", "--micro-joint-width", "NaN"],
+        vec!["--micro-joints", "2", "--micro-joint-width", "0"],
+        vec!["--micro-joint-below", "-5"],
+        vec!["--micro-joint-below", "1e300"],
     ] {
         let mut args = vec!["nest", s(&file), "-o", s(&out)];
         args.extend_from_slice(&bad);
@@ -295,5 +301,48 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
     let o = lamina(&["nest", s(&axes), "-o", s(&out)]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not lamina-plates"), "{}", stderr(&o));
+    Ok(())
+}
+
+#[test]
+fn micro_joints_shorten_the_cut_add_pierces_and_leave_no_assembly_to_rebuild() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (plates_dir, _) = plates_of(dir.path(), &axes, &["--groups", "7"])?;
+    let file = plates_dir.join("plates.json");
+    let (plain_dir, plain) = nest_of(dir.path(), &file, "cut", &["--tries", "1"])?;
+    assert!(plain_dir.join("assembly.scad").exists());
+    // Into the same folder: the old assembly (of closed contours) must not survive.
+    let (cut, jointed) = nest_of(
+        dir.path(),
+        &file,
+        "cut",
+        &[
+            "--tries",
+            "1",
+            "--micro-joints",
+            "3",
+            "--micro-joint-width",
+            "0.8",
+        ],
+    )?;
+    assert!(!cut.join("assembly.scad").exists());
+    let total = |d: &serde_json::Value, k: &str| d["total"][k].as_f64().unwrap_or(f64::NAN);
+    let joints: u64 = jointed["placements"]
+        .as_array()
+        .ok_or("placements")?
+        .iter()
+        .filter_map(|p| p["micro_joints"].as_u64())
+        .sum();
+    assert!(joints > 0, "some Calyx plates are under 200 mm");
+    let shorter = total(&plain, "cut_mm") - total(&jointed, "cut_mm");
+    assert!(
+        (shorter - 0.8 * joints as f64).abs() < 1e-6,
+        "{shorter} for {joints} joints"
+    );
+    assert_eq!(
+        total(&jointed, "pierces") - total(&plain, "pierces"),
+        joints as f64
+    );
     Ok(())
 }

@@ -7,6 +7,11 @@ with lamina.
   remnants on REMNANT, and no TEXT or MTEXT anywhere.
 - File order per part: its etching, then its inner contours, then its outer contour (each inside
   the outer one that follows).
+- Micro-joints (`--micro-joints N`): the outer contour of every part whose bounding box's longer
+  side is under `--micro-joint-below` is N open LWPOLYLINEs in a row, each starting the joint's
+  width after the last one ended and the last ending where the first began; every gap lies on a
+  straight side at least `clear_mm` (nest.json) from the part's corners, and is drawn across on
+  JOINT; larger parts have one closed contour. Without the flag every contour is closed.
 - Every placement's rotation is one of the allowed angles, bit for bit, and the part on the
   sheet is the plate's outline turned by it and moved by the offset (within 1e-6 mm).
 - Remnants lie on their sheet, at least the spacing from every part, at least the minimum size.
@@ -27,7 +32,7 @@ from pathlib import Path
 import ezdxf
 from ezdxf import recover
 from shapely import STRtree
-from shapely.geometry import LineString, Polygon, box
+from shapely.geometry import LineString, Point, Polygon, box
 
 DENSITY = 7.9  # g/cm³, stainless
 
@@ -45,7 +50,7 @@ def signed_area(pts):
     return 0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))
 
 
-def sheet_polygons(path, width, height):
+def sheet_polygons(path, width, height, joint_width=None):
     doc, auditor = recover.readfile(path)
     if auditor.has_errors:
         fail(f"{path}: ezdxf audit errors: {[str(e) for e in auditor.errors][:3]}")
@@ -62,30 +67,57 @@ def sheet_polygons(path, width, height):
     s = Polygon([(x, y) for x, y, *_ in sheet[0].get_points()])
     if abs(s.area - width * height) > 1e-6 * width * height:
         fail(f"{path}: sheet outline area {s.area} is not {width} × {height}")
-    parts, holes, remnants = [], [], []
+    parts, holes, remnants, gaps, joint_lines = [], [], [], [], []
     etch, inner, etched = [], [], 0
+    pieces = []
+
+    def close_part(pts, part_gaps):
+        if signed_area(pts) <= 0:
+            fail(f"{path}: an outer contour runs clockwise")
+        p = Polygon(pts)
+        if not p.is_valid or p.area <= 0:
+            fail(f"{path}: a CUT_OUTER outline is not a valid polygon")
+        for h in inner:
+            if not p.contains(h):
+                fail(f"{path}: an inner contour before part {len(parts)} is not inside it")
+        for line in etch:
+            if not p.buffer(1e-6).contains(line):
+                fail(f"{path}: etching before part {len(parts)} is not on it")
+        holes.extend(inner)
+        parts.append(Polygon(pts, [list(h.exterior.coords) for h in inner]))
+        gaps.append(part_gaps)
+
     for e in msp:
         layer = e.dxf.layer
         if layer in ("CUT_OUTER", "CUT_INNER", "ETCH", "LEAD", "REMNANT") and e.dxftype() != "LWPOLYLINE":
             fail(f"{path}: {layer} holds a {e.dxftype()}")
         if layer == "CUT_OUTER":
-            if not e.closed:
-                fail(f"{path}: an outer contour is not closed")
             pts = [(x, y) for x, y, *_ in e.get_points()]
-            if signed_area(pts) <= 0:
-                fail(f"{path}: an outer contour runs clockwise")
-            p = Polygon(pts)
-            if not p.is_valid or p.area <= 0:
-                fail(f"{path}: a CUT_OUTER outline is not a valid polygon")
-            for h in inner:
-                if not p.contains(h):
-                    fail(f"{path}: an inner contour before part {len(parts)} is not inside it")
-            for line in etch:
-                if not p.buffer(1e-6).contains(line):
-                    fail(f"{path}: etching before part {len(parts)} is not on it")
-            holes.extend(inner)
-            parts.append(Polygon(pts, [list(h.exterior.coords) for h in inner]))
+            if e.closed:
+                if pieces:
+                    fail(f"{path}: a closed outer contour inside the open pieces of another")
+                close_part(pts, [])
+            else:
+                if joint_width is None:
+                    fail(f"{path}: an outer contour is not closed (no micro-joints were asked for)")
+                if pieces:
+                    gap = math.dist(pieces[-1][-1], pts[0])
+                    if abs(gap - joint_width) > 1e-6:
+                        fail(f"{path}: a micro-joint gap of {gap:.6f} mm, not {joint_width}")
+                pieces.append(pts)
+                if math.dist(pts[-1], pieces[0][0]) < 1e-6:
+                    if len(pieces) < 2:
+                        fail(f"{path}: an open outer contour that closes on itself")
+                    ring = [q for piece in pieces for q in piece][:-1]
+                    part_gaps = [(a[-1], b[0]) for a, b in zip(pieces, pieces[1:])]
+                    close_part(ring, part_gaps)
+                    pieces = []
             etch, inner = [], []
+            continue
+        if pieces:
+            fail(f"{path}: a {layer} entity between the open pieces of an outer contour")
+        if layer == "JOINT":
+            joint_lines.append(tuple((x, y) for x, y, *_ in e.get_points()))
         elif layer == "CUT_INNER":
             if not e.closed:
                 fail(f"{path}: an inner contour is not closed")
@@ -100,11 +132,19 @@ def sheet_polygons(path, width, height):
             etched += 1
         elif layer == "REMNANT":
             remnants.append(Polygon([(x, y) for x, y, *_ in e.get_points()]))
-        elif layer not in ("SHEET", "LEAD"):
+        elif layer not in ("SHEET", "LEAD", "JOINT"):
             fail(f"{path}: unexpected layer {layer}")
     if etch or inner:
         fail(f"{path}: etching or inner contours after the last outer contour")
-    return parts, etched, remnants
+    if pieces:
+        fail(f"{path}: open outer pieces that never close")
+    drawn_gaps = sorted(tuple(sorted(g)) for part in gaps for g in part)
+    drawn_joints = sorted(tuple(sorted(j)) for j in joint_lines)
+    if len(drawn_gaps) != len(drawn_joints) or any(
+            math.dist(a[0], b[0]) > 1e-6 or math.dist(a[1], b[1]) > 1e-6
+            for a, b in zip(drawn_gaps, drawn_joints)):
+        fail(f"{path}: JOINT lines ({len(drawn_joints)}) are not the micro-joint gaps ({len(drawn_gaps)})")
+    return parts, etched, remnants, gaps
 
 
 def main():
@@ -116,7 +156,11 @@ def main():
     ap.add_argument("--spacing", type=float, required=True)
     ap.add_argument("--rotations", default="0,90,180,270", help="allowed angles, or any")
     ap.add_argument("--remnant-min", default="300x300")
+    ap.add_argument("--micro-joints", type=int, help="joints per small part, as nested")
+    ap.add_argument("--micro-joint-below", type=float, default=200.0)
+    ap.add_argument("--micro-joint-width", type=float, default=0.5)
     args = ap.parse_args()
+    joint_width = args.micro_joint_width if args.micro_joints else None
     folder = Path(args.folder)
     width, height = (float(v) for v in args.sheet.lower().split("x"))
 
@@ -148,7 +192,7 @@ def main():
         width, height = s["size"]
         sheet_area = width * height
         inner = box(args.margin, args.margin, width - args.margin, height - args.margin)
-        parts, etched, remnants = sheet_polygons(folder / s["file"], width, height)
+        parts, etched, remnants, _ = sheet_polygons(folder / s["file"], width, height, joint_width)
         strokes += etched
         sheet_box = box(0, 0, width, height).buffer(1e-9)
         if len(remnants) != len(s["remnants"]):
@@ -198,8 +242,10 @@ def main():
     drawn = {}
     for s in nest["sheets"]:
         width, height = s["size"]
-        for p in sheet_polygons(folder / s["file"], width, height)[0]:
-            drawn.setdefault(s["file"], []).append(p)
+        parts, _, _, gaps = sheet_polygons(folder / s["file"], width, height, joint_width)
+        drawn[s["file"]] = list(zip(parts, gaps))
+    clear = nest["micro_joints"]["clear_mm"] if args.micro_joints else 0.0
+    jointed = n_joints = 0
     for pl in nest["placements"]:
         a = pl["rotation_deg"]
         if allowed is not None and a not in allowed:
@@ -208,9 +254,27 @@ def main():
         pts = [(c * x - sn * y + pl["offset"][0], sn * x + c * y + pl["offset"][1])
                for x, y in plates[pl["id"]]["outline"]]
         want = Polygon(pts)
-        match = [p for p in drawn[pl["sheet"]] if p.exterior.hausdorff_distance(want.exterior) < 1e-6]
+        match = [(p, g) for p, g in drawn[pl["sheet"]]
+                 if p.exterior.hausdorff_distance(want.exterior) < 1e-6]
         if not match:
             fail(f"{pl['id']}: no part on {pl['sheet']} is its outline turned {a}° and moved by the offset")
+        part_gaps = match[0][1]
+        xs = [x for x, _ in plates[pl["id"]]["outline"]]
+        ys = [y for _, y in plates[pl["id"]]["outline"]]
+        small = max(max(xs) - min(xs), max(ys) - min(ys)) < args.micro_joint_below
+        expect = args.micro_joints if args.micro_joints and small else 0
+        if len(part_gaps) != expect or pl.get("micro_joints", 0) != expect:
+            fail(f"{pl['id']}: {len(part_gaps)} micro-joints drawn, nest.json says "
+                 f"{pl.get('micro_joints', 0)}, expected {expect}")
+        if part_gaps:
+            jointed += 1
+            n_joints += len(part_gaps)
+        for g in part_gaps:
+            seg = LineString(g)
+            for corner in pts:
+                d = seg.distance(Point(corner))
+                if d < clear - 1e-6:
+                    fail(f"{pl['id']}: a micro-joint is {d:.3f} mm from a corner (< {clear})")
     for row in bom:
         p = plates.get(row["id"])
         if p is None:
@@ -228,7 +292,8 @@ def main():
         f"{folder}: ok ({len(all_areas)} parts on {len(nest['sheets'])} sheets, "
         f"rotations {'any' if allowed is None else 'exactly ' + args.rotations}, "
         f"closest pair {worst_gap:.3f} mm (spacing {args.spacing}), "
-        f"utilisation {100 * total:.1f} %, {strokes} etched polylines, {n_remnants} remnants)"
+        f"utilisation {100 * total:.1f} %, {strokes} etched polylines, {n_remnants} remnants"
+        + (f", {n_joints} micro-joints on {jointed} parts" if args.micro_joints else "") + ")"
     )
 
 

@@ -15,7 +15,7 @@ use serde_json::json;
 
 use lamina::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
 use lamina::fabricate::cutplan::{remnants, times, SpeedTable};
-use lamina::fabricate::cutsheet::{write_cut_dxf, Drawn, Hole};
+use lamina::fabricate::cutsheet::{place_joints, write_cut_dxf, Drawn, Hole};
 pub use lamina::fabricate::nest::Stock;
 use lamina::fabricate::nest::{
     grown_hull, nest_families, BottomLeft, NestError, NestOptions, Place, Rotations, SLACK,
@@ -66,6 +66,17 @@ pub struct Args {
     /// spacing, and shortened inside small holes
     #[arg(long, allow_negative_numbers = true)]
     pub lead_in: Option<f64>,
+    /// Micro-joints: this many uncut bridges (from 1 to 8) on the outer contour of each part
+    /// smaller than --micro-joint-below, so that it stays in the sheet; the sheets then get no
+    /// assembly.scad (OpenSCAD drops open contours) [default: none]
+    #[arg(long)]
+    pub micro_joints: Option<usize>,
+    /// Parts whose bounding box's longer side is under this get micro-joints, mm
+    #[arg(long, default_value_t = 200.0, allow_negative_numbers = true)]
+    pub micro_joint_below: f64,
+    /// Width of a micro-joint along the contour, mm
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub micro_joint_width: f64,
     /// Cutting, pierce and marking speeds by thickness for the time estimate (JSON like the
     /// built-in table nest.json repeats) [default: typical stainless steel figures]
     #[arg(long)]
@@ -138,8 +149,24 @@ pub struct SheetInfo {
     pub pierces: usize,
     pub etch_mm: f64,
     pub lead_mm: f64,
+    pub joints: usize,
     /// Seconds: laser, plasma.
     pub time_s: (f64, f64),
+}
+
+/// Micro-joints as asked for.
+#[derive(Clone, Copy)]
+pub struct Joints {
+    pub per_part: usize,
+    pub below: f64,
+    pub width: f64,
+}
+
+impl Joints {
+    /// Kept from corners, the pierce point and each other, mm.
+    fn clear(&self) -> f64 {
+        (2.0 * self.width).max(2.0)
+    }
 }
 
 pub struct Outcome {
@@ -147,6 +174,9 @@ pub struct Outcome {
     pub cores: Vec<CoreRecord>,
     pub places: Vec<Place>,
     pub sheets: Vec<SheetInfo>,
+    pub joints: Option<Joints>,
+    /// Micro-joints per plate (fewer than asked where its sides are too short).
+    pub joint_counts: Vec<usize>,
 }
 
 impl Outcome {
@@ -192,6 +222,27 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             );
         }
     }
+    if !(args.micro_joint_below > 0.0 && args.micro_joint_below <= 1e6) {
+        bail!(
+            "--micro-joint-below must be more than 0 and at most 1e6 mm, got {}",
+            lamina::text::num(args.micro_joint_below)
+        );
+    }
+    if !(args.micro_joint_width > 0.0 && args.micro_joint_width <= 10.0) {
+        bail!(
+            "--micro-joint-width must be more than 0 and at most 10 mm, got {}",
+            lamina::text::num(args.micro_joint_width)
+        );
+    }
+    let joints = match args.micro_joints {
+        None => None,
+        Some(n @ 1..=8) => Some(Joints {
+            per_part: n,
+            below: args.micro_joint_below,
+            width: args.micro_joint_width,
+        }),
+        Some(n) => bail!("--micro-joints must be from 1 to 8, got {n}"),
+    };
     let opts = NestOptions {
         sheet: stock[0].size,
         margin: args.margin,
@@ -247,6 +298,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
                 pierces: 0,
                 etch_mm: 0.0,
                 lead_mm: 0.0,
+                joints: 0,
                 time_s: (0.0, 0.0),
             }
         })
@@ -263,7 +315,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let drawn: Vec<Drawn> = plates
         .iter()
         .zip(&places)
-        .map(|(p, place)| on_sheet(p, place, args.lead_in))
+        .map(|(p, place)| on_sheet(p, place, args.lead_in, joints))
         .collect();
 
     // Remnants and machine time, all before anything is written (a speed table without a row
@@ -274,6 +326,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         sheet.remnants = remnants(sheet.stock.size, &hulls, args.spacing, args.remnant_min);
         sheet.cut_mm = parts.iter().map(|d| d.cut_length()).sum();
         sheet.pierces = parts.iter().map(|d| d.pierces()).sum();
+        sheet.joints = parts.iter().map(|d| d.joints.len()).sum();
         sheet.etch_mm = parts.iter().map(|d| d.etch_length()).sum();
         sheet.lead_mm = parts
             .iter()
@@ -310,42 +363,43 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         )?;
     }
 
-    // The assembly, from the sheets.
-    let clip_d = 0.5 * args.spacing + SLACK;
-    let scad: Vec<SheetPart> = plates
-        .iter()
-        .zip(&places)
-        .enumerate()
-        .map(|(i, (p, place))| SheetPart {
-            id: &p.id,
-            dxf: &sheets[place.sheet].file,
-            thickness: p.thickness,
-            matrix: p.matrix,
-            angle: place.angle,
-            offset: place.offset,
-            clip: grown_hull(&drawn[i].outline, clip_d),
-        })
-        .collect();
-    let scad_cores: Vec<ScadCore> = cores
-        .iter()
-        .map(|c| ScadCore {
-            id: &c.id,
-            outer: c.outer_diameter,
-            inner: c.outer_diameter - 2.0 * c.wall,
-            length: c.length,
-            matrix: axis_frame(DVec3::from_array(c.base), DVec3::from_array(c.axis)),
-        })
-        .collect();
-    write_scad_from_sheets(&scad, &scad_cores, &args.output.join("assembly.scad"))?;
+    // The assembly, from the sheets (not from micro-jointed ones: their outer contours are
+    // open, and OpenSCAD's DXF import drops open paths).
+    let scad_path = args.output.join("assembly.scad");
+    if joints.is_some() {
+        if scad_path.exists() {
+            std::fs::remove_file(&scad_path).with_context(|| {
+                format!("{}: cannot remove the old assembly", scad_path.display())
+            })?;
+        }
+    } else {
+        write_assembly(
+            &plates,
+            &cores,
+            &places,
+            &sheets,
+            &drawn,
+            args.spacing,
+            &scad_path,
+        )?;
+    }
 
     let outcome = Outcome {
         plates,
         cores,
         places,
         sheets,
+        joints,
+        joint_counts: drawn.iter().map(|d| d.joints.len()).collect(),
     };
     write_bom(&outcome, &drawn, &args.output.join("bom.csv"))?;
-    write_nest_json(&outcome, &opts, &speeds, &args.output.join("nest.json"))?;
+    write_nest_json(
+        &outcome,
+        &drawn,
+        &opts,
+        &speeds,
+        &args.output.join("nest.json"),
+    )?;
     let views: Vec<SheetView> = outcome
         .sheets
         .iter()
@@ -381,9 +435,49 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     Ok(outcome)
 }
 
+/// assembly.scad: every part cut out of its sheet's DXF by a clip polygon around it.
+fn write_assembly(
+    plates: &[PlateRecord],
+    cores: &[CoreRecord],
+    places: &[Place],
+    sheets: &[SheetInfo],
+    drawn: &[Drawn],
+    spacing: f64,
+    path: &Path,
+) -> Result<()> {
+    let clip_d = 0.5 * spacing + SLACK;
+    let scad: Vec<SheetPart> = plates
+        .iter()
+        .zip(places)
+        .zip(drawn)
+        .map(|((p, place), d)| SheetPart {
+            id: &p.id,
+            dxf: &sheets[place.sheet].file,
+            thickness: p.thickness,
+            matrix: p.matrix,
+            angle: place.angle,
+            offset: place.offset,
+            clip: grown_hull(&d.outline, clip_d),
+        })
+        .collect();
+    let scad_cores: Vec<ScadCore> = cores
+        .iter()
+        .map(|c| ScadCore {
+            id: &c.id,
+            outer: c.outer_diameter,
+            inner: c.outer_diameter - 2.0 * c.wall,
+            length: c.length,
+            matrix: axis_frame(DVec3::from_array(c.base), DVec3::from_array(c.axis)),
+        })
+        .collect();
+    write_scad_from_sheets(&scad, &scad_cores, path)?;
+    Ok(())
+}
+
 /// A plate as cut on its sheet: the outline counter-clockwise from its pierce point (the middle
-/// of its longest side), holes, marks upright on the sheet, and leads when asked for.
-fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>) -> Drawn {
+/// of its longest side), holes, marks upright on the sheet, and leads and micro-joints when
+/// asked for.
+fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>, joints: Option<Joints>) -> Drawn {
     let mut outline: Vec<DVec2> = p.outline.iter().map(|q| place.apply(*q)).collect();
     let n = outline.len();
     let longest = (0..n)
@@ -425,11 +519,18 @@ fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>) -> Drawn {
         leads.push([pierce + out * l, pierce]);
         leads.push([pierce, pierce + (out + along).normalize() * l]);
     }
+    let joints = match joints {
+        Some(j) if size(&p.outline).max_element() < j.below => {
+            place_joints(&outline, j.per_part, j.width, j.clear())
+        }
+        _ => Vec::new(),
+    };
     Drawn {
         outline,
         holes,
         etch: marks.etch,
         leads,
+        joints,
     }
 }
 
@@ -580,6 +681,7 @@ fn write_bom(out: &Outcome, drawn: &[Drawn], path: &Path) -> Result<()> {
 
 fn write_nest_json(
     out: &Outcome,
+    drawn: &[Drawn],
     opts: &NestOptions,
     speeds: &SpeedTable,
     path: &Path,
@@ -614,11 +716,19 @@ fn write_nest_json(
         "tries": opts.tries,
         "seed": opts.seed,
         "pairs": opts.pair,
+        "micro_joints": out.joints.map(|j| json!({
+            "per_part": j.per_part,
+            "below_mm": j.below,
+            "width_mm": j.width,
+            "clear_mm": j.clear(),
+        })),
         "plates": out.plates.len(),
         "definitions": {
             "offset": "sheet point = R(rotation_deg) · plate point + offset, the plate point in the plate's own frame (plates.json)",
             "bbox_min": "lower-left corner of the part's bounding box on the sheet",
-            "cut_mm": "outer and inner contours (and lead lines when asked for)",
+            "cut_mm": "outer and inner contours less micro-joints (and lead lines when asked for)",
+            "pierces": "one per contour, and one after each micro-joint",
+            "micro_joints": "uncut bridges on the outer contour (gaps between its open pieces on CUT_OUTER, drawn across on JOINT), on parts whose bounding box's longer side is under below_mm",
             "time_s": "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed (speed_table)",
             "remnants": "free rectangles [lower-left, upper-right] at least remnant_min, the spacing clear of every part",
         },
@@ -634,6 +744,7 @@ fn write_nest_json(
             "remnants": s.remnants.iter().map(|[a, b]| [[a.x, a.y], [b.x, b.y]]).collect::<Vec<_>>(),
             "cut_mm": s.cut_mm + s.lead_mm,
             "pierces": s.pierces,
+            "micro_joints": s.joints,
             "etch_mm": s.etch_mm,
             "time_s": {"laser": s.time_s.0, "plasma": s.time_s.1},
         })).collect::<Vec<_>>(),
@@ -670,6 +781,7 @@ fn write_nest_json(
             "rotation_deg": pl.angle,
             "offset": [pl.offset.x, pl.offset.y],
             "bbox_min": placed(i),
+            "micro_joints": drawn[i].joints.len(),
         })).collect::<Vec<_>>(),
         "speed_table": speeds,
     });
@@ -727,6 +839,30 @@ pub fn run(args: Args) -> Result<()> {
             );
             t_prev = Some(s.thickness.to_bits());
         }
+    }
+    if let Some(j) = out.joints {
+        let small = out
+            .plates
+            .iter()
+            .filter(|p| size(&p.outline).max_element() < j.below)
+            .count();
+        let short = out
+            .joint_counts
+            .iter()
+            .zip(&out.plates)
+            .filter(|(&n, p)| n < j.per_part && size(&p.outline).max_element() < j.below)
+            .count();
+        println!(
+            "  micro-joints: {} on {small} part(s) under {} mm, {} mm wide{}; no assembly.scad (OpenSCAD drops open contours: the plates folder's rebuilds from the part DXFs)",
+            out.joint_counts.iter().sum::<usize>(),
+            j.below,
+            j.width,
+            if short > 0 {
+                format!(", {short} part(s) with fewer than {} (sides too short)", j.per_part)
+            } else {
+                String::new()
+            }
+        );
     }
     if !out.cores.is_empty() {
         println!(

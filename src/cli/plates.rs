@@ -102,6 +102,7 @@ fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
             .collect(),
         etch: marks.etch,
         leads: Vec::new(),
+        joints: Vec::new(),
     };
     (part, marks.tag_height)
 }

@@ -7,6 +7,10 @@
 //! - ETCH: tags and marks in our single-stroke font, strokes chained into open LWPOLYLINEs
 //!   (never live TEXT).
 //! - LEAD: lead-in and lead-out lines in the scrap, when asked for.
+//! - Micro-joints, when asked for: the outer contour of a small part is cut as open
+//!   LWPOLYLINEs (counter-clockwise, in cutting order) with a gap of the joint's width between
+//!   them, the uncut bridge that holds the part in the sheet; each bridge is also drawn as a line
+//!   across its gap on JOINT, for the operator (reference, not cut).
 //! - SHEET, REMNANT: the stock outline and the free rectangles worth keeping; reference only,
 //!   not to be cut (the layers are also marked not to plot).
 //!
@@ -27,6 +31,7 @@ pub const CUT_OUTER: &str = "CUT_OUTER";
 pub const CUT_INNER: &str = "CUT_INNER";
 pub const ETCH: &str = "ETCH";
 pub const LEAD: &str = "LEAD";
+pub const JOINT: &str = "JOINT";
 pub const SHEET: &str = "SHEET";
 pub const REMNANT: &str = "REMNANT";
 
@@ -47,15 +52,20 @@ pub struct Drawn {
     pub etch: Vec<Vec<DVec2>>,
     /// Lead-in and lead-out lines.
     pub leads: Vec<[DVec2; 2]>,
+    /// Micro-joints: uncut stretches of the outline, as arc lengths from its first point,
+    /// increasing and apart.
+    pub joints: Vec<[f64; 2]>,
 }
 
 impl Drawn {
-    /// Cut length: the outline's perimeter and the holes' circumferences, mm.
+    /// Cut length: the outline's perimeter less its micro-joints and the holes'
+    /// circumferences, mm.
     pub fn cut_length(&self) -> f64 {
         let n = self.outline.len();
         let outer: f64 = (0..n)
             .map(|k| self.outline[k].distance(self.outline[(k + 1) % n]))
-            .sum();
+            .sum::<f64>()
+            - self.joints.iter().map(|[a, b]| b - a).sum::<f64>();
         let inner: f64 = self
             .holes
             .iter()
@@ -72,10 +82,109 @@ impl Drawn {
             .sum()
     }
 
-    /// Pierces: one per contour.
+    /// Pierces: one per contour, and one more after each micro-joint (the cut starts again
+    /// in solid metal on its far side).
     pub fn pierces(&self) -> usize {
-        1 + self.holes.len()
+        1 + self.holes.len() + self.joints.len()
     }
+
+    /// The outer contour as cut: the closed outline, or with micro-joints the open pieces
+    /// between them in cutting order (from the first point round to it again).
+    pub fn outer_pieces(&self) -> Vec<Vec<DVec2>> {
+        if self.joints.is_empty() {
+            return vec![self.outline.clone()];
+        }
+        let mut ring = self.outline.clone();
+        ring.push(self.outline[0]);
+        let mut cuts = vec![0.0];
+        for [a, b] in &self.joints {
+            cuts.extend([*a, *b]);
+        }
+        cuts.push(arc_length(&ring));
+        cuts.chunks(2)
+            .map(|c| sub_path(&ring, c[0], c[1]))
+            .collect()
+    }
+
+    /// Each micro-joint as the line across its gap.
+    pub fn joint_lines(&self) -> Vec<[DVec2; 2]> {
+        let mut ring = self.outline.clone();
+        ring.push(self.outline[0]);
+        self.joints
+            .iter()
+            .map(|&[a, b]| [point_at(&ring, a), point_at(&ring, b)])
+            .collect()
+    }
+}
+
+fn arc_length(path: &[DVec2]) -> f64 {
+    path.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+/// The point at arc length `s` along an open path.
+fn point_at(path: &[DVec2], s: f64) -> DVec2 {
+    let mut run = 0.0;
+    for w in path.windows(2) {
+        let l = w[0].distance(w[1]);
+        if s <= run + l && l > 0.0 {
+            return w[0].lerp(w[1], ((s - run) / l).clamp(0.0, 1.0));
+        }
+        run += l;
+    }
+    *path.last().expect("a path has points")
+}
+
+/// The stretch of an open path from arc length `s0` to `s1`, with the vertices between.
+fn sub_path(path: &[DVec2], s0: f64, s1: f64) -> Vec<DVec2> {
+    let mut out = vec![point_at(path, s0)];
+    let mut run = 0.0;
+    for w in path.windows(2) {
+        run += w[0].distance(w[1]);
+        if run > s0 && run < s1 {
+            out.push(w[1]);
+        }
+    }
+    out.push(point_at(path, s1));
+    out
+}
+
+/// Up to `n` micro-joints `width` wide on a closed outline (its first point is the pierce
+/// point): each within one straight side, at least `clear` from its corners and from the pierce
+/// point, as near as that allows to `n` points spread evenly round the perimeter, and at least
+/// `clear` apart. Fewer where the sides are too short.
+pub fn place_joints(outline: &[DVec2], n: usize, width: f64, clear: f64) -> Vec<[f64; 2]> {
+    let mut ring = outline.to_vec();
+    ring.push(outline[0]);
+    let perimeter = arc_length(&ring);
+    // Where a joint's centre may go: an interval per side.
+    let mut room = Vec::new();
+    let mut run = 0.0;
+    for w in ring.windows(2) {
+        let l = w[0].distance(w[1]);
+        let half = clear + 0.5 * width;
+        if l > 2.0 * half {
+            room.push([run + half, run + l - half]);
+        }
+        run += l;
+    }
+    let mut centres: Vec<f64> = Vec::new();
+    for k in 0..n {
+        let target = perimeter * (k as f64 + 0.5) / n as f64;
+        let apart = |c: f64| centres.iter().all(|&o| (c - o).abs() >= width + clear);
+        let best = room
+            .iter()
+            .map(|&[lo, hi]| target.clamp(lo, hi))
+            .filter(|&c| apart(c))
+            .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()));
+        if let Some(c) = best {
+            centres.push(c);
+        }
+    }
+    centres.sort_by(f64::total_cmp);
+    centres
+        .iter()
+        .map(|c| [c - 0.5 * width, c + 0.5 * width])
+        .collect()
 }
 
 /// Writes the parts, and the sheet rectangle from the origin and remnant rectangles if given.
@@ -91,6 +200,7 @@ pub fn write_cut_dxf(
         (CUT_INNER, 6, true),
         (ETCH, 5, true),
         (LEAD, 3, true),
+        (JOINT, 4, false),
         (SHEET, 8, false),
         (REMNANT, 9, false),
     ] {
@@ -143,12 +253,22 @@ pub fn write_cut_dxf(
             lead(&mut drawing);
         }
         lead(&mut drawing);
-        drawing.add_entity(lw_polyline_entity(
-            part.outline.iter().map(|p| (p.x, p.y)),
-            true,
-            CUT_OUTER,
-        ));
+        let closed = part.joints.is_empty();
+        for piece in part.outer_pieces() {
+            drawing.add_entity(lw_polyline_entity(
+                piece.iter().map(|p| (p.x, p.y)),
+                closed,
+                CUT_OUTER,
+            ));
+        }
         lead(&mut drawing);
+        for [a, b] in part.joint_lines() {
+            drawing.add_entity(lw_polyline_entity(
+                [(a.x, a.y), (b.x, b.y)].into_iter(),
+                false,
+                JOINT,
+            ));
+        }
     }
     write_atomic(path, |w| {
         crate::network::io::dxf_write::save(&mut drawing, w)
@@ -232,5 +352,44 @@ mod tests {
         // A "-" and a separate "1": two.
         let two = chain(&[[p(0., 0.), p(1., 0.)], [p(3., 0.), p(3., 2.)]]);
         assert_eq!(two.len(), 2);
+    }
+
+    #[test]
+    fn micro_joints_sit_on_straight_sides_and_leave_the_cut_short_by_their_width() {
+        let p = |x: f64, y: f64| DVec2::new(x, y);
+        // A 100 × 40 rectangle pierced in the middle of its bottom side.
+        let outline = vec![p(50., 0.), p(100., 0.), p(100., 40.), p(0., 40.), p(0., 0.)];
+        let joints = place_joints(&outline, 3, 0.5, 2.0);
+        assert_eq!(joints.len(), 3);
+        let corners = [0.0, 50.0, 90.0, 190.0, 230.0, 280.0];
+        for [a, b] in &joints {
+            assert!((b - a - 0.5).abs() < 1e-12);
+            for c in corners {
+                assert!(
+                    *a >= c + 2.0 - 1e-9 || *b <= c - 2.0 + 1e-9,
+                    "{a}..{b} near {c}"
+                );
+            }
+        }
+        let drawn = Drawn {
+            outline: outline.clone(),
+            joints: joints.clone(),
+            ..Default::default()
+        };
+        let pieces = drawn.outer_pieces();
+        assert_eq!(pieces.len(), 4);
+        assert_eq!(pieces[0][0], outline[0]);
+        assert_eq!(*pieces[3].last().unwrap(), outline[0]);
+        let cut: f64 = pieces.iter().map(|q| arc_length(q)).sum();
+        assert!((cut - (280.0 - 1.5)).abs() < 1e-9, "{cut}");
+        assert!((drawn.cut_length() - cut).abs() < 1e-9);
+        assert_eq!(drawn.pierces(), 4);
+        // Each gap is a stretch of a side: its ends the joint's width apart.
+        for [a, b] in drawn.joint_lines() {
+            assert!((a.distance(b) - 0.5).abs() < 1e-9);
+        }
+        // A triangle too small for clearances gets none rather than joints on its corners.
+        let tiny = vec![p(0., 0.), p(3., 0.), p(0., 3.)];
+        assert!(place_joints(&tiny, 2, 0.5, 2.0).is_empty());
     }
 }
