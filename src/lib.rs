@@ -3,6 +3,7 @@
 //! The core type is [`Network`] (nodes and edges in 3D, millimetres); surfaces are [`TriMesh`].
 //! Formats live in each type's `io` module; `files` holds the error types and atomic writes.
 
+pub mod analyze;
 pub mod fabricate;
 pub mod files;
 pub mod fuzz;

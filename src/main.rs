@@ -50,6 +50,10 @@ enum Command {
     /// Node axes that make every panel of a network planar (L-BFGS or iterative projection),
     /// with the panels and a planarity report.
     Planarize(Box<cli::planarize::Args>),
+    /// Frame analysis of the plate network and the gauges it needs: thinnest gauges with
+    /// utilisation at most 1, a deflection limit, weld utilisation (sizing.json, HTML,
+    /// a CalculiX deck); exit 1 when the thickest gauge is not enough.
+    Size(Box<cli::size::Args>),
     /// Steel plates from node axes: one flat plate per edge in its panel plane, thickness from a
     /// gauge list, cut back at the nodes so plates do not interpenetrate (plates.json,
     /// assembly.stl).
@@ -107,6 +111,7 @@ fn main() -> ExitCode {
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
+        Command::Size(args) => cli::size::run(*args).map(within),
         Command::Plates(args) => cli::plates::run(args).map(within),
         Command::Nest(args) => cli::nest::run(*args).map(Within::from),
         Command::Audit(args) => cli::planarize::audit_run(args).map(within),

@@ -365,7 +365,8 @@ fn steel(out: &Path) -> Result<Entry> {
     let dir = out.join("calyx");
     let plates = super::plates::execute(&super::plates::Args {
         input: dir.join("lbfgs-axes.json"),
-        gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
+        gauges: Some(vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0]),
+        sizing: None,
         thickness: None,
         edge_thickness: vec![(EdgeSelector::parse("z<1").map_err(anyhow::Error::msg)?, 6.0)],
         weld_gap: 1.0,

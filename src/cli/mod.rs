@@ -13,6 +13,7 @@ pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod render;
+pub mod size;
 pub mod slice;
 pub mod solid;
 pub mod surface;

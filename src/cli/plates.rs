@@ -24,13 +24,17 @@ use lamina::TriMesh;
 pub struct Args {
     /// The axes file `lamina planarize` wrote
     pub input: PathBuf,
-    /// Sheet thicknesses available, mm, ascending; every plate is one of them
-    #[arg(long, value_delimiter = ',', default_value = "1.5,2,3,4,5,6")]
-    pub gauges: Vec<f64>,
+    /// Sheet thicknesses available, mm, ascending; every plate is one of them [default:
+    /// 1.5,2,3,4,5,6, or the sizing's list with --sizing]
+    #[arg(long, value_delimiter = ',')]
+    pub gauges: Option<Vec<f64>>,
     /// Every plate this thick, mm (a gauge) [default: from the vein radii, thicker veins on
     /// thicker gauges]
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sizing")]
     pub thickness: Option<f64>,
+    /// Gauges from `lamina size` (sizing.json for these axes): each edge's plate as sized
+    #[arg(long)]
+    pub sizing: Option<PathBuf>,
     /// Thickness for some edges, over the rule: `SELECTOR:MM`, where SELECTOR is `edge=K` or a
     /// node selector both ends must match (`all`, `node=N`, `x|y|z` `<` `<=` `>` `>=` value),
     /// e.g. `z<1:6` for a 6 mm base ring; repeatable, a later match wins
@@ -210,12 +214,31 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             );
         }
     }
+    let sized = match &args.sizing {
+        Some(p) => Some(lamina::analyze::sizing::read_gauges(p)?),
+        None => None,
+    };
+    let thickness = match (args.thickness, &sized) {
+        (Some(t), _) => Thickness::Constant(t),
+        (None, Some((list, _))) => Thickness::PerEdge(list.clone()),
+        (None, None) => {
+            if axes.edge_radii.iter().all(|r| *r <= 0.0) && args.edge_thickness.is_empty() {
+                bail!(
+                    "{}: no vein radii to take thicknesses from: give --sizing sizing.json (from `lamina size`), --thickness MM or --edge-thickness",
+                    args.input.display()
+                );
+            }
+            Thickness::FromRadius
+        }
+    };
+    let gauges = match (&args.gauges, &sized) {
+        (Some(g), _) => g.clone(),
+        (None, Some((_, g))) => g.clone(),
+        (None, None) => vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
+    };
     let opts = PlateOptions {
-        gauges: args.gauges.clone(),
-        thickness: match args.thickness {
-            Some(t) => Thickness::Constant(t),
-            None => Thickness::FromRadius,
-        },
+        gauges,
+        thickness,
         overrides: args.edge_thickness.clone(),
         weld_gap: args.weld_gap,
         weld_gap_tolerance: args.weld_gap_tolerance,

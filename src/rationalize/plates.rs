@@ -35,6 +35,8 @@ pub enum Thickness {
     /// The gauge at the edge radius's place between 0 and the largest radius (thicker veins,
     /// thicker plates); edges without a radius get the thinnest gauge.
     FromRadius,
+    /// One per edge, in edge order (from a sizing), mm.
+    PerEdge(Vec<f64>),
 }
 
 /// Which edges a thickness override applies to.
@@ -142,6 +144,8 @@ impl Default for PlateOptions {
 pub enum PlateError {
     #[error("the gauge list is empty")]
     NoGauges,
+    #[error("the sizing has {0} edges, the axes {1}: size these axes again")]
+    PerEdge(usize, usize),
     #[error("gauges must be positive and ascending: {0:?}")]
     Gauges(Vec<f64>),
     #[error("--thickness must be a positive number of mm, got {0}")]
@@ -400,6 +404,14 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
             return Err(PlateError::Thickness(t));
         }
     }
+    if let Thickness::PerEdge(list) = &opts.thickness {
+        if list.len() != axes.edges.len() {
+            return Err(PlateError::PerEdge(list.len(), axes.edges.len()));
+        }
+        if let Some(t) = list.iter().find(|t| !(t.is_finite() && **t > 0.0)) {
+            return Err(PlateError::Thickness(*t));
+        }
+    }
     for (sel, t) in &opts.overrides {
         if !(t.is_finite() && *t > 0.0) {
             return Err(PlateError::Override(*t));
@@ -425,6 +437,11 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     if let Thickness::Constant(t) = opts.thickness {
         if !on_list(t) {
             return Err(off("--thickness", t));
+        }
+    }
+    if let Thickness::PerEdge(list) = &opts.thickness {
+        if let Some(t) = list.iter().find(|t| !on_list(**t)) {
+            return Err(off("the sizing's gauge", *t));
         }
     }
     if let Some((_, t)) = opts.overrides.iter().find(|(_, t)| !on_list(*t)) {
@@ -478,8 +495,9 @@ pub fn thicknesses(axes: &Axes, opts: &PlateOptions) -> Result<Vec<f64>, PlateEr
 }
 
 fn by_rule(axes: &Axes, opts: &PlateOptions) -> Vec<f64> {
-    match opts.thickness {
-        Thickness::Constant(t) => vec![t; axes.edges.len()],
+    match &opts.thickness {
+        Thickness::Constant(t) => vec![*t; axes.edges.len()],
+        Thickness::PerEdge(list) => list.clone(),
         Thickness::FromRadius => {
             let top = axes.edge_radii.iter().copied().fold(0.0, f64::max);
             let last = opts.gauges.len() - 1;

@@ -1,0 +1,147 @@
+//! The frame as a CalculiX deck (`.inp`), for an independent solve: the same nodes, each member
+//! split into `SPLIT` quadratic beams (B32: CalculiX expands them into 20-node bricks of the
+//! member's rectangle), a rectangular section per member with its depth direction as the
+//! section's 1-direction, the same supports, and the loads of the case summing them all as
+//! nodal forces (uniform member loads as the consistent loads of each quadratic beam: 1/6, 2/3,
+//! 1/6 of its share). Results requested: displacements of every node and reaction forces of
+//! the supports (`.dat`), in mm, N, MPa.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::frame::{LoadCase, Model, Support};
+use crate::files::{write_atomic, WriteError};
+
+/// Quadratic beams per member.
+pub const SPLIT: usize = 8;
+
+/// Node numbers: network node i is i + 1; member k's inner nodes follow them, 2·SPLIT − 1 each.
+pub fn inner_node(model: &Model, k: usize, j: usize) -> usize {
+    model.nodes.len() + 1 + k * (2 * SPLIT - 1) + j
+}
+
+pub fn write_deck(
+    model: &Model,
+    case: &LoadCase,
+    title: &str,
+    poisson: f64,
+    path: &Path,
+) -> Result<(), WriteError> {
+    write_atomic(path, |w| {
+        writeln!(w, "*HEADING")?;
+        writeln!(w, "{title}")?;
+        writeln!(w, "*NODE, NSET=NALL")?;
+        for (i, p) in model.nodes.iter().enumerate() {
+            writeln!(w, "{}, {:?}, {:?}, {:?}", i + 1, p.x, p.y, p.z)?;
+        }
+        for (k, m) in model.members.iter().enumerate() {
+            let (a, b) = (model.nodes[m.a], model.nodes[m.b]);
+            for j in 0..2 * SPLIT - 1 {
+                let p = a.lerp(b, (j + 1) as f64 / (2 * SPLIT) as f64);
+                writeln!(
+                    w,
+                    "{}, {:?}, {:?}, {:?}",
+                    inner_node(model, k, j),
+                    p.x,
+                    p.y,
+                    p.z
+                )?;
+            }
+        }
+        let chain = |k: usize, i: usize| -> usize {
+            // The i-th of the member's 2·SPLIT + 1 nodes.
+            let m = &model.members[k];
+            if i == 0 {
+                m.a + 1
+            } else if i == 2 * SPLIT {
+                m.b + 1
+            } else {
+                inner_node(model, k, i - 1)
+            }
+        };
+        for (k, _) in model.members.iter().enumerate() {
+            writeln!(w, "*ELEMENT, TYPE=B32, ELSET=M{}", k + 1)?;
+            for e in 0..SPLIT {
+                writeln!(
+                    w,
+                    "{}, {}, {}, {}",
+                    k * SPLIT + e + 1,
+                    chain(k, 2 * e),
+                    chain(k, 2 * e + 1),
+                    chain(k, 2 * e + 2)
+                )?;
+            }
+        }
+        writeln!(w, "*MATERIAL, NAME=STEEL")?;
+        writeln!(w, "*ELASTIC")?;
+        writeln!(w, "{:?}, {:?}", model.elastic.e, poisson)?;
+        for (k, m) in model.members.iter().enumerate() {
+            let (x, _, _, _) = super::frame::local_frame(model, m);
+            let y = (m.y - x * m.y.dot(x)).normalize();
+            writeln!(
+                w,
+                "*BEAM SECTION, ELSET=M{}, MATERIAL=STEEL, SECTION=RECT",
+                k + 1
+            )?;
+            writeln!(w, "{:?}, {:?}", m.section.depth, m.section.thickness)?;
+            writeln!(w, "{:?}, {:?}, {:?}", y.x, y.y, y.z)?;
+        }
+        writeln!(w, "*NSET, NSET=SUPPORTS")?;
+        for (i, s) in model.supports.iter().enumerate() {
+            if s.is_some() {
+                writeln!(w, "{}", i + 1)?;
+            }
+        }
+        writeln!(w, "*BOUNDARY")?;
+        for (i, s) in model.supports.iter().enumerate() {
+            match s {
+                Some(Support::Fixed) => writeln!(w, "{}, 1, 6", i + 1)?,
+                Some(Support::Pinned) => writeln!(w, "{}, 1, 3", i + 1)?,
+                None => {}
+            }
+        }
+        writeln!(w, "*STEP")?;
+        writeln!(w, "*STATIC")?;
+        writeln!(w, "*CLOAD")?;
+        let mut forces: std::collections::BTreeMap<usize, DVec3> = Default::default();
+        for &(node, f) in &case.nodal {
+            *forces.entry(node + 1).or_default() += DVec3::new(f[0], f[1], f[2]);
+            for (d, v) in f[3..].iter().enumerate() {
+                if *v != 0.0 {
+                    writeln!(w, "{}, {}, {:?}", node + 1, d + 4, v)?;
+                }
+            }
+        }
+        for (k, load) in case.member_loads(model.members.len()).iter().enumerate() {
+            if *load == DVec3::ZERO {
+                continue;
+            }
+            let m = &model.members[k];
+            let share = *load * (model.nodes[m.a].distance(model.nodes[m.b]) / SPLIT as f64);
+            for e in 0..SPLIT {
+                for (i, part) in [
+                    (2 * e, 1.0 / 6.0),
+                    (2 * e + 1, 4.0 / 6.0),
+                    (2 * e + 2, 1.0 / 6.0),
+                ] {
+                    *forces.entry(chain(k, i)).or_default() += share * part;
+                }
+            }
+        }
+        for (node, f) in &forces {
+            for (d, v) in f.to_array().iter().enumerate() {
+                if *v != 0.0 {
+                    writeln!(w, "{}, {}, {:?}", node, d + 1, v)?;
+                }
+            }
+        }
+        writeln!(w, "*NODE PRINT, NSET=NALL")?;
+        writeln!(w, "U")?;
+        writeln!(w, "*NODE PRINT, NSET=SUPPORTS, TOTALS=NO")?;
+        writeln!(w, "RF")?;
+        writeln!(w, "*END STEP")?;
+        Ok(())
+    })
+}

@@ -1,0 +1,227 @@
+//! The sizing report: one self-contained HTML page with SVG views of the structure coloured
+//! by utilisation and by gauge, the deformed shape, and tables.
+
+use std::fmt::Write as _;
+
+use glam::DVec3;
+
+use super::material::Material;
+use super::sizing::Sizing;
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// Green (0) to yellow to red (1 and over).
+fn ramp(t: f64) -> String {
+    let t = t.clamp(0.0, 1.0);
+    let (r, g) = if t < 0.5 {
+        (2.0 * t, 1.0)
+    } else {
+        (1.0, 2.0 * (1.0 - t))
+    };
+    format!(
+        "#{:02x}{:02x}30",
+        (40.0 + 200.0 * r) as u8,
+        (40.0 + 160.0 * g) as u8
+    )
+}
+
+/// Front (x, z) and isometric projections of lines, each with its colour and width.
+fn view(lines: &[(DVec3, DVec3, String, f64)], iso: bool, size: f64) -> String {
+    let project = |p: DVec3| -> (f64, f64) {
+        if iso {
+            let c = std::f64::consts::FRAC_PI_6.cos();
+            ((p.x - p.y) * c, (p.x + p.y) * 0.5 - p.z)
+        } else {
+            (p.x, -p.z)
+        }
+    };
+    let pts: Vec<(f64, f64)> = lines
+        .iter()
+        .flat_map(|(a, b, _, _)| [project(*a), project(*b)])
+        .collect();
+    let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+    for &(x, y) in &pts {
+        lo = (lo.0.min(x), lo.1.min(y));
+        hi = (hi.0.max(x), hi.1.max(y));
+    }
+    let span = (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-9);
+    let k = (size - 20.0) / span;
+    let h = (hi.1 - lo.1) * k + 20.0;
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{size}\" height=\"{h:.0}\" viewBox=\"0 0 {size} {h:.0}\">"
+    );
+    for (a, b, colour, width) in lines {
+        let (pa, pb) = (project(*a), project(*b));
+        let _ = write!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"{colour}\" stroke-width=\"{width}\"/>",
+            (pa.0 - lo.0) * k + 10.0,
+            (pa.1 - lo.1) * k + 10.0,
+            (pb.0 - lo.0) * k + 10.0,
+            (pb.1 - lo.1) * k + 10.0
+        );
+    }
+    s.push_str("</svg>");
+    s
+}
+
+pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
+    let m = &s.model;
+    let total = s.total();
+    let (dnode, dmax) = s.max_displacement();
+    let gmin = s.gauges.iter().copied().fold(f64::MAX, f64::min);
+    let gmax = s.gauges.iter().copied().fold(0.0, f64::max);
+    let by = |f: &dyn Fn(usize) -> (String, f64)| -> Vec<(DVec3, DVec3, String, f64)> {
+        m.members
+            .iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let (c, w) = f(k);
+                (m.nodes[e.a], m.nodes[e.b], c, w)
+            })
+            .collect()
+    };
+    let util = by(&|k| (ramp(s.checks[k].utilisation), 2.0));
+    let gauge = by(&|k| {
+        let t = if gmax > gmin {
+            (s.gauges[k] - gmin) / (gmax - gmin)
+        } else {
+            0.0
+        };
+        (ramp(t), 1.0 + 3.0 * t)
+    });
+    // Deformed: the largest displacement drawn as a tenth of the span.
+    let scale = if dmax > 0.0 { 0.1 * s.span / dmax } else { 0.0 };
+    let moved = |i: usize| {
+        let d = total.displacements[i];
+        m.nodes[i] + DVec3::new(d[0], d[1], d[2]) * scale
+    };
+    let mut deformed: Vec<(DVec3, DVec3, String, f64)> = m
+        .members
+        .iter()
+        .map(|e| (m.nodes[e.a], m.nodes[e.b], "#bbb".to_string(), 1.0))
+        .collect();
+    deformed.extend(
+        m.members
+            .iter()
+            .map(|e| (moved(e.a), moved(e.b), "#1f4fbf".to_string(), 1.5)),
+    );
+    let max_u = s.checks.iter().map(|c| c.utilisation).fold(0.0, f64::max);
+    let max_w = s
+        .welds
+        .iter()
+        .flatten()
+        .map(|c| c.utilisation)
+        .fold(0.0, f64::max);
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Sizing: {src}</title>\
+         <style>body{{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:75em;color:#222}}\
+         table{{border-collapse:collapse}}td,th{{padding:2px 10px;border-bottom:1px solid #ddd;text-align:right}}\
+         .views{{display:flex;flex-wrap:wrap;gap:1em}}figure{{margin:0}}.bad{{color:#a3161a}}</style></head><body>\
+         <h1>Sizing: {src}</h1>",
+        src = esc(source)
+    );
+    let _ = write!(
+        h,
+        "<table><tr><th style=\"text-align:left\">material</th><td>{} (E {} MPa, f<sub>y</sub> {} MPa, f<sub>u</sub> {} MPa, γ<sub>M0</sub> {})</td></tr>\
+         <tr><th style=\"text-align:left\">members / nodes</th><td>{} / {}</td></tr>\
+         <tr><th style=\"text-align:left\">load cases</th><td>{}</td></tr>\
+         <tr><th style=\"text-align:left\">rounds</th><td>{}{}; {} of stiffening</td></tr>\
+         <tr><th style=\"text-align:left\">mass</th><td>{:.2} kg</td></tr>\
+         <tr><th style=\"text-align:left\">largest utilisation (members / welds)</th><td>{:.3} / {:.3}</td></tr>\
+         <tr><th style=\"text-align:left\">largest displacement</th><td>{:.3} mm at node {}{}</td></tr>\
+         <tr><th style=\"text-align:left\">equilibrium residual</th><td>{:.1e}</td></tr></table>",
+        esc(&material.name),
+        material.e,
+        material.fy,
+        material.fu,
+        material.gamma_m0,
+        m.members.len(),
+        m.nodes.len(),
+        s.cases.iter().map(|c| esc(&c.name)).collect::<Vec<_>>().join("; "),
+        s.rounds,
+        if s.converged { "" } else { " (the cap: not settled)" },
+        s.deflection_rounds,
+        s.mass_kg,
+        max_u,
+        max_w,
+        dmax,
+        dnode,
+        s.deflection_limit
+            .map(|l| format!(" (limit {l:.3} mm)"))
+            .unwrap_or_default(),
+        total.residual
+    );
+    h.push_str("<h2>Utilisation</h2><p>Green 0, yellow 0.5, red 1 or more: the larger of the stress and buckling checks over every case.</p><div class=\"views\">");
+    for iso in [false, true] {
+        let _ = write!(
+            h,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            view(&util, iso, 520.0),
+            if iso { "isometric" } else { "front (x, z)" }
+        );
+    }
+    let _ = write!(
+        h,
+        "</div><h2>Gauges</h2><p>From {gmin} mm (green, thin) to {gmax} mm (red, thick).</p><div class=\"views\">"
+    );
+    for iso in [false, true] {
+        let _ = write!(
+            h,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            view(&gauge, iso, 520.0),
+            if iso { "isometric" } else { "front (x, z)" }
+        );
+    }
+    let _ = write!(
+        h,
+        "</div><h2>Deformed shape</h2><p>Under the sum of the loads, displacements × {scale:.3e} (the largest drawn as a tenth of the span); grey undeformed.</p><div class=\"views\">"
+    );
+    for iso in [false, true] {
+        let _ = write!(
+            h,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            view(&deformed, iso, 520.0),
+            if iso { "isometric" } else { "front (x, z)" }
+        );
+    }
+    h.push_str("</div><h2>Most utilised members</h2><table><tr><th>edge</th><th>nodes</th><th>gauge mm</th><th>depth mm</th><th>utilisation</th><th>check</th><th>load</th></tr>");
+    let mut order: Vec<usize> = (0..m.members.len()).collect();
+    order.sort_by(|&a, &b| {
+        s.checks[b]
+            .utilisation
+            .total_cmp(&s.checks[a].utilisation)
+            .then(a.cmp(&b))
+    });
+    for &k in order.iter().take(25) {
+        let c = &s.checks[k];
+        let _ = write!(
+            h,
+            "<tr><td>{k}</td><td>{}–{}</td><td>{}</td><td>{:.1}</td><td{}>{:.3}</td><td>{}</td><td>{}</td></tr>",
+            m.members[k].a,
+            m.members[k].b,
+            s.gauges[k],
+            m.members[k].section.depth,
+            if c.utilisation > 1.0 { " class=\"bad\"" } else { "" },
+            c.utilisation,
+            c.check,
+            esc(&s.cases[c.case].name)
+        );
+    }
+    h.push_str("</table><h2>Reactions</h2><table><tr><th>node</th><th>F<sub>x</sub> N</th><th>F<sub>y</sub> N</th><th>F<sub>z</sub> N</th><th>M<sub>x</sub> N·mm</th><th>M<sub>y</sub> N·mm</th><th>M<sub>z</sub> N·mm</th></tr>");
+    for (node, r) in &total.reactions {
+        let _ = write!(
+            h,
+            "<tr><td>{node}</td><td>{:.2}</td><td>{:.2}</td><td>{:.2}</td><td>{:.0}</td><td>{:.0}</td><td>{:.0}</td></tr>",
+            r[0], r[1], r[2], r[3], r[4], r[5]
+        );
+    }
+    h.push_str("</table></body></html>\n");
+    h
+}

@@ -1,0 +1,174 @@
+//! `lamina size` end to end on the Calyx fixture, `plates --sizing`, and bad input.
+
+mod common;
+
+use common::{fixture, lamina, stderr, TestResult};
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap_or("")
+}
+
+fn calyx_axes(dir: &std::path::Path) -> Result<std::path::PathBuf, Box<dyn std::error::Error>> {
+    let axes = dir.join("axes.json");
+    let net = fixture("networks/calyx_veins.json");
+    let o = lamina(&[
+        "planarize",
+        s(&net),
+        "--fix-normal",
+        "z<1:0,0,1",
+        "-o",
+        s(&axes),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    Ok(axes)
+}
+
+#[test]
+fn calyx_is_sized_repeatably_and_plates_take_the_gauges() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    let sizing = dir.path().join("sizing.json");
+    let args = [
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1",
+        "--load",
+        "self-weight",
+        "--deflection-limit",
+        "L/500",
+        "--material",
+        "1.4404",
+    ];
+    let o = lamina(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let first = std::fs::read(&sizing)?;
+    let o = lamina(&args);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(
+        first,
+        std::fs::read(&sizing)?,
+        "the same inputs give the same bytes"
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&first)?;
+    let totals = &doc["totals"];
+    let limit = totals["deflection_limit"].as_f64().ok_or("limit")?;
+    assert!(totals["max_displacement"].as_f64().ok_or("d")? <= limit);
+    assert!(totals["residual"].as_f64().ok_or("residual")? < 1e-9);
+    let gauges: Vec<f64> = doc["edges"]
+        .as_array()
+        .ok_or("edges")?
+        .iter()
+        .filter_map(|e| e["gauge"].as_f64())
+        .collect();
+    assert_eq!(gauges.len(), 273);
+    assert!(
+        gauges.iter().any(|g| *g > 1.5),
+        "the deflection limit raised some"
+    );
+
+    // plates --sizing: every plate as sized (seam halves from the list adding up to it).
+    let out = dir.path().join("plates");
+    let o = lamina(&["plates", s(&axes), "--sizing", s(&sizing), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let plates: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    for p in plates["plates"].as_array().ok_or("plates")? {
+        let edge = p["edge"].as_u64().ok_or("edge")? as usize;
+        let t = p["thickness"].as_f64().ok_or("t")?;
+        if p["bolted_to"].is_null() {
+            assert_eq!(t, gauges[edge], "plate {}", p["id"]);
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn plates_without_radii_or_a_thickness_refuse_and_say_what_to_give() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    // The same axes without their radii.
+    let mut doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&axes)?)?;
+    for e in doc["edges"].as_array_mut().ok_or("edges")? {
+        e.as_object_mut().ok_or("edge")?.remove("radius");
+    }
+    let bare = dir.path().join("bare.json");
+    std::fs::write(&bare, serde_json::to_string(&doc)?)?;
+    let out = dir.path().join("p");
+    let o = lamina(&["plates", s(&bare), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--sizing"), "{}", stderr(&o));
+    assert!(!out.exists());
+    Ok(())
+}
+
+#[test]
+fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    let out = dir.path().join("s.json");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--load", "self-weight"], "no support"),
+        (vec!["--support", "z<1"], "no load"),
+        (
+            vec!["--support", "z<-5000", "--load", "self-weight"],
+            "no node matches",
+        ),
+        (
+            vec!["--support", "node=0:pinned", "--load", "self-weight"],
+            "mechanism",
+        ),
+        (
+            vec!["--support", "z<1", "--load", "point:node=99999:0,0,-1"],
+            "no node matches",
+        ),
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--material",
+                "s999",
+            ],
+            "unknown material",
+        ),
+        (
+            vec!["--support", "z<1", "--load", "wind:-1:1,0,0"],
+            "pressure",
+        ),
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--gauges",
+                "3,2",
+            ],
+            "ascending",
+        ),
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--deflection-limit",
+                "L/0",
+            ],
+            "L/N",
+        ),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["size", s(&axes), "-o", s(&out)];
+        args.extend_from_slice(&extra);
+        let o = lamina(&args);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{extra:?}: nothing written");
+    }
+    Ok(())
+}

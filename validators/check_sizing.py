@@ -1,0 +1,95 @@
+"""Checks `lamina size` output against the axes it sized, sharing no code with lamina (numpy):
+
+- every gauge is on the sizing's gauge list, every utilisation at most 1 (unless --allow-over);
+- equilibrium: the reactions balance the applied loads, recomputed here from the axes file —
+  self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down —
+  in force and in moment about the origin, to 1e-9 of the load;
+- `--lower-thicker`: the mean gauge of the lowest third of the members (by mid-height) is above
+  that of the highest third (Calyx's observation of its own structural analysis).
+
+    check_sizing.py axes.json sizing.json --self-weight [--lower-thicker]
+"""
+import argparse
+import json
+import sys
+
+import numpy as np
+
+G = 9.80665
+
+
+def fail(msg):
+    print(f"check_sizing: FAILED: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("axes")
+    ap.add_argument("sizing")
+    ap.add_argument("--self-weight", action="store_true", help="the only load was self-weight")
+    ap.add_argument("--lower-thicker", action="store_true")
+    args = ap.parse_args()
+    axes = json.load(open(args.axes))
+    s = json.load(open(args.sizing))
+    nodes = axes["nodes"]
+    edges = axes["edges"]
+    if len(s["edges"]) != len(edges):
+        fail(f"{len(s['edges'])} sized edges for {len(edges)} axes edges")
+    gauges = set(s["gauges"])
+    for k, e in enumerate(s["edges"]):
+        if e["gauge"] not in gauges:
+            fail(f"edge {k}: gauge {e['gauge']} is not on the list {sorted(gauges)}")
+        if (e["a"], e["b"]) != (edges[k]["a"], edges[k]["b"]):
+            fail(f"edge {k}: nodes {e['a']}-{e['b']}, the axes say {edges[k]['a']}-{edges[k]['b']}")
+    worst = max(e["utilisation"] for e in s["edges"])
+    if worst > 1.0:
+        fail(f"a member is utilised {worst:.3f} > 1")
+
+    # Applied loads and where they act, from the axes alone.
+    p = np.array([n["p"] for n in nodes], dtype=float)
+    d = np.array([n["axis"] for n in nodes], dtype=float)
+    h = np.array([n["height"] for n in nodes], dtype=float)
+    mid = p + d * (h[:, None] / 2.0)
+    force = np.zeros(3)
+    moment = np.zeros(3)
+    if args.self_weight:
+        rho = s["material"]["density"] * 1e-6  # kg/mm³
+        for k, e in enumerate(edges):
+            a, b = e["a"], e["b"]
+            quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
+            area = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[1]))
+            weight = area * s["edges"][k]["gauge"] * rho * G
+            f = np.array([0.0, 0.0, -weight])
+            # A uniform load along the member: its resultant at the member's middle.
+            centre = 0.5 * (mid[a] + mid[b])
+            force += f
+            moment += np.cross(centre, f)
+    scale = max(np.linalg.norm(force), 1e-300)
+    rf = np.zeros(3)
+    rm = np.zeros(3)
+    for r in s["reactions"]:
+        f = np.array(r["force"])
+        rf += f
+        rm += np.array(r["moment"]) + np.cross(mid[r["node"]], f)
+    size = np.ptp(mid, axis=0).max()
+    if np.linalg.norm(rf + force) > 1e-9 * scale:
+        fail(f"reactions {rf} do not balance the loads {force}")
+    if np.linalg.norm(rm + moment) > 1e-9 * scale * size:
+        fail(f"reaction moments {rm} do not balance the loads' {moment}")
+    line = (f"{args.sizing}: ok ({len(edges)} members, gauges on the list, utilisation at most "
+            f"{worst:.3f}, reactions balance {np.linalg.norm(force):.2f} N to "
+            f"{np.linalg.norm(rf + force) / scale:.1e}")
+    if args.lower_thicker:
+        z = np.array([0.5 * (mid[e["a"]][2] + mid[e["b"]][2]) for e in edges])
+        order = np.argsort(z, kind="stable")
+        third = len(order) // 3
+        g = np.array([e["gauge"] for e in s["edges"]])
+        low, high = g[order[:third]].mean(), g[order[-third:]].mean()
+        if not low > high:
+            fail(f"the lowest third's mean gauge {low:.3f} mm is not above the highest's {high:.3f}")
+        line += f"; mean gauge lowest third {low:.3f} mm, highest {high:.3f} mm"
+    print(line + ")")
+
+
+main()
