@@ -78,8 +78,7 @@ pub fn write_deck(
         writeln!(w, "*ELASTIC")?;
         writeln!(w, "{:?}, {:?}", model.elastic.e, poisson)?;
         for (k, m) in model.members.iter().enumerate() {
-            let (x, _, _, _) = super::frame::local_frame(model, m);
-            let y = (m.y - x * m.y.dot(x)).normalize();
+            let (_, y, _, _) = super::frame::local_frame(model, m);
             writeln!(
                 w,
                 "*BEAM SECTION, ELSET=M{}, MATERIAL=STEEL, SECTION=RECT",

@@ -467,7 +467,7 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
             .iter()
             .map(|c| {
                 let w = c.member_loads(model.members.len());
-                results(model, &members, c, &w, &vec![[0.0; 6]; n])
+                results(model, &members, c, &w, &vec![[0.0; 6]; n], &dof, 0.0)
             })
             .collect());
     }
@@ -534,54 +534,23 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
                 }
             }
         }
-        let mut res = results(model, &members, case, &w, &u);
-        // Out of balance at the free freedoms: K u − F, from the member end forces.
-        let mut unbalanced = vec![0.0; free];
-        let mut scale = 0.0f64;
-        for r in 0..free {
-            unbalanced[r] = -loads[(r, c)];
-            scale = scale.max(loads[(r, c)].abs());
-        }
-        for (mi, m) in model.members.iter().enumerate() {
-            let (x, y, z, _, _) = members[mi];
-            let f = &res.end_forces[mi];
-            let fixed = equivalent_loads(to_local(x, y, z, w[mi]), members[mi].3);
-            for end in 0..2 {
-                let node = if end == 0 { m.a } else { m.b };
-                for part in 0..2 {
-                    let o = end * 6 + part * 3;
-                    let v = to_global(
-                        x,
-                        y,
-                        z,
-                        DVec3::new(
-                            f[o] + fixed[o],
-                            f[o + 1] + fixed[o + 1],
-                            f[o + 2] + fixed[o + 2],
-                        ),
-                    );
-                    for (q, val) in v.to_array().iter().enumerate() {
-                        let r = dof[6 * node + part * 3 + q];
-                        if r != usize::MAX {
-                            unbalanced[r] += val;
-                        }
-                    }
-                }
-            }
-        }
-        res.residual = unbalanced.iter().fold(0.0f64, |a, v| a.max(v.abs())) / scale.max(1e-300);
-        out.push(res);
+        let scale = (0..free).fold(0.0f64, |a, r| a.max(loads[(r, c)].abs()));
+        out.push(results(model, &members, case, &w, &u, &dof, scale));
     }
     Ok(out)
 }
 
-/// End forces (k u − equivalent loads, local) and reactions for one case.
+/// End forces (k u − equivalent loads, local), reactions and the residual for one case: at
+/// each joint Σ f − F is the reaction where a freedom is held and is out of balance (over
+/// `scale`, the largest load) where it is free.
 fn results(
     model: &Model,
     members: &[Prepared],
     case: &LoadCase,
     w: &[DVec3],
     u: &[[f64; 6]],
+    dof: &[usize],
+    scale: f64,
 ) -> CaseResult {
     let n = model.nodes.len();
     let mut end_forces = Vec::with_capacity(model.members.len());
@@ -632,22 +601,26 @@ fn results(
             nodal[node][d] += f[d];
         }
     }
-    let reactions = (0..n)
-        .filter(|&i| model.supports[i].is_some())
-        .map(|i| {
-            // Joint equilibrium: reaction + nodal load = what the members take at the joint.
-            let mut r = [0.0; 6];
-            for d in 0..6 {
-                r[d] = at_node[i][d] - nodal[i][d];
+    // Joint equilibrium: reaction + nodal load = what the members take at the joint.
+    let mut unbalanced = 0.0f64;
+    let mut reactions = Vec::new();
+    for i in 0..n {
+        let mut r = [0.0; 6];
+        for d in 0..6 {
+            r[d] = at_node[i][d] - nodal[i][d];
+            if dof[6 * i + d] != usize::MAX {
+                unbalanced = unbalanced.max(r[d].abs());
             }
-            (i, r)
-        })
-        .collect();
+        }
+        if model.supports[i].is_some() {
+            reactions.push((i, r));
+        }
+    }
     CaseResult {
         displacements: u.to_vec(),
         end_forces,
         reactions,
-        residual: 0.0,
+        residual: unbalanced / scale.max(1e-300),
     }
 }
 

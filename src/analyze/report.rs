@@ -110,13 +110,7 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
             .iter()
             .map(|e| (moved(e.a), moved(e.b), "#1f4fbf".to_string(), 1.5)),
     );
-    let max_u = s.checks.iter().map(|c| c.utilisation).fold(0.0, f64::max);
-    let max_w = s
-        .welds
-        .iter()
-        .flatten()
-        .map(|c| c.utilisation)
-        .fold(0.0, f64::max);
+    let (max_u, max_w) = (s.max_utilisation(), s.max_weld_utilisation());
     let mut h = String::new();
     let _ = write!(
         h,

@@ -217,13 +217,26 @@ impl Sizing {
         self.results.last().expect("at least one case")
     }
 
+    /// The node moving most under the sum of the loads, and how far, mm.
     pub fn max_displacement(&self) -> (usize, f64) {
-        self.total()
-            .displacements
+        max_displacement(self.total())
+    }
+
+    /// The largest member utilisation.
+    pub fn max_utilisation(&self) -> f64 {
+        self.checks
             .iter()
-            .enumerate()
-            .map(|(i, d)| (i, DVec3::new(d[0], d[1], d[2]).length()))
-            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
+            .map(|c| c.utilisation)
+            .fold(0.0, f64::max)
+    }
+
+    /// The largest weld utilisation.
+    pub fn max_weld_utilisation(&self) -> f64 {
+        self.welds
+            .iter()
+            .flatten()
+            .map(|c| c.utilisation)
+            .fold(0.0, f64::max)
     }
 }
 
@@ -271,7 +284,7 @@ pub fn build(
             }
         }
         if !used {
-            return Err(SizingError::SupportUnused(format!("{sel:?}")));
+            return Err(SizingError::SupportUnused(sel.to_string()));
         }
     }
     Ok(Model {

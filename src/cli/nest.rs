@@ -163,6 +163,11 @@ pub struct Joints {
 }
 
 impl Joints {
+    /// Whether a plate (its outline in its own frame) is small enough to get joints.
+    fn applies(&self, outline: &[DVec2]) -> bool {
+        size(outline).max_element() < self.below
+    }
+
     /// Kept from corners, the pierce point and each other, mm.
     fn clear(&self) -> f64 {
         (2.0 * self.width).max(2.0)
@@ -520,9 +525,7 @@ fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>, joints: Option<Jo
         leads.push([pierce, pierce + (out + along).normalize() * l]);
     }
     let joints = match joints {
-        Some(j) if size(&p.outline).max_element() < j.below => {
-            place_joints(&outline, j.per_part, j.width, j.clear())
-        }
+        Some(j) if j.applies(&p.outline) => place_joints(&outline, j.per_part, j.width, j.clear()),
         _ => Vec::new(),
     };
     Drawn {
@@ -841,16 +844,12 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(j) = out.joints {
-        let small = out
-            .plates
-            .iter()
-            .filter(|p| size(&p.outline).max_element() < j.below)
-            .count();
+        let small = out.plates.iter().filter(|p| j.applies(&p.outline)).count();
         let short = out
             .joint_counts
             .iter()
             .zip(&out.plates)
-            .filter(|(&n, p)| n < j.per_part && size(&p.outline).max_element() < j.below)
+            .filter(|(&n, p)| n < j.per_part && j.applies(&p.outline))
             .count();
         println!(
             "  micro-joints: {} on {small} part(s) under {} mm, {} mm wide{}; no assembly.scad (OpenSCAD drops open contours: the plates folder's rebuilds from the part DXFs)",

@@ -151,17 +151,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         max_rounds: args.max_rounds,
     };
     let sizing = size(&axes, &opts).with_context(|| format!("{}", args.input.display()))?;
-    let max_u = sizing
-        .checks
-        .iter()
-        .map(|c| c.utilisation)
-        .fold(0.0, f64::max);
-    let max_w = sizing
-        .welds
-        .iter()
-        .flatten()
-        .map(|c| c.utilisation)
-        .fold(0.0, f64::max);
+    let (max_u, max_w) = (sizing.max_utilisation(), sizing.max_weld_utilisation());
     let (_, max_d) = sizing.max_displacement();
     let deflection_ok = sizing.deflection_limit.is_none_or(|l| max_d <= l);
     let ok = max_u <= 1.0 && max_w <= 1.0 && deflection_ok;
@@ -197,13 +187,7 @@ fn v3(v: DVec3) -> [f64; 3] {
 
 fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_json::Value> {
     let total = s.total();
-    let max_u = s.checks.iter().map(|c| c.utilisation).fold(0.0, f64::max);
-    let max_w = s
-        .welds
-        .iter()
-        .flatten()
-        .map(|c| c.utilisation)
-        .fold(0.0, f64::max);
+    let (max_u, max_w) = (s.max_utilisation(), s.max_weld_utilisation());
     let (dnode, dmax) = s.max_displacement();
     let edges: Vec<serde_json::Value> = s
         .model
@@ -261,7 +245,7 @@ fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_js
         "gauges": opts.gauges,
         "group_by": match opts.group_by { GroupBy::Member => "member", GroupBy::Chain => "chain" },
         "smooth": opts.smooth,
-        "supports": args.support.iter().map(|(sel, k)| format!("{sel:?}: {k:?}")).collect::<Vec<_>>(),
+        "supports": args.support.iter().map(|(sel, k)| format!("{sel}: {k:?}")).collect::<Vec<_>>(),
         "cases": s.cases.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
         "definitions": {
             "model": "a node at mid-height of each node axis (the panels' centroid line), a member per edge with a solid rectangle: depth the panel height across the member (local y, in the panel plane), thickness the gauge (local z, the panel normal); rigid joints; linear elastic, Timoshenko beams",
@@ -293,13 +277,7 @@ fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_js
 pub fn run(args: Args) -> Result<bool> {
     let out = execute(&args)?;
     let s = &out.sizing;
-    let max_u = s.checks.iter().map(|c| c.utilisation).fold(0.0, f64::max);
-    let max_w = s
-        .welds
-        .iter()
-        .flatten()
-        .map(|c| c.utilisation)
-        .fold(0.0, f64::max);
+    let (max_u, max_w) = (s.max_utilisation(), s.max_weld_utilisation());
     let (node, d) = s.max_displacement();
     if args.json {
         println!(

@@ -110,6 +110,25 @@ impl Selector {
     }
 }
 
+/// As it is written on the command line.
+impl std::fmt::Display for Selector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Selector::All => write!(f, "all"),
+            Selector::Node(n) => write!(f, "node={n}"),
+            Selector::Coord { axis, op, value } => {
+                let op = match op {
+                    Cmp::Lt => "<",
+                    Cmp::Le => "<=",
+                    Cmp::Gt => ">",
+                    Cmp::Ge => ">=",
+                };
+                write!(f, "{}{op}{value}", ["x", "y", "z"][*axis])
+            }
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct PlanarizeOptions {
     pub method: Method,
