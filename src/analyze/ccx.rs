@@ -22,6 +22,17 @@ pub fn inner_node(model: &Model, k: usize, j: usize) -> usize {
     model.nodes.len() + 1 + k * (2 * SPLIT - 1) + j
 }
 
+/// A number for a deck field: CalculiX reads at most 20 characters a field, so the shortest
+/// exact form where it fits, else 12 significant digits.
+fn num(x: f64) -> String {
+    let exact = format!("{x:?}");
+    if exact.len() <= 20 {
+        exact
+    } else {
+        format!("{x:.11e}")
+    }
+}
+
 pub fn write_deck(
     model: &Model,
     case: &LoadCase,
@@ -34,7 +45,7 @@ pub fn write_deck(
         writeln!(w, "{title}")?;
         writeln!(w, "*NODE, NSET=NALL")?;
         for (i, p) in model.nodes.iter().enumerate() {
-            writeln!(w, "{}, {:?}, {:?}, {:?}", i + 1, p.x, p.y, p.z)?;
+            writeln!(w, "{}, {}, {}, {}", i + 1, num(p.x), num(p.y), num(p.z))?;
         }
         for (k, m) in model.members.iter().enumerate() {
             let (a, b) = (model.nodes[m.a], model.nodes[m.b]);
@@ -42,11 +53,11 @@ pub fn write_deck(
                 let p = a.lerp(b, (j + 1) as f64 / (2 * SPLIT) as f64);
                 writeln!(
                     w,
-                    "{}, {:?}, {:?}, {:?}",
+                    "{}, {}, {}, {}",
                     inner_node(model, k, j),
-                    p.x,
-                    p.y,
-                    p.z
+                    num(p.x),
+                    num(p.y),
+                    num(p.z)
                 )?;
             }
         }
@@ -76,7 +87,7 @@ pub fn write_deck(
         }
         writeln!(w, "*MATERIAL, NAME=STEEL")?;
         writeln!(w, "*ELASTIC")?;
-        writeln!(w, "{:?}, {:?}", model.elastic.e, poisson)?;
+        writeln!(w, "{}, {}", num(model.elastic.e), num(poisson))?;
         for (k, m) in model.members.iter().enumerate() {
             let (_, y, _, _) = super::frame::local_frame(model, m);
             writeln!(
@@ -84,8 +95,8 @@ pub fn write_deck(
                 "*BEAM SECTION, ELSET=M{}, MATERIAL=STEEL, SECTION=RECT",
                 k + 1
             )?;
-            writeln!(w, "{:?}, {:?}", m.section.depth, m.section.thickness)?;
-            writeln!(w, "{:?}, {:?}, {:?}", y.x, y.y, y.z)?;
+            writeln!(w, "{}, {}", num(m.section.depth), num(m.section.thickness))?;
+            writeln!(w, "{}, {}, {}", num(y.x), num(y.y), num(y.z))?;
         }
         writeln!(w, "*NSET, NSET=SUPPORTS")?;
         for (i, s) in model.supports.iter().enumerate() {
@@ -109,7 +120,7 @@ pub fn write_deck(
             *forces.entry(node + 1).or_default() += DVec3::new(f[0], f[1], f[2]);
             for (d, v) in f[3..].iter().enumerate() {
                 if *v != 0.0 {
-                    writeln!(w, "{}, {}, {:?}", node + 1, d + 4, v)?;
+                    writeln!(w, "{}, {}, {}", node + 1, d + 4, num(*v))?;
                 }
             }
         }
@@ -132,15 +143,39 @@ pub fn write_deck(
         for (node, f) in &forces {
             for (d, v) in f.to_array().iter().enumerate() {
                 if *v != 0.0 {
-                    writeln!(w, "{}, {}, {:?}", node, d + 1, v)?;
+                    writeln!(w, "{}, {}, {}", node, d + 1, num(*v))?;
                 }
             }
         }
         writeln!(w, "*NODE PRINT, NSET=NALL")?;
         writeln!(w, "U")?;
-        writeln!(w, "*NODE PRINT, NSET=SUPPORTS, TOTALS=NO")?;
+        writeln!(w, "*NODE PRINT, NSET=SUPPORTS")?;
         writeln!(w, "RF")?;
         writeln!(w, "*END STEP")?;
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn deck_numbers_fit_calculix_fields() {
+        for x in [
+            0.0,
+            -1.0,
+            1e-300,
+            -3.6465070201051283e-16,
+            123456.78901234567,
+            -0.5000000000000002,
+            f64::MAX,
+        ] {
+            let s = num(x);
+            assert!(s.len() <= 20, "{s}");
+            let back: f64 = s.parse().unwrap();
+            assert!((back - x).abs() <= 1e-11 * x.abs(), "{s} for {x:?}");
+        }
+        assert_eq!(num(0.25), "0.25");
+    }
 }
