@@ -10,7 +10,7 @@
 //! per length, global directions); one factorisation solves every case.
 
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Side};
 use glam::DVec3;
 use thiserror::Error;
@@ -393,6 +393,115 @@ fn spans_a_plane(points: &[DVec3]) -> bool {
 }
 
 /// Solves every case with one factorisation.
+/// The lower triangle of the stiffness in compressed columns, summed in place (no triplets to
+/// sort: on 100,000 members sorting 7.8 million of them took a quarter of the analysis).
+/// Freedoms are numbered node by node, so a free freedom's column holds its own node's later
+/// freedoms, then every free freedom of each neighbour with a higher number, in node order.
+fn assemble(
+    model: &Model,
+    members: &[Prepared],
+    dof: &[usize],
+    free: usize,
+) -> Result<SparseColMat<usize, f64>, FrameError> {
+    let n = model.nodes.len();
+    let count = |i: usize| (0..6).filter(|&d| dof[6 * i + d] != usize::MAX).count();
+    let first = |i: usize| (0..6).map(|d| dof[6 * i + d]).find(|&d| d != usize::MAX);
+    // Each node's higher neighbours, sorted, as one list with a start per node.
+    let mut pairs: Vec<(usize, usize)> = model
+        .members
+        .iter()
+        .map(|m| (m.a.min(m.b), m.a.max(m.b)))
+        .filter(|&(i, j)| count(i) > 0 && count(j) > 0)
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut start = vec![0usize; n + 1];
+    for &(i, _) in &pairs {
+        start[i + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    // Where each neighbour's rows begin within its node's columns, after the node's own rows.
+    let mut offset = vec![0usize; pairs.len()];
+    let mut below = vec![0usize; n];
+    for i in 0..n {
+        let mut o = 0;
+        for p in start[i]..start[i + 1] {
+            offset[p] = o;
+            o += count(pairs[p].1);
+        }
+        below[i] = o;
+    }
+    let mut col_ptr = Vec::new();
+    col_ptr
+        .try_reserve(free + 1)
+        .map_err(|_| FrameError::OutOfMemory)?;
+    col_ptr.push(0usize);
+    for i in 0..n {
+        let own = count(i);
+        for q in 0..own {
+            let last = *col_ptr.last().expect("a start");
+            col_ptr.push(last + (own - q) + below[i]);
+        }
+    }
+    let nnz = col_ptr[free];
+    let mut row_idx = Vec::new();
+    let mut values = Vec::new();
+    row_idx
+        .try_reserve_exact(nnz)
+        .map_err(|_| FrameError::OutOfMemory)?;
+    values
+        .try_reserve_exact(nnz)
+        .map_err(|_| FrameError::OutOfMemory)?;
+    for i in 0..n {
+        let (own, Some(f)) = (count(i), first(i)) else {
+            continue;
+        };
+        for q in 0..own {
+            row_idx.extend(f + q..f + own);
+            for &(_, j) in &pairs[start[i]..start[i + 1]] {
+                let fj = first(j).expect("a free neighbour");
+                row_idx.extend(fj..fj + count(j));
+            }
+        }
+    }
+    values.resize(nnz, 0.0);
+    // Entry (r, c), r ≥ c: in column c (a freedom of node nj), below nj's own rows when r is
+    // a neighbour ni's.
+    for (m, (x, y, z, _, k)) in model.members.iter().zip(members) {
+        let g = global_stiffness(k, *x, *y, *z);
+        let ends = [m.a, m.b];
+        for (i, row) in g.iter().enumerate() {
+            let (ni, ri) = (ends[i / 6], dof[6 * ends[i / 6] + i % 6]);
+            if ri == usize::MAX {
+                continue;
+            }
+            for (j, gij) in row.iter().enumerate() {
+                let (nj, cj) = (ends[j / 6], dof[6 * ends[j / 6] + j % 6]);
+                if cj == usize::MAX || ri < cj {
+                    continue;
+                }
+                let base = first(nj).expect("a free freedom");
+                let col_start = col_ptr[cj];
+                let at = if ni == nj {
+                    ri - cj
+                } else {
+                    let p = start[nj]
+                        + pairs[start[nj]..start[nj + 1]]
+                            .binary_search(&(nj, ni))
+                            .expect("a neighbour");
+                    let own_rest = count(nj) - (cj - base);
+                    own_rest + offset[p] + (ri - first(ni).expect("a free freedom"))
+                };
+                values[col_start + at] += gij;
+            }
+        }
+    }
+    let symbolic = SymbolicSparseColMat::new_checked(free, free, col_ptr, None, row_idx);
+    Ok(SparseColMat::new(symbolic, values))
+}
+
 pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, FrameError> {
     check(model)?;
     let n = model.nodes.len();
@@ -431,27 +540,6 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
             (x, y, z, l, k)
         })
         .collect();
-    let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
-    triplets
-        .try_reserve(model.members.len() * 78 + free)
-        .map_err(|_| FrameError::OutOfMemory)?;
-    for (m, (x, y, z, _, k)) in model.members.iter().zip(&members) {
-        let g = global_stiffness(k, *x, *y, *z);
-        let at = |i: usize| dof[6 * if i < 6 { m.a } else { m.b } + i % 6];
-        for (i, row) in g.iter().enumerate() {
-            let ri = at(i);
-            if ri == usize::MAX {
-                continue;
-            }
-            for (j, gij) in row.iter().enumerate() {
-                let cj = at(j);
-                if cj == usize::MAX || ri < cj || *gij == 0.0 {
-                    continue;
-                }
-                triplets.push(Triplet::new(ri, cj, *gij));
-            }
-        }
-    }
     let owner: Vec<usize> = {
         let mut o = vec![0; free];
         for (k, &d) in dof.iter().enumerate() {
@@ -471,9 +559,7 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
             })
             .collect());
     }
-    let k = SparseColMat::<usize, f64>::try_new_from_triplets(free, free, &triplets)
-        .map_err(|_| FrameError::OutOfMemory)?;
-    drop(triplets);
+    let k = assemble(model, &members, &dof, free)?;
     let llt = k.sp_cholesky(Side::Lower).map_err(|e| match e {
         faer::sparse::linalg::LltError::Numeric(
             faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index },
