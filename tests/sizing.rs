@@ -86,6 +86,75 @@ fn calyx_is_sized_repeatably_and_plates_take_the_gauges() -> TestResult {
 }
 
 #[test]
+fn assembly_groups_get_one_gauge_each_as_plates_groups_them() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    let sizing = dir.path().join("sizing.json");
+    let o = lamina(&[
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1",
+        "--load",
+        "self-weight",
+        "--deflection-limit",
+        "L/500",
+        "--material",
+        "s355",
+        "--group-by",
+        "assembly",
+        "--groups",
+        "5",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&sizing)?)?;
+    assert_eq!(doc["group_by"]["assembly"], 5);
+    let gauges: Vec<f64> = doc["edges"]
+        .as_array()
+        .ok_or("edges")?
+        .iter()
+        .filter_map(|e| e["gauge"].as_f64())
+        .collect();
+    // plates --groups 5 makes the same groups: inside each, one gauge; seams by pair of groups.
+    let out = dir.path().join("plates");
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&sizing),
+        "--groups",
+        "5",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let plates: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let mut by_group: std::collections::BTreeMap<u64, f64> = Default::default();
+    let mut inner = 0;
+    for p in plates["plates"].as_array().ok_or("plates")? {
+        if !p["bolted_to"].is_null() {
+            continue;
+        }
+        inner += 1;
+        let g = gauges[p["edge"].as_u64().ok_or("edge")? as usize];
+        let group = p["group"].as_u64().ok_or("group")?;
+        let first = *by_group.entry(group).or_insert(g);
+        assert_eq!(first, g, "group {group} has gauges {first} and {g}");
+    }
+    assert!(
+        inner > 200 && by_group.len() == 5,
+        "{inner} plates in {} groups",
+        by_group.len()
+    );
+    let distinct: std::collections::BTreeSet<u64> = gauges.iter().map(|g| g.to_bits()).collect();
+    assert!(distinct.len() > 1, "the analysis told the groups apart");
+    Ok(())
+}
+
+#[test]
 fn plates_without_radii_or_a_thickness_refuse_and_say_what_to_give() -> TestResult {
     let dir = tempfile::tempdir()?;
     let axes = calyx_axes(dir.path())?;

@@ -30,6 +30,7 @@ use thiserror::Error;
 use super::frame::{self, CaseResult, Elastic, FrameError, LoadCase, Member, Model, Section};
 use super::material::Material;
 use crate::rationalize::axes::Axes;
+use crate::rationalize::groups::{partition, GroupError};
 use crate::rationalize::planarize::Selector;
 
 pub use super::frame::Support;
@@ -119,6 +120,9 @@ pub enum GroupBy {
     Member,
     /// Runs of members through nodes with two members.
     Chain,
+    /// The assembly groups `plates --groups K` makes (the same partition of the nodes): the
+    /// members inside each group together, and the seam members between each pair of groups.
+    Assembly(usize),
 }
 
 /// A limit on the largest displacement under the sum of the loads.
@@ -180,6 +184,8 @@ pub enum SizingError {
     BadNode(usize),
     #[error(transparent)]
     Frame(#[from] FrameError),
+    #[error("--group-by assembly: {0}")]
+    Groups(#[from] GroupError),
 }
 
 /// Per member and case, what governs.
@@ -479,10 +485,24 @@ fn weld_checks(
 }
 
 /// Groups of members sized together: a group number per member.
-pub fn groups(model: &Model, by: GroupBy) -> Vec<usize> {
+pub fn groups(axes: &Axes, model: &Model, by: GroupBy) -> Result<Vec<usize>, SizingError> {
     let m = model.members.len();
-    match by {
+    Ok(match by {
         GroupBy::Member => (0..m).collect(),
+        GroupBy::Assembly(k) => {
+            let node_group = partition(&axes.positions, &axes.edges, k)?;
+            let mut number = std::collections::BTreeMap::new();
+            model
+                .members
+                .iter()
+                .map(|mm| {
+                    let (ga, gb) = (node_group[mm.a], node_group[mm.b]);
+                    let key = (ga.min(gb), ga.max(gb));
+                    let next = number.len();
+                    *number.entry(key).or_insert(next)
+                })
+                .collect()
+        }
         GroupBy::Chain => {
             let mut degree = vec![0usize; model.nodes.len()];
             for mm in &model.members {
@@ -520,7 +540,7 @@ pub fn groups(model: &Model, by: GroupBy) -> Vec<usize> {
             }
             group
         }
-    }
+    })
 }
 
 /// Analyses with the given gauges and checks every member in every case.
@@ -600,7 +620,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     let mut level = vec![0usize; axes.edges.len()];
     let gauges_of = |level: &[usize]| level.iter().map(|&i| g[i]).collect::<Vec<f64>>();
     let (mut model, mut cases, mut results, _) = analyse(axes, &gauges_of(&level), opts)?;
-    let group = groups(&model, opts.group_by);
+    let group = groups(axes, &model, opts.group_by)?;
     let n_groups = group.iter().copied().max().map_or(0, |m| m + 1);
     let mut rounds = 1;
     let mut converged = false;

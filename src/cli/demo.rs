@@ -21,6 +21,8 @@ use super::info::summary;
 use super::input::{load, Loaded, ReadArgs};
 use super::planarize::{MethodArg, ReportArgs};
 use glam::{DVec2, DVec3};
+use lamina::analyze::frame::Support;
+use lamina::analyze::sizing::{DeflectionLimit, GroupBy};
 use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
 use lamina::grow::geodesic::{self, grow_veins, Incremental, MeshGraph, VeinOptions};
@@ -30,7 +32,7 @@ use lamina::grow::surface::{self, grow_on_surface, Channel, SurfaceOptions};
 use lamina::grow::venation::{Frame, Mode, Observer};
 use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_mesh, Stroke3};
 use lamina::network::io::{write_network, RenderOptions};
-use lamina::rationalize::plates::EdgeSelector;
+use lamina::rationalize::planarize::Selector;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -363,12 +365,32 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
 /// by vein radius), nested on 3000 × 1500 sheets per thickness.
 fn steel(out: &Path) -> Result<Entry> {
     let dir = out.join("calyx");
+    let sized = super::size::execute(&super::size::Args {
+        input: dir.join("lbfgs-axes.json"),
+        output: dir.join("sizing.json"),
+        material: Some("1.4404".into()),
+        gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0],
+        support: vec![(
+            Selector::parse("z<1").map_err(anyhow::Error::msg)?,
+            Support::Fixed,
+        )],
+        load: vec!["self-weight".into()],
+        deflection_limit: Some(DeflectionLimit::Ratio(500.0)),
+        group_by: GroupBy::Member,
+        groups: None,
+        smooth: true,
+        throat: 0.7,
+        max_rounds: 20,
+        html: Some(dir.join("sizing.html")),
+        export_ccx: Some(dir.join("sizing.inp")),
+        json: false,
+    })?;
     let plates = super::plates::execute(&super::plates::Args {
         input: dir.join("lbfgs-axes.json"),
-        gauges: Some(vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0]),
-        sizing: None,
+        gauges: None,
+        sizing: Some(dir.join("sizing.json")),
         thickness: None,
-        edge_thickness: vec![(EdgeSelector::parse("z<1").map_err(anyhow::Error::msg)?, 6.0)],
+        edge_thickness: vec![],
         weld_gap: 1.0,
         weld_gap_tolerance: 0.5,
         node_core: Some(
@@ -422,7 +444,32 @@ fn steel(out: &Path) -> Result<Entry> {
         .iter()
         .map(|q| q.area() * q.thickness * super::nest::DENSITY * 1e-6)
         .sum();
+    let sz = &sized.sizing;
+    let (_, dmax) = sz.max_displacement();
+    let lower_upper = {
+        let mid: Vec<f64> = sz
+            .model
+            .members
+            .iter()
+            .map(|m| 0.5 * (sz.model.nodes[m.a].z + sz.model.nodes[m.b].z))
+            .collect();
+        let mut order: Vec<usize> = (0..mid.len()).collect();
+        order.sort_by(|&a, &b| mid[a].total_cmp(&mid[b]));
+        let third = order.len() / 3;
+        let mean = |ks: &[usize]| ks.iter().map(|&k| sz.gauges[k]).sum::<f64>() / ks.len() as f64;
+        (mean(&order[..third]), mean(&order[order.len() - third..]))
+    };
     let mut facts = format!(
+        "Sized by `lamina size` under self-weight with the base fixed and a deflection limit of          L/500: {} stress round(s), {} deflection round(s), largest displacement {dmax:.2} mm,          utilisation at most {:.2}, welds at most {:.2}; mean gauge {:.2} mm in the lower third          of the members, {:.2} mm in the upper third. ",
+        sz.rounds,
+        sz.deflection_rounds,
+        sz.max_utilisation(),
+        sz.max_weld_utilisation(),
+        lower_upper.0,
+        lower_upper.1
+    );
+    let _ = write!(
+        facts,
         "{} plates in 7 groups, {seams} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
         p.len(),
         p.iter()
@@ -457,6 +504,9 @@ fn steel(out: &Path) -> Result<Entry> {
         per.join("; ")
     );
     let mut outputs: Vec<String> = [
+        "sizing.html",
+        "sizing.json",
+        "sizing.inp",
         "plates/welds.html",
         "plates/welds.json",
         "plates/plates.json",
@@ -474,7 +524,7 @@ fn steel(out: &Path) -> Result<Entry> {
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
     Ok(Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
-        about: "`lamina plates` on the L-BFGS axes (gauges 1.5–6 mm by vein radius, the base                 ring at 6 mm with `--edge-thickness 'z<1:6'`, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
+        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth`: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

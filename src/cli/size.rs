@@ -44,10 +44,14 @@ pub struct Args {
     /// horizontal extent) or mm; gauges are raised until it holds
     #[arg(long, value_parser = DeflectionLimit::parse)]
     pub deflection_limit: Option<DeflectionLimit>,
-    /// Members sized together: each `member`, or each `chain` (runs through nodes with two
-    /// members)
+    /// Members sized together: each `member`, each `chain` (runs through nodes with two
+    /// members), or each `assembly` group of `--groups K` (the groups `plates --groups K`
+    /// makes; the seam members between two groups together)
     #[arg(long, default_value = "member", value_parser = parse_group_by)]
     pub group_by: GroupBy,
+    /// Assembly groups for `--group-by assembly`, as `plates --groups`
+    #[arg(long)]
+    pub groups: Option<usize>,
     /// Neighbouring members within one gauge step (thinner ones raised)
     #[arg(long)]
     pub smooth: bool,
@@ -84,7 +88,8 @@ fn parse_group_by(s: &str) -> Result<GroupBy, String> {
     match s {
         "member" => Ok(GroupBy::Member),
         "chain" => Ok(GroupBy::Chain),
-        _ => Err(format!("`{s}`: give member or chain")),
+        "assembly" => Ok(GroupBy::Assembly(0)),
+        _ => Err(format!("`{s}`: give member, chain or assembly")),
     }
 }
 
@@ -145,7 +150,14 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         supports: args.support.clone(),
         loads,
         deflection_limit: args.deflection_limit,
-        group_by: args.group_by,
+        group_by: match (args.group_by, args.groups) {
+            (GroupBy::Assembly(_), Some(k)) if k >= 1 => GroupBy::Assembly(k),
+            (GroupBy::Assembly(_), _) => {
+                bail!("--group-by assembly needs --groups K (at least 1), the count `plates --groups` is given")
+            }
+            (by, None) => by,
+            (_, Some(_)) => bail!("--groups applies only with --group-by assembly"),
+        },
         smooth: args.smooth,
         throat_factor: args.throat,
         max_rounds: args.max_rounds,
@@ -243,7 +255,11 @@ fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_js
         "units": {"length": "mm", "force": "N", "moment": "N·mm", "stress": "MPa", "mass": "kg"},
         "material": opts.material,
         "gauges": opts.gauges,
-        "group_by": match opts.group_by { GroupBy::Member => "member", GroupBy::Chain => "chain" },
+        "group_by": match opts.group_by {
+            GroupBy::Member => json!("member"),
+            GroupBy::Chain => json!("chain"),
+            GroupBy::Assembly(k) => json!({"assembly": k}),
+        },
         "smooth": opts.smooth,
         "supports": args.support.iter().map(|(sel, k)| format!("{sel}: {k:?}")).collect::<Vec<_>>(),
         "cases": s.cases.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
