@@ -2,12 +2,17 @@
 
 - every gauge is on the sizing's gauge list, every utilisation at most 1 (unless --allow-over);
 - equilibrium: the reactions balance the applied loads, recomputed here from the axes file —
-  self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down —
-  in force and in moment about the origin, to 1e-9 of the load;
+  self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down;
+  point loads on the nodes given; wind as the pressure on each panel's area projected across
+  the wind (area × |normal · direction|, the normal from the quad's diagonals), along it —
+  in force and in moment about the origin, to 1e-9 of the load (plus 1e-6 of the wind: the
+  panels are planar only to planarize's tolerance, and lamina takes the normal from the
+  member's frame);
 - `--lower-thicker`: the mean gauge of the lowest third of the members (by mid-height) is above
   that of the highest third (Calyx's observation of its own structural analysis).
 
-    check_sizing.py axes.json sizing.json --self-weight [--lower-thicker]
+    check_sizing.py axes.json sizing.json [--self-weight] [--wind KPA:DX,DY,DZ]
+                    [--point NODE:FX,FY,FZ]... [--lower-thicker]
 """
 import argparse
 import json
@@ -28,6 +33,8 @@ def main():
     ap.add_argument("axes")
     ap.add_argument("sizing")
     ap.add_argument("--self-weight", action="store_true", help="the only load was self-weight")
+    ap.add_argument("--wind", help="KPA:DX,DY,DZ, as given to lamina size")
+    ap.add_argument("--point", action="append", default=[], help="NODE:FX,FY,FZ (one node)")
     ap.add_argument("--lower-thicker", action="store_true")
     args = ap.parse_args()
     axes = json.load(open(args.axes))
@@ -65,6 +72,26 @@ def main():
             centre = 0.5 * (mid[a] + mid[b])
             force += f
             moment += np.cross(centre, f)
+    wind_size = 0.0
+    if args.wind:
+        kpa, direction = args.wind.split(":")
+        d_w = np.array([float(v) for v in direction.split(",")])
+        d_w /= np.linalg.norm(d_w)
+        for k, e in enumerate(edges):
+            a, b = e["a"], e["b"]
+            quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
+            cross = np.cross(quad[2] - quad[0], quad[3] - quad[1])
+            area = 0.5 * np.linalg.norm(cross)
+            normal = cross / np.linalg.norm(cross)
+            f = float(kpa) * 1e-3 * area * abs(normal @ d_w) * d_w
+            force += f
+            moment += np.cross(0.5 * (mid[e["a"]] + mid[e["b"]]), f)
+            wind_size += np.linalg.norm(f)
+    for spec in args.point:
+        node, values = spec.split(":")
+        f = np.array([float(v) for v in values.split(",")])
+        force += f
+        moment += np.cross(mid[int(node)], f)
     scale = max(np.linalg.norm(force), 1e-300)
     rf = np.zeros(3)
     rm = np.zeros(3)
@@ -73,9 +100,10 @@ def main():
         rf += f
         rm += np.array(r["moment"]) + np.cross(mid[r["node"]], f)
     size = np.ptp(mid, axis=0).max()
-    if np.linalg.norm(rf + force) > 1e-9 * scale:
+    allowed = 1e-9 * scale + 1e-6 * wind_size
+    if np.linalg.norm(rf + force) > allowed:
         fail(f"reactions {rf} do not balance the loads {force}")
-    if np.linalg.norm(rm + moment) > 1e-9 * scale * size:
+    if np.linalg.norm(rm + moment) > allowed * size:
         fail(f"reaction moments {rm} do not balance the loads' {moment}")
     line = (f"{args.sizing}: ok ({len(edges)} members, gauges on the list, utilisation at most "
             f"{worst:.3f}, reactions balance {np.linalg.norm(force):.2f} N to "
