@@ -438,11 +438,11 @@ fn assemble(
         .try_reserve(free + 1)
         .map_err(|_| FrameError::OutOfMemory)?;
     col_ptr.push(0usize);
-    for i in 0..n {
+    for (i, rest) in below.iter().enumerate() {
         let own = count(i);
         for q in 0..own {
             let last = *col_ptr.last().expect("a start");
-            col_ptr.push(last + (own - q) + below[i]);
+            col_ptr.push(last + (own - q) + rest);
         }
     }
     let nnz = col_ptr[free];
