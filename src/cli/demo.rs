@@ -468,6 +468,9 @@ fn steel(out: &Path) -> Result<Entry> {
         lower_upper.0,
         lower_upper.1
     );
+    if !sized.ok {
+        facts.push_str("NOT ENOUGH: over-utilised even on the thickest gauge or over the limit. ");
+    }
     let _ = write!(
         facts,
         "{} plates in 7 groups, {seams} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",

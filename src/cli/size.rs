@@ -93,6 +93,14 @@ fn parse_group_by(s: &str) -> Result<GroupBy, String> {
     }
 }
 
+/// The input's file name: outputs stay the same bytes wherever the input sits.
+fn source_name(path: &std::path::Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 pub struct Outcome {
     pub sizing: Sizing,
     pub ok: bool,
@@ -172,13 +180,13 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let text = serde_json::to_string_pretty(&doc)? + "\n";
     write_atomic(&args.output, |w| w.write_all(text.as_bytes()))?;
     if let Some(path) = &args.html {
-        let html = sizing_html(&sizing, &opts.material, &args.input.display().to_string());
+        let html = sizing_html(&sizing, &opts.material, &source_name(&args.input));
         write_atomic(path, |w| w.write_all(html.as_bytes()))?;
     }
     if let Some(path) = &args.export_ccx {
         let title = format!(
             "lamina size {}: {} members, {} nodes, the sum of the loads",
-            args.input.display(),
+            source_name(&args.input),
             sizing.model.members.len(),
             sizing.model.nodes.len()
         );
@@ -251,7 +259,7 @@ fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_js
     Ok(json!({
         "format": lamina::analyze::sizing::FORMAT,
         "version": lamina::analyze::sizing::VERSION,
-        "source": args.input.display().to_string(),
+        "source": source_name(&args.input),
         "units": {"length": "mm", "force": "N", "moment": "N·mm", "stress": "MPa", "mass": "kg"},
         "material": opts.material,
         "gauges": opts.gauges,
