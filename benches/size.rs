@@ -12,6 +12,7 @@ use timing::{best_of, peak_mib};
 
 use glam::DVec3;
 use lamina::analyze::frame::{solve, Elastic, LoadCase, Member, Model, Section, Support};
+use lamina::analyze::sizing::max_displacement;
 
 fn grid(n: usize) -> Model {
     let step = 300.0;
@@ -82,11 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let before = peak_mib();
     let (secs, results) = best_of(3, || solve(&model, &cases));
     let results = results?;
-    let worst = results[0]
-        .displacements
-        .iter()
-        .map(|d| DVec3::new(d[0], d[1], d[2]).length())
-        .fold(0.0, f64::max);
+    let (_, worst) = max_displacement(&results[0]);
     println!(
         "frame {n} x {n}: {} nodes, {} members, one analysis (two load cases) {secs:.2} s, largest displacement {worst:.3} mm, residual {:.1e}, peak {:.0} MiB (model alone {before:.0} MiB)",
         model.nodes.len(),

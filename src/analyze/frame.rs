@@ -403,8 +403,15 @@ fn assemble(
     free: usize,
 ) -> Result<SparseColMat<usize, f64>, FrameError> {
     let n = model.nodes.len();
-    let count = |i: usize| (0..6).filter(|&d| dof[6 * i + d] != usize::MAX).count();
-    let first = |i: usize| (0..6).map(|d| dof[6 * i + d]).find(|&d| d != usize::MAX);
+    // Each node's free freedoms: how many, and the first (the rest follow it).
+    let counts: Vec<usize> = (0..n)
+        .map(|i| (0..6).filter(|&d| dof[6 * i + d] != usize::MAX).count())
+        .collect();
+    let firsts: Vec<Option<usize>> = (0..n)
+        .map(|i| (0..6).map(|d| dof[6 * i + d]).find(|&d| d != usize::MAX))
+        .collect();
+    let count = |i: usize| counts[i];
+    let first = |i: usize| firsts[i];
     // Each node's higher neighbours, sorted, as one list with a start per node.
     let mut pairs: Vec<(usize, usize)> = model
         .members

@@ -1,18 +1,13 @@
 //! The sizing report: one self-contained HTML page with SVG views of the structure coloured
 //! by utilisation and by gauge, the deformed shape, and tables.
 
+use crate::text::html;
 use std::fmt::Write as _;
 
 use glam::DVec3;
 
 use super::material::Material;
 use super::sizing::Sizing;
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
 
 /// Green (0) to yellow to red (1 and over).
 fn ramp(t: f64) -> String {
@@ -30,6 +25,18 @@ fn ramp(t: f64) -> String {
 }
 
 /// Front (x, z) and isometric projections of lines, each with its colour and width.
+/// The front and isometric views of `lines`, side by side.
+fn figures(h: &mut String, lines: &[(DVec3, DVec3, String, f64)]) {
+    for iso in [false, true] {
+        let _ = write!(
+            h,
+            "<figure>{}<figcaption>{}</figcaption></figure>",
+            view(lines, iso, 520.0),
+            if iso { "isometric" } else { "front (x, z)" }
+        );
+    }
+}
+
 fn view(lines: &[(DVec3, DVec3, String, f64)], iso: bool, size: f64) -> String {
     let project = |p: DVec3| -> (f64, f64) {
         if iso {
@@ -119,7 +126,7 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
          table{{border-collapse:collapse}}td,th{{padding:2px 10px;border-bottom:1px solid #ddd;text-align:right}}\
          .views{{display:flex;flex-wrap:wrap;gap:1em}}figure{{margin:0}}.bad{{color:#a3161a}}</style></head><body>\
          <h1>Sizing: {src}</h1>",
-        src = esc(source)
+        src = html(source)
     );
     let _ = write!(
         h,
@@ -131,14 +138,14 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
          <tr><th style=\"text-align:left\">largest utilisation (members / welds)</th><td>{:.3} / {:.3}</td></tr>\
          <tr><th style=\"text-align:left\">largest displacement</th><td>{:.3} mm at node {}{}</td></tr>\
          <tr><th style=\"text-align:left\">equilibrium residual</th><td>{:.1e}</td></tr></table>",
-        esc(&material.name),
+        html(&material.name),
         material.e,
         material.fy,
         material.fu,
         material.gamma_m0,
         m.members.len(),
         m.nodes.len(),
-        s.cases.iter().map(|c| esc(&c.name)).collect::<Vec<_>>().join("; "),
+        s.cases.iter().map(|c| html(&c.name)).collect::<Vec<_>>().join("; "),
         s.rounds,
         if s.converged { "" } else { " (the cap: not settled)" },
         s.deflection_rounds,
@@ -153,38 +160,17 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
         total.residual
     );
     h.push_str("<h2>Utilisation</h2><p>Green 0, yellow 0.5, red 1 or more: the larger of the stress and buckling checks over every case.</p><div class=\"views\">");
-    for iso in [false, true] {
-        let _ = write!(
-            h,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            view(&util, iso, 520.0),
-            if iso { "isometric" } else { "front (x, z)" }
-        );
-    }
+    figures(&mut h, &util);
     let _ = write!(
         h,
         "</div><h2>Gauges</h2><p>From {gmin} mm (green, thin) to {gmax} mm (red, thick).</p><div class=\"views\">"
     );
-    for iso in [false, true] {
-        let _ = write!(
-            h,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            view(&gauge, iso, 520.0),
-            if iso { "isometric" } else { "front (x, z)" }
-        );
-    }
+    figures(&mut h, &gauge);
     let _ = write!(
         h,
         "</div><h2>Deformed shape</h2><p>Under the sum of the loads, displacements × {scale:.3e} (the largest drawn as a tenth of the span); grey undeformed.</p><div class=\"views\">"
     );
-    for iso in [false, true] {
-        let _ = write!(
-            h,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            view(&deformed, iso, 520.0),
-            if iso { "isometric" } else { "front (x, z)" }
-        );
-    }
+    figures(&mut h, &deformed);
     h.push_str("</div><h2>Most utilised members</h2><table><tr><th>edge</th><th>nodes</th><th>gauge mm</th><th>depth mm</th><th>utilisation</th><th>check</th><th>load</th></tr>");
     let mut order: Vec<usize> = (0..m.members.len()).collect();
     order.sort_by(|&a, &b| {
@@ -205,7 +191,7 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
             if c.utilisation > 1.0 { " class=\"bad\"" } else { "" },
             c.utilisation,
             c.check,
-            esc(&s.cases[c.case].name)
+            html(&s.cases[c.case].name)
         );
     }
     h.push_str("</table><h2>Reactions</h2><table><tr><th>node</th><th>F<sub>x</sub> N</th><th>F<sub>y</sub> N</th><th>F<sub>z</sub> N</th><th>M<sub>x</sub> N·mm</th><th>M<sub>y</sub> N·mm</th><th>M<sub>z</sub> N·mm</th></tr>");

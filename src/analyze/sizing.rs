@@ -758,7 +758,8 @@ fn group_level(group: &[usize], level: &[usize], gk: usize) -> usize {
         .unwrap_or(0)
 }
 
-fn max_displacement(r: &CaseResult) -> (usize, f64) {
+/// The node moving most in a case, and how far, mm.
+pub fn max_displacement(r: &CaseResult) -> (usize, f64) {
     r.displacements
         .iter()
         .enumerate()

@@ -1,6 +1,7 @@
 //! A picture of nested sheets: every sheet to scale, stacked, each part filled in its assembly
 //! group's colour and labelled with its tag. SVG, for the shop and for report pages.
 
+use crate::text::html;
 use std::fmt::Write as _;
 
 use glam::DVec2;
@@ -45,7 +46,7 @@ pub fn sheets_svg(sheets: &[SheetView], width: f64) -> String {
             s,
             r#"<text x="2" y="{:.1}" font-size="16">{}</text>"#,
             top + 19.0,
-            escape(&sh.title)
+            html(&sh.title)
         );
         let _ = writeln!(
             s,
@@ -80,7 +81,7 @@ pub fn sheets_svg(sheets: &[SheetView], width: f64) -> String {
                 s,
                 r##"<polygon points="{}" fill="{colour}" fill-opacity="0.55" stroke="#222" stroke-width="0.6"><title>{}</title></polygon>"##,
                 pts.join(" "),
-                escape(id)
+                html(id)
             );
             let lo = outline.iter().fold(DVec2::INFINITY, |m, p| m.min(*p));
             let hi = outline.iter().fold(DVec2::NEG_INFINITY, |m, p| m.max(*p));
@@ -93,7 +94,7 @@ pub fn sheets_svg(sheets: &[SheetView], width: f64) -> String {
                     r#"<text x="{:.1}" y="{:.1}" font-size="{size:.1}" text-anchor="middle" dominant-baseline="middle">{}</text>"#,
                     centre.x,
                     centre.y,
-                    escape(id)
+                    html(id)
                 );
             }
         }
@@ -101,10 +102,4 @@ pub fn sheets_svg(sheets: &[SheetView], width: f64) -> String {
     }
     s.push_str("</svg>\n");
     s
-}
-
-fn escape(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }

@@ -3,6 +3,7 @@
 //! curve), the worst panels, a histogram, and three views (top, front, isometric) of the panels
 //! coloured by deviation. As JSON, and as one self-contained HTML page with inline SVG.
 
+use crate::text::html;
 use std::fmt::Write as _;
 
 use glam::DVec3;
@@ -154,8 +155,8 @@ impl Report {
              table{{border-collapse:collapse}}td,th{{padding:2px 10px;border-bottom:1px solid #ddd;text-align:right}}\
              .views{{display:flex;flex-wrap:wrap;gap:1em}}.views figure{{margin:0}}\
              .ok{{color:#186a1e}}.bad{{color:#a3161a}}</style></head><body>\n<h1>{}</h1>\n",
-            esc(&c.title),
-            esc(&c.title)
+            html(&c.title),
+            html(&c.title)
         );
         let verdict = if s.within_tolerance {
             format!(
@@ -176,9 +177,9 @@ impl Report {
                 "<tr><th style=\"text-align:left\">{k}</th><td>{v}</td></tr>"
             );
         };
-        row("source", esc(&c.source));
+        row("source", html(&c.source));
         if let Some(m) = &c.method {
-            row("method", esc(m));
+            row("method", html(m));
         }
         if let Some(i) = c.iterations {
             row("iterations", i.to_string());
@@ -199,7 +200,7 @@ impl Report {
         row("max torsion", format!("{:.4}°", s.max_torsion_deg));
         h.push_str("</table>\n");
         for note in &c.notes {
-            let _ = writeln!(h, "<p>{}</p>", esc(note));
+            let _ = writeln!(h, "<p>{}</p>", html(note));
         }
         h.push_str("<h2>Panels by deviation</h2>\n<div class=\"views\">\n");
         for (name, view) in [
@@ -370,13 +371,6 @@ fn curve_svg(history: &[f64]) -> String {
         h + 32.0,
         history.len()
     )
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
 }
 
 #[cfg(test)]
