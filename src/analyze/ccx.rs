@@ -1,10 +1,16 @@
 //! The frame as a CalculiX deck (`.inp`), for an independent solve: the same nodes, each member
-//! split into `SPLIT` quadratic beams (B32: CalculiX expands them into 20-node bricks of the
+//! split into `SPLIT` equal quadratic beams (B32: CalculiX expands them into 20-node bricks of the
 //! member's rectangle), a rectangular section per member with its depth direction as the
 //! section's 1-direction, the same supports, and the loads of the case summing them all as
 //! nodal forces (uniform member loads as the consistent loads of each quadratic beam: 1/6, 2/3,
 //! 1/6 of its share). Results requested: displacements of every node and reaction forces of
 //! the supports (`.dat`), in mm, N, MPa.
+//!
+//! Why 32 beams a member: CalculiX's expanded beams converge slowly (about as 1/n), because
+//! the section is held whole where a beam meets a support or a knot and the adjacent bricks
+//! cannot contract sideways. A cantilever under an end load deflects 1.2 % too little at 8
+//! beams, 0.55 % at 16, 0.3 % at 32; a planar portal frame 3.6 %, 1.7 % and 0.9 % from the
+//! exact frame. Grading (short beams at the ends, long ones between) did worse than uniform.
 
 use std::io::Write;
 use std::path::Path;
@@ -15,7 +21,7 @@ use super::frame::{LoadCase, Model, Support};
 use crate::files::{write_atomic, WriteError};
 
 /// Quadratic beams per member.
-pub const SPLIT: usize = 8;
+pub const SPLIT: usize = 32;
 
 /// Node numbers: network node i is i + 1; member k's inner nodes follow them, 2·SPLIT − 1 each.
 pub fn inner_node(model: &Model, k: usize, j: usize) -> usize {
