@@ -110,7 +110,8 @@ fn audit_reproduces_the_deviation_and_sets_the_exit_status() -> TestResult {
         s(&audit_rep),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let audited = report(&audit_rep)?["summary"]["max_deviation"]
+    // audit holds flatness by default; the corner figure is planarize's.
+    let audited = report(&audit_rep)?["summary"]["max_corner"]
         .as_f64()
         .ok_or("max")?;
     assert!(
@@ -302,5 +303,79 @@ fn audit_reads_dxf_faces_and_closed_polylines() -> TestResult {
         );
     }
     assert!(((polygons[2][1] - polygons[2][0]).length() - 20.0).abs() < 1e-12);
+    Ok(())
+}
+
+#[test]
+fn audit_holds_iso_flatness_by_default_and_writes_a_row_per_panel() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let obj = dir.path().join("mixed.obj");
+    // A square 1000 mm twisted by w = 0.4 mm (corners alternate ±w/2), a planar hexagon, a
+    // triangle and a quad with a repeated corner (both skipped, counted), CRLF line ends.
+    let w = 0.4;
+    let mut text = String::new();
+    for (x, y, z) in [
+        (0.0, 0.0, w / 2.0),
+        (1000.0, 0.0, -w / 2.0),
+        (1000.0, 1000.0, w / 2.0),
+        (0.0, 1000.0, -w / 2.0),
+    ] {
+        text += &format!("v {x} {y} {z}\r\n");
+    }
+    for k in 0..6 {
+        let t = std::f64::consts::TAU * k as f64 / 6.0;
+        text += &format!(
+            "v {} {} {}\r\n",
+            100.0 * t.cos(),
+            0.5 * t.sin(),
+            100.0 * t.sin()
+        );
+    }
+    text += "v 5 5 5\r\nv 6 5 5\r\nv 5 6 9\r\n";
+    text += "f 1 2 3 4\r\nf 5 6 7 8 9 10\r\nf 11 12 13\r\nf 11 12 12 13\r\n";
+    std::fs::write(&obj, text)?;
+    let csv = dir.path().join("panels.csv");
+    let json = dir.path().join("audit.json");
+    let o = lamina(&[
+        "audit",
+        s(&obj),
+        "--tolerance",
+        "0.5",
+        "--csv",
+        s(&csv),
+        "--report",
+        s(&json),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("2 of 4 faces have fewer than 4 distinct corners"));
+    assert!(stdout(&o).contains("max flatness 0.4"), "{}", stdout(&o));
+    let r = report(&json)?;
+    assert_eq!(r["summary"]["metric"], "flatness");
+    assert_eq!(r["summary"]["panels"], 2);
+    let rows = r["panels"].as_array().ok_or("panels")?;
+    assert!((rows[0]["flatness"].as_f64().ok_or("f")? - w).abs() < 1e-9);
+    assert!(rows[1]["flatness"].as_f64().ok_or("f")? < 1e-9);
+    assert!(r["definitions"]["flatness"]
+        .as_str()
+        .ok_or("def")?
+        .contains("ISO 1101"));
+    let table = std::fs::read_to_string(&csv)?;
+    let lines: Vec<&str> = table.lines().collect();
+    assert_eq!(lines.len(), 3);
+    assert!(lines[0].starts_with("panel,corners,flatness_mm"));
+    assert!(lines[1].starts_with("0,4,") && lines[1].ends_with(",flatness,0.5,pass"));
+    assert!(lines[2].starts_with("1,6,"));
+    // The corner figure is about 2w: over 0.5 mm, so held to it the audit fails.
+    let o = lamina(&["audit", s(&obj), "--tolerance", "0.5", "--metric", "corner"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    let o = lamina(&[
+        "audit",
+        s(&obj),
+        "--tolerance",
+        "0.5",
+        "--metric",
+        "best-fit",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `lamina planarize` and `lamina audit`: node axes that make every panel planar, and a check of
 //! panels made elsewhere; both write the planarity report.
 
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -12,10 +13,11 @@ use serde_json::json;
 use lamina::files::write_atomic;
 use lamina::rationalize::audit::{audit, read_polygons};
 use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
+use lamina::rationalize::panels::MAX_FLATNESS_CORNERS;
 use lamina::rationalize::planarize::{
     planarize, Input, Method, PlanarizeOptions, Selector, Solution,
 };
-use lamina::report::planarity::{Context, PanelRow, Report};
+use lamina::report::planarity::{Context, Metric, PanelRow, Report};
 
 use super::input::{reference_normals, ReadArgs};
 
@@ -296,16 +298,25 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
         rows,
         quads.iter().map(|q| q.to_vec()).collect(),
         sol.tolerance,
+        // planarize holds each panel's corner figure to the tolerance.
+        Metric::Corner,
     )
 }
 
 #[derive(ClapArgs)]
 pub struct AuditArgs {
-    /// Panels: .obj faces or .dxf 3DFACE / closed polylines
+    /// Panels: .obj faces (quads and n-gons) or .dxf 3DFACE / polyface meshes / closed polylines
     pub input: PathBuf,
-    /// Largest deviation accepted, mm
+    /// Largest figure accepted, mm
     #[arg(long)]
     pub tolerance: f64,
+    /// The figure held to the tolerance: ISO 1101 minimum-zone flatness, the largest distance
+    /// from the least-squares plane, or the corner's distance from the plane of the other three
+    #[arg(long, value_enum, default_value_t = Metric::Flatness)]
+    pub metric: Metric,
+    /// One row per panel (id, corners, every figure, tolerance, pass/fail) for quality records
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
     #[command(flatten)]
     pub reports: ReportArgs,
 }
@@ -318,26 +329,104 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
             args.tolerance
         );
     }
-    let polygons = read_polygons(&args.input)?;
-    let audited = audit(&polygons);
-    let rows = audited
-        .iter()
+    let read = read_polygons(&args.input)?;
+    // Faces of fewer than four distinct corners are planar by construction: counted, not audited.
+    let (polygons, skipped): (Vec<_>, Vec<_>) = read
+        .into_iter()
         .enumerate()
-        .map(|(k, a)| PanelRow {
+        .partition(|(_, p)| distinct_corners(p) >= 4);
+    if !skipped.is_empty() {
+        eprintln!(
+            "lamina: {} of {} faces have fewer than 4 distinct corners (planar by construction): skipped",
+            skipped.len(),
+            skipped.len() + polygons.len()
+        );
+    }
+    if polygons.is_empty() {
+        bail!(
+            "{}: no face has 4 or more distinct corners: nothing to audit",
+            args.input.display()
+        );
+    }
+    let ids: Vec<usize> = polygons.iter().map(|(k, _)| *k).collect();
+    let polygons: Vec<Vec<DVec3>> = polygons.into_iter().map(|(_, p)| p).collect();
+    let audited = audit(&polygons);
+    let too_many = audited
+        .iter()
+        .filter(|a| a.metrics.flatness.is_nan())
+        .count();
+    if too_many > 0 {
+        if args.metric == Metric::Flatness {
+            bail!(
+                "{}: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners, beyond the exact flatness search: give --metric best-fit",
+                args.input.display()
+            );
+        }
+        eprintln!(
+            "lamina: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners: no flatness for them (NaN)"
+        );
+    }
+    let rows: Vec<PanelRow> = audited
+        .iter()
+        .zip(&ids)
+        .map(|(a, &k)| PanelRow {
             index: k,
             nodes: None,
             metrics: a.metrics,
         })
         .collect();
+    if let Some(path) = &args.csv {
+        write_atomic(path, |w| {
+            writeln!(
+                w,
+                "panel,corners,flatness_mm,best_fit_mm,corner_mm,diagonal_distance_mm,warp,torsion_deg,normal_x,normal_y,normal_z,metric,tolerance_mm,pass"
+            )?;
+            for (r, p) in rows.iter().zip(&polygons) {
+                let m = &r.metrics;
+                writeln!(
+                    w,
+                    "{},{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
+                    r.index,
+                    p.len(),
+                    m.flatness,
+                    m.best_fit,
+                    m.deviation,
+                    m.diagonal_distance,
+                    m.diagonal_rel_diagonal,
+                    m.torsion_deg,
+                    m.normal[0],
+                    m.normal[1],
+                    m.normal[2],
+                    args.metric.name(),
+                    args.tolerance,
+                    if args.metric.of(m) <= args.tolerance {
+                        "pass"
+                    } else {
+                        "fail"
+                    }
+                )?;
+            }
+            Ok(())
+        })?;
+    }
     let report = Report::new(
         Context {
             title: format!("Planarity audit of {}", args.input.display()),
             source: args.input.display().to_string(),
+            notes: if skipped.is_empty() {
+                Vec::new()
+            } else {
+                vec![format!(
+                    "{} faces of fewer than 4 distinct corners skipped (planar by construction).",
+                    skipped.len()
+                )]
+            },
             ..Default::default()
         },
         rows,
-        audited.into_iter().map(|a| a.corners).collect(),
+        polygons,
         args.tolerance,
+        args.metric,
     );
     args.reports.write(&report)?;
     let s = &report.summary;
@@ -345,13 +434,26 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
         println!("{}", serde_json::to_string(s)?);
     } else {
         println!(
-            "{}: {} panels, max deviation {:.9} mm, {} above {} mm",
+            "{}: {} panels, max {} {:.9} mm (flatness {:.9}, best fit {:.9}, corner {:.9}), {} above {} mm",
             args.input.display(),
             s.panels,
+            s.metric.name(),
             s.max_deviation,
+            s.max_flatness,
+            s.max_best_fit,
+            s.max_corner,
             s.above_tolerance,
             s.tolerance
         );
     }
     Ok(s.within_tolerance)
+}
+
+/// Corners more than 1e-9 of the polygon's size apart from every earlier one.
+fn distinct_corners(p: &[DVec3]) -> usize {
+    let size = p.iter().map(|q| q.distance(p[0])).fold(0.0, f64::max);
+    let eps = 1e-9 * size.max(f64::MIN_POSITIVE);
+    (0..p.len())
+        .filter(|&i| p[..i].iter().all(|q| q.distance(p[i]) > eps))
+        .count()
 }

@@ -1,7 +1,8 @@
 //! A fabricator's check of panels made elsewhere: read polygons (OBJ faces, kept as polygons;
-//! DXF 3DFACE entities and closed POLYLINE/LWPOLYLINE), and measure each one with the metrics
-//! of `panels.rs`. Quads get every metric; triangles are planar; polygons of five or more
-//! corners get the deviation from their Newell plane and no diagonal or torsion figures.
+//! DXF 3DFACE entities, polyface meshes and closed POLYLINE/LWPOLYLINE), and measure each one
+//! with the figures of `panels.rs`: flatness, best fit and normal for every polygon; quads also
+//! get the corner, diagonal and torsion figures, other polygons the deviation from their Newell
+//! plane as the corner figure.
 
 use std::path::Path;
 
@@ -9,7 +10,7 @@ use dxf::entities::EntityType;
 use dxf::Drawing;
 use glam::DVec3;
 
-use super::panels::{polygon_deviation, quad_metrics, QuadMetrics};
+use super::panels::{polygon_metrics, QuadMetrics};
 use crate::files::{extension, ReadError};
 use crate::network::io::dxf::{load_drawing, lw_polyline, polyline};
 use crate::network::io::units::dxf_units;
@@ -54,16 +55,7 @@ pub fn audit(polygons: &[Vec<DVec3>]) -> Vec<Audited> {
     polygons
         .iter()
         .map(|p| {
-            let metrics = match p.len() {
-                4 => quad_metrics([p[0], p[1], p[2], p[3]]),
-                _ => QuadMetrics {
-                    deviation: polygon_deviation(p),
-                    diagonal_distance: 0.0,
-                    diagonal_rel_edge: 0.0,
-                    diagonal_rel_diagonal: 0.0,
-                    torsion_deg: 0.0,
-                },
-            };
+            let metrics = polygon_metrics(p);
             Audited {
                 corners: p.clone(),
                 metrics,
@@ -144,7 +136,10 @@ fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Vec<Vec<DVec3>>, ReadE
                 }
                 out.push(c);
             }
-            EntityType::Polyline(pl) if pl.is_closed() && !pl.is_polyface_mesh() => {
+            EntityType::Polyline(pl) if pl.is_polyface_mesh() => {
+                out.extend(polyface_faces(path, e, pl)?);
+            }
+            EntityType::Polyline(pl) if pl.is_closed() => {
                 out.push(closed_loop(path, e, polyline(pl))?);
             }
             EntityType::LwPolyline(pl) if pl.is_closed() => {
@@ -154,6 +149,59 @@ fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Vec<Vec<DVec3>>, ReadE
         }
     }
     Ok(out)
+}
+
+/// The faces of a polyface mesh (a POLYLINE with flag 64): vertex records (flags 64 + 128)
+/// hold the positions, face records (flag 128 alone) up to four 1-based indices into them,
+/// negative where the edge after the corner is invisible, 0 where the face has fewer.
+fn polyface_faces(
+    path: &Path,
+    e: &dxf::entities::Entity,
+    pl: &dxf::entities::Polyline,
+) -> Result<Vec<Vec<DVec3>>, ReadError> {
+    let mut positions = Vec::new();
+    let mut faces = Vec::new();
+    for v in pl.vertices() {
+        if v.flags & 64 != 0 {
+            let p = &v.location;
+            positions.push(DVec3::new(p.x, p.y, p.z));
+        } else if v.flags & 128 != 0 {
+            let idx = [
+                v.polyface_mesh_vertex_index1,
+                v.polyface_mesh_vertex_index2,
+                v.polyface_mesh_vertex_index3,
+                v.polyface_mesh_vertex_index4,
+            ];
+            faces.push(idx);
+        }
+    }
+    faces
+        .iter()
+        .enumerate()
+        .map(|(f, idx)| {
+            idx.iter()
+                .filter(|&&i| i != 0)
+                .map(|&i| {
+                    positions
+                        .get(i.unsigned_abs() as usize - 1)
+                        .copied()
+                        .ok_or_else(|| {
+                            ReadError::record(
+                                path,
+                                format!(
+                                    "polyface mesh with handle {:X}, face {f}",
+                                    e.common.handle.0
+                                ),
+                                format!(
+                                    "refers to vertex {i}, but the mesh has {}",
+                                    positions.len()
+                                ),
+                            )
+                        })
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// A closed polyline's corners in world coordinates (2D polylines through their object

@@ -9,12 +9,32 @@
 //!   mean edge length (as COMPAS reports flatness) and to the mean diagonal (as libigl does).
 //! - torsion: the angle between the planes (q0, q1, q3) and (q0, q1, q2) along the edge q0q1,
 //!   degrees: 0 for a planar panel.
+//!
+//! Figures of any polygon (n ≥ 3 corners):
+//! - flatness (ISO 1101): the width of the thinnest zone between two parallel planes that holds
+//!   every corner, the minimum zone. Exact: the thinnest zone of a point set rests on a face and
+//!   a vertex or on two edges of its convex hull (Houle and Toussaint 1988), so the width is the
+//!   least over the normals of every corner triple and of every two corner pairs with no corner
+//!   in common of the extent along that normal. For a quad, the least of the tetrahedron's four
+//!   heights and the distances between its three pairs of opposite edges.
+//! - best fit: the largest distance of a corner from the least-squares plane (through the
+//!   centroid, normal the covariance's least eigenvector).
+//! - normal: the minimum zone's, turned to agree with the polygon's Newell normal.
 
 use glam::DVec3;
 
-/// Planarity figures of one quad.
+/// Polygons with more corners than this get no flatness: the exact search grows as n⁵.
+pub const MAX_FLATNESS_CORNERS: usize = 48;
+
+/// Planarity figures of one quad (the quad's own ones zero for other polygons).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct QuadMetrics {
+    /// ISO 1101 minimum-zone flatness, mm (NaN over `MAX_FLATNESS_CORNERS` corners).
+    pub flatness: f64,
+    /// Largest distance from the least-squares plane, mm.
+    pub best_fit: f64,
+    /// Unit normal of the minimum zone.
+    pub normal: [f64; 3],
     pub deviation: f64,
     pub diagonal_distance: f64,
     pub diagonal_rel_edge: f64,
@@ -35,6 +55,168 @@ pub fn quad_deviation(q: [DVec3; 4]) -> f64 {
     }
 }
 
+/// Every figure of a polygon: the quad ones for four corners, the Newell deviation as the
+/// corner figure of other n-gons (triangles: 0).
+pub fn polygon_metrics(p: &[DVec3]) -> QuadMetrics {
+    if p.len() == 4 {
+        return quad_metrics([p[0], p[1], p[2], p[3]]);
+    }
+    let mut m = QuadMetrics {
+        flatness: 0.0,
+        best_fit: 0.0,
+        normal: [0.0; 3],
+        deviation: polygon_deviation(p),
+        diagonal_distance: 0.0,
+        diagonal_rel_edge: 0.0,
+        diagonal_rel_diagonal: 0.0,
+        torsion_deg: 0.0,
+    };
+    plane_figures(&mut m, p);
+    m
+}
+
+/// Flatness, its normal and the best-fit figure of `m`'s polygon `p`.
+fn plane_figures(m: &mut QuadMetrics, p: &[DVec3]) {
+    let newell = newell_normal(p);
+    let (width, normal) = if p.len() <= MAX_FLATNESS_CORNERS {
+        min_zone(p).unwrap_or((0.0, newell))
+    } else {
+        (f64::NAN, newell)
+    };
+    let normal = if normal.dot(newell) < 0.0 {
+        -normal
+    } else {
+        normal
+    };
+    m.flatness = width;
+    m.normal = normal.to_array();
+    m.best_fit = best_fit(p);
+}
+
+/// The minimum zone: its width and unit normal; None when every corner lies on one line.
+pub fn min_zone(p: &[DVec3]) -> Option<(f64, DVec3)> {
+    let extent = |n: DVec3| {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for q in p {
+            let t = q.dot(n);
+            lo = lo.min(t);
+            hi = hi.max(t);
+        }
+        hi - lo
+    };
+    let size = p
+        .iter()
+        .map(|q| q.distance(p[0]))
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let mut best: Option<(f64, DVec3)> = None;
+    let mut consider = |n: DVec3| {
+        // A normal from nearly parallel lines is noise: keep those of a real angle.
+        if n.length() <= 1e-12 * size * size {
+            return;
+        }
+        let n = n.normalize();
+        let w = extent(n);
+        if best.is_none_or(|(b, _)| w < b) {
+            best = Some((w, n));
+        }
+    };
+    let c = p.len();
+    for i in 0..c {
+        for j in i + 1..c {
+            for k in j + 1..c {
+                consider((p[j] - p[i]).cross(p[k] - p[i]));
+            }
+        }
+    }
+    for i in 0..c {
+        for j in i + 1..c {
+            for k in i + 1..c {
+                for l in k + 1..c {
+                    if k == j || l == j {
+                        continue;
+                    }
+                    consider((p[j] - p[i]).cross(p[l] - p[k]));
+                }
+            }
+        }
+    }
+    best
+}
+
+/// The largest distance of a corner from the least-squares plane.
+pub fn best_fit(p: &[DVec3]) -> f64 {
+    if p.len() < 4 {
+        return 0.0;
+    }
+    let c = p.iter().copied().sum::<DVec3>() / p.len() as f64;
+    let mut m = [[0.0; 3]; 3];
+    for q in p {
+        let d = (*q - c).to_array();
+        for r in 0..3 {
+            for s in 0..3 {
+                m[r][s] += d[r] * d[s];
+            }
+        }
+    }
+    let n = least_eigenvector(m);
+    p.iter().map(|q| (*q - c).dot(n).abs()).fold(0.0, f64::max)
+}
+
+/// The unit eigenvector of the least eigenvalue of a symmetric 3 × 3 matrix (cyclic Jacobi).
+fn least_eigenvector(mut a: [[f64; 3]; 3]) -> DVec3 {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
+        let diag = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
+        if off <= 1e-300 || off <= f64::EPSILON * 1e-3 * diag {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let (cs, sn) = (1.0 / (t * t + 1.0).sqrt(), t / (t * t + 1.0).sqrt());
+            for row in a.iter_mut() {
+                let (x, y) = (row[p], row[q]);
+                row[p] = cs * x - sn * y;
+                row[q] = sn * x + cs * y;
+            }
+            let (rp, rq) = (a[p], a[q]);
+            for (k, (x, y)) in rp.into_iter().zip(rq).enumerate() {
+                a[p][k] = cs * x - sn * y;
+                a[q][k] = sn * x + cs * y;
+            }
+            for row in v.iter_mut() {
+                let (x, y) = (row[p], row[q]);
+                row[p] = cs * x - sn * y;
+                row[q] = sn * x + cs * y;
+            }
+        }
+    }
+    let k = (0..3)
+        .min_by(|&i, &j| a[i][i].total_cmp(&a[j][j]))
+        .unwrap_or(0);
+    DVec3::new(v[0][k], v[1][k], v[2][k]).normalize_or(DVec3::Z)
+}
+
+/// The Newell normal of a polygon (unit; +z when it has no area).
+pub fn newell_normal(p: &[DVec3]) -> DVec3 {
+    let mut n = DVec3::ZERO;
+    for k in 0..p.len() {
+        let (a, b) = (p[k], p[(k + 1) % p.len()]);
+        n += DVec3::new(
+            (a.y - b.y) * (a.z + b.z),
+            (a.z - b.z) * (a.x + b.x),
+            (a.x - b.x) * (a.y + b.y),
+        );
+    }
+    n.normalize_or(DVec3::Z)
+}
+
 pub fn quad_metrics(q: [DVec3; 4]) -> QuadMetrics {
     // Degenerate (three corners collinear): any fourth corner fits a plane, deviation 0.
     let deviation = quad_deviation(q);
@@ -49,13 +231,18 @@ pub fn quad_metrics(q: [DVec3; 4]) -> QuadMetrics {
         (Some(a), Some(b)) => a.dot(b).clamp(-1.0, 1.0).acos().to_degrees(),
         _ => 0.0,
     };
-    QuadMetrics {
+    let mut m = QuadMetrics {
+        flatness: 0.0,
+        best_fit: 0.0,
+        normal: [0.0; 3],
         deviation,
         diagonal_distance,
         diagonal_rel_edge: ratio(diagonal_distance, edges),
         diagonal_rel_diagonal: ratio(diagonal_distance, diagonals),
         torsion_deg,
-    }
+    };
+    plane_figures(&mut m, &q);
+    m
 }
 
 /// The deviation of a polygon with more than four corners: the largest distance of a corner
@@ -136,6 +323,86 @@ mod tests {
         let e = vb - va;
         let closed = h * db.dot(e.cross(da)).abs() / e.cross(da).length();
         assert!((quad_metrics(q).deviation - closed).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_twisted_square_has_flatness_w_and_a_corner_figure_near_2w() {
+        for (side, w) in [(1000.0, 1.0), (100.0, 0.01), (10.0, 2.0)] {
+            let q = [
+                DVec3::new(0.0, 0.0, w / 2.0),
+                DVec3::new(side, 0.0, -w / 2.0),
+                DVec3::new(side, side, w / 2.0),
+                DVec3::new(0.0, side, -w / 2.0),
+            ];
+            let m = quad_metrics(q);
+            assert!(
+                (m.flatness - w).abs() <= 1e-12 * side,
+                "{side} {w}: {}",
+                m.flatness
+            );
+            // The corner figure: 2w measured along the tilted plane's normal.
+            let tilt = (1.0 + (w / side).powi(2) * 2.0).sqrt();
+            assert!(
+                (m.deviation - 2.0 * w / tilt).abs() < 1e-9 * side,
+                "{}",
+                m.deviation
+            );
+            // Best fit: the plane z = 0, every corner w/2 from it.
+            assert!((m.best_fit - w / 2.0).abs() < 1e-9 * side, "{}", m.best_fit);
+            let n = DVec3::from(m.normal);
+            assert!((n.z.abs() - 1.0).abs() < 1e-6 && n.z > 0.0);
+        }
+    }
+
+    #[test]
+    fn a_planar_ngon_has_zero_flatness_in_any_pose() {
+        let rot = glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.3, -1.1, 2.0);
+        let p: Vec<DVec3> = (0..9)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 9.0;
+                rot * DVec3::new(50.0 * t.cos(), 30.0 * t.sin(), 0.0) + DVec3::new(1e3, -2e3, 7.0)
+            })
+            .collect();
+        let m = polygon_metrics(&p);
+        assert!(m.flatness < 1e-9 && m.best_fit < 1e-9, "{m:?}");
+        assert!((DVec3::from(m.normal) - rot * DVec3::Z).length() < 1e-9);
+    }
+
+    #[test]
+    fn flatness_is_the_thinnest_zone_over_sampled_directions() {
+        // Against a dense search over directions: never thinner, and close.
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for n in [4, 5, 7, 12] {
+            let p: Vec<DVec3> = (0..n)
+                .map(|_| DVec3::new(100.0 * rnd(), 100.0 * rnd(), 3.0 * rnd()))
+                .collect();
+            let (w, normal) = min_zone(&p).unwrap();
+            let extent = |d: DVec3| {
+                let t: Vec<f64> = p.iter().map(|q| q.dot(d)).collect();
+                t.iter().cloned().fold(f64::MIN, f64::max)
+                    - t.iter().cloned().fold(f64::MAX, f64::min)
+            };
+            assert!((extent(normal) - w).abs() < 1e-9);
+            let mut sampled = f64::MAX;
+            for a in 0..200 {
+                for b in 0..200 {
+                    let (th, ph) = (
+                        a as f64 / 200.0 * 0.2,
+                        b as f64 / 200.0 * std::f64::consts::TAU,
+                    );
+                    let d = DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+                    sampled = sampled.min(extent(d));
+                }
+            }
+            assert!(w <= sampled + 1e-12, "{n}: {w} > {sampled}");
+            assert!(w > 0.95 * sampled, "{n}: {w} vs {sampled}");
+        }
     }
 
     #[test]

@@ -15,6 +15,50 @@ pub const WORST: usize = 20;
 /// Histogram bins.
 pub const BINS: usize = 20;
 
+/// The figure a tolerance is held against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// ISO 1101 minimum-zone flatness.
+    #[default]
+    Flatness,
+    /// The largest distance from the least-squares plane.
+    BestFit,
+    /// The distance of the fourth corner from the plane of the other three.
+    Corner,
+}
+
+impl Metric {
+    pub fn name(self) -> &'static str {
+        match self {
+            Metric::Flatness => "flatness",
+            Metric::BestFit => "best-fit",
+            Metric::Corner => "corner",
+        }
+    }
+
+    /// The figure of a panel.
+    pub fn of(self, m: &QuadMetrics) -> f64 {
+        match self {
+            Metric::Flatness => m.flatness,
+            Metric::BestFit => m.best_fit,
+            Metric::Corner => m.deviation,
+        }
+    }
+}
+
+/// Each figure of a panel row, as the JSON report and the page define it.
+pub const DEFINITIONS: [(&str, &str); 8] = [
+    ("flatness", "ISO 1101 flatness, mm: the width of the thinnest zone between two parallel planes that holds every corner of the panel (the minimum zone), exact"),
+    ("best_fit", "mm: the largest distance of a corner from the least-squares plane through the corners"),
+    ("deviation", "the corner figure, mm: the distance of the third corner from the plane through the other three (quads; for other polygons the largest distance from the plane through the centroid with the Newell normal); on a twisted square 2 times the flatness and 4 times the best-fit figure"),
+    ("diagonal_distance", "mm: the distance between the lines of the two diagonals (quads)"),
+    ("diagonal_rel_edge", "the diagonal distance over the mean edge length (COMPAS's planarity)"),
+    ("diagonal_rel_diagonal", "warp: the diagonal distance over the mean diagonal length (libigl's planarity)"),
+    ("torsion_deg", "degrees: the angle between the planes (q0, q1, q3) and (q0, q1, q2) along the edge q0q1 (quads)"),
+    ("normal", "the unit normal of the minimum zone, turned to agree with the polygon's Newell normal"),
+];
+
 /// What the report is about: where the panels came from and how they were solved.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Context {
@@ -42,12 +86,17 @@ pub struct PanelRow {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Summary {
     pub panels: usize,
+    /// The figure the tolerance is held against; the max, mean and 95th percentile are of it.
+    pub metric: Metric,
     pub tolerance: f64,
     pub max_deviation: f64,
     pub mean_deviation: f64,
     pub p95_deviation: f64,
     pub above_tolerance: usize,
     pub within_tolerance: bool,
+    pub max_flatness: f64,
+    pub max_best_fit: f64,
+    pub max_corner: f64,
     pub max_diagonal_distance: f64,
     pub max_torsion_deg: f64,
 }
@@ -64,6 +113,7 @@ pub struct Report {
     #[serde(flatten)]
     pub context: Context,
     pub summary: Summary,
+    pub definitions: std::collections::BTreeMap<&'static str, &'static str>,
     pub worst: Vec<PanelRow>,
     pub histogram: Histogram,
     pub panels: Vec<PanelRow>,
@@ -78,9 +128,10 @@ impl Report {
         rows: Vec<PanelRow>,
         quads: Vec<Vec<DVec3>>,
         tolerance: f64,
+        metric: Metric,
     ) -> Report {
         let n = rows.len();
-        let mut devs: Vec<f64> = rows.iter().map(|r| r.metrics.deviation).collect();
+        let mut devs: Vec<f64> = rows.iter().map(|r| metric.of(&r.metrics)).collect();
         devs.sort_by(f64::total_cmp);
         let max = devs.last().copied().unwrap_or(0.0);
         let p95 = if n > 0 {
@@ -90,10 +141,14 @@ impl Report {
         };
         let above = rows
             .iter()
-            .filter(|r| r.metrics.deviation > tolerance)
+            .filter(|r| metric.of(&r.metrics) > tolerance)
             .count();
+        let largest = |f: &dyn Fn(&QuadMetrics) -> f64| {
+            rows.iter().map(|r| f(&r.metrics)).fold(0.0, f64::max)
+        };
         let summary = Summary {
             panels: n,
+            metric,
             tolerance,
             max_deviation: max,
             mean_deviation: if n > 0 {
@@ -104,6 +159,9 @@ impl Report {
             p95_deviation: p95,
             above_tolerance: above,
             within_tolerance: above == 0,
+            max_flatness: largest(&|m| m.flatness),
+            max_best_fit: largest(&|m| m.best_fit),
+            max_corner: largest(&|m| m.deviation),
             max_diagonal_distance: rows
                 .iter()
                 .map(|r| r.metrics.diagonal_distance)
@@ -115,10 +173,9 @@ impl Report {
         };
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| {
-            rows[b]
-                .metrics
-                .deviation
-                .total_cmp(&rows[a].metrics.deviation)
+            metric
+                .of(&rows[b].metrics)
+                .total_cmp(&metric.of(&rows[a].metrics))
                 .then(a.cmp(&b))
         });
         let worst = order.iter().take(WORST).map(|&k| rows[k].clone()).collect();
@@ -132,6 +189,7 @@ impl Report {
         Report {
             context,
             summary,
+            definitions: DEFINITIONS.into_iter().collect(),
             worst,
             histogram: Histogram { edges, counts },
             panels: rows,
@@ -160,13 +218,18 @@ impl Report {
         );
         let verdict = if s.within_tolerance {
             format!(
-                "<p class=\"ok\">All {} panels are within {} mm.</p>",
-                s.panels, s.tolerance
+                "<p class=\"ok\">All {} panels are within {} mm ({}).</p>",
+                s.panels,
+                s.tolerance,
+                s.metric.name()
             )
         } else {
             format!(
-                "<p class=\"bad\">{} of {} panels exceed the tolerance of {} mm.</p>",
-                s.above_tolerance, s.panels, s.tolerance
+                "<p class=\"bad\">{} of {} panels exceed the tolerance of {} mm ({}).</p>",
+                s.above_tolerance,
+                s.panels,
+                s.tolerance,
+                s.metric.name()
             )
         };
         h.push_str(&verdict);
@@ -190,9 +253,23 @@ impl Report {
         if let (Some(a), Some(u)) = (c.alpha_requested, c.alpha_used) {
             row("α requested / used", format!("{a:e} / {u:e}"));
         }
-        row("max deviation", format!("{:.6} mm", s.max_deviation));
-        row("mean deviation", format!("{:.6} mm", s.mean_deviation));
-        row("95th percentile", format!("{:.6} mm", s.p95_deviation));
+        let held = s.metric.name();
+        row("held to the tolerance", held.to_string());
+        row(&format!("max {held}"), format!("{:.6} mm", s.max_deviation));
+        row(
+            &format!("mean {held}"),
+            format!("{:.6} mm", s.mean_deviation),
+        );
+        row(
+            &format!("95th percentile of {held}"),
+            format!("{:.6} mm", s.p95_deviation),
+        );
+        row(
+            "max flatness (ISO 1101)",
+            format!("{:.6} mm", s.max_flatness),
+        );
+        row("max best-fit distance", format!("{:.6} mm", s.max_best_fit));
+        row("max corner figure", format!("{:.6} mm", s.max_corner));
         row(
             "max diagonal distance",
             format!("{:.6} mm", s.max_diagonal_distance),
@@ -202,7 +279,16 @@ impl Report {
         for note in &c.notes {
             let _ = writeln!(h, "<p>{}</p>", html(note));
         }
-        h.push_str("<h2>Panels by deviation</h2>\n<div class=\"views\">\n");
+        h.push_str("<h2>Figures</h2>\n<dl>\n");
+        for (k, v) in DEFINITIONS {
+            let _ = writeln!(h, "<dt>{k}</dt><dd>{}</dd>", html(v));
+        }
+        h.push_str("</dl>\n");
+        let _ = writeln!(
+            h,
+            "<h2>Panels by {}</h2>\n<div class=\"views\">",
+            s.metric.name()
+        );
         for (name, view) in [
             ("top", View::Top),
             ("front", View::Front),
@@ -221,15 +307,17 @@ impl Report {
             h.push_str("<h2>Convergence</h2>\n");
             h.push_str(&curve_svg(&c.history));
         }
-        h.push_str("<h2>Worst panels</h2>\n<table><tr><th>panel</th><th>nodes</th><th>deviation mm</th>\
-                    <th>diagonals mm</th><th>diag / edge</th><th>diag / diag</th><th>torsion °</th></tr>\n");
+        h.push_str("<h2>Worst panels</h2>\n<table><tr><th>panel</th><th>nodes</th><th>flatness mm</th>\
+                    <th>best fit mm</th><th>corner mm</th><th>diagonals mm</th><th>diag / edge</th><th>diag / diag</th><th>torsion °</th></tr>\n");
         for r in &self.worst {
             let m = &r.metrics;
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{:.6}</td><td>{:.6}</td><td>{:.2e}</td><td>{:.2e}</td><td>{:.4}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.2e}</td><td>{:.2e}</td><td>{:.4}</td></tr>",
                 r.index,
                 r.nodes.map_or(String::new(), |[a, b]| format!("{a}–{b}")),
+                m.flatness,
+                m.best_fit,
                 m.deviation,
                 m.diagonal_distance,
                 m.diagonal_rel_edge,
@@ -274,7 +362,7 @@ impl Report {
         );
         let tol = self.summary.tolerance;
         for (q, row) in self.quads.iter().zip(&self.panels) {
-            let t = (row.metrics.deviation / tol).clamp(0.0, 1.0);
+            let t = (self.summary.metric.of(&row.metrics) / tol).clamp(0.0, 1.0);
             let (r, g) = ((40.0 + 200.0 * t) as u8, (160.0 - 130.0 * t) as u8);
             let mut d = String::new();
             for (i, p) in q.iter().enumerate() {
@@ -409,6 +497,7 @@ mod tests {
             rows,
             quads,
             0.005,
+            Metric::Corner,
         );
         assert!((r.summary.max_deviation - 0.009).abs() < 1e-12);
         assert_eq!(r.summary.above_tolerance, 4);
