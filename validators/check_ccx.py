@@ -385,12 +385,15 @@ def shell_model(axes, sizing, deck_text, per_height):
     by_gauge = {}
     for el, t in enumerate(thickness):
         by_gauge.setdefault(t, []).append(el)
-    for g, (t, els) in enumerate(sorted(by_gauge.items())):
+    by_gauge = sorted(by_gauge.items())
+    for g, (t, els) in enumerate(by_gauge):
         lines.append(f"*ELEMENT, TYPE=S8R, ELSET=G{g}")
         lines += [f"{el + 1}, " + ", ".join(map(str, elements[el])) for el in els]
+    # Every element in one set, for the gravity load.
+    lines += ["*ELSET, ELSET=NALL_E"] + [f"G{g}" for g in range(len(by_gauge))]
     lines += ["*MATERIAL, NAME=STEEL", "*ELASTIC", f"{num(mat['E'])}, {num(mat['nu'])}",
               "*DENSITY", num(mat["density"] * 1e-9)]  # g/cm³ -> t/mm³
-    for g, (t, _) in enumerate(sorted(by_gauge.items())):
+    for g, (t, _) in enumerate(by_gauge):
         lines += [f"*SHELL SECTION, ELSET=G{g}, MATERIAL=STEEL", num(t)]
     lines.append("*BOUNDARY")
     for i, kind in sorted(deck_supports(deck_text).items()):
@@ -412,11 +415,7 @@ def shell_model(axes, sizing, deck_text, per_height):
         else:
             fail(f"the shell model takes self-weight and point loads, not {case!r}")
     lines += ["*NODE PRINT, NSET=NALL", "U", "*END STEP"]
-    text = "\n".join(lines) + "\n"
-    # Every element in one set, for the gravity load.
-    elset = ["*ELSET, ELSET=NALL_E"] + [f"G{g}" for g in range(len(by_gauge))]
-    text = text.replace("*MATERIAL,", "\n".join(elset) + "\n*MATERIAL,", 1)
-    return text, centre, len(elements)
+    return "\n".join(lines) + "\n", centre, len(elements)
 
 
 def lone_panel(length, height, gauge, E, nu, per_height, workdir):

@@ -413,14 +413,18 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
         Context {
             title: format!("Planarity audit of {}", args.input.display()),
             source: args.input.display().to_string(),
-            notes: if skipped.is_empty() {
-                Vec::new()
-            } else {
-                vec![format!(
+            notes: [
+                (!skipped.is_empty()).then(|| format!(
                     "{} faces of fewer than 4 distinct corners skipped (planar by construction).",
                     skipped.len()
-                )]
-            },
+                )),
+                (too_many > 0).then(|| format!(
+                    "{too_many} faces of more than {MAX_FLATNESS_CORNERS} corners have no flatness; the largest flatness is of the others."
+                )),
+            ]
+            .into_iter()
+            .flatten()
+            .collect(),
             ..Default::default()
         },
         rows,

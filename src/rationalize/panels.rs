@@ -203,8 +203,8 @@ fn least_eigenvector(mut a: [[f64; 3]; 3]) -> DVec3 {
     DVec3::new(v[0][k], v[1][k], v[2][k]).normalize_or(DVec3::Z)
 }
 
-/// The Newell normal of a polygon (unit; +z when it has no area).
-pub fn newell_normal(p: &[DVec3]) -> DVec3 {
+/// Newell's sum over a polygon's edges: twice its vector area.
+fn newell_sum(p: &[DVec3]) -> DVec3 {
     let mut n = DVec3::ZERO;
     for k in 0..p.len() {
         let (a, b) = (p[k], p[(k + 1) % p.len()]);
@@ -214,7 +214,12 @@ pub fn newell_normal(p: &[DVec3]) -> DVec3 {
             (a.x - b.x) * (a.y + b.y),
         );
     }
-    n.normalize_or(DVec3::Z)
+    n
+}
+
+/// The Newell normal of a polygon (unit; +z when it has no area).
+fn newell_normal(p: &[DVec3]) -> DVec3 {
+    newell_sum(p).normalize_or(DVec3::Z)
 }
 
 pub fn quad_metrics(q: [DVec3; 4]) -> QuadMetrics {
@@ -251,16 +256,7 @@ pub fn polygon_deviation(p: &[DVec3]) -> f64 {
     if p.len() < 4 {
         return 0.0;
     }
-    let mut n = DVec3::ZERO;
-    for k in 0..p.len() {
-        let (a, b) = (p[k], p[(k + 1) % p.len()]);
-        n += DVec3::new(
-            (a.y - b.y) * (a.z + b.z),
-            (a.z - b.z) * (a.x + b.x),
-            (a.x - b.x) * (a.y + b.y),
-        );
-    }
-    let Some(n) = n.try_normalize() else {
+    let Some(n) = newell_sum(p).try_normalize() else {
         return 0.0;
     };
     let c = p.iter().copied().sum::<DVec3>() / p.len() as f64;
