@@ -139,6 +139,17 @@ pub(crate) fn utf8_text(path: &Path, bytes: Vec<u8>) -> Result<String, ReadError
 
 /// Checks a lamina JSON file's `format` and `version` before its schema, so that another lamina
 /// file given by mistake is named as such (`what` says which file was expected).
+/// The `format` a lamina JSON file names at its top level, if any.
+pub(crate) fn json_format(path: &Path, text: &str) -> Result<Option<String>, ReadError> {
+    #[derive(serde::Deserialize)]
+    struct Header {
+        format: Option<String>,
+    }
+    let header: Header =
+        serde_json::from_str(text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+    Ok(header.format)
+}
+
 pub(crate) fn check_format(
     path: &Path,
     text: &str,

@@ -47,6 +47,18 @@ fn plates(path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
+fn panels(path: &Path) -> Result<(), String> {
+    let read = crate::rationalize::audit::read_panels(path).map_err(|e| e.to_string())?;
+    let _ = crate::rationalize::audit::audit(&read.panels);
+    Ok(())
+}
+
+fn tolerance_rules(path: &Path) -> Result<(), String> {
+    crate::rationalize::tolerance::Rules::read(path)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
 fn outline(path: &Path) -> Result<(), String> {
     crate::grow::outline_file::read_outline(path)
         .map(|_| ())
@@ -142,6 +154,24 @@ pub const TARGETS: &[Target] = &[
         ext: "json",
         seeds: &["fuzz/corpus/plates"],
         run: plates,
+    },
+    Target {
+        name: "panels_dxf",
+        ext: "dxf",
+        seeds: &["fixtures/panels/ezdxf_panels.dxf"],
+        run: panels,
+    },
+    Target {
+        name: "panels_obj",
+        ext: "obj",
+        seeds: &["fixtures/panels/rhino_ngons.obj"],
+        run: panels,
+    },
+    Target {
+        name: "tolerance_rules",
+        ext: "json",
+        seeds: &["fixtures/panels/glass_rules.json"],
+        run: tolerance_rules,
     },
     Target {
         name: "svg_outline",

@@ -295,8 +295,9 @@ fn audit_reads_dxf_faces_and_closed_polylines() -> TestResult {
     let html = dir.path().join("audit.html");
     let o = lamina(&["audit", s(&path), "--tolerance", "1", "--html", s(&html)]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let polygons = lamina::rationalize::audit::read_polygons(&path)?;
-    for c in &polygons[2] {
+    let read = lamina::rationalize::audit::read_panels(&path)?;
+    let polygons: Vec<_> = read.panels.iter().map(|p| &p.corners).collect();
+    for c in polygons[2] {
         assert!(
             (c.dot(n) - 3.0).abs() < 1e-12,
             "{c} is not on the plane 3 mm along n"
@@ -362,9 +363,9 @@ fn audit_holds_iso_flatness_by_default_and_writes_a_row_per_panel() -> TestResul
     let table = std::fs::read_to_string(&csv)?;
     let lines: Vec<&str> = table.lines().collect();
     assert_eq!(lines.len(), 3);
-    assert!(lines[0].starts_with("panel,corners,flatness_mm"));
-    assert!(lines[1].starts_with("0,4,") && lines[1].ends_with(",flatness,0.5,pass"));
-    assert!(lines[2].starts_with("1,6,"));
+    assert!(lines[0].starts_with("panel,name,layer,group,corners,flatness_mm"));
+    assert!(lines[1].starts_with("0,,,,4,") && lines[1].ends_with(",flatness,,0.5,pass"));
+    assert!(lines[2].starts_with("1,,,,6,"));
     // The corner figure is about 2w: over 0.5 mm, so held to it the audit fails.
     let o = lamina(&["audit", s(&obj), "--tolerance", "0.5", "--metric", "corner"]);
     assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
@@ -377,5 +378,204 @@ fn audit_holds_iso_flatness_by_default_and_writes_a_row_per_panel() -> TestResul
         "best-fit",
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    Ok(())
+}
+
+#[test]
+fn audit_holds_each_panel_to_its_tolerance_class() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let rules = fixture("panels/glass_rules.json");
+    // ezdxf's MESH (2 faces, GLASS-MESH), polyface (STEEL), 3DFACE (GLASS-N), a closed
+    // LWPOLYLINE hexagon (STEEL), an open LWPOLYLINE and a TEXT; in inches.
+    let dxf = fixture("panels/ezdxf_panels.dxf");
+    let (json, csv) = (dir.path().join("dxf.json"), dir.path().join("dxf.csv"));
+    let o = lamina(&[
+        "audit",
+        s(&dxf),
+        "--tolerance-rules",
+        s(&rules),
+        "--report",
+        s(&json),
+        "--csv",
+        s(&csv),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("1 TEXT, 1 open LWPOLYLINE"), "{err}");
+    assert!(err.contains("in ($INSUNITS = 1), ×25.4 to mm"), "{err}");
+    let r = report(&json)?;
+    let rows = r["panels"].as_array().ok_or("panels")?;
+    assert_eq!(rows.len(), 5);
+    let by_layer = |layer: &'static str| rows.iter().filter(move |p| p["layer"] == layer);
+    // The 3DFACE: a 10 in square with one corner 0.04 in up. Its zone is h/2 thick along a
+    // normal tilted from z: w = (h/2) / sqrt(1 + 2 (h / 2s)²); held to 0.0003 × its diagonal.
+    let (h, side): (f64, f64) = (0.04 * 25.4, 10.0 * 25.4);
+    let face = by_layer("GLASS-N").next().ok_or("3DFACE")?;
+    let w = (h / 2.0) / (1.0 + 2.0 * (h / (2.0 * side)).powi(2)).sqrt();
+    assert!(
+        (face["flatness"].as_f64().ok_or("f")? - w).abs() < 1e-12,
+        "{face}"
+    );
+    let diagonal = (2.0 * side * side + h * h).sqrt();
+    assert!((face["tolerance"].as_f64().ok_or("t")? - 3e-4 * diagonal).abs() < 1e-12);
+    assert_eq!(face["class"], "glass (layer)");
+    assert_eq!(face["pass"], false);
+    // The MESH's two faces keep its layer and are named by its handle and face number.
+    let mesh: Vec<_> = by_layer("GLASS-MESH").collect();
+    assert_eq!(mesh.len(), 2);
+    assert!(mesh[0]["name"].as_str().ok_or("name")?.ends_with("/0"));
+    assert!(mesh[1]["name"].as_str().ok_or("name")?.ends_with("/1"));
+    // STEEL: the polyface face within the default 0.5 mm, the hexagon exactly planar.
+    let steel: Vec<_> = by_layer("STEEL").collect();
+    assert_eq!(steel.len(), 2);
+    assert!(steel
+        .iter()
+        .all(|p| p["class"] == "default" && p["pass"] == true));
+    assert!(steel.iter().any(|p| p["flatness"] == 0.0));
+    let classes = r["summary"]["classes"].as_array().ok_or("classes")?;
+    let counts: Vec<(&str, u64)> = classes
+        .iter()
+        .map(|c| {
+            (
+                c["name"].as_str().unwrap_or(""),
+                c["panels"].as_u64().unwrap_or(0),
+            )
+        })
+        .collect();
+    assert_eq!(
+        counts,
+        [
+            ("glass (layer)", 3),
+            ("glass (group)", 0),
+            ("large steel", 0),
+            ("default", 2)
+        ]
+    );
+    assert_eq!(r["summary"]["above_tolerance"], 3);
+    assert!(
+        err.contains("\"large steel\""),
+        "an unused class is said: {err}"
+    );
+    let table = std::fs::read_to_string(&csv)?;
+    assert_eq!(table.lines().count(), 6);
+    assert_eq!(table.matches(",glass (layer),").count(), 3);
+
+    // Rhino's groups: the quad is glass by its group, the pentagon (721 mm across) large steel;
+    // the triangle is skipped.
+    let obj = fixture("panels/rhino_ngons.obj");
+    let o = lamina(&[
+        "audit",
+        s(&obj),
+        "--tolerance-rules",
+        s(&rules),
+        "--report",
+        s(&json),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let r = report(&json)?;
+    let classes: Vec<&str> = r["panels"]
+        .as_array()
+        .ok_or("panels")?
+        .iter()
+        .map(|p| p["class"].as_str().unwrap_or(""))
+        .collect();
+    assert_eq!(classes, ["glass (group)", "large steel"]);
+    assert_eq!(r["panels"][0]["group"], "glass");
+
+    // Errors, exit 2, nothing written: two defaults, no tolerance at all, a panel no rule
+    // matches without a default, a bad rule.
+    let none = dir.path().join("none.csv");
+    let o = lamina(&[
+        "audit",
+        s(&dxf),
+        "--tolerance-rules",
+        s(&rules),
+        "--tolerance",
+        "1",
+        "--csv",
+        s(&none),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("give it in one place"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lamina(&["audit", s(&dxf), "--csv", s(&none)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--tolerance-rules"), "{}", stderr(&o));
+    let only_glass = dir.path().join("glass.json");
+    for (rules, needle) in [
+        (
+            r#"{"rules":[{"layer":"GLASS*","mm":1}]}"#,
+            "layer \"STEEL\"",
+        ),
+        (r#"{"rules":[{"layer":"GLASS*","relative":-1}]}"#, "rule 1"),
+    ] {
+        std::fs::write(&only_glass, rules)?;
+        let o = lamina(&[
+            "audit",
+            s(&dxf),
+            "--tolerance-rules",
+            s(&only_glass),
+            "--csv",
+            s(&none),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{rules}");
+        assert!(stderr(&o).contains(needle), "{rules}: {}", stderr(&o));
+    }
+    assert!(!none.exists());
+    Ok(())
+}
+
+#[test]
+fn audit_reads_lamina_axes_and_plates() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let net = fixture("networks/calyx_veins.json");
+    let (axes, panels) = (dir.path().join("axes.json"), dir.path().join("panels.obj"));
+    let o = lamina(&["planarize", s(&net), "-o", s(&axes), "--panels", s(&panels)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (from_obj, from_axes) = (
+        dir.path().join("obj.json"),
+        dir.path().join("axes.audit.json"),
+    );
+    for (input, rep) in [(&panels, &from_obj), (&axes, &from_axes)] {
+        let o = lamina(&["audit", s(input), "--tolerance", "0.01", "--report", s(rep)]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    }
+    let (a, b) = (report(&from_obj)?, report(&from_axes)?);
+    let (a, b) = (
+        a["panels"].as_array().ok_or("a")?,
+        b["panels"].as_array().ok_or("b")?,
+    );
+    assert_eq!(a.len(), b.len());
+    for (p, q) in a.iter().zip(b) {
+        let (x, y) = (
+            p["flatness"].as_f64().ok_or("x")?,
+            q["flatness"].as_f64().ok_or("y")?,
+        );
+        assert!((x - y).abs() <= 1e-9 * x.max(1e-3), "{x} vs {y}");
+        assert!(q["nodes"].is_array(), "axes panels name their edge's nodes");
+    }
+    let plates = dir.path().join("plates");
+    let o = lamina(&["plates", s(&axes), "--groups", "3", "-o", s(&plates)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rep = dir.path().join("plates.audit.json");
+    let o = lamina(&[
+        "audit",
+        s(&plates.join("plates.json")),
+        "--tolerance",
+        "0.001",
+        "--report",
+        s(&rep),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let r = report(&rep)?;
+    let rows = r["panels"].as_array().ok_or("panels")?;
+    // Cut plates are flat by construction: only rounding in their placement.
+    assert!(r["summary"]["max_flatness"].as_f64().ok_or("max")? < 1e-9);
+    assert!(rows
+        .iter()
+        .all(|p| p["name"].is_string() && p["group"].is_string()));
     Ok(())
 }

@@ -18,11 +18,28 @@ start is the least-squares plane (numpy's SVD).
     check_flatness.py --same A.json B.json ... reports of the same panels from different files:
                                            the same figures, panel by panel, to --rel (a DXF
                                            in inches rounds each coordinate once more)
+    check_flatness.py --rules RULES.json PANELS REPORT.json [CSV]
+                                           tolerance classes: each panel's class, tolerance
+                                           and verdict recomputed from the rule file (first
+                                           matching rule by layer, group and size, else the
+                                           default; tolerance mm + relative x size, size the
+                                           largest corner-to-corner distance), against the
+                                           report and, row by row, its CSV
+    check_flatness.py --quads OBJ [SUMMARY.json]
+                                           a large OBJ of quads only (`v x y z`, `f a b c d`),
+                                           vectorised: each quad's flatness is the least of its
+                                           tetrahedron's four heights and three opposite-edge
+                                           distances; the largest against lamina audit's
+                                           `--json` summary (the benchmark's peer)
 
-Panels are read here: OBJ `v`/`f` records (n-gons kept whole), DXF 3DFACE entities and
-polyface meshes through ezdxf. Faces with fewer than 4 distinct corners are skipped, as lamina
-skips them.
+Panels are read here: OBJ `v`/`f` records (n-gons kept whole, `o`/`g` names as groups), DXF
+3DFACE entities, polyface meshes and MESH entities through ezdxf (with their layers), a lamina
+axes file (one quad per edge: p_a, p_b, p_b + h_b d_b, p_a + h_a d_a) and a lamina plates file
+(each outline through its 4 x 4 placement matrix, the assembly group as group). Faces with fewer
+than 4 distinct corners are skipped, as lamina skips them.
 """
+import csv
+import fnmatch
 import argparse
 import json
 import os
@@ -38,18 +55,48 @@ def fail(msg):
     sys.exit(1)
 
 
+class Panel:
+    def __init__(self, corners, layer=None, group=None):
+        self.corners = np.array(corners, dtype=float)
+        self.layer, self.group = layer, group
+
+
 def read_obj(path):
-    verts, faces = [], []
+    verts, faces, group = [], [], None
     for line in open(path, encoding="utf-8", errors="replace"):
         parts = line.split()
         if not parts:
             continue
         if parts[0] == "v":
             verts.append([float(x) for x in parts[1:4]])
+        elif parts[0] in ("o", "g"):
+            group = line.strip()[1:].strip() or None
         elif parts[0] == "f":
             idx = [int(tok.split("/")[0]) for tok in parts[1:]]
-            faces.append([verts[i - 1] if i > 0 else verts[i] for i in idx])
-    return [np.array(f, dtype=float) for f in faces]
+            faces.append(Panel([verts[i - 1] if i > 0 else verts[i] for i in idx], group=group))
+    return faces
+
+
+def read_lamina_json(path):
+    data = json.load(open(path))
+    if data.get("format") == "lamina-axes":
+        nodes = data["nodes"]
+        out = []
+        for e in data["edges"]:
+            a, b = nodes[e["a"]], nodes[e["b"]]
+            pa, pb = np.array(a["p"]), np.array(b["p"])
+            out.append(Panel([pa, pb, pb + b["height"] * np.array(b["axis"]),
+                              pa + a["height"] * np.array(a["axis"])]))
+        return out
+    if data.get("format") == "lamina-plates":
+        out = []
+        for plate in data["plates"]:
+            m = np.array(plate["matrix"], dtype=float)
+            xy = np.array(plate["outline"], dtype=float)
+            local = np.column_stack([xy, np.zeros(len(xy)), np.ones(len(xy))])
+            out.append(Panel((local @ m.T)[:, :3], group=str(plate["group"])))
+        return out
+    fail(f"{path}: not a lamina axes or plates file")
 
 
 def read_dxf(path):
@@ -60,17 +107,23 @@ def read_dxf(path):
     scale = {1: 25.4, 2: 304.8, 4: 1.0, 5: 10.0, 6: 1000.0}.get(doc.header.get("$INSUNITS", 0), 1.0)
     out = []
     for e in doc.modelspace():
-        kind = e.dxftype()
+        kind, layer = e.dxftype(), e.dxf.layer
         if kind == "3DFACE":
             c = [np.array(e.dxf.get(f"vtx{k}")) for k in range(4)]
             if np.array_equal(c[3], c[2]):
                 c = c[:3]
-            out.append(np.array(c, dtype=float))
+            out.append(Panel(c, layer))
         elif kind == "POLYLINE" and e.is_poly_face_mesh:
             for face in e.faces():
                 # ezdxf yields the face's vertices followed by the face record itself.
-                out.append(np.array([list(v.dxf.location) for v in face[:-1]], dtype=float))
-    return [p * scale for p in out]
+                out.append(Panel([list(v.dxf.location) for v in face[:-1]], layer))
+        elif kind == "MESH":
+            v = [list(p) for p in e.vertices]
+            for f in e.faces:
+                out.append(Panel([v[i] for i in f], layer))
+    for p in out:
+        p.corners *= scale
+    return out
 
 
 def distinct(p):
@@ -122,16 +175,21 @@ def flatness(p):
 
 
 def read_panels(path):
+    """The panels of 4 or more distinct corners."""
     ext = os.path.splitext(path)[1].lower()
     if ext == ".obj":
-        return read_obj(path)
-    if ext == ".dxf":
-        return read_dxf(path)
-    fail(f"{path}: give .obj or .dxf panels")
+        read = read_obj(path)
+    elif ext == ".dxf":
+        read = read_dxf(path)
+    elif ext == ".json":
+        read = read_lamina_json(path)
+    else:
+        fail(f"{path}: give .obj, .dxf or lamina .json panels")
+    return [p for p in read if distinct(p.corners) >= 4]
 
 
 def compare(panels_path, report_path, rel):
-    panels = [p for p in read_panels(panels_path) if distinct(p) >= 4]
+    panels = [p.corners for p in read_panels(panels_path)]
     report = json.load(open(report_path))
     rows = report["panels"]
     if len(rows) != len(panels):
@@ -190,6 +248,90 @@ def random_ngons(out, lamina, rel):
     compare(path, report, rel)
 
 
+def rules_check(rules_path, panels_path, report_path, csv_path):
+    rules = json.load(open(rules_path))
+    default = rules.get("default")
+    panels = read_panels(panels_path)
+    report = json.load(open(report_path))
+    rows = report["panels"]
+    metric = {"flatness": "flatness", "best-fit": "best_fit", "corner": "deviation"}[
+        report["summary"]["metric"]]
+    if len(rows) != len(panels):
+        fail(f"{report_path}: {len(rows)} panels, {panels_path} {len(panels)}")
+
+    def matches(rule, p, size):
+        for key, name in (("layer", p.layer), ("group", p.group)):
+            if key in rule and (name is None or not fnmatch.fnmatchcase(name.lower(), rule[key].lower())):
+                return False
+        return rule.get("min_size", 0) <= size <= rule.get("max_size", float("inf"))
+
+    counts = {}
+    fails = 0
+    for k, (p, row) in enumerate(zip(panels, rows)):
+        c = p.corners
+        size = max(np.linalg.norm(c[i] - c[j]) for i in range(len(c)) for j in range(i + 1, len(c)))
+        name, allow = None, default
+        for n, rule in enumerate(rules.get("rules", [])):
+            if matches(rule, p, size):
+                name, allow = rule.get("name") or f"rule {n + 1}", rule
+                break
+        if allow is None:
+            fail(f"panel {k} matches no rule and there is no default")
+        name = name or "default"
+        tol = allow.get("mm", 0.0) + allow.get("relative", 0.0) * size
+        ok = row[metric] <= tol
+        if row.get("class") != name or abs(row["tolerance"] - tol) > 1e-9 * max(tol, 1.0) or row["pass"] != ok:
+            fail(f"panel {k}: lamina says class {row.get('class')}, tolerance {row['tolerance']}, "
+                 f"pass {row['pass']}; the rules give {name}, {tol}, {ok}")
+        counts[name] = counts.get(name, 0) + 1
+        fails += not ok
+    s = report["summary"]
+    if s["above_tolerance"] != fails or s["within_tolerance"] != (fails == 0):
+        fail(f"summary: {s['above_tolerance']} above, the rules give {fails}")
+    for c in s["classes"]:
+        if c["panels"] != counts.get(c["name"], 0):
+            fail(f"class {c['name']}: {c['panels']} panels, the rules give {counts.get(c['name'], 0)}")
+    if csv_path:
+        with open(csv_path, newline="") as f:
+            table = list(csv.DictReader(f))
+        if len(table) != len(rows):
+            fail(f"{csv_path}: {len(table)} rows, the report {len(rows)} panels")
+        for r, row in zip(table, rows):
+            if (int(r["panel"]) != row["index"] or r["class"] != row.get("class", "")
+                    or (r["pass"] == "pass") != row["pass"]
+                    or abs(float(r["tolerance_mm"]) - row["tolerance"]) > 1e-12 * row["tolerance"]
+                    or abs(float(r["flatness_mm"]) - row["flatness"]) > 1e-12 * max(row["flatness"], 1e-300)):
+                fail(f"{csv_path}: row {r['panel']} disagrees with the report")
+    print(f"check_flatness: {panels_path}: {len(rows)} panels in classes "
+          f"{', '.join(f'{k} {v}' for k, v in sorted(counts.items()))}, {fails} above their "
+          f"tolerance: lamina's classes, tolerances and verdicts agree")
+
+
+def quads(path, summary_path, rel):
+    lines = open(path).read().splitlines()
+    v = np.array(" ".join(l[2:] for l in lines if l.startswith("v ")).split(), dtype=float)
+    f = np.array(" ".join(l[2:] for l in lines if l.startswith("f ")).split(), dtype=np.int64)
+    p = v.reshape(-1, 3)[f.reshape(-1, 4) - 1]
+    normals = [np.cross(p[:, j] - p[:, i], p[:, k] - p[:, i])
+               for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))]
+    normals += [np.cross(p[:, j] - p[:, i], p[:, l] - p[:, k])
+                for i, j, k, l in ((0, 1, 2, 3), (0, 2, 1, 3), (0, 3, 1, 2))]
+    n = np.stack(normals, axis=1)
+    length = np.linalg.norm(n, axis=2)
+    size = np.linalg.norm(p.max(axis=1) - p.min(axis=1), axis=1)
+    ok = length > 1e-12 * size[:, None] ** 2
+    n = n / np.where(ok, length, 1.0)[:, :, None]
+    t = np.einsum("nkj,nij->nki", n, p)
+    width = np.where(ok, t.max(axis=2) - t.min(axis=2), np.inf).min(axis=1)
+    largest = float(width.max())
+    print(f"check_flatness: {path}: {len(width)} quads, largest flatness {largest:.9g} mm")
+    if summary_path:
+        theirs = json.load(open(summary_path))["max_flatness"]
+        if abs(theirs - largest) > rel * max(largest, 1e-9):
+            fail(f"lamina's largest flatness {theirs} differs from {largest}")
+        print(f"check_flatness: lamina's largest flatness {theirs:.9g} mm agrees")
+
+
 def same(reports, rel):
     first = json.load(open(reports[0]))["panels"]
     for other in reports[1:]:
@@ -213,12 +355,20 @@ def main():
     ap.add_argument("--rel", type=float, default=1e-6)
     ap.add_argument("--random", nargs=2, metavar=("DIR", "LAMINA"))
     ap.add_argument("--same", nargs="+")
+    ap.add_argument("--rules", nargs="+", metavar="RULES PANELS REPORT [CSV]")
+    ap.add_argument("--quads", nargs="+", metavar="OBJ [SUMMARY]")
     args = ap.parse_args()
     if args.random:
         os.makedirs(args.random[0], exist_ok=True)
         random_ngons(*args.random, args.rel)
     elif args.same:
         same(args.same, args.rel)
+    elif args.quads:
+        quads(args.quads[0], args.quads[1] if len(args.quads) > 1 else None, args.rel)
+    elif args.rules:
+        if len(args.rules) not in (3, 4):
+            ap.error("--rules RULES PANELS REPORT [CSV]")
+        rules_check(*args.rules[:3], args.rules[3] if len(args.rules) == 4 else None)
     elif args.panels and args.report:
         compare(args.panels, args.report, args.rel)
     else:

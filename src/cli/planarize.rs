@@ -2,7 +2,7 @@
 //! panels made elsewhere; both write the planarity report.
 
 use std::io::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Result};
@@ -11,12 +11,13 @@ use glam::DVec3;
 use serde_json::json;
 
 use lamina::files::write_atomic;
-use lamina::rationalize::audit::{audit, read_polygons};
+use lamina::rationalize::audit::{audit, read_panels, Panel};
 use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
 use lamina::rationalize::panels::MAX_FLATNESS_CORNERS;
 use lamina::rationalize::planarize::{
     planarize, Input, Method, PlanarizeOptions, Selector, Solution,
 };
+use lamina::rationalize::tolerance::{Allowance, Judged, Rule, Rules};
 use lamina::report::planarity::{Context, Metric, PanelRow, Report};
 
 use super::input::{reference_normals, ReadArgs};
@@ -274,7 +275,9 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
         .map(|p| PanelRow {
             index: p.edge,
             nodes: Some([p.a, p.b]),
+            tolerance: sol.tolerance,
             metrics: p.metrics,
+            ..Default::default()
         })
         .collect();
     Report::new(
@@ -297,7 +300,8 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
         },
         rows,
         quads.iter().map(|q| q.to_vec()).collect(),
-        sol.tolerance,
+        Some(sol.tolerance),
+        Vec::new(),
         // planarize holds each panel's corner figure to the tolerance.
         Metric::Corner,
     )
@@ -305,152 +309,297 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
 
 #[derive(ClapArgs)]
 pub struct AuditArgs {
-    /// Panels: .obj faces (quads and n-gons) or .dxf 3DFACE / polyface meshes / closed polylines
+    /// Panels: .obj faces (quads and n-gons, with their groups), .dxf 3DFACE / polyface meshes /
+    /// MESH / closed polylines (with their layers), or a lamina axes or plates .json
     pub input: PathBuf,
-    /// Largest figure accepted, mm
+    /// Largest figure accepted, mm (with --tolerance-rules: for the panels no rule matches)
     #[arg(long)]
-    pub tolerance: f64,
+    pub tolerance: Option<f64>,
+    /// Tolerance classes (JSON) by DXF layer, OBJ or assembly group and panel size, absolute or
+    /// relative to the size: the first rule a panel matches gives its tolerance
+    #[arg(long, value_name = "RULES.json")]
+    pub tolerance_rules: Option<PathBuf>,
     /// The figure held to the tolerance: ISO 1101 minimum-zone flatness, the largest distance
     /// from the least-squares plane, or the corner's distance from the plane of the other three
     #[arg(long, value_enum, default_value_t = Metric::Flatness)]
     pub metric: Metric,
-    /// One row per panel (id, corners, every figure, tolerance, pass/fail) for quality records
+    /// One row per panel (id, name, layer, group, corners, every figure, class, tolerance,
+    /// pass/fail) for quality records
     #[arg(long)]
     pub csv: Option<PathBuf>,
     #[command(flatten)]
     pub reports: ReportArgs,
 }
 
-/// Ok(true) when every panel is within the tolerance.
-pub fn audit_run(args: AuditArgs) -> Result<bool> {
-    if !(args.tolerance.is_finite() && args.tolerance > 0.0) {
-        bail!(
-            "--tolerance must be a positive distance in mm, got {}",
-            args.tolerance
-        );
+/// The tolerance classes the arguments give: the rule file's, with --tolerance as the default.
+fn audit_rules(args: &AuditArgs) -> Result<Rules> {
+    if let Some(t) = args.tolerance {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--tolerance must be a positive distance in mm, got {t}");
+        }
     }
-    let read = read_polygons(&args.input)?;
+    let mut rules = match &args.tolerance_rules {
+        Some(path) => Rules::read(path)?,
+        None => Rules::default(),
+    };
+    match (args.tolerance, rules.default) {
+        (Some(_), Some(_)) => bail!(
+            "{} gives a default tolerance and so does --tolerance: give it in one place",
+            args.tolerance_rules
+                .as_deref()
+                .unwrap_or(Path::new(""))
+                .display()
+        ),
+        (Some(t), None) => rules.default = Some(Allowance::absolute(t)),
+        (None, None) if args.tolerance_rules.is_none() => {
+            bail!("give the tolerance: --tolerance MM, or --tolerance-rules RULES.json")
+        }
+        _ => {}
+    }
+    Ok(rules)
+}
+
+/// Ok(true) when every panel is within its tolerance.
+pub fn audit_run(args: AuditArgs) -> Result<bool> {
+    let rules = audit_rules(&args)?;
+    let read = read_panels(&args.input)?;
+    let source = args.input.display().to_string();
+    for note in &read.notes {
+        eprintln!("lamina: {source}: {note}");
+    }
     // Faces of fewer than four distinct corners are planar by construction: counted, not audited.
-    let (polygons, skipped): (Vec<_>, Vec<_>) = read
+    let total = read.panels.len();
+    let (ids, panels): (Vec<usize>, Vec<Panel>) = read
+        .panels
         .into_iter()
         .enumerate()
-        .partition(|(_, p)| distinct_corners(p) >= 4);
-    if !skipped.is_empty() {
+        .filter(|(_, p)| distinct_corners(&p.corners) >= 4)
+        .unzip();
+    let skipped = total - panels.len();
+    if skipped > 0 {
         eprintln!(
-            "lamina: {} of {} faces have fewer than 4 distinct corners (planar by construction): skipped",
-            skipped.len(),
-            skipped.len() + polygons.len()
+            "lamina: {skipped} of {total} faces have fewer than 4 distinct corners (planar by construction): skipped"
         );
     }
-    if polygons.is_empty() {
+    if panels.is_empty() {
         bail!(
-            "{}: no face has 4 or more distinct corners: nothing to audit",
-            args.input.display()
+            "{source}: no face has 4 or more distinct corners: nothing to audit (a triangulated \
+             export, as from STL or trimesh, has lost its panels: export quads or n-gons)"
         );
     }
-    let ids: Vec<usize> = polygons.iter().map(|(k, _)| *k).collect();
-    let polygons: Vec<Vec<DVec3>> = polygons.into_iter().map(|(_, p)| p).collect();
-    let audited = audit(&polygons);
-    let too_many = audited
-        .iter()
-        .filter(|a| a.metrics.flatness.is_nan())
-        .count();
+    let judged = judge(&args, &rules, &ids, &panels)?;
+    let metrics = audit(&panels);
+    let too_many = metrics.iter().filter(|m| m.flatness.is_nan()).count();
     if too_many > 0 {
         if args.metric == Metric::Flatness {
             bail!(
-                "{}: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners, beyond the exact flatness search: give --metric best-fit",
-                args.input.display()
+                "{source}: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners, beyond the exact flatness search: give --metric best-fit"
             );
         }
         eprintln!(
             "lamina: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners: no flatness for them (NaN)"
         );
     }
-    let rows: Vec<PanelRow> = audited
-        .iter()
+    let (rows, corners): (Vec<PanelRow>, Vec<Vec<DVec3>>) = panels
+        .into_iter()
+        .zip(metrics)
         .zip(&ids)
-        .map(|(a, &k)| PanelRow {
-            index: k,
-            nodes: None,
-            metrics: a.metrics,
+        .zip(&judged)
+        .map(|(((p, metrics), &index), j)| {
+            let row = PanelRow {
+                index,
+                nodes: p.nodes,
+                name: p.name,
+                layer: p.layer,
+                group: p.group,
+                tolerance: j.tolerance,
+                class: args
+                    .tolerance_rules
+                    .is_some()
+                    .then(|| j.rule.unwrap_or(rules.rules.len())),
+                metrics,
+                ..Default::default()
+            };
+            (row, p.corners)
         })
-        .collect();
-    if let Some(path) = &args.csv {
-        write_atomic(path, |w| {
-            writeln!(
-                w,
-                "panel,corners,flatness_mm,best_fit_mm,corner_mm,diagonal_distance_mm,warp,torsion_deg,normal_x,normal_y,normal_z,metric,tolerance_mm,pass"
-            )?;
-            for (r, p) in rows.iter().zip(&polygons) {
-                let m = &r.metrics;
-                writeln!(
-                    w,
-                    "{},{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
-                    r.index,
-                    p.len(),
-                    m.flatness,
-                    m.best_fit,
-                    m.deviation,
-                    m.diagonal_distance,
-                    m.diagonal_rel_diagonal,
-                    m.torsion_deg,
-                    m.normal[0],
-                    m.normal[1],
-                    m.normal[2],
-                    args.metric.name(),
-                    args.tolerance,
-                    if args.metric.of(m) <= args.tolerance {
-                        "pass"
-                    } else {
-                        "fail"
-                    }
-                )?;
-            }
-            Ok(())
-        })?;
-    }
+        .unzip();
+    let classes: Vec<(String, String)> = if args.tolerance_rules.is_some() {
+        rules
+            .rules
+            .iter()
+            .map(|r| (r.name.clone(), describe_rule(r)))
+            .chain(rules.default.map(|d| {
+                (
+                    "default".to_string(),
+                    format!("any other panel: {}", d.describe()),
+                )
+            }))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let report = Report::new(
         Context {
-            title: format!("Planarity audit of {}", args.input.display()),
-            source: args.input.display().to_string(),
-            notes: [
-                (!skipped.is_empty()).then(|| format!(
-                    "{} faces of fewer than 4 distinct corners skipped (planar by construction).",
-                    skipped.len()
-                )),
-                (too_many > 0).then(|| format!(
+            title: format!("Planarity audit of {source}"),
+            source: source.clone(),
+            notes: read
+                .notes
+                .iter()
+                .cloned()
+                .chain((skipped > 0).then(|| format!(
+                    "{skipped} faces of fewer than 4 distinct corners skipped (planar by construction)."
+                )))
+                .chain((too_many > 0).then(|| format!(
                     "{too_many} faces of more than {MAX_FLATNESS_CORNERS} corners have no flatness; the largest flatness is of the others."
-                )),
-            ]
-            .into_iter()
-            .flatten()
-            .collect(),
+                )))
+                .chain(args.tolerance_rules.as_ref().map(|p| format!(
+                    "Tolerances from {}: the first rule a panel matches gives its tolerance; size is the panel's largest corner-to-corner distance.",
+                    p.display()
+                )))
+                .collect(),
             ..Default::default()
         },
         rows,
-        polygons,
-        args.tolerance,
+        corners,
+        rules.default.filter(|d| d.relative == 0.0).map(|d| d.mm),
+        classes,
         args.metric,
     );
+    for c in &report.summary.classes {
+        if c.panels == 0 {
+            eprintln!(
+                "lamina: tolerance class \"{}\" ({}) matches no panel",
+                c.name, c.rule
+            );
+        }
+    }
+    if let Some(path) = &args.csv {
+        write_audit_csv(path, &report, args.metric)?;
+    }
     args.reports.write(&report)?;
     let s = &report.summary;
     if args.reports.json {
         println!("{}", serde_json::to_string(s)?);
     } else {
+        let figure = |v: f64| {
+            if v.is_nan() {
+                "none".to_string()
+            } else {
+                format!("{v:.9}")
+            }
+        };
         println!(
-            "{}: {} panels, max {} {:.9} mm (flatness {:.9}, best fit {:.9}, corner {:.9}), {} above {} mm",
-            args.input.display(),
+            "{source}: {} panels, max {} {} mm (flatness {}, best fit {}, corner {}), {} above {}",
             s.panels,
             s.metric.name(),
-            s.max_deviation,
-            s.max_flatness,
-            s.max_best_fit,
-            s.max_corner,
+            figure(s.max_deviation),
+            figure(s.max_flatness),
+            figure(s.max_best_fit),
+            figure(s.max_corner),
             s.above_tolerance,
-            s.tolerance
+            match (s.tolerance, s.classes.is_empty()) {
+                (Some(t), true) => format!("{t} mm"),
+                _ => format!("their class's tolerance ({} classes)", s.classes.len()),
+            }
         );
     }
     Ok(s.within_tolerance)
+}
+
+/// Each panel's tolerance; an error for a panel no rule matches when there is no default.
+fn judge(args: &AuditArgs, rules: &Rules, ids: &[usize], panels: &[Panel]) -> Result<Vec<Judged>> {
+    panels
+        .iter()
+        .zip(ids)
+        .map(|(p, id)| {
+            rules.judge(p).ok_or_else(|| {
+                let label: Vec<String> = [("name", &p.name), ("layer", &p.layer), ("group", &p.group)]
+                    .into_iter()
+                    .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k} \"{v}\"")))
+                    .collect();
+                anyhow::anyhow!(
+                    "{}: panel {id} ({}) matches no rule of {} and there is no default: add \"default\" to the rules or give --tolerance",
+                    args.input.display(),
+                    if label.is_empty() { "no name, layer or group".into() } else { label.join(", ") },
+                    args.tolerance_rules.as_deref().unwrap_or(Path::new("")).display()
+                )
+            })
+        })
+        .collect()
+}
+
+/// What a rule matches and allows, in words.
+fn describe_rule(r: &Rule) -> String {
+    let mut what = Vec::new();
+    if let Some(l) = &r.layer {
+        what.push(format!("layer {l}"));
+    }
+    if let Some(g) = &r.group {
+        what.push(format!("group {g}"));
+    }
+    if let Some(s) = r.min_size {
+        what.push(format!("size ≥ {s} mm"));
+    }
+    if let Some(s) = r.max_size {
+        what.push(format!("size ≤ {s} mm"));
+    }
+    if what.is_empty() {
+        what.push("every panel".into());
+    }
+    format!("{}: {}", what.join(", "), r.allowance().describe())
+}
+
+/// One row per panel: id, labels, every figure, class, tolerance and verdict. Rows are
+/// formatted in blocks on every core and written in order.
+fn write_audit_csv(path: &Path, report: &Report, metric: Metric) -> Result<()> {
+    use rayon::prelude::*;
+    // Names are quoted as CSV asks when they hold a comma, quote or line break.
+    let field = |v: &Option<String>| match v {
+        None => String::new(),
+        Some(v) if v.contains([',', '"', '\n', '\r']) => format!("\"{}\"", v.replace('"', "\"\"")),
+        Some(v) => v.clone(),
+    };
+    let row = |(r, p): (&PanelRow, &Vec<DVec3>)| {
+        let m = &r.metrics;
+        format!(
+            "{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{},{}\n",
+            r.index,
+            field(&r.name),
+            field(&r.layer),
+            field(&r.group),
+            p.len(),
+            m.flatness,
+            m.best_fit,
+            m.deviation,
+            m.diagonal_distance,
+            m.diagonal_rel_diagonal,
+            m.torsion_deg,
+            m.normal[0],
+            m.normal[1],
+            m.normal[2],
+            metric.name(),
+            field(&r.class_name),
+            r.tolerance,
+            if r.pass { "pass" } else { "fail" }
+        )
+    };
+    let blocks: Vec<String> = report
+        .panels
+        .par_chunks(4096)
+        .zip(report.quads.par_chunks(4096))
+        .map(|(rows, quads)| rows.iter().zip(quads).map(row).collect())
+        .collect();
+    write_atomic(path, |w| {
+        writeln!(
+            w,
+            "panel,name,layer,group,corners,flatness_mm,best_fit_mm,corner_mm,diagonal_distance_mm,warp,torsion_deg,normal_x,normal_y,normal_z,metric,class,tolerance_mm,pass"
+        )?;
+        for b in &blocks {
+            w.write_all(b.as_bytes())?;
+        }
+        Ok(())
+    })?;
+    Ok(())
 }
 
 /// Corners more than 1e-9 of the polygon's size apart from every earlier one.

@@ -9,4 +9,5 @@ pub mod groups;
 pub mod panels;
 pub mod planarize;
 pub mod plates;
+pub mod tolerance;
 pub mod welds;

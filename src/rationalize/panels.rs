@@ -27,7 +27,7 @@ use glam::DVec3;
 pub const MAX_FLATNESS_CORNERS: usize = 48;
 
 /// Planarity figures of one quad (the quad's own ones zero for other polygons).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct QuadMetrics {
     /// ISO 1101 minimum-zone flatness, mm (NaN over `MAX_FLATNESS_CORNERS` corners).
     pub flatness: f64,

@@ -14,6 +14,8 @@ use crate::rationalize::panels::QuadMetrics;
 pub const WORST: usize = 20;
 /// Histogram bins.
 pub const BINS: usize = 20;
+/// The most panels a view draws (the page stays a few megabytes).
+pub const VIEW_PANELS: usize = 20_000;
 
 /// The figure a tolerance is held against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
@@ -48,7 +50,7 @@ impl Metric {
 }
 
 /// Each figure of a panel row, as the JSON report and the page define it.
-pub const DEFINITIONS: [(&str, &str); 8] = [
+pub const DEFINITIONS: [(&str, &str); 10] = [
     ("flatness", "ISO 1101 flatness, mm: the width of the thinnest zone between two parallel planes that holds every corner of the panel (the minimum zone), exact"),
     ("best_fit", "mm: the largest distance of a corner from the least-squares plane through the corners"),
     ("deviation", "the corner figure, mm: the distance of the third corner from the plane through the other three (quads; for other polygons the largest distance from the plane through the centroid with the Newell normal); on a twisted square 2 times the flatness and 4 times the best-fit figure"),
@@ -57,6 +59,8 @@ pub const DEFINITIONS: [(&str, &str); 8] = [
     ("diagonal_rel_diagonal", "warp: the diagonal distance over the mean diagonal length (libigl's planarity)"),
     ("torsion_deg", "degrees: the angle between the planes (q0, q1, q3) and (q0, q1, q2) along the edge q0q1 (quads)"),
     ("normal", "the unit normal of the minimum zone, turned to agree with the polygon's Newell normal"),
+    ("tolerance", "mm: the largest held figure the panel may have: the one tolerance given, or its class's mm + relative × size, size being the largest distance between two of its corners"),
+    ("pass", "whether the held figure (the summary's metric) is at most the panel's tolerance"),
 ];
 
 /// What the report is about: where the panels came from and how they were solved.
@@ -74,13 +78,38 @@ pub struct Context {
     pub notes: Vec<String>,
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct PanelRow {
     pub index: usize,
     /// The network edge's nodes, when the panels came from a network.
     pub nodes: Option<[u32; 2]>,
+    /// The panel's own name (a plate's tag), its DXF layer, its OBJ group or assembly group.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub layer: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
+    /// The tolerance this panel is held to, mm, and the class (rule) that gave it.
+    pub tolerance: f64,
+    #[serde(skip)]
+    pub class: Option<usize>,
+    #[serde(rename = "class", skip_serializing_if = "Option::is_none")]
+    pub class_name: Option<String>,
+    /// Whether the held figure is within the tolerance.
+    pub pass: bool,
     #[serde(flatten)]
     pub metrics: QuadMetrics,
+}
+
+/// A tolerance class of an audit and how its panels fared.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Class {
+    pub name: String,
+    /// What the class matches and allows, as the rule file says it.
+    pub rule: String,
+    pub panels: usize,
+    pub above_tolerance: usize,
 }
 
 #[derive(Clone, Debug, serde::Serialize)]
@@ -88,7 +117,15 @@ pub struct Summary {
     pub panels: usize,
     /// The figure the tolerance is held against; the max, mean and 95th percentile are of it.
     pub metric: Metric,
-    pub tolerance: f64,
+    /// The tolerance of every panel, or of those no class rule matched; None when only the
+    /// rules give tolerances.
+    pub tolerance: Option<f64>,
+    /// The tolerance classes, when a rule file gave them (the last, "default", for panels no
+    /// rule matched).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub classes: Vec<Class>,
+    /// The largest ratio of the held figure to the panel's own tolerance.
+    pub max_ratio: f64,
     pub max_deviation: f64,
     pub mean_deviation: f64,
     pub p95_deviation: f64,
@@ -123,39 +160,65 @@ pub struct Report {
 }
 
 impl Report {
+    /// The report of `rows`, each with its tolerance (and class, an index into `classes`, given
+    /// as (name, rule) pairs); `tolerance` is the default one.
     pub fn new(
         context: Context,
-        rows: Vec<PanelRow>,
+        mut rows: Vec<PanelRow>,
         quads: Vec<Vec<DVec3>>,
-        tolerance: f64,
+        tolerance: Option<f64>,
+        classes: Vec<(String, String)>,
         metric: Metric,
     ) -> Report {
         let n = rows.len();
+        let mut classes: Vec<Class> = classes
+            .into_iter()
+            .map(|(name, rule)| Class {
+                name,
+                rule,
+                panels: 0,
+                above_tolerance: 0,
+            })
+            .collect();
+        let mut above = 0;
+        let mut max_ratio: f64 = 0.0;
+        for r in rows.iter_mut() {
+            let figure = metric.of(&r.metrics);
+            // NaN (no flatness for a huge polygon) fails.
+            r.pass = figure <= r.tolerance;
+            above += usize::from(!r.pass);
+            max_ratio = max_ratio.max(figure / r.tolerance);
+            if let Some(c) = r.class.and_then(|k| classes.get_mut(k)) {
+                c.panels += 1;
+                c.above_tolerance += usize::from(!r.pass);
+                r.class_name = Some(c.name.clone());
+            }
+        }
         let mut devs: Vec<f64> = rows.iter().map(|r| metric.of(&r.metrics)).collect();
-        devs.sort_by(f64::total_cmp);
-        let max = devs.last().copied().unwrap_or(0.0);
-        let p95 = if n > 0 {
-            devs[((n as f64 * 0.95).ceil() as usize).clamp(1, n) - 1]
+        let max = devs.iter().copied().fold(0.0, f64::max);
+        let mean = if n > 0 {
+            devs.iter().sum::<f64>() / n as f64
         } else {
             0.0
         };
-        let above = rows
-            .iter()
-            .filter(|r| metric.of(&r.metrics) > tolerance)
-            .count();
+        let p95 = if n > 0 {
+            let k = ((n as f64 * 0.95).ceil() as usize).clamp(1, n) - 1;
+            *devs.select_nth_unstable_by(k, f64::total_cmp).1
+        } else {
+            0.0
+        };
+        // NaN when no panel has the figure (flatness of polygons beyond the exact search).
         let largest = |f: &dyn Fn(&QuadMetrics) -> f64| {
-            rows.iter().map(|r| f(&r.metrics)).fold(0.0, f64::max)
+            rows.iter().map(|r| f(&r.metrics)).fold(f64::NAN, f64::max)
         };
         let summary = Summary {
             panels: n,
             metric,
             tolerance,
+            classes,
+            max_ratio,
             max_deviation: max,
-            mean_deviation: if n > 0 {
-                devs.iter().sum::<f64>() / n as f64
-            } else {
-                0.0
-            },
+            mean_deviation: mean,
             p95_deviation: p95,
             above_tolerance: above,
             within_tolerance: above == 0,
@@ -171,18 +234,31 @@ impl Report {
                 .map(|r| r.metrics.torsion_deg)
                 .fold(0.0, f64::max),
         };
+        // The worst panels relative to their own tolerances (failures first), NaN first of all.
+        let ratio = |k: usize| {
+            let r = metric.of(&rows[k].metrics) / rows[k].tolerance;
+            if r.is_nan() {
+                f64::INFINITY
+            } else {
+                r
+            }
+        };
+        let by_ratio = |&a: &usize, &b: &usize| ratio(b).total_cmp(&ratio(a)).then(a.cmp(&b));
         let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| {
-            metric
-                .of(&rows[b].metrics)
-                .total_cmp(&metric.of(&rows[a].metrics))
-                .then(a.cmp(&b))
-        });
-        let worst = order.iter().take(WORST).map(|&k| rows[k].clone()).collect();
-        let top = if max > 0.0 { max } else { tolerance };
+        if n > WORST {
+            order.select_nth_unstable_by(WORST, by_ratio);
+            order.truncate(WORST);
+        }
+        order.sort_by(by_ratio);
+        let worst = order.iter().map(|&k| rows[k].clone()).collect();
+        let top = if max > 0.0 {
+            max
+        } else {
+            tolerance.unwrap_or(1.0)
+        };
         let edges: Vec<f64> = (0..=BINS).map(|k| top * k as f64 / BINS as f64).collect();
         let mut counts = vec![0usize; BINS];
-        for d in &devs {
+        for d in devs.iter().filter(|d| !d.is_nan()) {
             let k = ((d / top) * BINS as f64) as usize;
             counts[k.min(BINS - 1)] += 1;
         }
@@ -216,19 +292,21 @@ impl Report {
             html(&c.title),
             html(&c.title)
         );
+        let within = match (s.tolerance, s.classes.is_empty()) {
+            (Some(t), true) => format!("{t} mm"),
+            _ => "their class's tolerance".to_string(),
+        };
         let verdict = if s.within_tolerance {
             format!(
-                "<p class=\"ok\">All {} panels are within {} mm ({}).</p>",
+                "<p class=\"ok\">All {} panels are within {within} ({}).</p>",
                 s.panels,
-                s.tolerance,
                 s.metric.name()
             )
         } else {
             format!(
-                "<p class=\"bad\">{} of {} panels exceed the tolerance of {} mm ({}).</p>",
+                "<p class=\"bad\">{} of {} panels exceed {within} ({}).</p>",
                 s.above_tolerance,
                 s.panels,
-                s.tolerance,
                 s.metric.name()
             )
         };
@@ -255,6 +333,18 @@ impl Report {
         }
         let held = s.metric.name();
         row("held to the tolerance", held.to_string());
+        if let Some(t) = s.tolerance {
+            let what = if s.classes.is_empty() {
+                "tolerance"
+            } else {
+                "default tolerance"
+            };
+            row(what, format!("{t} mm"));
+        }
+        row(
+            &format!("max {held} / tolerance"),
+            format!("{:.4}", s.max_ratio),
+        );
         row(&format!("max {held}"), format!("{:.6} mm", s.max_deviation));
         row(
             &format!("mean {held}"),
@@ -276,6 +366,21 @@ impl Report {
         );
         row("max torsion", format!("{:.4}°", s.max_torsion_deg));
         h.push_str("</table>\n");
+        if !s.classes.is_empty() {
+            h.push_str("<h2>Tolerance classes</h2>\n<table><tr><th>class</th><th>rule</th><th>panels</th><th>above</th></tr>\n");
+            for k in &s.classes {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td style=\"text-align:left\">{}</td><td>{}</td><td class=\"{}\">{}</td></tr>",
+                    html(&k.name),
+                    html(&k.rule),
+                    k.panels,
+                    if k.above_tolerance == 0 { "ok" } else { "bad" },
+                    k.above_tolerance
+                );
+            }
+            h.push_str("</table>\n");
+        }
         for note in &c.notes {
             let _ = writeln!(h, "<p>{}</p>", html(note));
         }
@@ -300,22 +405,42 @@ impl Report {
                 self.view_svg(view)
             );
         }
-        h.push_str("</div>\n<p>Colour: green at 0, red at the tolerance or above.</p>\n");
+        let _ = writeln!(
+            h,
+            "</div>\n<p>Colour: green at 0, red at the panel's tolerance or above.{}</p>",
+            if self.panels.len() > VIEW_PANELS {
+                format!(
+                    " The views draw {} of the {} panels: those above their tolerance first, then an even sample of the rest.",
+                    self.drawn().len(),
+                    self.panels.len()
+                )
+            } else {
+                String::new()
+            }
+        );
         h.push_str("<h2>Histogram</h2>\n");
         h.push_str(&self.histogram_svg());
         if !c.history.is_empty() {
             h.push_str("<h2>Convergence</h2>\n");
             h.push_str(&curve_svg(&c.history));
         }
-        h.push_str("<h2>Worst panels</h2>\n<table><tr><th>panel</th><th>nodes</th><th>flatness mm</th>\
+        h.push_str("<h2>Worst panels (by figure over tolerance)</h2>\n<table><tr><th>panel</th><th>nodes</th><th>name / layer / group</th><th>tolerance mm</th><th>flatness mm</th>\
                     <th>best fit mm</th><th>corner mm</th><th>diagonals mm</th><th>diag / edge</th><th>diag / diag</th><th>torsion °</th></tr>\n");
         for r in &self.worst {
             let m = &r.metrics;
+            let label: Vec<&str> = [&r.name, &r.layer, &r.group]
+                .into_iter()
+                .flatten()
+                .map(String::as_str)
+                .collect();
             let _ = writeln!(
                 h,
-                "<tr><td>{}</td><td>{}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.2e}</td><td>{:.2e}</td><td>{:.4}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"{}\">{}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.6}</td><td>{:.2e}</td><td>{:.2e}</td><td>{:.4}</td></tr>",
                 r.index,
                 r.nodes.map_or(String::new(), |[a, b]| format!("{a}–{b}")),
+                html(&label.join(" / ")),
+                if r.pass { "ok" } else { "bad" },
+                r.tolerance,
                 m.flatness,
                 m.best_fit,
                 m.deviation,
@@ -341,7 +466,12 @@ impl Report {
                 }
             }
         };
-        let pts: Vec<(f64, f64)> = self.quads.iter().flatten().map(|p| project(*p)).collect();
+        let drawn = self.drawn();
+        let pts: Vec<(f64, f64)> = drawn
+            .iter()
+            .flat_map(|&k| &self.quads[k])
+            .map(|p| project(*p))
+            .collect();
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
         for &(x, y) in &pts {
             lo = (lo.0.min(x), lo.1.min(y));
@@ -360,9 +490,10 @@ impl Report {
             w * k + 8.0,
             hgt * k + 8.0
         );
-        let tol = self.summary.tolerance;
-        for (q, row) in self.quads.iter().zip(&self.panels) {
-            let t = (self.summary.metric.of(&row.metrics) / tol).clamp(0.0, 1.0);
+        for &i in &drawn {
+            let (q, row) = (&self.quads[i], &self.panels[i]);
+            let t = (self.summary.metric.of(&row.metrics) / row.tolerance).clamp(0.0, 1.0);
+            let t = if t.is_nan() { 1.0 } else { t };
             let (r, g) = ((40.0 + 200.0 * t) as u8, (160.0 - 130.0 * t) as u8);
             let mut d = String::new();
             for (i, p) in q.iter().enumerate() {
@@ -382,6 +513,40 @@ impl Report {
         }
         s.push_str("</svg>");
         s
+    }
+
+    /// The panels the views draw: all of them up to `VIEW_PANELS`, else `VIEW_PANELS` of
+    /// them: every failing one (an even sample if there are more) and an even sample of the
+    /// others in the room left.
+    fn drawn(&self) -> Vec<usize> {
+        let n = self.panels.len().min(self.quads.len());
+        if n <= VIEW_PANELS {
+            return (0..n).collect();
+        }
+        let failing = self.panels[..n].iter().filter(|r| !r.pass).count();
+        let fail_room = failing.min(VIEW_PANELS);
+        let pass_room = VIEW_PANELS - fail_room;
+        let stride = |count: usize, room: usize| {
+            if room == 0 {
+                usize::MAX
+            } else {
+                count.div_ceil(room).max(1)
+            }
+        };
+        let (fail_stride, pass_stride) =
+            (stride(failing, fail_room), stride(n - failing, pass_room));
+        let (mut fails, mut passes) = (0usize, 0usize);
+        (0..n)
+            .filter(|&k| {
+                let (seen, every) = if self.panels[k].pass {
+                    (&mut passes, pass_stride)
+                } else {
+                    (&mut fails, fail_stride)
+                };
+                *seen += 1;
+                (*seen - 1) % every == 0
+            })
+            .collect()
     }
 
     fn histogram_svg(&self) -> String {
@@ -484,8 +649,9 @@ mod tests {
             .enumerate()
             .map(|(k, q)| PanelRow {
                 index: k,
-                nodes: None,
+                tolerance: 0.005,
                 metrics: quad_metrics([q[0], q[1], q[2], q[3]]),
+                ..Default::default()
             })
             .collect();
         let r = Report::new(
@@ -496,7 +662,8 @@ mod tests {
             },
             rows,
             quads,
-            0.005,
+            Some(0.005),
+            Vec::new(),
             Metric::Corner,
         );
         assert!((r.summary.max_deviation - 0.009).abs() < 1e-12);

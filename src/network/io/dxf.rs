@@ -15,6 +15,7 @@ use dxf::tables::Layer;
 use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
 use glam::DVec3;
 
+pub(crate) use super::dxf_entities::type_name;
 use super::dxf_entities::{
     collect, default_max_points, from_ocs, ocs_axes, Collected, Context, MAX_POINTS,
 };

@@ -356,7 +356,7 @@ fn close_exactly(pts: &mut [DVec3]) {
 }
 
 /// DXF name of an entity type ("3DFACE", "DIMENSION").
-pub(super) fn type_name(t: &EntityType) -> String {
+pub(crate) fn type_name(t: &EntityType) -> String {
     let name = match t {
         EntityType::Face3D(_) => "3DFACE",
         EntityType::Solid3D(_) => "3DSOLID",
