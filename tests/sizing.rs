@@ -230,6 +230,25 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
             ],
             "L/N",
         ),
+        (
+            vec!["--support", "z<1", "--load", "self-weight", "--shells", "3"],
+            "even number",
+        ),
+        (
+            vec!["--support", "z<1", "--load", "self-weight", "--shells", "0"],
+            "even number",
+        ),
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--shells",
+                "64",
+            ],
+            "even number",
+        ),
     ];
     for (extra, want) in cases {
         let mut args = vec!["size", s(&axes), "-o", s(&out)];
@@ -239,5 +258,58 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
         assert!(stderr(&o).contains(want), "{extra:?}: {}", stderr(&o));
         assert!(!out.exists(), "{extra:?}: nothing written");
     }
+    Ok(())
+}
+
+#[test]
+fn calyx_as_shells_balances_and_deflects_like_the_frame() -> TestResult {
+    // The panels as shells (4 up each) against the frame: the same loads and supports. Deep
+    // panels welded along whole axes are not beams joined at points, but not far from them
+    // (10 % stiffer here at the time of writing).
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    let mut docs = Vec::new();
+    for shells in [None, Some("4")] {
+        let sizing = dir.path().join("sizing.json");
+        let mut args = vec![
+            "size",
+            s(&axes),
+            "-o",
+            s(&sizing),
+            "--support",
+            "z<1",
+            "--load",
+            "self-weight",
+            "--gauges",
+            "2",
+        ];
+        if let Some(n) = shells {
+            args.extend(["--shells", n]);
+        }
+        let o = lamina(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        docs.push(serde_json::from_slice::<serde_json::Value>(
+            &std::fs::read(&sizing)?,
+        )?);
+    }
+    let (frame, shells) = (&docs[0], &docs[1]);
+    assert_eq!(shells["analysis"]["shells"], 4);
+    assert_eq!(frame["analysis"], "frame");
+    // Equilibrium: the vertical reactions carry the same weight (one gauge everywhere).
+    let lift = |d: &serde_json::Value| -> f64 {
+        d["reactions"]
+            .as_array()
+            .map(|r| r.iter().filter_map(|x| x["force"][2].as_f64()).sum())
+            .unwrap_or(0.0)
+    };
+    assert!((lift(frame) / lift(shells) - 1.0).abs() < 1e-9);
+    let (df, ds) = (
+        frame["totals"]["max_displacement"].as_f64().ok_or("d")?,
+        shells["totals"]["max_displacement"].as_f64().ok_or("d")?,
+    );
+    assert!(
+        (ds / df - 1.0).abs() < 0.25,
+        "shells {ds} mm, frame {df} mm"
+    );
     Ok(())
 }

@@ -43,6 +43,9 @@ knots as large as the section cover most of each member. `--shells AXES` models 
 themselves instead: each edge's quad from axes.json as S8R shells with its gauge as thickness,
 panels welded along the node axes they share, self-weight as gravity on the shells, point loads
 at mid-height of the axis; compared with the frame's displacements to `--shell-tolerance`.
+When lamina itself analysed the panels as shells (`lamina size --shells N`: sizing.json's
+"analysis" is {"shells": N}), its displacements are compared with these S8R shells alone (the
+beam deck is used for its supports), to `--shell-tolerance` (default 5 %).
 
     check_ccx.py model.inp sizing.json [--tolerance 0.01] [--torsion] [--shells axes.json]
     check_ccx.py --slender-frame DIR LAMINA
@@ -403,6 +406,8 @@ def shell_model(axes, sizing, deck_text, per_height):
             lines.append(f"{centre[i]}, 1, 3")
     lines += ["*STEP", "*STATIC"]
     for case in sizing["cases"]:
+        if case == "all loads":
+            continue  # the sum of the others, which this one step applies together
         if case == "self-weight":
             lines += ["*DLOAD", f"NALL_E, GRAV, {num(G_MM)}, 0, 0, -1"]
         elif case.startswith("point:"):
@@ -469,8 +474,8 @@ def compare_shells(axes_path, sizing_path, deck_path, per_height):
     w = int(du.argmax())
     rel = du[w] / scale
     print(f"check_ccx: shells ({count} S8R, {per_height} up each panel): largest displacement "
-          f"{np.abs(shell_u).max():.4g} mm (frame {scale:.4g}); worst difference {du[w]:.3g} mm "
-          f"at node {used[w]} ({100 * rel:.2f} % of the frame's largest)")
+          f"{np.abs(shell_u).max():.4g} mm (lamina {scale:.4g}); worst difference {du[w]:.3g} mm "
+          f"at node {used[w]} ({100 * rel:.2f} % of lamina's largest)")
     print(f"check_ccx: a lone panel as long as the median member ({np.median(lengths):.0f} mm, "
           f"{depth:.0f} x {gauge:g} mm), clamped along one axis and loaded along the other, "
           f"deflects {weak:.3f} of the beam out of its plane (a plate wider than long bends "
@@ -572,6 +577,8 @@ def main():
     ap.add_argument("--shells", metavar="AXES", help="also model the panels as shells (axes.json)")
     ap.add_argument("--shell-tolerance", type=float, default=0.05)
     ap.add_argument("--per-height", type=int, default=4, help="shell elements up each panel")
+    ap.add_argument("--write-shell-deck", metavar="INP",
+                    help="with --shells: also write the S8R deck (for the benchmark)")
     args = ap.parse_args()
     if shutil.which("ccx") is None:
         fail("ccx is not installed (scripts/setup installs calculix-ccx)")
@@ -583,12 +590,25 @@ def main():
         compare(*arm_frame(out, lamina), args.torsion_tolerance, True, "frame with an arm: ",
                 forces=True)
     elif args.deck and args.sizing:
-        compare(args.deck, args.sizing, args.tolerance, args.torsion)
+        analysis = json.load(open(args.sizing)).get("analysis")
+        lamina_shells = isinstance(analysis, dict) and "shells" in analysis
+        if lamina_shells and not args.shells:
+            fail(f"{args.sizing} is a shell analysis: give --shells axes.json to compare it")
+        if not lamina_shells:
+            compare(args.deck, args.sizing, args.tolerance, args.torsion)
+        if args.shells and args.write_shell_deck:
+            text, _, _ = shell_model(json.load(open(args.shells)), json.load(open(args.sizing)),
+                                     open(args.deck).read(), args.per_height)
+            with open(args.write_shell_deck, "w") as f:
+                f.write(text)
         if args.shells:
             rel = compare_shells(args.shells, args.sizing, args.deck, args.per_height)
             if rel > args.shell_tolerance:
                 fail(f"{args.sizing}: {100 * rel:.2f} % from the shell model, over the "
                      f"{100 * args.shell_tolerance:g} % allowed")
+            if lamina_shells:
+                print(f"check_ccx: lamina's shells ({analysis['shells']} up each panel) within "
+                      f"{100 * rel:.2f} % of CalculiX's S8R shells on {args.sizing}")
     else:
         ap.error("give model.inp and sizing.json, or --slender-frame DIR LAMINA")
 

@@ -7,7 +7,9 @@
   the wind (area × |normal · direction|, the normal from the quad's diagonals), along it —
   in force and in moment about the origin, to 1e-9 of the load (plus 1e-6 of the wind: the
   panels are planar only to planarize's tolerance, and lamina takes the normal from the
-  member's frame);
+  member's frame). The frame's self-weight acts along its members; shells' (sizing.json
+  "analysis": {"shells": N}) at each panel's centroid, known to within the panel's warp, which
+  the moment check allows;
 - `--lower-thicker`: the mean gauge of the lowest third of the members (by mid-height) is above
   that of the highest third (Calyx's observation of its own structural analysis).
 
@@ -58,8 +60,11 @@ def main():
     d = np.array([n["axis"] for n in nodes], dtype=float)
     h = np.array([n["height"] for n in nodes], dtype=float)
     mid = p + d * (h[:, None] / 2.0)
+    # The panels as shells carry their weight where it is; the frame along its members.
+    shells = isinstance(s.get("analysis"), dict) and "shells" in s["analysis"]
     force = np.zeros(3)
     moment = np.zeros(3)
+    warp_moment = 0.0
     if args.self_weight:
         rho = s["material"]["density"] * 1e-6  # kg/mm³
         for k, e in enumerate(edges):
@@ -68,8 +73,19 @@ def main():
             area = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[1]))
             weight = area * s["edges"][k]["gauge"] * rho * G
             f = np.array([0.0, 0.0, -weight])
-            # A uniform load along the member: its resultant at the member's middle.
-            centre = 0.5 * (mid[a] + mid[b])
+            if shells:
+                # The panel's own weight: its resultant at the quad's centroid (two triangles).
+                t1 = 0.5 * np.linalg.norm(np.cross(quad[1] - quad[0], quad[2] - quad[0]))
+                t2 = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[0]))
+                centre = (t1 * (quad[0] + quad[1] + quad[2]) + t2 * (quad[0] + quad[2] + quad[3])) \
+                    / (3 * (t1 + t2))
+                # A warped quad has no one centroid: its weight acts somewhere within its warp
+                # (the fourth corner's distance from the plane of the other three).
+                n3 = np.cross(quad[1] - quad[0], quad[3] - quad[0])
+                warp_moment += weight * abs((quad[2] - quad[0]) @ n3) / np.linalg.norm(n3)
+            else:
+                # A uniform load along the member: its resultant at the member's middle.
+                centre = 0.5 * (mid[a] + mid[b])
             force += f
             moment += np.cross(centre, f)
     wind_size = 0.0
@@ -103,7 +119,7 @@ def main():
     allowed = 1e-9 * scale + 1e-6 * wind_size
     if np.linalg.norm(rf + force) > allowed:
         fail(f"reactions {rf} do not balance the loads {force}")
-    if np.linalg.norm(rm + moment) > allowed * size:
+    if np.linalg.norm(rm + moment) > allowed * size + warp_moment:
         fail(f"reaction moments {rm} do not balance the loads' {moment}")
     line = (f"{args.sizing}: ok ({len(edges)} members, gauges on the list, utilisation at most "
             f"{worst:.3f}, reactions balance {np.linalg.norm(force):.2f} N to "

@@ -131,6 +131,7 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
     let _ = write!(
         h,
         "<table><tr><th style=\"text-align:left\">material</th><td>{} (E {} MPa, f<sub>y</sub> {} MPa, f<sub>u</sub> {} MPa, γ<sub>M0</sub> {})</td></tr>\
+         <tr><th style=\"text-align:left\">analysis</th><td>{}</td></tr>\
          <tr><th style=\"text-align:left\">members / nodes</th><td>{} / {}</td></tr>\
          <tr><th style=\"text-align:left\">load cases</th><td>{}</td></tr>\
          <tr><th style=\"text-align:left\">rounds</th><td>{}{}; {} of stiffening</td></tr>\
@@ -143,6 +144,10 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
         material.fy,
         material.fu,
         material.gamma_m0,
+        match s.shells {
+            None => "frame: a Timoshenko beam per member, rigid joints at mid-height of the node axes".to_string(),
+            Some(n) => format!("the panels as flat shells, {n} elements up each, welded along the node axes"),
+        },
         m.members.len(),
         m.nodes.len(),
         s.cases.iter().map(|c| html(&c.name)).collect::<Vec<_>>().join("; "),

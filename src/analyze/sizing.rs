@@ -29,6 +29,7 @@ use thiserror::Error;
 
 use super::frame::{self, CaseResult, Elastic, FrameError, LoadCase, Member, Model, Section};
 use super::material::Material;
+use super::shell;
 use crate::rationalize::axes::Axes;
 use crate::rationalize::groups::{partition, GroupError};
 use crate::rationalize::planarize::Selector;
@@ -168,12 +169,19 @@ pub struct SizingOptions {
     pub throat_factor: f64,
     /// Rounds of analysis and choice at most.
     pub max_rounds: usize,
+    /// Analyse the panels as flat shells, this many elements up each (even), not as beams.
+    pub shells: Option<usize>,
 }
 
 #[derive(Debug, Error)]
 pub enum SizingError {
     #[error("no load: give at least one --load")]
     NoLoad,
+    #[error(
+        "the panels make {0} shell elements, more than {max}: give --shells fewer elements up each panel, or analyse the frame",
+        max = shell::MAX_ELEMENTS
+    )]
+    TooManyShells(usize),
     #[error("no support: no node matches {0}")]
     SupportUnused(String),
     #[error("load {0}: no node matches it")]
@@ -215,6 +223,8 @@ pub struct Sizing {
     pub deflection_limit: Option<f64>,
     pub span: f64,
     pub mass_kg: f64,
+    /// Elements up each panel when the panels were analysed as shells; None for the frame.
+    pub shells: Option<usize>,
 }
 
 impl Sizing {
@@ -543,6 +553,32 @@ pub fn groups(axes: &Axes, model: &Model, by: GroupBy) -> Result<Vec<usize>, Siz
     })
 }
 
+/// The frame's solve, or the shells' when asked: the same results either way.
+fn solve(
+    axes: &Axes,
+    model: &Model,
+    cases: &[LoadCase],
+    opts: &SizingOptions,
+) -> Result<Vec<CaseResult>, SizingError> {
+    Ok(match opts.shells {
+        None => frame::solve(model, cases)?,
+        Some(per_height) => {
+            let count = shell::element_count(model, &axes.positions, &axes.heights, per_height);
+            if count > shell::MAX_ELEMENTS {
+                return Err(SizingError::TooManyShells(count));
+            }
+            let mesh = shell::mesh(
+                model,
+                &axes.positions,
+                &axes.axes,
+                &axes.heights,
+                per_height,
+            );
+            shell::solve(model, &mesh, opts.material.nu, cases)?
+        }
+    })
+}
+
 /// Analyses with the given gauges and checks every member in every case.
 /// A model, its load cases, their results and each member's check.
 type Analysis = (Model, Vec<LoadCase>, Vec<CaseResult>, Vec<Check>);
@@ -550,7 +586,7 @@ type Analysis = (Model, Vec<LoadCase>, Vec<CaseResult>, Vec<Check>);
 fn analyse(axes: &Axes, gauges: &[f64], opts: &SizingOptions) -> Result<Analysis, SizingError> {
     let model = build(axes, gauges, &opts.supports, &opts.material)?;
     let cases = cases(axes, &model, opts)?;
-    let results = frame::solve(&model, &cases)?;
+    let results = solve(axes, &model, &cases, opts)?;
     let checks = checks_of(&model, &cases, &results, &opts.material);
     Ok((model, cases, results, checks))
 }
@@ -660,6 +696,8 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
                 break;
             }
             let shares = stiffening(
+                axes,
+                opts,
                 &model,
                 cases.last().expect("a case"),
                 results.last().expect("a case"),
@@ -745,6 +783,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         deflection_limit: limit,
         span,
         mass_kg,
+        shells: opts.shells,
     })
 }
 
@@ -777,6 +816,8 @@ pub fn span_of(points: &[DVec3]) -> f64 {
 /// Each member's share of the displacement of `node` along its direction (unit load method:
 /// the member's strain energy product of the real and the virtual state), N·mm.
 fn stiffening(
+    axes: &Axes,
+    opts: &SizingOptions,
     model: &Model,
     case: &LoadCase,
     real: &CaseResult,
@@ -789,7 +830,7 @@ fn stiffening(
         nodal: vec![(node, [dir.x, dir.y, dir.z, 0.0, 0.0, 0.0])],
         member: vec![],
     };
-    let virt = &frame::solve(model, &[unit])?[0];
+    let virt = &solve(axes, model, &[unit], opts)?[0];
     let w = case.member_loads(model.members.len());
     // Virtual work of the real end forces (k u: what the ends take, the member's own load's
     // equivalent added back) over the virtual end displacements: the sum is δ.

@@ -381,6 +381,7 @@ fn steel(out: &Path) -> Result<Entry> {
         smooth: true,
         throat: 0.7,
         max_rounds: 20,
+        shells: None,
         html: Some(dir.join("sizing.html")),
         export_ccx: Some(dir.join("sizing.inp")),
         json: false,

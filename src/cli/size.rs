@@ -61,6 +61,11 @@ pub struct Args {
     /// Rounds of analysis and gauge choice at most
     #[arg(long, default_value_t = 20)]
     pub max_rounds: usize,
+    /// Analyse the panels themselves as flat shells, N elements up each (even, 2 to 32),
+    /// welded along the node axes, instead of beams: for deep panels (Calyx's), where beam
+    /// theory is stiffer than the plates are
+    #[arg(long, value_name = "N")]
+    pub shells: Option<usize>,
     /// An HTML report: the structure by utilisation and by gauge, the deformed shape, tables
     #[arg(long)]
     pub html: Option<PathBuf>,
@@ -136,6 +141,11 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             args.max_rounds
         );
     }
+    if let Some(n) = args.shells {
+        if !(2..=32).contains(&n) || n % 2 == 1 {
+            bail!("--shells must be an even number of elements from 2 to 32, got {n}");
+        }
+    }
     if args.support.is_empty() {
         bail!("no support: give --support SELECTOR[:fixed|pinned], e.g. --support 'z<1'");
     }
@@ -169,6 +179,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         smooth: args.smooth,
         throat_factor: args.throat,
         max_rounds: args.max_rounds,
+        shells: args.shells,
     };
     let sizing = size(&axes, &opts).with_context(|| format!("{}", args.input.display()))?;
     let (max_u, max_w) = (sizing.max_utilisation(), sizing.max_weld_utilisation());
@@ -269,10 +280,17 @@ fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_js
             GroupBy::Assembly(k) => json!({"assembly": k}),
         },
         "smooth": opts.smooth,
+        "analysis": match opts.shells {
+            None => json!("frame"),
+            Some(n) => json!({"shells": n}),
+        },
         "supports": args.support.iter().map(|(sel, k)| format!("{sel}: {k:?}")).collect::<Vec<_>>(),
         "cases": s.cases.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
         "definitions": {
-            "model": "a node at mid-height of each node axis (the panels' centroid line), a member per edge with a solid rectangle: depth the panel height across the member (local y, in the panel plane), thickness the gauge (local z, the panel normal); rigid joints; linear elastic, Timoshenko beams",
+            "model": match opts.shells {
+                None => "a node at mid-height of each node axis (the panels' centroid line), a member per edge with a solid rectangle: depth the panel height across the member (local y, in the panel plane), thickness the gauge (local z, the panel normal); rigid joints; linear elastic, Timoshenko beams".to_string(),
+                Some(n) => format!("the panels as flat shells (four-node: incompatible-mode membrane, MITC4 bending), {n} elements up each panel and square along it, the gauge as thickness, welded along the node axes they share; a node's displacement is its axis' mid-height point's, a member's end forces the resultant its panel takes along that end's axis, about the mid-height point; fixed supports hold the whole axis, pinned ones its mid-height point"),
+            },
             "utilisation": "the largest over the load cases and five points along the member of: stress = von Mises of the largest corner normal stress (N, My, Mz) and the largest shear stress (torsion + 1.5 V/A) over f_y/gamma_M0; buckling = compression over the weak-axis flexural buckling resistance as a pin-ended strut (EN 1993-1-1 6.3.1.2, curve c), chi A f_y/gamma_M1",
             "weld_utilisation": "EN 1993-1-8 4.5.3.3 simplified method: the force per length on the two fillet welds (throat a = throat factor x the thinner plate at the node) along each member end's depth, over f_u/(sqrt(3) beta_w gamma_M2) a; the largest over the node's member ends and the cases",
             "end_forces": "under the sum of the loads, in the member's local axes: forces and moments the joints apply to its ends, [a: Fx Fy Fz Mx My Mz, b: ...]",
