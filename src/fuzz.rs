@@ -59,6 +59,12 @@ fn tolerance_rules(path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())
 }
 
+fn sl1(path: &Path) -> Result<(), String> {
+    crate::fabricate::sl1::check(path)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
 fn outline(path: &Path) -> Result<(), String> {
     crate::grow::outline_file::read_outline(path)
         .map(|_| ())
@@ -172,6 +178,12 @@ pub const TARGETS: &[Target] = &[
         ext: "json",
         seeds: &["fixtures/panels/glass_rules.json"],
         run: tolerance_rules,
+    },
+    Target {
+        name: "sl1",
+        ext: "sl1",
+        seeds: &["fixtures/print/prusaslicer_bridge.sl1"],
+        run: sl1,
     },
     Target {
         name: "svg_outline",

@@ -61,8 +61,9 @@ enum Command {
     /// Nest plates on stock sheets, one sheet family per thickness: a cut DXF per sheet,
     /// bom.csv, nest.json, assembly.scad rebuilt from the sheets, and sheets.svg.
     Nest(Box<cli::nest::Args>),
-    /// Check the planarity of panels made elsewhere (.obj faces, .dxf 3DFACE/closed polylines):
-    /// exit 0 when all are within the tolerance, 1 when some are not.
+    /// Check the planarity of panels (.obj faces, .dxf 3DFACE, polyface meshes, MESH and closed
+    /// polylines, lamina axes or plates): ISO flatness, best fit and the corner figure, each
+    /// panel against its tolerance class; exit 0 when all are within, 1 when some are not.
     Audit(cli::planarize::AuditArgs),
     /// A vein network as one watertight, 2-manifold mesh for printing: tapered round veins,
     /// optional lamina and base, scaled to a print size.
@@ -70,6 +71,8 @@ enum Command {
     /// Slice closed meshes for a masked-SLA (DMP-SL) printer: anti-aliased layer PNGs in an
     /// SL1 archive (PrusaSlicer layout), with resin volume, cost and build time.
     Slice(Box<cli::slice::Args>),
+    /// Read an SL1 archive back and check it (ours or PrusaSlicer's).
+    Sl1(cli::sl1::Args),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
 }
@@ -108,6 +111,7 @@ fn main() -> ExitCode {
         Command::Buds(args) => cli::buds::run(*args).map(within),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
+        Command::Sl1(args) => cli::sl1::run(args).map(within),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),

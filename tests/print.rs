@@ -298,3 +298,139 @@ fn slice_refuses_open_meshes_and_models_that_do_not_fit() -> TestResult {
     assert!(!out.exists(), "no partial archive");
     Ok(())
 }
+
+/// A 10 mm bar 2 mm above the plate on two 2 mm posts; with `hanging`, the second post stops
+/// 1 mm above the plate.
+fn bar_on_posts(hanging: bool) -> TriMesh {
+    let parts = [
+        cuboid(DVec3::new(0.0, 0.0, 2.0), DVec3::new(10.0, 2.0, 3.0)),
+        cuboid(DVec3::new(0.0, 0.0, 0.0), DVec3::new(2.0, 2.0, 2.0)),
+        cuboid(
+            DVec3::new(8.0, 0.0, if hanging { 1.0 } else { 0.0 }),
+            DVec3::new(10.0, 2.0, 2.0),
+        ),
+    ];
+    let mut mesh = TriMesh {
+        positions: Vec::new(),
+        triangles: Vec::new(),
+        colors: None,
+    };
+    for p in parts {
+        let base = mesh.positions.len() as u32;
+        mesh.triangles
+            .extend(p.triangles.iter().map(|t| t.map(|i| i + base)));
+        mesh.positions.extend(p.positions);
+    }
+    mesh
+}
+
+#[test]
+fn a_post_that_stops_short_of_the_plate_starts_an_island() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    for (hanging, expect) in [(false, 0), (true, 1)] {
+        let stl = dir.path().join("bar.stl");
+        write_mesh(&bar_on_posts(hanging), &stl, 256)?;
+        let (sl1, report) = (dir.path().join("bar.sl1"), dir.path().join("print.json"));
+        let o = lamina(&[
+            "slice",
+            stl.to_str().ok_or("p")?,
+            "-o",
+            sl1.to_str().ok_or("p")?,
+            "--report",
+            report.to_str().ok_or("p")?,
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = json(&report)?;
+        assert_eq!(r["island_count"], expect, "hanging {hanging}");
+        if hanging {
+            // The short post's foot at z = 1 mm: layer 20 is the first cut above it (1.025 mm).
+            let i = &r["islands"][0];
+            assert_eq!(i["layer"], 20);
+            let area = i["area_mm2"].as_f64().ok_or("area")?;
+            assert!((area - 4.0).abs() < 0.2, "the post's 2 × 2 mm: {area}");
+            assert!(
+                common::stdout(&o).contains("1 islands"),
+                "{}",
+                common::stdout(&o)
+            );
+        }
+        // Read back: the same islands, exit 1 when there are any.
+        let o = lamina(&["sl1", "check", sl1.to_str().ok_or("p")?, "--json"]);
+        assert_eq!(o.status.code(), Some(expect), "{}", stderr(&o));
+        let c: serde_json::Value = serde_json::from_str(&common::stdout(&o))?;
+        assert_eq!(c["islands"], r["islands"]);
+        let (ours, theirs) = (
+            c["volume_ml"].as_f64().ok_or("v")?,
+            r["volume_ml"].as_f64().ok_or("v")?,
+        );
+        assert!(
+            (ours - theirs).abs() <= 1e-12 * theirs,
+            "{ours} vs {theirs}"
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn sl1_check_reads_prusaslicers_archive_and_refuses_what_is_no_sl1() -> TestResult {
+    // Written by PrusaSlicer 2.5 (--export-sla, scripts/peers/dmp-sl.ini) from
+    // fixtures/print/hanging_post.stl.
+    let theirs = fixture("print/prusaslicer_hanging.sl1");
+    let o = lamina(&["sl1", "check", theirs.to_str().ok_or("p")?, "--json"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let c: serde_json::Value = serde_json::from_str(&common::stdout(&o))?;
+    assert_eq!(c["layers"], 60);
+    assert_eq!(c["config"]["layerHeight"], "0.05");
+    assert_eq!(c["used_ml"], 0.032);
+    assert_eq!(c["pixels"], serde_json::json!([1920, 1080]));
+    assert_eq!(c["island_count"], 1);
+    assert_eq!(c["islands"][0]["layer"], 20);
+    let o = lamina(&[
+        "sl1",
+        "check",
+        fixture("print/prusaslicer_bridge.sl1")
+            .to_str()
+            .ok_or("p")?,
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::stdout(&o));
+
+    // Not an SL1: exit 2 naming the file and why.
+    let dir = tempfile::tempdir()?;
+    let stl = fixture("print/bridge.stl");
+    let o = lamina(&["sl1", "check", stl.to_str().ok_or("p")?]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("not a zip"), "{}", stderr(&o));
+    // A zip without config.ini, and one whose layer 3 is gone.
+    let copy = |skip: &dyn Fn(&str) -> bool, out: &Path| -> TestResult {
+        let mut src = zip::ZipArchive::new(std::fs::File::open(&theirs)?)?;
+        let mut w = zip::ZipWriter::new(std::fs::File::create(out)?);
+        for k in 0..src.len() {
+            let mut e = src.by_index(k)?;
+            let name = e.name()?.into_owned();
+            if skip(&name) {
+                continue;
+            }
+            let mut bytes = Vec::new();
+            e.read_to_end(&mut bytes)?;
+            w.start_file(name, zip::write::SimpleFileOptions::default())?;
+            std::io::Write::write_all(&mut w, &bytes)?;
+        }
+        w.finish()?;
+        Ok(())
+    };
+    let no_config = dir.path().join("no-config.sl1");
+    copy(&|n| n == "config.ini", &no_config)?;
+    let o = lamina(&["sl1", "check", no_config.to_str().ok_or("p")?]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no config.ini"), "{}", stderr(&o));
+    let gap = dir.path().join("gap.sl1");
+    copy(&|n| n == "hanging00003.png", &gap)?;
+    let o = lamina(&["sl1", "check", gap.to_str().ok_or("p")?]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        common::stdout(&o).contains("1 of 60 layer images missing, the first hanging00003.png"),
+        "{}",
+        common::stdout(&o)
+    );
+    Ok(())
+}

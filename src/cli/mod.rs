@@ -14,6 +14,7 @@ pub mod planarize;
 pub mod plates;
 pub mod render;
 pub mod size;
+pub mod sl1;
 pub mod slice;
 pub mod solid;
 pub mod surface;

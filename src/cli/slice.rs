@@ -11,6 +11,8 @@ use serde_json::json;
 use super::venation::write_json;
 use lamina::fabricate::archive::{Job, Sl1Writer};
 use lamina::fabricate::estimate::{estimate, Estimate, Resin};
+use lamina::fabricate::sl1::MAX_LISTED;
+use lamina::fabricate::slice::islands::Islands;
 use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer, SliceError};
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_triangles;
@@ -299,6 +301,24 @@ pub fn run(args: Args) -> Result<()> {
             e.build_time_from
         );
     }
+    // Islands are said even with --json (on stderr then): a print fails at each.
+    let count = report["island_count"].as_u64().unwrap_or(0);
+    let line = match report["islands"].get(0) {
+        None => "no islands: every region of every layer stands on the one below".to_string(),
+        Some(i) => format!(
+            "{count} islands (regions cured in free resin, touching nothing in the layer below): \
+             the first at layer {} ({:.2}, {:.2}) mm, {:.3} mm²; see \"islands\" in the report",
+            i["layer"],
+            i["x_mm"].as_f64().unwrap_or(0.0),
+            i["y_mm"].as_f64().unwrap_or(0.0),
+            i["area_mm2"].as_f64().unwrap_or(0.0)
+        ),
+    };
+    if args.json {
+        eprintln!("lamina: {line}");
+    } else {
+        println!("  {line}");
+    }
     Ok(())
 }
 
@@ -343,6 +363,13 @@ pub fn slice_job(
     };
     let mut areas = Vec::with_capacity(layers_total);
     let mut exact = Vec::with_capacity(layers_total);
+    let mut finder = Islands::new(
+        printer.pixels_x as usize,
+        printer.pixels_y as usize,
+        printer.pixel_mm,
+        printer.layer_mm,
+    );
+    let (mut islands, mut island_count) = (Vec::new(), 0usize);
     let mut kept = Vec::new();
     let mut est = None;
     write_atomic(spec.output, |w| {
@@ -357,6 +384,12 @@ pub fn slice_job(
             }
             areas.push(layer.area_mm2);
             exact.push(layer.exact_area_mm2);
+            for i in finder.layer(layer.index, &layer.image) {
+                island_count += 1;
+                if islands.len() < MAX_LISTED {
+                    islands.push(i);
+                }
+            }
             if keep.contains(&layer.index) {
                 kept.push((layer.index, layer.image));
             }
@@ -415,6 +448,8 @@ pub fn slice_job(
         "bbox_min": lo,
         "bbox_max": hi,
         "layer_area_mm2": areas,
+        "island_count": island_count,
+        "islands": islands,
     });
     Ok((report, e, kept))
 }

@@ -10,6 +10,7 @@ pub mod estimate;
 pub mod nest;
 pub mod plates_file;
 pub mod preview;
+pub mod sl1;
 pub mod slice;
 pub mod solid;
 pub mod tags;

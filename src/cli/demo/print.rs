@@ -132,7 +132,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
         facts: format!(
             "solid: {} triangles, closed 2-manifold, {} part(s), genus {}, {:.1} mm³, \
              {:.1} × {:.1} × {:.1} mm; print: {} layers, {:.3} mL of resin for {COPIES} \
-             leaves, cost {:.3} at 55/L, {:.1} g, {:.2} h ({})",
+             leaves, cost {:.3} at 55/L, {:.1} g, {:.2} h ({}); {}",
             r.triangles,
             r.parts,
             r.genus,
@@ -145,7 +145,14 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
             e.resin_cost,
             e.mass_g,
             e.build_time_h,
-            e.build_time_from
+            e.build_time_from,
+            match report["islands"].get(0) {
+                None => "no islands".to_string(),
+                Some(i) => format!(
+                    "{} islands (regions that start in free resin; supports would hold them), the first at layer {}",
+                    report["island_count"], i["layer"]
+                ),
+            }
         ),
     })
 }

@@ -9,6 +9,7 @@
 //! image: overlapping closed shells need no union. Image row 0 is the far edge of the plate
 //! (largest y), column 0 its left edge, as PrusaSlicer draws them.
 
+pub mod islands;
 mod raster;
 
 use std::path::PathBuf;
