@@ -10,6 +10,7 @@
 //! per length, global directions); one factorisation solves every case.
 
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::Llt;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 use faer::{Mat, Side};
 use glam::DVec3;
@@ -508,8 +509,8 @@ fn assemble(
     Ok(SparseColMat::new(symbolic, values))
 }
 
-/// Solves every case with one factorisation.
-pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, FrameError> {
+/// The model's own checks, and every case's loads on nodes that exist.
+pub fn check_cases(model: &Model, cases: &[LoadCase]) -> Result<(), FrameError> {
     check(model)?;
     let n = model.nodes.len();
     for case in cases {
@@ -523,6 +524,30 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
             }
         }
     }
+    Ok(())
+}
+
+/// The sparse Cholesky factor of a stiffness (lower triangle); a pivot that is not positive is
+/// a singular stiffness at the node `owner` gives for that freedom.
+pub fn factor(
+    k: &SparseColMat<usize, f64>,
+    owner: impl Fn(usize) -> usize,
+) -> Result<Llt<usize, f64>, FrameError> {
+    let last = k.nrows().saturating_sub(1);
+    k.sp_cholesky(Side::Lower).map_err(|e| match e {
+        faer::sparse::linalg::LltError::Numeric(
+            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index },
+        ) => FrameError::Singular {
+            node: owner(index.min(last)),
+        },
+        faer::sparse::linalg::LltError::Generic(_) => FrameError::OutOfMemory,
+    })
+}
+
+/// Solves every case with one factorisation.
+pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, FrameError> {
+    check_cases(model, cases)?;
+    let n = model.nodes.len();
     // Freedom numbers: held ones get none.
     let mut dof = vec![usize::MAX; 6 * n];
     let mut free = 0usize;
@@ -567,14 +592,7 @@ pub fn solve(model: &Model, cases: &[LoadCase]) -> Result<Vec<CaseResult>, Frame
             .collect());
     }
     let k = assemble(model, &members, &dof, free)?;
-    let llt = k.sp_cholesky(Side::Lower).map_err(|e| match e {
-        faer::sparse::linalg::LltError::Numeric(
-            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index },
-        ) => FrameError::Singular {
-            node: owner[index.min(free - 1)],
-        },
-        faer::sparse::linalg::LltError::Generic(_) => FrameError::OutOfMemory,
-    })?;
+    let llt = factor(&k, |r| owner[r])?;
     // Right-hand sides, one column per case.
     let mut rhs = Mat::<f64>::zeros(free, cases.len());
     for (c, case) in cases.iter().enumerate() {

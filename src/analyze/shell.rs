@@ -21,11 +21,11 @@
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Mat, Side};
+use faer::Mat;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::frame::{local_frame, CaseResult, FrameError, LoadCase, Model, Support};
+use super::frame::{factor, local_frame, CaseResult, FrameError, LoadCase, Model, Support};
 
 /// The most elements a mesh may have: each costs about 12 kB while the stiffness is assembled.
 pub const MAX_ELEMENTS: usize = 100_000;
@@ -479,19 +479,7 @@ pub fn solve(
     poisson: f64,
     cases: &[LoadCase],
 ) -> Result<Vec<CaseResult>, FrameError> {
-    super::frame::check(model)?;
-    let n_net = model.nodes.len();
-    for case in cases {
-        for &(node, _) in &case.nodal {
-            if node >= n_net {
-                return Err(FrameError::LoadOnMissingNode {
-                    case: case.name.clone(),
-                    node,
-                    nodes: n_net,
-                });
-            }
-        }
-    }
+    super::frame::check_cases(model, cases)?;
     let n = mesh.nodes.len();
     let mid = |i: usize| mesh.axis_lines[i][mesh.axis_lines[i].len() / 2];
     // Held freedoms.
@@ -567,14 +555,7 @@ pub fn solve(
     let k = SparseColMat::<usize, f64>::try_new_from_triplets(free, free, &triplets)
         .map_err(|_| FrameError::OutOfMemory)?;
     drop(triplets);
-    let llt = k.sp_cholesky(Side::Lower).map_err(|e| match e {
-        faer::sparse::linalg::LltError::Numeric(
-            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index },
-        ) => FrameError::Singular {
-            node: owner(index.min(free.saturating_sub(1))),
-        },
-        faer::sparse::linalg::LltError::Generic(_) => FrameError::OutOfMemory,
-    })?;
+    let llt = factor(&k, owner)?;
     // Each corner's share of its element's area (∫ N_i dA: a uniform load's consistent
     // nodal loads, whose resultant acts at the element's centroid), and the panels' areas.
     let shares: Vec<[f64; 4]> = mesh
@@ -880,7 +861,10 @@ mod tests {
             let r = free.iter().position(|&d| d == 6 * t + dir).unwrap();
             rhs[(r, 0)] = p * share;
         }
-        let u = a.llt(Side::Lower).expect("positive definite").solve(&rhs);
+        let u = a
+            .llt(faer::Side::Lower)
+            .expect("positive definite")
+            .solve(&rhs);
         tip.iter()
             .map(|&t| u[(free.iter().position(|&d| d == 6 * t + dir).unwrap(), 0)])
             .sum::<f64>()

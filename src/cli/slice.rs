@@ -384,14 +384,14 @@ pub fn slice_job(
             }
             areas.push(layer.area_mm2);
             exact.push(layer.exact_area_mm2);
-            for i in finder.layer(layer.index, &layer.image) {
+            if keep.contains(&layer.index) {
+                kept.push((layer.index, layer.image.clone()));
+            }
+            for i in finder.layer_owned(layer.index, layer.image) {
                 island_count += 1;
                 if islands.len() < MAX_LISTED {
                     islands.push(i);
                 }
-            }
-            if keep.contains(&layer.index) {
-                kept.push((layer.index, layer.image));
             }
             bar.inc(1);
             Ok::<(), std::io::Error>(())

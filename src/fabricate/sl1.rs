@@ -183,11 +183,11 @@ pub fn check(path: &Path) -> Result<Sl1Check, Sl1Error> {
                 Ok(None) => {
                     missing.push(k);
                     // A missing layer holds nothing up: the next starts afresh.
-                    finder.layer(k, &vec![0; px as usize * py as usize]);
+                    finder.layer_owned(k, vec![0; px as usize * py as usize]);
                 }
                 Ok(Some(Err(msg))) => {
                     problems.push(format!("{}: {msg}", names[k]));
-                    finder.layer(k, &vec![0; px as usize * py as usize]);
+                    finder.layer_owned(k, vec![0; px as usize * py as usize]);
                 }
                 Ok(Some(Ok(img))) => {
                     let sum: u64 = img.iter().map(|&g| u64::from(g)).sum();
@@ -195,7 +195,7 @@ pub fn check(path: &Path) -> Result<Sl1Check, Sl1Error> {
                     if sum == 0 {
                         empty += 1;
                     }
-                    for i in finder.layer(k, &img) {
+                    for i in finder.layer_owned(k, img) {
                         island_count += 1;
                         if islands.len() < MAX_LISTED {
                             islands.push(i);

@@ -28,11 +28,23 @@ pub struct Islands {
     height: usize,
     pixel_mm: f64,
     layer_mm: f64,
-    /// The previous layer's lit pixels (empty before the first layer).
-    below: Vec<bool>,
-    /// Scratch: the component (from 1) of each pixel of this layer; 0 for none yet.
+    /// The previous layer's image (empty before the first layer).
+    below: Vec<u8>,
+    /// Per pixel: the last component (numbered across all layers, from 1) that took it. A
+    /// pixel is free in this layer when its number is at most `first`, the count before it.
     seen: Vec<u32>,
+    next: u32,
     stack: Vec<usize>,
+}
+
+/// Whether any grey byte of `row` is lit (≥ 128: its top bit set); eight at a time.
+fn any_lit(row: &[u8]) -> bool {
+    let chunks = row.chunks_exact(8);
+    let tail = chunks.remainder().iter().fold(0u8, |a, &b| a | b);
+    let bits = chunks.fold(0u64, |a, c| {
+        a | u64::from_le_bytes(c.try_into().expect("eight bytes"))
+    });
+    bits & 0x8080_8080_8080_8080 != 0 || tail & 0x80 != 0
 }
 
 impl Islands {
@@ -44,68 +56,74 @@ impl Islands {
             layer_mm,
             below: Vec::new(),
             seen: Vec::new(),
+            next: 0,
             stack: Vec::new(),
         }
     }
 
     /// The islands that start in `layer` (row-major grey, `width` × `height`).
     pub fn layer(&mut self, index: usize, image: &[u8]) -> Vec<Island> {
+        self.layer_owned(index, image.to_vec())
+    }
+
+    /// The same, keeping the image (as the next layer's below) without copying it.
+    pub fn layer_owned(&mut self, index: usize, image: Vec<u8>) -> Vec<Island> {
         let (w, h) = (self.width, self.height);
         debug_assert_eq!(image.len(), w * h);
-        let lit: Vec<bool> = image.iter().map(|&g| g >= LIT).collect();
         let mut out = Vec::new();
         if !self.below.is_empty() {
-            self.seen.clear();
-            self.seen.resize(w * h, 0);
-            let mut label = 0u32;
-            for start in 0..w * h {
-                if !lit[start] || self.seen[start] != 0 {
+            if self.seen.len() != w * h || self.next > u32::MAX - (w * h) as u32 {
+                self.seen = vec![0; w * h];
+                self.next = 0;
+            }
+            let first = self.next;
+            let lit = |p: usize| image[p] >= LIT;
+            // Dark rows are skipped whole.
+            for (r, row) in image.chunks(w).enumerate() {
+                if !any_lit(row) {
                     continue;
                 }
-                label += 1;
-                self.seen[start] = label;
-                self.stack.push(start);
-                let (mut count, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64);
-                let mut held = false;
-                while let Some(p) = self.stack.pop() {
-                    let (r, c) = (p / w, p % w);
-                    count += 1;
-                    sx += c as f64;
-                    sy += r as f64;
-                    held |= self.below[p];
-                    for dr in [-1i64, 0, 1] {
-                        for dc in [-1i64, 0, 1] {
-                            let (rr, cc) = (r as i64 + dr, c as i64 + dc);
-                            if (dr, dc) == (0, 0)
-                                || rr < 0
-                                || cc < 0
-                                || rr >= h as i64
-                                || cc >= w as i64
-                            {
-                                continue;
-                            }
-                            let q = rr as usize * w + cc as usize;
-                            if lit[q] && self.seen[q] == 0 {
-                                self.seen[q] = label;
-                                self.stack.push(q);
+                for start in r * w..(r + 1) * w {
+                    if !lit(start) || self.seen[start] > first {
+                        continue;
+                    }
+                    self.next += 1;
+                    let label = self.next;
+                    self.seen[start] = label;
+                    self.stack.push(start);
+                    let (mut count, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64);
+                    let mut held = false;
+                    while let Some(p) = self.stack.pop() {
+                        let (r, col) = (p / w, p % w);
+                        count += 1;
+                        sx += col as f64;
+                        sy += r as f64;
+                        held |= self.below[p] >= LIT;
+                        for rr in r.saturating_sub(1)..(r + 2).min(h) {
+                            for cc in col.saturating_sub(1)..(col + 2).min(w) {
+                                let q = rr * w + cc;
+                                if lit(q) && self.seen[q] <= first {
+                                    self.seen[q] = label;
+                                    self.stack.push(q);
+                                }
                             }
                         }
                     }
-                }
-                if !held {
-                    let n = count as f64;
-                    out.push(Island {
-                        layer: index,
-                        x_mm: (sx / n + 0.5) * self.pixel_mm,
-                        y_mm: (h as f64 - (sy / n + 0.5)) * self.pixel_mm,
-                        z_mm: index as f64 * self.layer_mm,
-                        pixels: count,
-                        area_mm2: n * self.pixel_mm * self.pixel_mm,
-                    });
+                    if !held {
+                        let n = count as f64;
+                        out.push(Island {
+                            layer: index,
+                            x_mm: (sx / n + 0.5) * self.pixel_mm,
+                            y_mm: (h as f64 - (sy / n + 0.5)) * self.pixel_mm,
+                            z_mm: index as f64 * self.layer_mm,
+                            pixels: count,
+                            area_mm2: n * self.pixel_mm * self.pixel_mm,
+                        });
+                    }
                 }
             }
         }
-        self.below = lit;
+        self.below = image;
         out
     }
 }
@@ -138,6 +156,31 @@ mod tests {
         assert_eq!((i.layer, i.pixels), (1, 2));
         assert!((i.x_mm - 7.0 * 0.05).abs() < 1e-12, "{}", i.x_mm);
         assert!((i.y_mm - (8.0 - 6.5) * 0.05).abs() < 1e-12, "{}", i.y_mm);
+    }
+
+    #[test]
+    fn labels_carry_across_layers_without_mixing() {
+        // Two separate dots in one layer, then a bar over both: one region, held.
+        let mut f = Islands::new(9, 3, 1.0, 1.0);
+        f.layer(0, &layer(9, 3, &[(1, 1), (1, 7)]));
+        let bar: Vec<(usize, usize)> = (0..9).map(|c| (1, c)).collect();
+        assert!(f.layer(1, &layer(9, 3, &bar)).is_empty());
+        // The next layer: the same bar and a new dot far from it in the last row.
+        let mut next = bar.clone();
+        next.push((2, 0));
+        assert!(
+            f.layer(2, &layer(9, 3, &next)).is_empty(),
+            "(2,0) touches (1,0)"
+        );
+        // Pixel (0, 4) was dark in layer 2 (the bar is row 1): an island, though its label
+        // space is shared with the layers before.
+        let found = f.layer(3, &layer(9, 3, &[(0, 4), (1, 4)]));
+        assert!(
+            found.is_empty(),
+            "(1, 4) stands on the bar, and (0, 4) with it"
+        );
+        let found = f.layer(4, &layer(9, 3, &[(2, 8)]));
+        assert_eq!(found.len(), 1, "(2, 8) was dark in layer 3");
     }
 
     #[test]

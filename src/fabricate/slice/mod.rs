@@ -7,7 +7,8 @@
 //! segment (the solid on its left seen from above, from the triangle's winding), the segments of
 //! all models are rasterised by exact area coverage (`raster`), and the non-zero rule fills the
 //! image: overlapping closed shells need no union. Image row 0 is the far edge of the plate
-//! (largest y), column 0 its left edge, as PrusaSlicer draws them.
+//! (largest y), column 0 its left edge, as PrusaSlicer draws them. The layers, in order, are
+//! where `islands` looks for regions that start in free resin.
 
 pub mod islands;
 mod raster;
