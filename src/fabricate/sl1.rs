@@ -63,7 +63,7 @@ pub struct Sl1Check {
     pub island_count: usize,
     /// The first `MAX_LISTED` islands.
     pub islands: Vec<Island>,
-    /// Layers with no lit pixel, and the first of them.
+    /// Layers with no lit pixel.
     pub empty_layers: usize,
     pub problems: Vec<String>,
 }
