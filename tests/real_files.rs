@@ -304,3 +304,15 @@ fn a_small_file_that_means_millions_of_points_says_how_to_read_it() -> TestResul
     );
     Ok(())
 }
+
+#[test]
+fn mesh_entities_the_dxf_crate_drops_are_said_as_not_read() -> TestResult {
+    // ezdxf's panels: a MESH, a polyface mesh, a 3DFACE and a TEXT beside the polylines that
+    // make the network; the dxf crate skips MESH without a trace, lamina counts it.
+    let d = info(&[&path("panels/ezdxf_panels.dxf")?])?;
+    let skipped = &d["import"]["skipped"];
+    assert_eq!(skipped["MESH"], 1, "{skipped}");
+    assert_eq!(skipped["3DFACE"], 1, "{skipped}");
+    assert_eq!(skipped["TEXT"], 1, "{skipped}");
+    Ok(())
+}

@@ -100,6 +100,11 @@ pub(super) fn read_bytes(
         inserts += piece.inserts;
         base += piece.entities;
     }
+    // Entities the dxf crate drops without a trace: counted from the text itself.
+    let meshes = mesh_entity_count(bytes);
+    if meshes > 0 {
+        *skipped.entry("MESH".into()).or_default() += meshes;
+    }
     if points.is_empty() {
         let found = if skipped.is_empty() {
             "no entities at all".to_string()
@@ -136,6 +141,31 @@ pub(super) fn read_bytes(
         inserts,
         split: None,
     })
+}
+
+/// How many MESH entities (AcDbSubDMesh) the ENTITIES section of an ASCII DXF holds: the
+/// `dxf` crate skips them unread. Only files that name the class are scanned.
+pub(crate) fn mesh_entity_count(bytes: &[u8]) -> usize {
+    if memchr::memmem::find(bytes, b"AcDbSubDMesh").is_none() {
+        return 0;
+    }
+    let text = String::from_utf8_lossy(bytes);
+    let mut lines = text.lines();
+    let (mut in_entities, mut after_section, mut count) = (false, false, 0);
+    while let (Some(code), Some(value)) = (lines.next(), lines.next()) {
+        let (code, value) = (code.trim(), value.trim());
+        match (code, value) {
+            ("0", "SECTION") => after_section = true,
+            ("0", "ENDSEC") => in_entities = false,
+            ("2", name) if after_section => {
+                in_entities = name == "ENTITIES";
+                after_section = false;
+            }
+            ("0", "MESH") if in_entities => count += 1,
+            _ => after_section = false,
+        }
+    }
+    count
 }
 
 /// Parses the first part (the header and the blocks: the whole file, or its skeleton), then
