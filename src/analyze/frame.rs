@@ -251,11 +251,19 @@ fn to_global(x: DVec3, y: DVec3, z: DVec3, v: DVec3) -> DVec3 {
 
 /// The member stiffness in global axes (T̀ k T).
 fn global_stiffness(k: &[[f64; 12]; 12], x: DVec3, y: DVec3, z: DVec3) -> [[f64; 12]; 12] {
-    let r = [x.to_array(), y.to_array(), z.to_array()];
-    // kt = k T (T block-diagonal with r), then Tᵀ kt.
-    let mut kt = [[0.0; 12]; 12];
-    for i in 0..12 {
-        for jb in 0..4 {
+    rotate_stiffness(k, [x.to_array(), y.to_array(), z.to_array()])
+}
+
+/// Tᵀ k T for a stiffness over blocks of three freedoms (translations, rotations), T block-
+/// diagonal with `r`, whose rows are the local axes in global coordinates (local = r · global).
+pub(super) fn rotate_stiffness<const N: usize>(
+    k: &[[f64; N]; N],
+    r: [[f64; 3]; 3],
+) -> [[f64; N]; N] {
+    // kt = k T, then Tᵀ kt.
+    let mut kt = [[0.0; N]; N];
+    for i in 0..N {
+        for jb in 0..N / 3 {
             for j in 0..3 {
                 let mut s = 0.0;
                 for q in 0..3 {
@@ -265,10 +273,10 @@ fn global_stiffness(k: &[[f64; 12]; 12], x: DVec3, y: DVec3, z: DVec3) -> [[f64;
             }
         }
     }
-    let mut g = [[0.0; 12]; 12];
-    for ib in 0..4 {
+    let mut g = [[0.0; N]; N];
+    for ib in 0..N / 3 {
         for i in 0..3 {
-            for j in 0..12 {
+            for j in 0..N {
                 let mut s = 0.0;
                 for q in 0..3 {
                     s += r[q][i] * kt[ib * 3 + q][j];

@@ -25,7 +25,9 @@ use faer::Mat;
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::frame::{factor, local_frame, CaseResult, FrameError, LoadCase, Model, Support};
+use super::frame::{
+    factor, local_frame, rotate_stiffness, CaseResult, FrameError, LoadCase, Model, Support,
+};
 
 /// The most elements a mesh may have: each costs about 12 kB while the stiffness is assembled.
 pub const MAX_ELEMENTS: usize = 100_000;
@@ -439,36 +441,14 @@ fn global_stiffness(x: &[DVec3; 4], p: Plate) -> [[f64; 24]; 24] {
         }
     }
     // K = Tᵀ K_l T, T block-diagonal with R (local = R · global).
-    let rm = [
-        r.row(0).to_array(),
-        r.row(1).to_array(),
-        r.row(2).to_array(),
-    ];
-    let mut kt = [[0.0; 24]; 24];
-    for i in 0..24 {
-        for bj in 0..8 {
-            for c in 0..3 {
-                let mut s = 0.0;
-                for a in 0..3 {
-                    s += kl[i][3 * bj + a] * rm[a][c];
-                }
-                kt[i][3 * bj + c] = s;
-            }
-        }
-    }
-    let mut k = [[0.0; 24]; 24];
-    for bi in 0..8 {
-        for c in 0..3 {
-            for j in 0..24 {
-                let mut s = 0.0;
-                for a in 0..3 {
-                    s += rm[a][c] * kt[3 * bi + a][j];
-                }
-                k[3 * bi + c][j] = s;
-            }
-        }
-    }
-    k
+    rotate_stiffness(
+        &kl,
+        [
+            r.row(0).to_array(),
+            r.row(1).to_array(),
+            r.row(2).to_array(),
+        ],
+    )
 }
 
 /// Solves every case on the shell mesh of `model`'s panels and gives back what the frame
