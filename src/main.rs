@@ -71,6 +71,9 @@ enum Command {
     /// Slice closed meshes for a masked-SLA (DMP-SL) printer: anti-aliased layer PNGs in an
     /// SL1 archive (PrusaSlicer layout), with resin volume, cost and build time.
     Slice(Box<cli::slice::Args>),
+    /// A network's solid sliced straight from its signed distance into an SL1 archive, with no
+    /// mesh in between: the same layers as `solid` then `slice`, in a fraction of the memory.
+    Print(Box<cli::print::Args>),
     /// Read an SL1 archive back and check it (ours or PrusaSlicer's).
     Sl1(cli::sl1::Args),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
@@ -111,6 +114,7 @@ fn main() -> ExitCode {
         Command::Buds(args) => cli::buds::run(*args).map(within),
         Command::Solid(args) => cli::solid::run(args).map(Within::from),
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
+        Command::Print(args) => cli::print::run(*args).map(Within::from),
         Command::Sl1(args) => cli::sl1::run(args).map(within),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),

@@ -434,3 +434,100 @@ fn sl1_check_reads_prusaslicers_archive_and_refuses_what_is_no_sl1() -> TestResu
     );
     Ok(())
 }
+
+/// A network of one straight vein from `a` to `b`, radius `r` everywhere.
+fn vein(
+    dir: &Path,
+    a: [f64; 3],
+    b: [f64; 3],
+    r: f64,
+) -> Result<String, Box<dyn std::error::Error>> {
+    let net = serde_json::json!({
+        "format": "lamina-network", "version": 1, "meta": {"units": "mm", "parameters": {}},
+        "nodes": [{"p": a, "radius": r}, {"p": b, "radius": r}],
+        "edges": [{"a": 0, "b": 1, "radius": r}],
+    });
+    let path = dir.join("vein.json");
+    std::fs::write(&path, net.to_string())?;
+    Ok(path.to_str().ok_or("p")?.to_string())
+}
+
+#[test]
+fn print_samples_the_true_sections_of_a_standing_vein_and_repeats_its_bytes() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    // A vein standing 4 mm (balls of 0.3 mm at its ends): discs of 0.3 mm (8.6 pixels) along
+    // it, spherical caps' sections at its ends.
+    let net = vein(dir.path(), [0.0, 0.0, 0.0], [0.0, 0.0, 4.0], 0.3)?;
+    let report = dir.path().join("print.json");
+    let (a, b) = (dir.path().join("a.sl1"), dir.path().join("b.sl1"));
+    for out in [&a, &b] {
+        run_ok(&[
+            "print",
+            &net,
+            "-o",
+            out.to_str().ok_or("p")?,
+            "--report",
+            report.to_str().ok_or("p")?,
+        ])?;
+    }
+    let r = json(&report)?;
+    let areas = r["layer_area_mm2"].as_array().ok_or("areas")?;
+    assert_eq!(areas.len(), 92, "4.6 mm at 0.05 mm");
+    for (i, a) in areas.iter().enumerate() {
+        let a = a.as_f64().ok_or("area")?;
+        // The layer's middle height against the balls' centres at 0.3 and 4.3.
+        let z = (i as f64 + 0.5) * 0.05;
+        let off = (0.3 - z).max(z - 4.3).max(0.0);
+        let want = std::f64::consts::PI * (0.09 - off * off);
+        // Whole discs within 0.1 % (8-bit greys round); the small caps' sections within 1 %.
+        let tol = if off == 0.0 { 1e-3 } else { 1e-2 };
+        assert!(
+            (a - want).abs() <= tol * want,
+            "layer {i}: {a} mm², true {want}"
+        );
+    }
+    assert_eq!(r["island_count"], 0);
+    assert!(r["mesh_volume_ml"].is_null() && r["contour_volume_ml"].is_null());
+    let layer = |p: &Path, name: &str| -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+        let mut z = zip::ZipArchive::new(std::fs::File::open(p)?)?;
+        let mut out = Vec::new();
+        z.by_name(name)?.read_to_end(&mut out)?;
+        Ok(out)
+    };
+    assert_eq!(layer(&a, "a00050.png")?, layer(&b, "b00050.png")?);
+    Ok(())
+}
+
+#[test]
+fn print_refuses_bad_flags_and_networks_leaving_nothing() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let net = vein(dir.path(), [0.0, 0.0, 0.0], [0.0, 0.0, 4.0], 0.3)?;
+    let out = dir.path().join("job.sl1");
+    let out_s = out.to_str().ok_or("p")?;
+    for (flags, says) in [
+        (&["--layer", "0"][..], "--layer"),
+        (&["--fit=-1"][..], "--fit"),
+        (&["--fit", "NaN"][..], "--fit"),
+        (&["--lamina", "0.3"][..], "outline"),
+        (&["--copies", "0"][..], "--copies"),
+        (&["--fit", "1e6"][..], "the printer builds at most"),
+    ] {
+        let mut args = vec!["print", &net, "-o", out_s];
+        args.extend_from_slice(flags);
+        let o = lamina(&args);
+        assert_eq!(o.status.code(), Some(2), "{flags:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{flags:?}: {}", stderr(&o));
+        assert!(!out.exists(), "{flags:?}: no partial archive");
+    }
+    let bare = dir.path().join("bare.json");
+    std::fs::write(
+        &bare,
+        r#"{"format": "lamina-network", "version": 1, "nodes": [{"p": [0, 0, 0]}, {"p": [1, 0, 0]}],
+            "edges": [{"a": 0, "b": 1}]}"#,
+    )?;
+    let o = lamina(&["print", bare.to_str().ok_or("p")?, "-o", out_s]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("bare.json") && stderr(&o).contains("no radius"));
+    assert!(!out.exists());
+    Ok(())
+}

@@ -12,6 +12,7 @@ pub mod lsystem;
 pub mod nest;
 pub mod planarize;
 pub mod plates;
+pub mod print;
 pub mod render;
 pub mod size;
 pub mod sl1;

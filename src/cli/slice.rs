@@ -13,7 +13,10 @@ use lamina::fabricate::archive::{Job, Sl1Writer};
 use lamina::fabricate::estimate::{estimate, Estimate, Resin};
 use lamina::fabricate::sl1::MAX_LISTED;
 use lamina::fabricate::slice::islands::Islands;
-use lamina::fabricate::slice::{self, arrange, layer_count, Model, Placement, Printer, SliceError};
+use lamina::fabricate::slice::shapes::{self, Placed};
+use lamina::fabricate::slice::{
+    self, arrange, layer_count, Layer, Model, Placement, Printer, SliceError,
+};
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_triangles;
 use lamina::network::io::units::LengthUnit;
@@ -26,6 +29,22 @@ pub struct Args {
     /// The SL1 archive to write
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub job: JobArgs,
+    /// Print the models where they are (x, y in the display's mm) instead of arranging them
+    #[arg(long, conflicts_with = "copies")]
+    pub keep_position: bool,
+    /// Scale every model by this factor before slicing (after --units)
+    #[arg(long, value_name = "F")]
+    pub scale: Option<f64>,
+    /// The unit the models are in (mm, cm, m, in, ft): taken to mm before slicing [default: mm]
+    #[arg(long, value_name = "UNIT")]
+    pub units: Option<String>,
+}
+
+/// The printer, the plate and the report: what `slice` and `print` share.
+#[derive(ClapArgs)]
+pub struct JobArgs {
     /// Printer: `dmp-sl` (built in) or a JSON profile whose fields override it
     #[arg(long, default_value = "dmp-sl")]
     pub printer: String,
@@ -59,9 +78,6 @@ pub struct Args {
     /// Space between models on the plate, mm
     #[arg(long, default_value_t = 2.0)]
     pub gap: f64,
-    /// Print the models where they are (x, y in the display's mm) instead of arranging them
-    #[arg(long, conflicts_with = "copies")]
-    pub keep_position: bool,
     /// Also write the layer images into this folder
     #[arg(long, value_name = "DIR")]
     pub layers_dir: Option<PathBuf>,
@@ -83,12 +99,6 @@ pub struct Args {
     /// Print the estimate as JSON on stdout
     #[arg(long)]
     pub json: bool,
-    /// Scale every model by this factor before slicing (after --units)
-    #[arg(long, value_name = "F")]
-    pub scale: Option<f64>,
-    /// The unit the models are in (mm, cm, m, in, ft): taken to mm before slicing [default: mm]
-    #[arg(long, value_name = "UNIT")]
-    pub units: Option<String>,
 }
 
 /// The factor every model is scaled by: `--units` to mm, then `--scale`.
@@ -112,7 +122,7 @@ fn model_scale(args: &Args) -> Result<f64> {
     Ok(unit * scale)
 }
 
-fn printer(args: &Args) -> Result<Printer> {
+pub fn printer(args: &JobArgs) -> Result<Printer> {
     let mut p = if args.printer == "dmp-sl" {
         Printer::default()
     } else {
@@ -217,27 +227,64 @@ fn printer(args: &Args) -> Result<Printer> {
     Ok(p)
 }
 
+impl JobArgs {
+    /// The printer, with every job flag checked.
+    pub fn checked_printer(&self) -> Result<Printer> {
+        let printer = printer(self)?;
+        for (what, v) in [
+            ("--resin-cost", self.resin_cost),
+            ("--density", self.density),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                bail!("{what} must be a number ≥ 0, got {v}");
+            }
+        }
+        if let Some(v) = self.speed {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("--speed must be a positive number of mm/h, got {v}");
+            }
+        }
+        if self.copies == 0 {
+            bail!("--copies must be at least 1");
+        }
+        if !(self.gap.is_finite() && self.gap >= 0.0) {
+            bail!("--gap must be a number of mm ≥ 0, got {}", self.gap);
+        }
+        Ok(printer)
+    }
+
+    pub fn spec<'a>(&'a self, output: &'a Path) -> Spec<'a> {
+        Spec {
+            output,
+            layers_dir: self.layers_dir.as_deref(),
+            resin: Resin {
+                cost_per_litre: self.resin_cost,
+                density: self.density,
+            },
+            speed: self.speed,
+            material: &self.material,
+            copies: self.copies,
+        }
+    }
+
+    /// Writes print.json where asked and says what the job is.
+    pub fn finish(
+        &self,
+        report: &serde_json::Value,
+        e: &Estimate,
+        printer: &Printer,
+        output: &Path,
+    ) -> Result<()> {
+        if let Some(path) = &self.report {
+            write_json(path, report)?;
+        }
+        tell(report, e, printer, output, self.json)
+    }
+}
+
 pub fn run(args: Args) -> Result<()> {
-    let printer = printer(&args)?;
-    for (what, v) in [
-        ("--resin-cost", args.resin_cost),
-        ("--density", args.density),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("{what} must be a number ≥ 0, got {v}");
-        }
-    }
-    if let Some(v) = args.speed {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("--speed must be a positive number of mm/h, got {v}");
-        }
-    }
-    if args.copies == 0 {
-        bail!("--copies must be at least 1");
-    }
-    if !(args.gap.is_finite() && args.gap >= 0.0) {
-        bail!("--gap must be a number of mm ≥ 0, got {}", args.gap);
-    }
+    let job = &args.job;
+    let printer = job.checked_printer()?;
     let scale = model_scale(&args)?;
     let mut models = Vec::with_capacity(args.models.len());
     for path in &args.models {
@@ -262,43 +309,38 @@ pub fn run(args: Args) -> Result<()> {
             mesh,
         });
     }
-    let placed = arrange(&models, &printer, args.copies, args.gap, args.keep_position)?;
-    let resin = Resin {
-        cost_per_litre: args.resin_cost,
-        density: args.density,
-    };
-    let spec = Spec {
-        output: &args.output,
-        layers_dir: args.layers_dir.as_deref(),
-        resin,
-        speed: args.speed,
-        material: &args.material,
-        copies: args.copies,
-    };
-    let (report, e, _) = slice_job(&models, &placed, &printer, &spec, &[])?;
-    let mesh_volume = report["mesh_volume_ml"].as_f64().unwrap_or(0.0) * 1000.0;
-    if let Some(path) = &args.report {
-        write_json(path, &report)?;
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+    let placed = arrange(&models, &printer, job.copies, job.gap, args.keep_position)?;
+    let spec = job.spec(&args.output);
+    let (report, e, _) = slice_job(Source::Meshes(&models), &placed, &printer, &spec, &[])?;
+    job.finish(&report, &e, &printer, &args.output)
+}
+
+/// Says what a sliced job is: the summary (or print.json with `json`) on stdout, and its islands.
+pub fn tell(
+    report: &serde_json::Value,
+    e: &Estimate,
+    printer: &Printer,
+    output: &Path,
+    json: bool,
+) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(report)?);
     } else {
+        let placed = report["placements"].as_array().map_or(0, |p| p.len());
         println!(
-            "wrote {}: {} layers of {} mm ({:.2} mm), {} model(s) on the plate",
-            args.output.display(),
+            "wrote {}: {} layers of {} mm ({:.2} mm), {placed} model(s) on the plate",
+            output.display(),
             e.layers,
             printer.layer_mm,
             e.height_mm,
-            placed.len()
         );
+        let mesh = match report["mesh_volume_ml"].as_f64() {
+            Some(v) => format!(" (mesh {v:.4} mL)"),
+            None => String::new(),
+        };
         println!(
-            "  resin {:.4} mL (mesh {:.4} mL), cost {:.4}, {:.3} g; build {:.2} h ({})",
-            e.volume_ml,
-            mesh_volume / 1000.0,
-            e.resin_cost,
-            e.mass_g,
-            e.build_time_h,
-            e.build_time_from
+            "  resin {:.4} mL{mesh}, cost {:.4}, {:.3} g; build {:.2} h ({})",
+            e.volume_ml, e.resin_cost, e.mass_g, e.build_time_h, e.build_time_from
         );
     }
     // Islands are said even with --json (on stderr then): a print fails at each.
@@ -314,12 +356,19 @@ pub fn run(args: Args) -> Result<()> {
             i["area_mm2"].as_f64().unwrap_or(0.0)
         ),
     };
-    if args.json {
+    if json {
         eprintln!("lamina: {line}");
     } else {
         println!("  {line}");
     }
     Ok(())
+}
+
+/// What a job slices: closed meshes, or a solid's shapes sampled directly (`lamina print`).
+#[derive(Clone, Copy)]
+pub enum Source<'a> {
+    Meshes(&'a [Model]),
+    Shapes { model: &'a Placed, path: &'a Path },
 }
 
 /// Raw images of chosen layers: (index, row-major grey bytes).
@@ -338,7 +387,7 @@ pub struct Spec<'a> {
 /// Slices placed models into the SL1 archive (and the layers folder), and returns print.json,
 /// the estimate, and the raw images of the layers listed in `keep`.
 pub fn slice_job(
-    models: &[Model],
+    source: Source,
     placed: &[Placement],
     printer: &Printer,
     spec: &Spec,
@@ -351,7 +400,10 @@ pub fn slice_job(
         .filter(|s| !s.is_empty())
         .unwrap_or("lamina")
         .to_string();
-    let layers_total = layer_count(models, printer);
+    let layers_total = match source {
+        Source::Meshes(models) => layer_count(models, printer),
+        Source::Shapes { model, .. } => shapes::layer_count(model, printer),
+    };
     let bar =
         ProgressBar::with_draw_target(Some(layers_total as u64), ProgressDrawTarget::stderr());
     bar.set_style(ProgressStyle::with_template(
@@ -374,7 +426,7 @@ pub fn slice_job(
     let mut est = None;
     write_atomic(spec.output, |w| {
         let mut sl1 = Sl1Writer::new(w, &name);
-        slice::slice(models, placed, printer, |layer| {
+        let mut on_layer = |layer: Layer| {
             sl1.layer(layer.index, &layer.png)?;
             if let Some(s) = &staging {
                 std::fs::write(
@@ -395,7 +447,11 @@ pub fn slice_job(
             }
             bar.inc(1);
             Ok::<(), std::io::Error>(())
-        })?;
+        };
+        match source {
+            Source::Meshes(models) => slice::slice(models, placed, printer, &mut on_layer)?,
+            Source::Shapes { model, .. } => shapes::slice(model, placed, printer, &mut on_layer)?,
+        };
         let e = est.insert(estimate(printer, &spec.resin, &areas, spec.speed));
         sl1.finish(
             printer,
@@ -415,17 +471,31 @@ pub fn slice_job(
     }
     let e = est.ok_or_else(|| anyhow::anyhow!("internal: slicing finished without an estimate"))?;
     // Per model once; every copy has the same volume and height.
-    let volumes: Vec<f64> = models.iter().map(|m| m.mesh.signed_volume()).collect();
-    let heights: Vec<f64> = models.iter().map(|m| m.mesh.bbox().size().z).collect();
-    let mesh_volume: f64 = placed.iter().map(|p| volumes[p.model]).sum();
+    let (paths, volumes, heights): (Vec<&Path>, Option<Vec<f64>>, Vec<f64>) = match source {
+        Source::Meshes(models) => (
+            models.iter().map(|m| m.path.as_path()).collect(),
+            Some(models.iter().map(|m| m.mesh.signed_volume()).collect()),
+            models.iter().map(|m| m.mesh.bbox().size().z).collect(),
+        ),
+        Source::Shapes { model, path } => {
+            let (lo, hi) = model.bounds();
+            (vec![path], None, vec![hi.z - lo.z])
+        }
+    };
+    let mesh_volume: Option<f64> =
+        volumes.map(|v| placed.iter().map(|p| v[p.model]).sum::<f64>() / 1000.0);
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in placed {
         let h = heights[p.model];
         lo = [lo[0].min(p.min[0]), lo[1].min(p.min[1]), 0.0];
         hi = [hi[0].max(p.max[0]), hi[1].max(p.max[1]), hi[2].max(h)];
     }
-    let exact_ml = exact.iter().sum::<f64>() * printer.layer_mm / 1000.0;
-    let paths: Vec<&Path> = models.iter().map(|m| m.path.as_path()).collect();
+    // The contours' volume, when the layers were cut from meshes.
+    let exact_ml = exact
+        .iter()
+        .copied()
+        .sum::<Option<f64>>()
+        .map(|a| a * printer.layer_mm / 1000.0);
     let report = json!({
         "archive": spec.output,
         "printer": printer,
@@ -437,7 +507,7 @@ pub fn slice_job(
         "height_mm": e.height_mm,
         "volume_ml": e.volume_ml,
         "contour_volume_ml": exact_ml,
-        "mesh_volume_ml": mesh_volume / 1000.0,
+        "mesh_volume_ml": mesh_volume,
         "resin_cost": e.resin_cost,
         "resin_cost_per_litre": spec.resin.cost_per_litre,
         "density_g_ml": spec.resin.density,

@@ -22,6 +22,21 @@ pub struct Args {
     /// Grid cell of the mesher, mm (default: the DMP-SL pixel)
     #[arg(long, default_value_t = DEFAULT_CELL)]
     pub cell: f64,
+    #[command(flatten)]
+    pub shape: ShapeArgs,
+    #[command(flatten)]
+    pub weld: ReadArgs,
+    /// Write the report as JSON here
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the report as JSON on stdout
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// What the solid is made of: what `solid` and `print` share.
+#[derive(ClapArgs)]
+pub struct ShapeArgs {
     /// Add the leaf lamina: the blade outline extruded this thick, mm, veins standing on it
     #[arg(long, value_name = "MM")]
     pub lamina: Option<f64>,
@@ -37,14 +52,20 @@ pub struct Args {
     /// Radius for edges the network gives none, mm
     #[arg(long, value_name = "MM")]
     pub radius: Option<f64>,
-    #[command(flatten)]
-    pub weld: ReadArgs,
-    /// Write the report as JSON here
-    #[arg(long, value_name = "FILE")]
-    pub report: Option<PathBuf>,
-    /// Print the report as JSON on stdout
-    #[arg(long)]
-    pub json: bool,
+}
+
+impl ShapeArgs {
+    /// The solid's options at grid cell `cell`.
+    pub fn options(&self, cell: f64) -> Result<SolidOptions> {
+        Ok(SolidOptions {
+            cell,
+            lamina: self.lamina,
+            base: self.base.as_deref().map(parse_base).transpose()?,
+            fit: self.fit,
+            upright: self.upright,
+            radius: self.radius,
+        })
+    }
 }
 
 pub fn parse_base(text: &str) -> Result<Base> {
@@ -64,14 +85,7 @@ pub fn parse_base(text: &str) -> Result<Base> {
 
 pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
-    let opts = SolidOptions {
-        cell: args.cell,
-        lamina: args.lamina,
-        base: args.base.as_deref().map(parse_base).transpose()?,
-        fit: args.fit,
-        upright: args.upright,
-        radius: args.radius,
-    };
+    let opts = args.shape.options(args.cell)?;
     let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
     bar.set_style(ProgressStyle::with_template(
         "meshing {bar:40} {pos}/{len} bricks {elapsed}",

@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::Entry;
-use crate::cli::slice::{slice_job, Spec};
+use crate::cli::slice::{slice_job, Source, Spec};
 use crate::cli::venation::write_json;
 use lamina::fabricate::estimate::Resin;
 use lamina::fabricate::slice::{arrange, encode_grey, layer_count, Model, Printer};
@@ -74,7 +74,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
         material: "MakerJuice G+",
         copies: COPIES,
     };
-    let (report, e, kept) = slice_job(&models, &placed, &printer, &spec, &keep)?;
+    let (report, e, kept) = slice_job(Source::Meshes(&models), &placed, &printer, &spec, &keep)?;
     write_json(&dir.join("print.json"), &report)?;
 
     // The strip: each kept layer cropped to the first leaf's footprint, side by side.

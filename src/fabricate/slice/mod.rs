@@ -12,6 +12,7 @@
 
 pub mod islands;
 mod raster;
+pub mod shapes;
 
 use std::path::PathBuf;
 
@@ -227,7 +228,6 @@ pub fn arrange(
     gap: f64,
     keep_position: bool,
 ) -> Result<Vec<Placement>, SliceError> {
-    let area = printer.area();
     let mut boxes = Vec::with_capacity(models.len());
     for m in models {
         if m.mesh.triangles.is_empty() {
@@ -235,10 +235,25 @@ pub fn arrange(
         }
         closed(m)?;
         let b = m.mesh.bbox();
-        let size = b.size();
+        boxes.push((m.path.as_path(), b.min, b.max));
+    }
+    arrange_boxes(&boxes, printer, copies, gap, keep_position)
+}
+
+/// The same for models known by their boxes: (file, lowest corner, highest corner).
+pub fn arrange_boxes(
+    boxes: &[(&std::path::Path, DVec3, DVec3)],
+    printer: &Printer,
+    copies: usize,
+    gap: f64,
+    keep_position: bool,
+) -> Result<Vec<Placement>, SliceError> {
+    let area = printer.area();
+    for &(path, lo, hi) in boxes {
+        let size = hi - lo;
         if size.z > printer.max_height_mm {
             return Err(SliceError::TooTall {
-                path: m.path.clone(),
+                path: path.to_path_buf(),
                 height: size.z,
                 max: printer.max_height_mm,
             });
@@ -246,7 +261,7 @@ pub fn arrange(
         let layers = size.z / printer.layer_mm;
         if layers > MAX_LAYERS as f64 {
             return Err(SliceError::TooManyLayers {
-                path: m.path.clone(),
+                path: path.to_path_buf(),
                 height: size.z,
                 layer: printer.layer_mm,
                 layers: layers.ceil(),
@@ -255,21 +270,20 @@ pub fn arrange(
         let fits = |w: f64, h: f64| w <= area.x && h <= area.y;
         if !fits(size.x, size.y) && (keep_position || !fits(size.y, size.x)) {
             return Err(SliceError::TooBig {
-                path: m.path.clone(),
+                path: path.to_path_buf(),
                 size_x: size.x,
                 size_y: size.y,
                 area_x: area.x,
                 area_y: area.y,
             });
         }
-        boxes.push((b.min, b.max));
     }
     if keep_position {
         let mut placed = Vec::new();
-        for (k, (m, &(lo, hi))) in models.iter().zip(&boxes).enumerate() {
+        for (k, &(path, lo, hi)) in boxes.iter().enumerate() {
             if lo.x < 0.0 || lo.y < 0.0 || hi.x > area.x || hi.y > area.y {
                 return Err(SliceError::Outside {
-                    path: m.path.clone(),
+                    path: path.to_path_buf(),
                     x0: lo.x,
                     x1: hi.x,
                     y0: lo.y,
@@ -287,6 +301,7 @@ pub fn arrange(
         }
         return Ok(placed);
     }
+    let boxes: Vec<(DVec3, DVec3)> = boxes.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
     match shelves(&boxes, copies, gap, area, false) {
         Ok(p) => Ok(p),
         Err(straight) => shelves(&boxes, copies, gap, area, true).map_err(|turned| {
@@ -298,7 +313,7 @@ pub fn arrange(
                     straight
                 }
             }
-            .into_error(models.len() * copies, area, gap)
+            .into_error(boxes.len() * copies, area, gap)
         }),
     }
 }
@@ -465,8 +480,8 @@ pub struct Layer {
     pub image: Vec<u8>,
     /// Area as the image shows it (Σ grey/255 × pixel area), mm².
     pub area_mm2: f64,
-    /// Area enclosed by the section's contours, mm².
-    pub exact_area_mm2: f64,
+    /// Area enclosed by the section's contours, mm², when the layer was cut from a mesh.
+    pub exact_area_mm2: Option<f64>,
 }
 
 /// Which triangles cross each layer plane, per model.
@@ -608,7 +623,7 @@ fn layer(
         png: encode_grey(&image, w as u32, h as u32),
         image,
         area_mm2: area_px * px * px,
-        exact_area_mm2: exact.abs(),
+        exact_area_mm2: Some(exact.abs()),
     }
 }
 

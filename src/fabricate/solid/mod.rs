@@ -176,12 +176,38 @@ pub struct SolidReport {
     pub warnings: Vec<String>,
 }
 
-/// Builds the solid. `progress(done, total)` is called while meshing.
-pub fn solid(
-    net: &Network,
-    opts: &SolidOptions,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<Solid, SolidError> {
+/// The solid before meshing: its pieces, in the network's frame scaled by `--fit`.
+#[derive(Clone, Debug)]
+pub struct Shapes {
+    pub prims: Vec<Primitive>,
+    /// Factor the network was scaled by (`--fit`), 1 otherwise.
+    pub scale: f64,
+    /// Radius at each end of each edge, after scaling.
+    pub ends: Vec<[f64; 2]>,
+    pub min_radius: f64,
+    pub max_radius: f64,
+}
+
+impl Shapes {
+    /// The exact box of the union: every piece's box is exact (a round cone's is its balls').
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.prims.iter().map(Primitive::bounds).fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+        )
+    }
+
+    /// Signed distance to the union at `p` (in the shapes' frame), exact outside within
+    /// `reach`, correct in sign everywhere.
+    pub fn eval(&self, p: DVec3, reach: f64) -> f64 {
+        self.prims
+            .iter()
+            .fold(f64::INFINITY, |d, s| d.min(s.eval(p, reach)))
+    }
+}
+
+/// Checks the network and the options and builds the pieces of its solid.
+pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> {
     positive("--cell", opts.cell)?;
     for (what, v) in [
         ("--lamina", opts.lamina),
@@ -300,6 +326,29 @@ pub fn solid(
             radius: base.diameter / 2.0,
         }));
     }
+    Ok(Shapes {
+        prims,
+        scale,
+        ends,
+        min_radius,
+        max_radius,
+    })
+}
+
+/// Builds the solid. `progress(done, total)` is called while meshing.
+pub fn solid(
+    net: &Network,
+    opts: &SolidOptions,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Solid, SolidError> {
+    let Shapes {
+        prims,
+        scale,
+        ends,
+        min_radius,
+        max_radius,
+    } = shapes(net, opts)?;
+    let n = net.nodes.len();
 
     // The surface the mesh will have, bounded from above (every shape's own area), in cells:
     // refused before meshing when the mesh would not fit in memory.

@@ -103,6 +103,11 @@ impl RoundCone {
         }
     }
 
+    /// The two balls: (centre a, radius a, centre b, radius b).
+    pub fn balls(&self) -> (DVec3, f64, DVec3, f64) {
+        (self.a, self.ra, self.b, self.rb)
+    }
+
     pub fn eval(&self, p: DVec3) -> f64 {
         let pa = p - self.a;
         if self.nested {
