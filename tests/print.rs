@@ -531,3 +531,62 @@ fn print_refuses_bad_flags_and_networks_leaving_nothing() -> TestResult {
     assert!(!out.exists());
     Ok(())
 }
+
+#[test]
+fn supports_hold_a_floating_vein_on_the_one_below_and_leave_no_island() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    // A vein on the plate and a second one floating 3 mm above it, crossing it.
+    let net = serde_json::json!({
+        "format": "lamina-network", "version": 1, "meta": {"units": "mm", "parameters": {}},
+        "nodes": [{"p": [0.0, 0.0, 0.0], "radius": 0.4}, {"p": [6.0, 0.0, 0.0], "radius": 0.4},
+                  {"p": [3.0, -3.0, 3.0], "radius": 0.3}, {"p": [3.0, 3.0, 3.0], "radius": 0.3}],
+        "edges": [{"a": 0, "b": 1, "radius": 0.4}, {"a": 2, "b": 3, "radius": 0.3}],
+    });
+    let path = dir.path().join("two.json");
+    std::fs::write(&path, net.to_string())?;
+    let path = path.to_str().ok_or("p")?;
+    let report = dir.path().join("print.json");
+    let report_s = report.to_str().ok_or("p")?;
+    let job = dir.path().join("job.sl1");
+    let job_s = job.to_str().ok_or("p")?;
+    run_ok(&["print", path, "-o", job_s, "--report", report_s])?;
+    let r = json(&report)?;
+    assert_eq!(
+        r["island_count"], 1,
+        "the floating vein starts in free resin"
+    );
+    run_ok(&[
+        "print",
+        path,
+        "-o",
+        job_s,
+        "--report",
+        report_s,
+        "--supports",
+    ])?;
+    let r = json(&report)?;
+    assert_eq!(r["island_count"], 0);
+    let s = &r["supports"];
+    assert_eq!(
+        (s["islands"].as_u64(), s["islands_left"].as_u64()),
+        (Some(1), Some(0))
+    );
+    assert_eq!(s["to_model"], 1, "the vein below is right under the island");
+    assert!(s["support_ml"].as_f64().ok_or("ml")? > 0.0);
+    // The same supports in the mesh: one closed 2-manifold shell.
+    let stl = dir.path().join("two.stl");
+    run_ok(&[
+        "solid",
+        path,
+        "--cell",
+        "0.05",
+        "--supports",
+        "-o",
+        stl.to_str().ok_or("p")?,
+    ])?;
+    let mesh = read_mesh(&stl)?;
+    let topo = mesh.check_manifold();
+    assert!(topo.is_manifold() && topo.closed);
+    assert_eq!(topo.components, 1, "the supports join the two veins");
+    Ok(())
+}

@@ -9,7 +9,7 @@ use serde_json::json;
 
 use super::input::ReadArgs;
 use super::slice::{slice_job, JobArgs, Source};
-use super::solid::ShapeArgs;
+use super::solid::{ShapeArgs, SupportArgs};
 use lamina::fabricate::slice::arrange_boxes;
 use lamina::fabricate::slice::shapes::Placed;
 use lamina::fabricate::solid::shapes;
@@ -24,6 +24,8 @@ pub struct Args {
     #[command(flatten)]
     pub shape: ShapeArgs,
     #[command(flatten)]
+    pub supports: SupportArgs,
+    #[command(flatten)]
     pub weld: ReadArgs,
     #[command(flatten)]
     pub job: JobArgs,
@@ -34,7 +36,12 @@ pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
     // The outline's distance buckets are sized by the cell; the pixel is the cell here.
     let opts = args.shape.options(printer.pixel_mm)?;
-    let made = shapes(&net, &opts).with_context(|| format!("{}", args.network.display()))?;
+    let within = || format!("{}", args.network.display());
+    let mut made = shapes(&net, &opts).with_context(within)?;
+    let supports = args
+        .supports
+        .add(&mut made, opts.upright, &printer)
+        .with_context(within)?;
     let (scale, min_radius, max_radius) = (made.scale, made.min_radius, made.max_radius);
     if min_radius < printer.pixel_mm {
         eprintln!(
@@ -68,5 +75,8 @@ pub fn run(args: Args) -> Result<()> {
         "upright": opts.upright,
         "size_mm": (hi - lo).to_array(),
     });
+    if let Some(s) = supports {
+        report["supports"] = serde_json::to_value(s)?;
+    }
     args.job.finish(&report, &e, &printer, &args.output)
 }

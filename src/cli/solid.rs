@@ -9,7 +9,10 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::input::ReadArgs;
 use super::venation::write_json;
-use lamina::fabricate::solid::{solid, Base, SolidOptions, DEFAULT_CELL};
+use lamina::fabricate::slice::shapes::Placed;
+use lamina::fabricate::slice::supports::{plan, SupportOptions, SupportReport};
+use lamina::fabricate::slice::Printer;
+use lamina::fabricate::solid::{shapes, solid_of, Base, Shapes, SolidOptions, DEFAULT_CELL};
 use lamina::mesh::io::write_mesh;
 
 #[derive(ClapArgs)]
@@ -24,6 +27,8 @@ pub struct Args {
     pub cell: f64,
     #[command(flatten)]
     pub shape: ShapeArgs,
+    #[command(flatten)]
+    pub supports: SupportArgs,
     #[command(flatten)]
     pub weld: ReadArgs,
     /// Write the report as JSON here
@@ -68,6 +73,87 @@ impl ShapeArgs {
     }
 }
 
+/// Supports under the islands: what `solid` and `print` share.
+#[derive(ClapArgs)]
+pub struct SupportArgs {
+    /// Add tree supports under every island (a region that would start in free resin), at the
+    /// printer's pixel and layer (solid: the DMP-SL's)
+    #[arg(long)]
+    pub supports: bool,
+    /// Support tip diameter where it touches the model, mm (narrower on a thinner vein)
+    #[arg(long, value_name = "MM", default_value_t = 0.4)]
+    pub support_tip: f64,
+    /// Support pillar diameter, mm
+    #[arg(long, value_name = "MM", default_value_t = 0.8)]
+    pub support_pillar: f64,
+    /// Join pillars standing closer than this, mm
+    #[arg(long, value_name = "MM", default_value_t = 4.0)]
+    pub support_join: f64,
+    /// Base disc under each pillar on the plate: DIAMETER,HEIGHT in mm
+    #[arg(long, value_name = "D,H", default_value = "2,0.4")]
+    pub support_base: String,
+}
+
+impl SupportArgs {
+    /// Adds supports to `shapes` when asked, and says what they are.
+    pub fn add(
+        &self,
+        shapes: &mut Shapes,
+        upright: bool,
+        printer: &Printer,
+    ) -> Result<Option<SupportReport>> {
+        if !self.supports {
+            return Ok(None);
+        }
+        let base: Vec<f64> = self
+            .support_base
+            .split(',')
+            .map(|s| s.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .ok()
+            .filter(|v: &Vec<f64>| v.len() == 2)
+            .with_context(|| {
+                format!(
+                    "--support-base {}: expected DIAMETER,HEIGHT in mm, e.g. 2,0.4",
+                    self.support_base
+                )
+            })?;
+        let opts = SupportOptions {
+            tip: self.support_tip,
+            pillar: self.support_pillar,
+            base: base[0],
+            base_height: base[1],
+            join: self.support_join,
+        };
+        let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+        bar.set_style(ProgressStyle::with_template(
+            "supports: slicing {bar:40} {pos}/{len} layers {elapsed}",
+        )?);
+        let model = Placed::new(shapes.clone(), upright);
+        let made = plan(&model, printer, &opts, &|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        })?;
+        bar.finish_and_clear();
+        shapes.added += made.prims.len();
+        shapes.prims.extend(made.prims);
+        let r = made.report;
+        eprintln!(
+            "lamina: supports: {} island(s) held by {} tip(s); {} pillar(s) on the plate, {} on \
+             the model, {} join(s); {:.4} mL of supports for {:.4} mL of model",
+            r.islands, r.tips, r.to_plate, r.to_model, r.joins, r.support_ml, r.model_ml
+        );
+        if let Some(i) = &r.first_left {
+            eprintln!(
+                "lamina: warning: {} island(s) left with supports, the first at layer {} \
+                 ({:.2}, {:.2}) mm",
+                r.islands_left, i.layer, i.x_mm, i.y_mm
+            );
+        }
+        Ok(Some(r))
+    }
+}
+
 pub fn parse_base(text: &str) -> Result<Base> {
     let Some(rest) = text.strip_prefix("cylinder:") else {
         bail!("--base {text}: expected cylinder:DIAMETER,HEIGHT (mm), e.g. cylinder:6,2");
@@ -90,16 +176,26 @@ pub fn run(args: Args) -> Result<()> {
     bar.set_style(ProgressStyle::with_template(
         "meshing {bar:40} {pos}/{len} bricks {elapsed}",
     )?);
-    let made = solid(&net, &opts, &|done, total| {
+    let within = || format!("{}", args.network.display());
+    let mut pieces = shapes(&net, &opts).with_context(within)?;
+    let supports = args
+        .supports
+        .add(&mut pieces, opts.upright, &Printer::default())
+        .with_context(within)?;
+    let made = solid_of(&net, &opts, pieces, &|done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })
-    .with_context(|| format!("{}", args.network.display()))?;
+    .with_context(within)?;
     bar.finish_and_clear();
     write_mesh(&made.mesh, &args.output, 1024)?;
     let r = &made.report;
     if let Some(path) = &args.report {
-        write_json(path, &serde_json::to_value(r)?)?;
+        let mut value = serde_json::to_value(r)?;
+        if let Some(s) = &supports {
+            value["supports"] = serde_json::to_value(s)?;
+        }
+        write_json(path, &value)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(r)?);

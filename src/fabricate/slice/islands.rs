@@ -20,6 +20,9 @@ pub struct Island {
     pub z_mm: f64,
     pub pixels: usize,
     pub area_mm2: f64,
+    /// The island's pixel nearest its centroid, mm: a point surely on it, where a support can
+    /// hold it (the centroid of a crescent lies off it).
+    pub anchor_mm: [f64; 2],
 }
 
 /// Finds islands layer by layer; feed the layers in order.
@@ -35,6 +38,7 @@ pub struct Islands {
     seen: Vec<u32>,
     next: u32,
     stack: Vec<usize>,
+    members: Vec<usize>,
 }
 
 /// Whether any grey byte of `row` is lit (≥ 128: its top bit set); eight at a time.
@@ -58,6 +62,7 @@ impl Islands {
             seen: Vec::new(),
             next: 0,
             stack: Vec::new(),
+            members: Vec::new(),
         }
     }
 
@@ -93,7 +98,9 @@ impl Islands {
                     self.stack.push(start);
                     let (mut count, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64);
                     let mut held = false;
+                    self.members.clear();
                     while let Some(p) = self.stack.pop() {
+                        self.members.push(p);
                         let (r, col) = (p / w, p % w);
                         count += 1;
                         sx += col as f64;
@@ -111,7 +118,23 @@ impl Islands {
                     }
                     if !held {
                         let n = count as f64;
+                        let (cx, cy) = (sx / n, sy / n);
+                        let far = |p: usize| {
+                            let (x, y) = ((p % w) as f64 - cx, (p / w) as f64 - cy);
+                            x * x + y * y
+                        };
+                        let anchor = self
+                            .members
+                            .iter()
+                            .copied()
+                            .min_by(|&a, &b| far(a).total_cmp(&far(b)).then(a.cmp(&b)))
+                            .unwrap_or(start);
+                        let (ax, ay) = ((anchor % w) as f64, (anchor / w) as f64);
                         out.push(Island {
+                            anchor_mm: [
+                                (ax + 0.5) * self.pixel_mm,
+                                (h as f64 - (ay + 0.5)) * self.pixel_mm,
+                            ],
                             layer: index,
                             x_mm: (sx / n + 0.5) * self.pixel_mm,
                             y_mm: (h as f64 - (sy / n + 0.5)) * self.pixel_mm,

@@ -13,6 +13,7 @@
 pub mod islands;
 mod raster;
 pub mod shapes;
+pub mod supports;
 
 use std::path::PathBuf;
 

@@ -102,13 +102,44 @@ impl Placed {
     }
 
     /// A placed point in the shapes' own frame.
-    fn local(&self, q: DVec3) -> DVec3 {
-        let p = q - self.shift;
+    pub fn local(&self, q: DVec3) -> DVec3 {
+        self.local_direction(q - self.shift)
+    }
+
+    /// A placed direction in the shapes' own frame.
+    pub fn local_direction(&self, v: DVec3) -> DVec3 {
         if self.upright {
-            DVec3::new(p.x, p.z, -p.y)
+            DVec3::new(v.x, v.z, -v.y)
         } else {
-            p
+            v
         }
+    }
+
+    pub fn upright(&self) -> bool {
+        self.upright
+    }
+
+    /// The radius of the thickest vein holding the placed point `p`, where it is: a round cone's
+    /// radius at `p`'s place along its axis. `None` when no vein holds it.
+    pub fn vein_radius(&self, p: DVec3) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        for (k, balls) in self.balls.iter().enumerate() {
+            let Some((a, ra, b, rb)) = *balls else {
+                continue;
+            };
+            if self.eval_piece(k as u32, p, 1.0) >= 0.0 {
+                continue;
+            }
+            let ab = b - a;
+            let t = if ab.length_squared() > 0.0 {
+                ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let r = ra + (rb - ra) * t;
+            best = Some(best.map_or(r, |x: f64| x.max(r)));
+        }
+        best
     }
 
     /// Signed distance to piece `k` at the placed point `q`.
@@ -312,7 +343,9 @@ pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) 
 /// to first order, refined by one secant step along the gradient (the section of a thin vein near
 /// its top or bottom narrows fast with height); the area under that straight edge, less the
 /// sliver between it and the section's curved edge (curvature from the distance's second
-/// difference along the edge), so a vein a few pixels across keeps its area.
+/// difference along the edge), so a vein a few pixels across keeps its area. Where no straight
+/// edge fits (the gradient nearly cancels, or the edge curves tighter than the pixel), the pixel
+/// is sampled at 8 × 8 points.
 fn cover(dist: &dyn Fn(DVec3) -> f64, q: DVec3, side: f64) -> f64 {
     let d = dist(q) / side;
     if d >= 0.75 {
@@ -323,11 +356,20 @@ fn cover(dist: &dyn Fn(DVec3) -> f64, q: DVec3, side: f64) -> f64 {
     }
     let step = 0.25 * side;
     let (dx, dy) = (DVec3::X * step, DVec3::Y * step);
-    let g = DVec2::new(dist(q + dx) - dist(q - dx), dist(q + dy) - dist(q - dy)) / (2.0 * step);
+    let probes = [dist(q + dx), dist(q - dx), dist(q + dy), dist(q - dy)];
+    let g = DVec2::new(probes[0] - probes[1], probes[2] - probes[3]) / (2.0 * step);
+    // The second differences across x and y, per pixel: a kink (two pieces meeting, or a gap
+    // between them) makes one of them about the slope over the step.
+    let kink = (probes[0] + probes[1] - 2.0 * d * side)
+        .abs()
+        .max((probes[2] + probes[3] - 2.0 * d * side).abs())
+        / (step * step)
+        * side;
     let len = g.length();
-    if len.is_nan() || len <= 1e-9 {
-        // The surface lies in the plane here: the pixel is on its centre's side.
-        return if d < 0.0 { 1.0 } else { 0.0 };
+    if len.is_nan() || len <= 1e-9 || kink > 2.0 {
+        // The surface lies in the plane, or two pieces meet (or nearly) in the pixel: no
+        // straight edge describes it.
+        return sampled(dist, q, side);
     }
     let n = g / len;
     let mut along = d / len;
@@ -344,10 +386,31 @@ fn cover(dist: &dyn Fn(DVec3) -> f64, q: DVec3, side: f64) -> f64 {
     // Curvature in pixels⁻¹, positive where the section is convex.
     let t = n.perp().extend(0.0) * step;
     let bend = (dist(q + t) + dist(q - t) - 2.0 * d * side) / (step * step * len) * side;
+    if bend.abs() > 1.0 {
+        // Curved tighter than the pixel: a crease or a pixel-sized piece.
+        return sampled(dist, q, side);
+    }
     let Some((u0, u1)) = chord(-along, n) else {
         return straight;
     };
     (straight - bend * (u1.powi(3) - u0.powi(3)) / 6.0).clamp(0.0, 1.0)
+}
+
+/// The part of the pixel inside, counted at 8 × 8 points.
+fn sampled(dist: &dyn Fn(DVec3) -> f64, q: DVec3, side: f64) -> f64 {
+    const K: usize = 8;
+    let mut inside = 0;
+    for i in 0..K {
+        for j in 0..K {
+            let u = DVec3::new(
+                ((i as f64 + 0.5) / K as f64 - 0.5) * side,
+                ((j as f64 + 0.5) / K as f64 - 0.5) * side,
+                0.0,
+            );
+            inside += usize::from(dist(q + u) < 0.0);
+        }
+    }
+    inside as f64 / (K * K) as f64
 }
 
 /// Where the line {u : n·u = t} crosses the unit pixel [−½, ½]²: the range of its tangent

@@ -186,6 +186,9 @@ pub struct Shapes {
     pub ends: Vec<[f64; 2]>,
     pub min_radius: f64,
     pub max_radius: f64,
+    /// Pieces added after the network's (supports): the network's genus no longer tells the
+    /// solid's.
+    pub added: usize,
 }
 
 impl Shapes {
@@ -332,6 +335,7 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
         ends,
         min_radius,
         max_radius,
+        added: 0,
     })
 }
 
@@ -341,13 +345,24 @@ pub fn solid(
     opts: &SolidOptions,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Solid, SolidError> {
+    solid_of(net, opts, shapes(net, opts)?, progress)
+}
+
+/// Meshes shapes built by `shapes(net, opts)`, perhaps with pieces added (supports).
+pub fn solid_of(
+    net: &Network,
+    opts: &SolidOptions,
+    shapes: Shapes,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Solid, SolidError> {
     let Shapes {
         prims,
         scale,
         ends,
         min_radius,
         max_radius,
-    } = shapes(net, opts)?;
+        added,
+    } = shapes;
     let n = net.nodes.len();
 
     // The surface the mesh will have, bounded from above (every shape's own area), in cells:
@@ -398,7 +413,7 @@ pub fn solid(
         ));
     }
     let genus = topo.genus.unwrap_or(0);
-    if opts.lamina.is_none() && opts.base.is_none() {
+    if opts.lamina.is_none() && opts.base.is_none() && added == 0 {
         if (genus as usize) < network_cycles {
             warnings.push(format!(
                 "genus {genus} is below the network's {network_cycles} cycles: veins thick \

@@ -1,0 +1,398 @@
+//! Supports: tree supports under every island, made of the same shapes as the solid, so the
+//! supported solid is still one union (meshed as one closed 2-manifold by `solid`, sampled as one
+//! by `print`).
+//!
+//! # Method
+//! The solid is sliced at the printer's pixel and layer (no archive) and its islands found as
+//! `slice` finds them. Under each island, at its first layer's height and at its pixel nearest its
+//! centroid, a tip: a ball no wider than `tip` and never wider than the vein there, widening
+//! downwards into a pillar. The pillar goes straight down until the solid is right below it (it
+//! then narrows onto it, ending in a ball half as wide as the vein there, sunk into it: nothing
+//! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). A pillar
+//! may brush the solid on its way down; that only merges them.
+//! Pillars bound for the plate that stand closer than `join` are joined in pairs, nearest first:
+//! each leans at most 45° to a point between them, from where one pillar goes on down (and may
+//! be joined again): a tree. A join whose braces would pass within a pillar's radius of the
+//! solid is not made. Every step down looks at the exact distance to the solid, so a pillar's
+//! axis never passes through it.
+//!
+//! The supported solid is sliced again: the islands left (none, unless a pillar could not be
+//! placed) and the supports' resin are reported.
+
+use glam::{DVec2, DVec3};
+use rayon::prelude::*;
+
+use super::islands::{Island, Islands};
+use super::shapes::{image, layer_count, Placed};
+use super::{Placement, Printer};
+use crate::fabricate::solid::sdf::{Cylinder, Primitive, RoundCone};
+
+/// How the supports are made, mm.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SupportOptions {
+    /// Tip diameter where it touches the solid (narrower where the vein is).
+    pub tip: f64,
+    /// Pillar diameter.
+    pub pillar: f64,
+    /// Base disc under each pillar on the plate: diameter and height.
+    pub base: f64,
+    pub base_height: f64,
+    /// Pillars closer than this are joined.
+    pub join: f64,
+}
+
+impl Default for SupportOptions {
+    fn default() -> Self {
+        SupportOptions {
+            tip: 0.4,
+            pillar: 0.8,
+            base: 2.0,
+            base_height: 0.4,
+            join: 4.0,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SupportError {
+    #[error("--support-{what} must be a positive number of mm (at most 100), got {value}")]
+    Option { what: &'static str, value: f64 },
+    #[error(
+        "the solid is {0} × {1} pixels across, more than 16384: supports need its layers at the \
+         printer's pixel"
+    )]
+    TooWide(usize, usize),
+}
+
+/// What was built.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SupportReport {
+    pub options: SupportOptions,
+    /// Islands of the solid alone.
+    pub islands: usize,
+    pub tips: usize,
+    pub to_plate: usize,
+    pub to_model: usize,
+    pub joins: usize,
+    /// Islands of the solid with its supports (0 when every island is held).
+    pub islands_left: usize,
+    pub first_left: Option<Island>,
+    /// Resin of the supports alone, from the layers' pixels, mL.
+    pub support_ml: f64,
+    pub model_ml: f64,
+}
+
+/// The supports' shapes, in the solid's own frame (as `Shapes::prims`), and what they are.
+pub struct Supports {
+    pub prims: Vec<Primitive>,
+    pub report: SupportReport,
+}
+
+impl SupportOptions {
+    pub fn check(&self) -> Result<(), SupportError> {
+        for (what, value) in [
+            ("tip", self.tip),
+            ("pillar", self.pillar),
+            ("base", self.base),
+            ("base-height", self.base_height),
+            ("join", self.join),
+        ] {
+            if !(value.is_finite() && value > 0.0 && value <= 100.0) {
+                return Err(SupportError::Option { what, value });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A piece of support in the placed frame.
+enum Piece {
+    Cone(DVec3, DVec3, f64, f64),
+    /// A disc on the plate: centre of its bottom, radius, height.
+    Base(DVec3, f64, f64),
+}
+
+impl Piece {
+    /// The piece in the solid's own frame.
+    fn local(&self, model: &Placed) -> Primitive {
+        match *self {
+            Piece::Cone(a, b, ra, rb) => {
+                Primitive::Cone(RoundCone::new(model.local(a), model.local(b), ra, rb))
+            }
+            Piece::Base(c, radius, height) => Primitive::Cylinder(Cylinder {
+                base: model.local(c),
+                axis: model.local_direction(DVec3::Z),
+                height,
+                radius,
+            }),
+        }
+    }
+}
+
+/// A pillar's top still to be taken down: where it is and how it ends below.
+#[derive(Clone, Copy, Debug)]
+struct Top {
+    at: DVec3,
+    /// Where going straight down ends: on the solid at this height, or on the plate.
+    end: End,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum End {
+    Plate,
+    Model(f64),
+}
+
+/// Plans the supports of `model` for `printer`. `progress(done, total)` counts layers sliced.
+pub fn plan(
+    model: &Placed,
+    printer: &Printer,
+    opts: &SupportOptions,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Supports, SupportError> {
+    opts.check()?;
+    // Islands are found on two pixel grids, half a pixel apart: a sliver of a few pixels may be
+    // an island on one and held on the other, and the solid will be sliced on some grid.
+    let islands = find_islands(model, printer, DVec2::ZERO, progress)?;
+    let shifted = find_islands(model, printer, DVec2::splat(0.5), progress)?;
+    let near = |a: &Island, b: &Island| {
+        a.layer.abs_diff(b.layer) <= 2
+            && DVec2::from(a.anchor_mm).distance(DVec2::from(b.anchor_mm)) < 4.0 * printer.pixel_mm
+    };
+    let mut holds: Vec<(Island, DVec2)> = islands
+        .list
+        .iter()
+        .map(|i| (i.clone(), islands.offset))
+        .collect();
+    for i in &shifted.list {
+        // Compared where the first grid has it.
+        let mut moved = i.clone();
+        let d = shifted.offset - islands.offset;
+        moved.anchor_mm = [i.anchor_mm[0] - d.x, i.anchor_mm[1] - d.y];
+        if !islands.list.iter().any(|j| near(j, &moved)) {
+            holds.push((i.clone(), shifted.offset));
+        }
+    }
+    let layer = printer.layer_mm;
+    let rp = 0.5 * opts.pillar;
+    let mut pieces: Vec<Piece> = Vec::new();
+    let mut tops: Vec<Top> = Vec::new();
+    let mut to_model = 0;
+    for (island, offset) in &holds {
+        let z = (island.layer as f64 + 0.5) * layer;
+        let p = DVec3::new(
+            island.anchor_mm[0] - offset.x,
+            island.anchor_mm[1] - offset.y,
+            z,
+        );
+        let rt = model
+            .vein_radius(p)
+            .map_or(0.5 * opts.tip, |r| r.min(0.5 * opts.tip));
+        // Down from the layer below, where the island is not.
+        let end = descend(model, DVec3::new(p.x, p.y, z - layer));
+        let bottom = match end {
+            End::Plate => 0.0,
+            End::Model(h) => h,
+        };
+        // The tip widens over up to four pillar radii, never past half the drop.
+        let tip_len = (4.0 * rp).min(0.5 * (z - bottom)).max(0.0);
+        let neck = p - DVec3::Z * tip_len;
+        pieces.push(Piece::Cone(p, neck, rt, rp.max(rt)));
+        match end {
+            End::Model(h) => {
+                to_model += 1;
+                land(model, &mut pieces, neck, h, rp);
+            }
+            End::Plate => tops.push(Top { at: neck, end }),
+        }
+    }
+    let tips = holds.len();
+
+    // Join plate-bound pillars in pairs, nearest first.
+    let mut joins = 0;
+    let mut refused: Vec<(DVec2, DVec2)> = Vec::new();
+    loop {
+        let mut best: Option<(f64, usize, usize)> = None;
+        for i in 0..tops.len() {
+            for j in i + 1..tops.len() {
+                let (a, b) = (tops[i].at, tops[j].at);
+                let d = a.truncate().distance(b.truncate());
+                let pair = (a.truncate(), b.truncate());
+                if d < opts.join && best.is_none_or(|(bd, _, _)| d < bd) && !refused.contains(&pair)
+                {
+                    best = Some((d, i, j));
+                }
+            }
+        }
+        let Some((d, i, j)) = best else {
+            break;
+        };
+        let (a, b) = (tops[i].at, tops[j].at);
+        let mid = 0.5 * (a.truncate() + b.truncate());
+        let joint = mid.extend(a.z.min(b.z) - 0.5 * d);
+        let clear = joint.z > opts.base_height + 2.0 * rp
+            && clear_of(model, a, joint, rp)
+            && clear_of(model, b, joint, rp);
+        if !clear {
+            refused.push((a.truncate(), b.truncate()));
+            continue;
+        }
+        joins += 1;
+        pieces.push(pillar(a, joint, rp));
+        pieces.push(pillar(b, joint, rp));
+        let (hi, lo) = (i.max(j), i.min(j));
+        tops.swap_remove(hi);
+        tops.swap_remove(lo);
+        match descend(model, joint) {
+            End::Model(h) => {
+                to_model += 1;
+                land(model, &mut pieces, joint, h, rp);
+            }
+            End::Plate => tops.push(Top {
+                at: joint,
+                end: End::Plate,
+            }),
+        }
+    }
+    let to_plate = tops.len();
+    for t in &tops {
+        debug_assert_eq!(t.end, End::Plate);
+        let foot = DVec3::new(t.at.x, t.at.y, opts.base_height);
+        pieces.push(pillar(t.at, foot, rp));
+        pieces.push(Piece::Base(
+            DVec3::new(t.at.x, t.at.y, 0.0),
+            0.5 * opts.base,
+            opts.base_height,
+        ));
+    }
+
+    // The supported solid, sliced again.
+    let prims: Vec<Primitive> = pieces.iter().map(|s| s.local(model)).collect();
+    let mut shapes = model.shapes().clone();
+    shapes.prims.extend(prims.iter().cloned());
+    let supported = Placed::new(shapes, model.upright());
+    let after = find_islands(&supported, printer, DVec2::ZERO, progress)?;
+    let ml = |v: f64| v / 1000.0;
+    Ok(Supports {
+        prims,
+        report: SupportReport {
+            options: opts.clone(),
+            islands: islands.list.len(),
+            tips,
+            to_plate,
+            to_model,
+            joins,
+            islands_left: after.list.len(),
+            first_left: after.list.first().cloned(),
+            support_ml: ml(after.volume - islands.volume),
+            model_ml: ml(islands.volume),
+        },
+    })
+}
+
+/// A pillar of radius `r` from `a` to `b`.
+fn pillar(a: DVec3, b: DVec3, r: f64) -> Piece {
+    Piece::Cone(a, b, r, r)
+}
+
+/// Straight down from `from` (outside the solid): the height where the solid is first right
+/// below, or the plate.
+fn descend(model: &Placed, from: DVec3) -> End {
+    let mut p = from;
+    // Steps are at least 5 µm, so a descent takes at most (height / 5 µm) steps.
+    while p.z > 0.0 {
+        let d = model.eval(p, 1.0);
+        if d <= 0.0 {
+            return End::Model(p.z);
+        }
+        p.z -= d.max(0.005);
+    }
+    End::Plate
+}
+
+/// A pillar of radius `r` from `top` down onto the solid, which it meets at height `h`: the
+/// pillar narrows over its last stretch to a ball half as wide as the vein it lands on, sunk
+/// into the vein, so no part of it hangs beside the vein (it would be an island).
+fn land(model: &Placed, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
+    let hit = DVec3::new(top.x, top.y, h);
+    let inside = hit - DVec3::Z * 0.01;
+    let rl = model
+        .vein_radius(inside)
+        .map_or(0.5 * r, |v| (0.5 * v).min(r));
+    let taper = (4.0 * r).min(0.5 * (top.z - h)).max(0.0);
+    let foot = DVec3::new(top.x, top.y, h + taper);
+    if top.z > foot.z {
+        pieces.push(pillar(top, foot, r));
+    }
+    pieces.push(Piece::Cone(foot, hit - DVec3::Z * rl, r, rl));
+}
+
+/// Whether a brace of radius `r` from `a` to `b` keeps clear of the solid.
+fn clear_of(model: &Placed, a: DVec3, b: DVec3, r: f64) -> bool {
+    let len = a.distance(b);
+    let steps = (len / (0.5 * r)).ceil().max(1.0) as usize;
+    (0..=steps).all(|k| model.eval(a.lerp(b, k as f64 / steps as f64), 2.0 * r) > r)
+}
+
+/// The islands of the placed solid on a display just large enough for it.
+struct Found {
+    list: Vec<Island>,
+    /// Where the placed solid's origin is on that display, mm.
+    offset: DVec2,
+    /// The layers' volume, mm³.
+    volume: f64,
+}
+
+/// `phase` shifts the grid by that part of a pixel.
+fn find_islands(
+    model: &Placed,
+    printer: &Printer,
+    phase: DVec2,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Found, SupportError> {
+    let (lo, hi) = model.bounds();
+    let px = printer.pixel_mm;
+    let margin = 4.0;
+    let w = ((hi.x - lo.x) / px).ceil() as usize + 2 * margin as usize + 1;
+    let h = ((hi.y - lo.y) / px).ceil() as usize + 2 * margin as usize + 1;
+    if w > 16384 || h > 16384 {
+        return Err(SupportError::TooWide(w, h));
+    }
+    let grid = Printer {
+        pixels_x: w as u32,
+        pixels_y: h as u32,
+        ..printer.clone()
+    };
+    let offset = DVec2::new(margin * px - lo.x, margin * px - lo.y) + phase * px;
+    let place = Placement {
+        model: 0,
+        copy: 0,
+        turned: false,
+        offset: [offset.x, offset.y, 0.0],
+        min: [margin * px, margin * px],
+        max: [margin * px + hi.x - lo.x, margin * px + hi.y - lo.y],
+    };
+    let layers = layer_count(model, &grid);
+    let mut finder = Islands::new(w, h, px, grid.layer_mm);
+    let (mut list, mut area) = (Vec::new(), 0.0);
+    let batch = 4 * rayon::current_num_threads().max(1);
+    let mut next = 0;
+    while next < layers {
+        let end = (next + batch).min(layers);
+        let done: Vec<(Vec<u8>, f64)> = (next..end)
+            .into_par_iter()
+            .map(|i| image(model, std::slice::from_ref(&place), &grid, i))
+            .collect();
+        for (k, (img, a)) in done.into_iter().enumerate() {
+            area += a;
+            list.extend(finder.layer_owned(next + k, img));
+        }
+        next = end;
+        progress(next as u64, layers as u64);
+    }
+    Ok(Found {
+        list,
+        offset,
+        volume: area * grid.layer_mm,
+    })
+}
