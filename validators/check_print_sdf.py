@@ -26,25 +26,7 @@ import numpy as np
 
 from PIL import Image
 
-
-def end_radii(net):
-    nodes, edges = net["nodes"], net["edges"]
-    radius = []
-    for e in edges:
-        r = e.get("radius", 0.0) or max(nodes[e["a"]].get("radius", 0.0), nodes[e["b"]].get("radius", 0.0))
-        radius.append(r)
-    ends = [[r, r] for r in radius]
-    around = {}
-    for k, e in enumerate(edges):
-        around.setdefault(e["a"], []).append(k)
-        around.setdefault(e["b"], []).append(k)
-    for v, ks in around.items():
-        rv = nodes[v].get("radius", 0.0)
-        if not rv > 0:
-            continue
-        for k in sorted(ks, key=lambda k: (-radius[k], k))[:2]:
-            ends[k][0 if edges[k]["a"] == v else 1] = rv
-    return ends
+from check_solid import end_radii
 
 
 def hull_distance(p, a, b, ra, rb):

@@ -556,20 +556,32 @@ pub fn slice<E>(
         .par_iter()
         .map(|m| LayerIndex::new(&m.mesh, m.mesh.bbox().min.z, printer.layer_mm, layers))
         .collect();
+    in_batches(
+        layers,
+        |i| layer(models, placed, &indices, printer, i),
+        |_, l| sink(l),
+    )?;
+    Ok(layers)
+}
+
+/// Makes items `0..count` in parallel batches of a few per thread and hands each, in order, to
+/// `sink`: layers are made on every core while memory stays at a few dozen images.
+pub fn in_batches<T: Send, E>(
+    count: usize,
+    make: impl Fn(usize) -> T + Sync,
+    mut sink: impl FnMut(usize, T) -> Result<(), E>,
+) -> Result<(), E> {
     let batch = 4 * rayon::current_num_threads().max(1);
     let mut next = 0;
-    while next < layers {
-        let end = (next + batch).min(layers);
-        let done: Vec<Layer> = (next..end)
-            .into_par_iter()
-            .map(|i| layer(models, placed, &indices, printer, i))
-            .collect();
-        for l in done {
-            sink(l)?;
+    while next < count {
+        let end = (next + batch).min(count);
+        let done: Vec<T> = (next..end).into_par_iter().map(&make).collect();
+        for (k, item) in done.into_iter().enumerate() {
+            sink(next + k, item)?;
         }
         next = end;
     }
-    Ok(layers)
+    Ok(())
 }
 
 fn layer(

@@ -20,9 +20,8 @@
 //! the surface in 3D are wholly in or out without a gradient.
 
 use glam::{DVec2, DVec3};
-use rayon::prelude::*;
 
-use super::{encode_grey, Layer, Placement, Printer};
+use super::{encode_grey, in_batches, Layer, Placement, Printer};
 use crate::fabricate::solid::sdf::Primitive;
 use crate::fabricate::solid::Shapes;
 
@@ -193,28 +192,20 @@ pub fn slice<E>(
     mut sink: impl FnMut(Layer) -> Result<(), E>,
 ) -> Result<usize, E> {
     let layers = layer_count(model, printer);
-    let batch = 4 * rayon::current_num_threads().max(1);
-    let mut next = 0;
-    while next < layers {
-        let end = (next + batch).min(layers);
-        let done: Vec<Layer> = (next..end)
-            .into_par_iter()
-            .map(|i| {
-                let (image, area) = image(model, placed, printer, i);
-                Layer {
-                    index: i,
-                    png: encode_grey(&image, printer.pixels_x, printer.pixels_y),
-                    image,
-                    area_mm2: area,
-                    exact_area_mm2: None,
-                }
-            })
-            .collect();
-        for l in done {
-            sink(l)?;
-        }
-        next = end;
-    }
+    in_batches(
+        layers,
+        |i| {
+            let (image, area) = image(model, placed, printer, i);
+            Layer {
+                index: i,
+                png: encode_grey(&image, printer.pixels_x, printer.pixels_y),
+                image,
+                area_mm2: area,
+                exact_area_mm2: None,
+            }
+        },
+        |_, l| sink(l),
+    )?;
     Ok(layers)
 }
 

@@ -20,11 +20,10 @@
 //! placed) and the supports' resin are reported.
 
 use glam::{DVec2, DVec3};
-use rayon::prelude::*;
 
 use super::islands::{Island, Islands};
 use super::shapes::{image, layer_count, Placed};
-use super::{Placement, Printer};
+use super::{in_batches, Placement, Printer};
 use crate::fabricate::solid::sdf::{Cylinder, Primitive, RoundCone};
 
 /// How the supports are made, mm.
@@ -129,14 +128,6 @@ impl Piece {
     }
 }
 
-/// A pillar's top still to be taken down: where it is and how it ends below.
-#[derive(Clone, Copy, Debug)]
-struct Top {
-    at: DVec3,
-    /// Where going straight down ends: on the solid at this height, or on the plate.
-    end: End,
-}
-
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum End {
     Plate,
@@ -176,7 +167,8 @@ pub fn plan(
     let layer = printer.layer_mm;
     let rp = 0.5 * opts.pillar;
     let mut pieces: Vec<Piece> = Vec::new();
-    let mut tops: Vec<Top> = Vec::new();
+    // The tops of pillars bound for the plate.
+    let mut tops: Vec<DVec3> = Vec::new();
     let mut to_model = 0;
     for (island, offset) in &holds {
         let z = (island.layer as f64 + 0.5) * layer;
@@ -203,7 +195,7 @@ pub fn plan(
                 to_model += 1;
                 land(model, &mut pieces, neck, h, rp);
             }
-            End::Plate => tops.push(Top { at: neck, end }),
+            End::Plate => tops.push(neck),
         }
     }
     let tips = holds.len();
@@ -215,7 +207,7 @@ pub fn plan(
         let mut best: Option<(f64, usize, usize)> = None;
         for i in 0..tops.len() {
             for j in i + 1..tops.len() {
-                let (a, b) = (tops[i].at, tops[j].at);
+                let (a, b) = (tops[i], tops[j]);
                 let d = a.truncate().distance(b.truncate());
                 let pair = (a.truncate(), b.truncate());
                 if d < opts.join && best.is_none_or(|(bd, _, _)| d < bd) && !refused.contains(&pair)
@@ -227,7 +219,7 @@ pub fn plan(
         let Some((d, i, j)) = best else {
             break;
         };
-        let (a, b) = (tops[i].at, tops[j].at);
+        let (a, b) = (tops[i], tops[j]);
         let mid = 0.5 * (a.truncate() + b.truncate());
         let joint = mid.extend(a.z.min(b.z) - 0.5 * d);
         let clear = joint.z > opts.base_height + 2.0 * rp
@@ -248,19 +240,15 @@ pub fn plan(
                 to_model += 1;
                 land(model, &mut pieces, joint, h, rp);
             }
-            End::Plate => tops.push(Top {
-                at: joint,
-                end: End::Plate,
-            }),
+            End::Plate => tops.push(joint),
         }
     }
     let to_plate = tops.len();
     for t in &tops {
-        debug_assert_eq!(t.end, End::Plate);
-        let foot = DVec3::new(t.at.x, t.at.y, opts.base_height);
-        pieces.push(pillar(t.at, foot, rp));
+        let foot = DVec3::new(t.x, t.y, opts.base_height);
+        pieces.push(pillar(*t, foot, rp));
         pieces.push(Piece::Base(
-            DVec3::new(t.at.x, t.at.y, 0.0),
+            DVec3::new(t.x, t.y, 0.0),
             0.5 * opts.base,
             opts.base_height,
         ));
@@ -375,21 +363,17 @@ fn find_islands(
     let layers = layer_count(model, &grid);
     let mut finder = Islands::new(w, h, px, grid.layer_mm);
     let (mut list, mut area) = (Vec::new(), 0.0);
-    let batch = 4 * rayon::current_num_threads().max(1);
-    let mut next = 0;
-    while next < layers {
-        let end = (next + batch).min(layers);
-        let done: Vec<(Vec<u8>, f64)> = (next..end)
-            .into_par_iter()
-            .map(|i| image(model, std::slice::from_ref(&place), &grid, i))
-            .collect();
-        for (k, (img, a)) in done.into_iter().enumerate() {
+    in_batches(
+        layers,
+        |i| image(model, std::slice::from_ref(&place), &grid, i),
+        |i, (img, a)| {
             area += a;
-            list.extend(finder.layer_owned(next + k, img));
-        }
-        next = end;
-        progress(next as u64, layers as u64);
-    }
+            list.extend(finder.layer_owned(i, img));
+            progress(i as u64 + 1, layers as u64);
+            Ok::<(), std::convert::Infallible>(())
+        },
+    )
+    .unwrap_or_else(|never| match never {});
     Ok(Found {
         list,
         offset,
