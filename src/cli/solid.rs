@@ -137,6 +137,8 @@ impl SupportArgs {
         bar.finish_and_clear();
         shapes.added += made.prims.len();
         shapes.prims.extend(made.prims);
+        // Placed where they were planned, so the print's pixels are the planned ones.
+        shapes.frame = Some(model.shift());
         let r = made.report;
         eprintln!(
             "lamina: supports: {} island(s) held by {} tip(s); {} pillar(s) on the plate, {} on \

@@ -303,19 +303,21 @@ pub fn arrange_boxes(
         return Ok(placed);
     }
     let boxes: Vec<(DVec3, DVec3)> = boxes.iter().map(|&(_, lo, hi)| (lo, hi)).collect();
-    match shelves(&boxes, copies, gap, area, false) {
+    match shelves(&boxes, copies, gap, area, printer.pixel_mm, false) {
         Ok(p) => Ok(p),
-        Err(straight) => shelves(&boxes, copies, gap, area, true).map_err(|turned| {
-            {
-                // Report the way that placed more.
-                if turned.0 > straight.0 {
-                    turned
-                } else {
-                    straight
+        Err(straight) => {
+            shelves(&boxes, copies, gap, area, printer.pixel_mm, true).map_err(|turned| {
+                {
+                    // Report the way that placed more.
+                    if turned.0 > straight.0 {
+                        turned
+                    } else {
+                        straight
+                    }
                 }
-            }
-            .into_error(boxes.len() * copies, area, gap)
-        }),
+                .into_error(boxes.len() * copies, area, gap)
+            })
+        }
     }
 }
 
@@ -340,6 +342,7 @@ fn shelves(
     copies: usize,
     gap: f64,
     area: DVec2,
+    pixel: f64,
     turned: bool,
 ) -> Result<Vec<Placement>, Short> {
     let mut placed = Vec::new();
@@ -377,10 +380,25 @@ fn shelves(
     }
     let shift = (area - used) / 2.0;
     for p in &mut placed {
-        p.offset[0] += shift.x;
-        p.offset[1] += shift.y;
-        p.min = [p.min[0] + shift.x, p.min[1] + shift.y];
-        p.max = [p.max[0] + shift.x, p.max[1] + shift.y];
+        // Each model's origin on a pixel corner, where the supports were planned, unless that
+        // would push it off the display.
+        let mut at = DVec2::new(p.offset[0], p.offset[1]) + shift;
+        let snapped = (at / pixel).round() * pixel;
+        let moved = snapped - at;
+        let (lo, hi) = (
+            DVec2::from(p.min) + shift + moved,
+            DVec2::from(p.max) + shift + moved,
+        );
+        let d = if lo.min_element() >= 0.0 && hi.x <= area.x && hi.y <= area.y {
+            at = snapped;
+            shift + moved
+        } else {
+            shift
+        };
+        p.offset[0] = at.x;
+        p.offset[1] = at.y;
+        p.min = [p.min[0] + d.x, p.min[1] + d.y];
+        p.max = [p.max[0] + d.x, p.max[1] + d.y];
     }
     Ok(placed)
 }

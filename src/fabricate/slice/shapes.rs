@@ -42,7 +42,7 @@ pub struct Placed {
 
 impl Placed {
     /// Stands the shapes up if asked (+y becomes +z), centres them on the z axis and sets their
-    /// lowest point on z = 0.
+    /// lowest point on z = 0; or moves them by their `frame` when they have one.
     pub fn new(shapes: Shapes, upright: bool) -> Placed {
         let turn = |p: DVec3| {
             if upright {
@@ -64,7 +64,11 @@ impl Placed {
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)),
         );
-        let shift = DVec3::new(-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), -lo.z);
+        let shift = shapes.frame.unwrap_or(DVec3::new(
+            -0.5 * (lo.x + hi.x),
+            -0.5 * (lo.y + hi.y),
+            -lo.z,
+        ));
         for b in &mut boxes {
             *b = (b.0 + shift, b.1 + shift);
         }
@@ -116,6 +120,11 @@ impl Placed {
 
     pub fn upright(&self) -> bool {
         self.upright
+    }
+
+    /// Where the shapes' origin is placed.
+    pub fn shift(&self) -> DVec3 {
+        self.shift
     }
 
     /// The radius of the thickest vein holding the placed point `p`, where it is: a round cone's

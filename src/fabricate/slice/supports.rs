@@ -3,10 +3,12 @@
 //! by `print`).
 //!
 //! # Method
-//! The solid is sliced at the printer's pixel and layer (no archive) and its islands found as
-//! `slice` finds them. Under each island, at its first layer's height and at its pixel nearest its
-//! centroid, a tip: a ball no wider than `tip` and never wider than the vein there, widening
-//! downwards into a pillar. The pillar goes straight down until the solid is right below it (it
+//! The solid is sliced at the printer's pixel and layer (no archive), with its placed origin on a
+//! pixel corner as `arrange_boxes` places models, and its islands found as `slice` finds them;
+//! and again on a grid half a pixel over, where a sliver may be an island that the first grid
+//! holds. Under each island, at its first layer's height and at its pixel nearest its centroid,
+//! a tip: a ball no wider than `tip` and never wider than the vein there, widening downwards into
+//! a pillar. The pillar goes straight down until the solid (or a support) is right below it (it
 //! then narrows onto it, ending in a ball half as wide as the vein there, sunk into it: nothing
 //! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). A pillar
 //! may brush the solid on its way down; that only merges them.
@@ -16,8 +18,9 @@
 //! solid is not made. Every step down looks at the exact distance to the solid, so a pillar's
 //! axis never passes through it.
 //!
-//! The supported solid is sliced again: the islands left (none, unless a pillar could not be
-//! placed) and the supports' resin are reported.
+//! The supported solid is sliced again on both grids and what islands are left (slivers beside
+//! a tip) are held the same way, for up to three rounds. The islands left on the print's grid
+//! (none, unless a pillar could not be placed) and the supports' resin are reported.
 
 use glam::{DVec2, DVec3};
 
@@ -134,7 +137,23 @@ enum End {
     Model(f64),
 }
 
+/// Rounds of supports at most: the islands a round leaves (slivers beside a tip, seen on the
+/// other grid) are held by the next.
+const ROUNDS: usize = 3;
+
+/// What the rounds made, counted.
+#[derive(Default)]
+struct Tally {
+    tips: usize,
+    to_plate: usize,
+    to_model: usize,
+    joins: usize,
+}
+
 /// Plans the supports of `model` for `printer`. `progress(done, total)` counts layers sliced.
+/// The pixels they are planned on are the print's when the placed shapes' origin lands on a
+/// pixel corner (as `arrange_boxes` places it) and the supported shapes keep the model's frame
+/// (`Shapes::frame`, which the caller sets to `model.shift()`).
 pub fn plan(
     model: &Placed,
     printer: &Printer,
@@ -142,35 +161,83 @@ pub fn plan(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Supports, SupportError> {
     opts.check()?;
-    // Islands are found on two pixel grids, half a pixel apart: a sliver of a few pixels may be
-    // an island on one and held on the other, and the solid will be sliced on some grid.
     let islands = find_islands(model, printer, DVec2::ZERO, progress)?;
-    let shifted = find_islands(model, printer, DVec2::splat(0.5), progress)?;
-    let near = |a: &Island, b: &Island| {
-        a.layer.abs_diff(b.layer) <= 2
-            && DVec2::from(a.anchor_mm).distance(DVec2::from(b.anchor_mm)) < 4.0 * printer.pixel_mm
+    let mut shapes = model.shapes().clone();
+    shapes.frame = Some(model.shift());
+    let mut current = Placed::new(shapes.clone(), model.upright());
+    let mut left = Found {
+        list: islands.list.clone(),
+        offset: islands.offset,
+        volume: islands.volume,
     };
-    let mut holds: Vec<(Island, DVec2)> = islands
-        .list
-        .iter()
-        .map(|i| (i.clone(), islands.offset))
-        .collect();
-    for i in &shifted.list {
+    let mut prims: Vec<Primitive> = Vec::new();
+    let mut tally = Tally::default();
+    for _ in 0..ROUNDS {
+        // Islands are found on two pixel grids, half a pixel apart: a sliver of a few pixels
+        // may be an island on one and held on the other.
+        let shifted = find_islands(&current, printer, DVec2::splat(0.5), progress)?;
+        let holds = unite(&left, &shifted, printer.pixel_mm);
+        if holds.is_empty() {
+            break;
+        }
+        let pieces = hold(&current, &holds, printer, opts, &mut tally);
+        let made: Vec<Primitive> = pieces.iter().map(|s| s.local(&current)).collect();
+        shapes.prims.extend(made.iter().cloned());
+        prims.extend(made);
+        current = Placed::new(shapes.clone(), model.upright());
+        left = find_islands(&current, printer, DVec2::ZERO, progress)?;
+    }
+    let ml = |v: f64| v / 1000.0;
+    Ok(Supports {
+        prims,
+        report: SupportReport {
+            options: opts.clone(),
+            islands: islands.list.len(),
+            tips: tally.tips,
+            to_plate: tally.to_plate,
+            to_model: tally.to_model,
+            joins: tally.joins,
+            islands_left: left.list.len(),
+            first_left: left.list.first().cloned(),
+            support_ml: ml(left.volume - islands.volume),
+            model_ml: ml(islands.volume),
+        },
+    })
+}
+
+/// The islands of both grids, each once, with the offset of the grid it was found on.
+fn unite(a: &Found, b: &Found, pixel: f64) -> Vec<(Island, DVec2)> {
+    let near = |i: &Island, j: &Island| {
+        i.layer.abs_diff(j.layer) <= 2
+            && DVec2::from(i.anchor_mm).distance(DVec2::from(j.anchor_mm)) < 4.0 * pixel
+    };
+    let mut holds: Vec<(Island, DVec2)> = a.list.iter().map(|i| (i.clone(), a.offset)).collect();
+    for i in &b.list {
         // Compared where the first grid has it.
         let mut moved = i.clone();
-        let d = shifted.offset - islands.offset;
+        let d = b.offset - a.offset;
         moved.anchor_mm = [i.anchor_mm[0] - d.x, i.anchor_mm[1] - d.y];
-        if !islands.list.iter().any(|j| near(j, &moved)) {
-            holds.push((i.clone(), shifted.offset));
+        if !a.list.iter().any(|j| near(j, &moved)) {
+            holds.push((i.clone(), b.offset));
         }
     }
+    holds
+}
+
+/// Tips, pillars, joins and bases under `holds`, in the placed frame of `model`.
+fn hold(
+    model: &Placed,
+    holds: &[(Island, DVec2)],
+    printer: &Printer,
+    opts: &SupportOptions,
+    tally: &mut Tally,
+) -> Vec<Piece> {
     let layer = printer.layer_mm;
     let rp = 0.5 * opts.pillar;
     let mut pieces: Vec<Piece> = Vec::new();
     // The tops of pillars bound for the plate.
     let mut tops: Vec<DVec3> = Vec::new();
-    let mut to_model = 0;
-    for (island, offset) in &holds {
+    for (island, offset) in holds {
         let z = (island.layer as f64 + 0.5) * layer;
         let p = DVec3::new(
             island.anchor_mm[0] - offset.x,
@@ -192,16 +259,15 @@ pub fn plan(
         pieces.push(Piece::Cone(p, neck, rt, rp.max(rt)));
         match end {
             End::Model(h) => {
-                to_model += 1;
+                tally.to_model += 1;
                 land(model, &mut pieces, neck, h, rp);
             }
             End::Plate => tops.push(neck),
         }
     }
-    let tips = holds.len();
+    tally.tips += holds.len();
 
     // Join plate-bound pillars in pairs, nearest first.
-    let mut joins = 0;
     let mut refused: Vec<(DVec2, DVec2)> = Vec::new();
     loop {
         let mut best: Option<(f64, usize, usize)> = None;
@@ -229,7 +295,7 @@ pub fn plan(
             refused.push((a.truncate(), b.truncate()));
             continue;
         }
-        joins += 1;
+        tally.joins += 1;
         pieces.push(pillar(a, joint, rp));
         pieces.push(pillar(b, joint, rp));
         let (hi, lo) = (i.max(j), i.min(j));
@@ -237,13 +303,13 @@ pub fn plan(
         tops.swap_remove(lo);
         match descend(model, joint) {
             End::Model(h) => {
-                to_model += 1;
+                tally.to_model += 1;
                 land(model, &mut pieces, joint, h, rp);
             }
             End::Plate => tops.push(joint),
         }
     }
-    let to_plate = tops.len();
+    tally.to_plate += tops.len();
     for t in &tops {
         let foot = DVec3::new(t.x, t.y, opts.base_height);
         pieces.push(pillar(*t, foot, rp));
@@ -253,29 +319,7 @@ pub fn plan(
             opts.base_height,
         ));
     }
-
-    // The supported solid, sliced again.
-    let prims: Vec<Primitive> = pieces.iter().map(|s| s.local(model)).collect();
-    let mut shapes = model.shapes().clone();
-    shapes.prims.extend(prims.iter().cloned());
-    let supported = Placed::new(shapes, model.upright());
-    let after = find_islands(&supported, printer, DVec2::ZERO, progress)?;
-    let ml = |v: f64| v / 1000.0;
-    Ok(Supports {
-        prims,
-        report: SupportReport {
-            options: opts.clone(),
-            islands: islands.list.len(),
-            tips,
-            to_plate,
-            to_model,
-            joins,
-            islands_left: after.list.len(),
-            first_left: after.list.first().cloned(),
-            support_ml: ml(after.volume - islands.volume),
-            model_ml: ml(islands.volume),
-        },
-    })
+    pieces
 }
 
 /// A pillar of radius `r` from `a` to `b`.
@@ -341,8 +385,9 @@ fn find_islands(
     let (lo, hi) = model.bounds();
     let px = printer.pixel_mm;
     let margin = 4.0;
-    let w = ((hi.x - lo.x) / px).ceil() as usize + 2 * margin as usize + 1;
-    let h = ((hi.y - lo.y) / px).ceil() as usize + 2 * margin as usize + 1;
+    // One pixel more each way: the placed origin is moved onto a pixel corner.
+    let w = ((hi.x - lo.x) / px).ceil() as usize + 2 * margin as usize + 2;
+    let h = ((hi.y - lo.y) / px).ceil() as usize + 2 * margin as usize + 2;
     if w > 16384 || h > 16384 {
         return Err(SupportError::TooWide(w, h));
     }
@@ -351,14 +396,14 @@ fn find_islands(
         pixels_y: h as u32,
         ..printer.clone()
     };
-    let offset = DVec2::new(margin * px - lo.x, margin * px - lo.y) + phase * px;
+    let offset = (DVec2::new(margin - lo.x / px, margin - lo.y / px).ceil() + phase) * px;
     let place = Placement {
         model: 0,
         copy: 0,
         turned: false,
         offset: [offset.x, offset.y, 0.0],
-        min: [margin * px, margin * px],
-        max: [margin * px + hi.x - lo.x, margin * px + hi.y - lo.y],
+        min: [lo.x + offset.x, lo.y + offset.y],
+        max: [hi.x + offset.x, hi.y + offset.y],
     };
     let layers = layer_count(model, &grid);
     let mut finder = Islands::new(w, h, px, grid.layer_mm);

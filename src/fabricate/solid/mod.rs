@@ -189,6 +189,10 @@ pub struct Shapes {
     /// Pieces added after the network's (supports): the network's genus no longer tells the
     /// solid's.
     pub added: usize,
+    /// Where placing puts the shapes' origin (after standing them up), fixed once supports are
+    /// planned on that placement so the print's pixels are the ones they were planned on;
+    /// `None`: the shapes are centred on their own box.
+    pub frame: Option<DVec3>,
 }
 
 impl Shapes {
@@ -336,6 +340,7 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
         min_radius,
         max_radius,
         added: 0,
+        frame: None,
     })
 }
 
@@ -362,6 +367,7 @@ pub fn solid_of(
         min_radius,
         max_radius,
         added,
+        frame,
     } = shapes;
     let n = net.nodes.len();
 
@@ -385,7 +391,7 @@ pub fn solid_of(
         });
     }
     let cavities = fill_cavities(&mut mesh);
-    place(&mut mesh, opts.upright);
+    place(&mut mesh, opts.upright, frame);
     let topo = mesh.check_manifold();
     if !topo.is_manifold() || !topo.closed {
         let first = topo
@@ -532,8 +538,8 @@ fn outline(net: &Network) -> Result<Vec<DVec2>, SolidError> {
 }
 
 /// Turns the mesh upright if asked (exactly: +y becomes +z), then sets it on z = 0, centred on
-/// the z axis.
-fn place(mesh: &mut TriMesh, upright: bool) {
+/// the z axis, or moves it by `frame` when the shapes have one.
+fn place(mesh: &mut TriMesh, upright: bool, frame: Option<DVec3>) {
     if upright {
         for p in &mut mesh.positions {
             *p = crate::geom::upright(*p);
@@ -543,11 +549,11 @@ fn place(mesh: &mut TriMesh, upright: bool) {
     if b.is_empty() {
         return;
     }
-    let shift = DVec3::new(
+    let shift = frame.unwrap_or(DVec3::new(
         -0.5 * (b.min.x + b.max.x),
         -0.5 * (b.min.y + b.max.y),
         -b.min.z,
-    );
+    ));
     for p in &mut mesh.positions {
         *p += shift;
     }
