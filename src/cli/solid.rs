@@ -25,6 +25,11 @@ pub struct Args {
     /// Grid cell of the mesher, mm (default: the DMP-SL pixel)
     #[arg(long, default_value_t = DEFAULT_CELL)]
     pub cell: f64,
+    /// Simplify the mesh to within this distance of the exact surface, mm (without a value: a
+    /// quarter of the cell, a quarter pixel by default); without the flag every marched
+    /// triangle is kept
+    #[arg(long, value_name = "MM", num_args = 0..=1)]
+    pub tolerance: Option<Option<f64>>,
     #[command(flatten)]
     pub shape: ShapeArgs,
     #[command(flatten)]
@@ -69,6 +74,7 @@ impl ShapeArgs {
             fit: self.fit,
             upright: self.upright,
             radius: self.radius,
+            tolerance: None,
         })
     }
 }
@@ -173,7 +179,8 @@ pub fn parse_base(text: &str) -> Result<Base> {
 
 pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
-    let opts = args.shape.options(args.cell)?;
+    let mut opts = args.shape.options(args.cell)?;
+    opts.tolerance = args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell));
     let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
     bar.set_style(ProgressStyle::with_template(
         "meshing {bar:40} {pos}/{len} bricks {elapsed}",

@@ -49,6 +49,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
         fit: Some(20.0),
         upright: true,
         radius: None,
+        tolerance: None,
     };
     let made = solid(&leaf.network, &solid_opts, &|_, _| {})?;
     write_mesh(&made.mesh, &dir.join("leaf.stl"), size)?;

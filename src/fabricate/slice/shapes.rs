@@ -23,7 +23,7 @@ use glam::{DVec2, DVec3};
 
 use super::{encode_grey, in_batches, Layer, Placement, Printer};
 use crate::fabricate::solid::sdf::Primitive;
-use crate::fabricate::solid::Shapes;
+use crate::fabricate::solid::{placing_shift, Shapes};
 
 /// Pixels per tile side.
 const TILE: usize = 8;
@@ -60,15 +60,9 @@ impl Placed {
                 (a.min(b), a.max(b))
             })
             .collect();
-        let (lo, hi) = boxes.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &(a, b)| (lo.min(a), hi.max(b)),
-        );
-        let shift = shapes.frame.unwrap_or(DVec3::new(
-            -0.5 * (lo.x + hi.x),
-            -0.5 * (lo.y + hi.y),
-            -lo.z,
-        ));
+        let shift = shapes
+            .frame
+            .unwrap_or_else(|| placing_shift(&shapes.prims, upright));
         for b in &mut boxes {
             *b = (b.0 + shift, b.1 + shift);
         }

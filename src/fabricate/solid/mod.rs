@@ -31,6 +31,7 @@
 
 mod march;
 pub mod sdf;
+pub mod simplify;
 
 use glam::{DVec2, DVec3};
 
@@ -65,6 +66,9 @@ pub struct SolidOptions {
     pub upright: bool,
     /// Radius for edges the network gives none, mm (after `fit`).
     pub radius: Option<f64>,
+    /// Simplify the mesh to within this distance of the exact surface, mm; `None` keeps the
+    /// marched mesh.
+    pub tolerance: Option<f64>,
 }
 
 impl Default for SolidOptions {
@@ -76,6 +80,7 @@ impl Default for SolidOptions {
             fit: None,
             upright: false,
             radius: None,
+            tolerance: None,
         }
     }
 }
@@ -89,6 +94,11 @@ pub struct Base {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SolidError {
+    #[error(
+        "--tolerance {tolerance} mm is more than ten cells ({cell} mm): the mesh would lose the \
+         veins' shape; use a smaller --tolerance or a larger --cell"
+    )]
+    ToleranceTooLarge { tolerance: f64, cell: f64 },
     #[error(
         "at --cell {cell} mm no grid point falls inside the veins (the thickest is {thickest:.4} \
          mm in radius): the solid vanishes; use a --cell below the vein radius, or a larger --fit"
@@ -173,6 +183,8 @@ pub struct SolidReport {
     pub lamina_mm: Option<f64>,
     pub base: Option<[f64; 2]>,
     pub upright: bool,
+    /// What simplifying did, when asked (`tolerance`).
+    pub simplified: Option<simplify::Simplified>,
     pub warnings: Vec<String>,
 }
 
@@ -220,11 +232,20 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
         ("--lamina", opts.lamina),
         ("--fit", opts.fit),
         ("--radius", opts.radius),
+        ("--tolerance", opts.tolerance),
         ("--base diameter", opts.base.map(|b| b.diameter)),
         ("--base height", opts.base.map(|b| b.height)),
     ] {
         if let Some(v) = v {
             positive(what, v)?;
+        }
+    }
+    if let Some(t) = opts.tolerance {
+        if t > 10.0 * opts.cell {
+            return Err(SolidError::ToleranceTooLarge {
+                tolerance: t,
+                cell: opts.cell,
+            });
         }
     }
     if net.edges.is_empty() {
@@ -391,7 +412,13 @@ pub fn solid_of(
         });
     }
     let cavities = fill_cavities(&mut mesh);
-    place(&mut mesh, opts.upright, frame);
+    let simplified = opts.tolerance.map(|tol| {
+        let field = simplify::Field::new(&prims, 2.0 * opts.cell + 4.0 * tol);
+        simplify::simplify(&mut mesh, &field, tol, (opts.cell, min_radius), progress)
+    });
+    // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
+    let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
+    place(&mut mesh, opts.upright, shift);
     let topo = mesh.check_manifold();
     if !topo.is_manifold() || !topo.closed {
         let first = topo
@@ -459,6 +486,7 @@ pub fn solid_of(
         lamina_mm: opts.lamina,
         base: opts.base.map(|b| [b.diameter, b.height]),
         upright: opts.upright,
+        simplified,
         warnings,
     };
     Ok(Solid { mesh, report })
@@ -537,24 +565,29 @@ fn outline(net: &Network) -> Result<Vec<DVec2>, SolidError> {
     Ok(points)
 }
 
-/// Turns the mesh upright if asked (exactly: +y becomes +z), then sets it on z = 0, centred on
-/// the z axis, or moves it by `frame` when the shapes have one.
-fn place(mesh: &mut TriMesh, upright: bool, frame: Option<DVec3>) {
-    if upright {
-        for p in &mut mesh.positions {
+/// Where placing puts the origin of `prims` (stood up when `upright`, +y becoming +z): their
+/// exact box centred on the z axis, its bottom on z = 0.
+pub fn placing_shift(prims: &[Primitive], upright: bool) -> DVec3 {
+    let (lo, hi) = prims.iter().map(Primitive::bounds).fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), (a, b)| {
+            let (a, b) = if upright {
+                (crate::geom::upright(a), crate::geom::upright(b))
+            } else {
+                (a, b)
+            };
+            (lo.min(a.min(b)), hi.max(a.max(b)))
+        },
+    );
+    DVec3::new(-0.5 * (lo.x + hi.x), -0.5 * (lo.y + hi.y), -lo.z)
+}
+
+/// Turns the mesh upright if asked (exactly: +y becomes +z), then moves it by `shift`.
+fn place(mesh: &mut TriMesh, upright: bool, shift: DVec3) {
+    for p in &mut mesh.positions {
+        if upright {
             *p = crate::geom::upright(*p);
         }
-    }
-    let b = mesh.bbox();
-    if b.is_empty() {
-        return;
-    }
-    let shift = frame.unwrap_or(DVec3::new(
-        -0.5 * (b.min.x + b.max.x),
-        -0.5 * (b.min.y + b.max.y),
-        -b.min.z,
-    ));
-    for p in &mut mesh.positions {
         *p += shift;
     }
 }
