@@ -26,8 +26,12 @@
 //! (35 µm): finer than that cannot be printed.
 //!
 //! The mesh is as fine as the cell everywhere, flat lamina included: a 50 mm leaf with its
-//! lamina is millions of triangles. Simplifying it (edge collapse that keeps it a manifold) is
-//! the next step, not done.
+//! lamina is millions of triangles. With `tolerance` it is refined where chords cut creases and
+//! simplified by edge collapse within that distance of the exact surface (`simplify`): 24–33×
+//! fewer triangles on the small fixture; still far too slow on a 12,700-node leaf.
+//!
+//! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
+//! so both put the solid on the same pixels.
 
 mod march;
 pub mod sdf;
