@@ -165,11 +165,7 @@ pub fn plan(
     let mut shapes = model.shapes().clone();
     shapes.frame = Some(model.shift());
     let mut current = Placed::new(shapes.clone(), model.upright());
-    let mut left = Found {
-        list: islands.list.clone(),
-        offset: islands.offset,
-        volume: islands.volume,
-    };
+    let mut left = islands.clone();
     let mut prims: Vec<Primitive> = Vec::new();
     let mut tally = Tally::default();
     for _ in 0..ROUNDS {
@@ -367,6 +363,7 @@ fn clear_of(model: &Placed, a: DVec3, b: DVec3, r: f64) -> bool {
 }
 
 /// The islands of the placed solid on a display just large enough for it.
+#[derive(Clone)]
 struct Found {
     list: Vec<Island>,
     /// Where the placed solid's origin is on that display, mm.

@@ -151,9 +151,7 @@ impl<'a> Field<'a> {
 
     /// Signed distance to the union at `p`.
     pub fn eval(&self, p: DVec3) -> f64 {
-        self.pieces(p).iter().fold(self.reach, |d, &n| {
-            d.min(self.prims[n as usize].eval(p, self.reach))
-        })
+        self.two(p).0
     }
 
     /// The two least values of the pieces at `p` (each at most `reach`).
@@ -281,7 +279,7 @@ pub fn simplify(
             );
         }
         progress(passes as u64, MAX_PASSES as u64);
-        if (made as f64) < SETTLED * s.live_vertices() as f64 {
+        if (made as f64) < SETTLED * s.live as f64 {
             break;
         }
     }
@@ -465,17 +463,18 @@ impl Quadric {
         );
         let det = m.determinant();
         let scale = (xx + yy + zz) / 3.0;
-        let mut options = vec![p, q, 0.5 * (p + q)];
+        let mut free = None;
         if det.abs() > 1e-6 * scale.powi(3) {
             let v = m.inverse() * -DVec3::from(self.b);
             // Not far from the edge: a free optimum far away is a flat spot's noise.
             if v.distance(0.5 * (p + q)) <= p.distance(q) {
-                options.push(v);
+                free = Some(v);
             }
         }
         let w = self.w.max(1e-300);
-        options
+        [p, q, 0.5 * (p + q)]
             .into_iter()
+            .chain(free)
             .map(|v| (v, self.error(v) / w))
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap_or((p, 0.0))
@@ -504,7 +503,8 @@ struct Simplifier<'f, 'a> {
     /// The pass in which each vertex's star last changed, and edges rejected (by the pass).
     changed: Vec<u32>,
     rejected: HashMap<u64, u32, Quick>,
-    alive: Vec<bool>,
+    /// Vertices in use.
+    live: usize,
     // Per pass: vertex -> triangles, triangle -> witnesses.
     vt_start: Vec<u32>,
     vt: Vec<u32>,
@@ -529,7 +529,7 @@ impl<'f, 'a> Simplifier<'f, 'a> {
                 }
             }
         }
-        let used: Vec<bool> = owner.iter().map(|&o| o != u32::MAX).collect();
+        let used = owner.iter().filter(|&&o| o != u32::MAX).count();
         let (witness, owner) = mesh
             .positions
             .iter()
@@ -548,16 +548,12 @@ impl<'f, 'a> Simplifier<'f, 'a> {
             owner,
             changed: vec![0; n],
             rejected: HashMap::with_hasher(Quick),
-            alive: used,
+            live: used,
             vt_start: Vec::new(),
             vt: Vec::new(),
             tw_start: Vec::new(),
             tw: Vec::new(),
         }
-    }
-
-    fn live_vertices(&self) -> usize {
-        self.alive.iter().filter(|&&a| a).count()
     }
 
     fn star(&self, v: u32) -> &[u32] {
@@ -811,7 +807,7 @@ impl<'f, 'a> Simplifier<'f, 'a> {
         }
         self.positions[a as usize] = c.to;
         self.quadrics[a as usize] = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
-        self.alive[b as usize] = false;
+        self.live -= 1;
         for &(w, t) in &c.witnesses {
             self.owner[w as usize] = t;
         }
