@@ -12,8 +12,10 @@ z = 0 (as `solid` places it). Checks:
 - mesh to surface: at every vertex, edge midpoint and triangle centre, and random points on the
   triangles, the distance to the exact surface is at most T. Outside the solid the least of the
   hulls' distances is the distance; inside it is where only one hull is that near; elsewhere
-  (where hulls overlap) the surface is reached by steps along the distance's gradient, whose
-  total length bounds the distance from above;
+  (where hulls overlap) a surface point is found, and its distance bounds the distance from
+  above: where a straight line out of either of the two nearest hulls leaves the union
+  (bisection), the end of steps along the union's gradient or out of the deepest hull (their
+  total length), and for points still not placed, lines in 64 directions;
 - surface to mesh: random points on the exact surface (on each hull, outside the others),
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - with --min-reduction R, the report's marched triangles are at least R times the mesh's.
@@ -27,7 +29,7 @@ import manifold3d
 import numpy as np
 import trimesh
 
-from check_print_sdf import hull_distance
+from scipy.spatial import cKDTree
 from check_solid import end_radii
 
 
@@ -44,29 +46,125 @@ def cones_of(net, report):
     return [(c[0] + shift, c[1] + shift, c[2], c[3]) for c in cones]
 
 
-def two_least(p, cones):
-    """The least and second least hull distances at each point."""
-    d1 = np.full(len(p), np.inf)
-    d2 = np.full(len(p), np.inf)
-    for c in cones:
-        d = hull_distance(p, *c)
-        d2 = np.where(d < d1, d1, np.minimum(d2, d))
-        d1 = np.minimum(d1, d)
-    return d1, d2
+class Hulls:
+    """The cones as arrays, for a union limited to `reach`: each point meets only the hulls
+    whose bounding sphere, grown by `reach`, holds it (found with a k-d tree of the points);
+    elsewhere the value is `reach`, so a value of `reach` means at least that far."""
+
+    def __init__(self, cones, reach):
+        self.A = np.array([c[0] for c in cones])
+        self.B = np.array([c[1] for c in cones])
+        self.RA = np.array([c[2] for c in cones])
+        self.RB = np.array([c[3] for c in cones])
+        self.centre = (self.A + self.B) / 2
+        self.bound = np.linalg.norm(self.B - self.A, axis=1) / 2 + np.maximum(self.RA, self.RB)
+        self.reach = reach
+
+    def pairs(self, p):
+        """(point, hull) index pairs that may be within reach."""
+        tree = cKDTree(p)
+        hits = tree.query_ball_point(self.centre, self.bound + self.reach)
+        counts = np.array([len(h) for h in hits])
+        hull = np.repeat(np.arange(len(hits)), counts)
+        point = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits]) if counts.sum() \
+            else np.zeros(0, np.int64)
+        return point, hull
+
+    def distance(self, p, hull):
+        """Signed distance from each p[i] to hull[i] (the hull of two balls, exact)."""
+        a, b, ra, rb = self.A[hull], self.B[hull], self.RA[hull], self.RB[hull]
+        ab = b - a
+        L = np.linalg.norm(ab, axis=1)
+        ball = L <= np.abs(ra - rb)
+        Ls = np.where(ball, 1.0, L)
+        u = ab / Ls[:, None]
+        pa = p - a
+        t = (pa * u).sum(1)
+        q = np.sqrt(np.maximum((pa * pa).sum(1) - t * t, 0))
+        # f(s) = sqrt((t - s)^2 + q^2) - ra - (rb - ra) s / L over s in [0, L]: stationary at
+        # s = t - q k / sqrt(1 - k^2), k = (ra - rb) / L.
+        k = np.where(ball, 0.0, (ra - rb) / Ls)
+        s = np.clip(t - q * k / np.sqrt(1 - k * k), 0, Ls)
+        cone = np.sqrt((t - s) ** 2 + q * q) - (ra + (rb - ra) * s / Ls)
+        balls = np.minimum(np.linalg.norm(p - a, axis=1) - ra, np.linalg.norm(p - b, axis=1) - rb)
+        return np.where(ball, balls, cone)
+
+    def two_least(self, p, ids=False):
+        """The least and second least hull distances at each point (at most reach), and with
+        ids=True the hulls giving them (-1 for none)."""
+        d1 = np.full(len(p), self.reach)
+        d2 = np.full(len(p), self.reach)
+        i1 = np.full(len(p), -1)
+        i2 = np.full(len(p), -1)
+        if len(p):
+            point, hull = self.pairs(p)
+            d = self.distance(p[point], hull)
+            order = np.lexsort((d, point))
+            point, hull, d = point[order], hull[order], d[order]
+            first = np.ones(len(point), bool)
+            first[1:] = point[1:] != point[:-1]
+            second = np.zeros(len(point), bool)
+            second[1:] = first[:-1] & ~first[1:]
+            for mask, dk, ik in ((first, d1, i1), (second, d2, i2)):
+                close = mask & (d < self.reach)
+                dk[point[close]] = d[close]
+                ik[point[close]] = hull[close]
+        return (d1, i1, d2, i2) if ids else (d1, d2)
+
+    def union(self, p):
+        return self.two_least(p)[0]
+
+    def hull_gradient(self, p, hull, h=1e-6):
+        """Unit gradient of each point's own hull's distance (central differences)."""
+        g = np.stack([self.distance(p + h * e, hull) - self.distance(p - h * e, hull)
+                      for e in np.eye(3)], 1)
+        return g / np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
 
 
-def union(p, cones):
-    return two_least(p, cones)[0]
+def exit_along(p, g, length, hulls):
+    """For points p inside the union: the distance along the unit directions g to a point
+    outside it, if one lies within `length` (inf otherwise). The first of a few trial lengths
+    that is outside, then bisection between it and the inside."""
+    out = np.full(len(p), np.inf)
+    hi = np.full(len(p), np.inf)
+    for f in (1 / 16, 1 / 8, 1 / 4, 1 / 2, 1):
+        todo = np.isinf(hi)
+        if not todo.any():
+            break
+        L = length[todo] * f
+        outside = hulls.union(p[todo] + g[todo] * L[:, None]) >= 0
+        idx = np.nonzero(todo)[0][outside]
+        hi[idx] = L[outside]
+    found = np.isfinite(hi)
+    if not found.any():
+        return out
+    lo = np.zeros(found.sum())
+    h = hi[found]
+    q, d = p[found], g[found]
+    for _ in range(30):
+        mid = (lo + h) / 2
+        outside = hulls.union(q + d * mid[:, None]) >= 0
+        h = np.where(outside, mid, h)
+        lo = np.where(outside, lo, mid)
+    out[found] = h
+    return out
 
 
-def distance_bound(p, cones, tol):
+def distance_bound(p, hulls, tol):
     """An upper bound of each point's distance to the surface (inf when none within 2 tol)."""
-    d1, d2 = two_least(p, cones)
+    d1, i1, d2, i2 = hulls.two_least(p, ids=True)
     out = np.where(d1 >= 0, d1, np.inf)
     exact = (d1 < 0) & (d2 > -d1)
     out[exact] = -d1[exact]
     walk = np.nonzero((d1 < 0) & ~exact & (d1 > -2 * tol))[0]
     if len(walk):
+        # Straight out of either of the two nearest hulls: where the line leaves the union
+        # is a surface point, so its distance bounds the distance from above.
+        for ids in (i1, i2):
+            ok = ids[walk] >= 0
+            idx = walk[ok]
+            g = hulls.hull_gradient(p[idx], ids[idx])
+            out[idx] = np.minimum(out[idx], exit_along(p[idx], g, np.full(len(idx), 2 * tol), hulls))
         q, f = p[walk].copy(), d1[walk].copy()
         walked = np.zeros(len(walk))
         h = 1e-5
@@ -74,19 +172,45 @@ def distance_bound(p, cones, tol):
             inside = f < 0
             if not inside.any():
                 break
-            g = np.stack([union(q + h * e, cones) - union(q - h * e, cones)
+            g = np.stack([hulls.union(q + h * e) - hulls.union(q - h * e)
                           for e in np.eye(3)], 1)
             g /= np.maximum(np.linalg.norm(g, axis=1, keepdims=True), 1e-300)
             s = np.where(inside, -f + 1e-7, 0.0)
             q += g * s[:, None]
             walked += s
-            f = union(q, cones)
+            f = hulls.union(q)
         walked[f < 0] = np.inf
-        out[walk] = walked
+        out[walk] = np.minimum(out[walk], walked)
+        # Steps out of the deepest hull, each by its depth: zig-zags into a crease.
+        q, f, n = p[walk].copy(), d1[walk].copy(), i1[walk].copy()
+        walked = np.zeros(len(walk))
+        for _ in range(16):
+            inside = (f < 0) & (walked <= 2 * tol)
+            if not inside.any():
+                break
+            g = hulls.hull_gradient(q[inside], n[inside])
+            s = -f[inside] + 1e-7
+            q[inside] += g * s[:, None]
+            walked[inside] += s
+            fi, ni, _, _ = hulls.two_least(q[inside], ids=True)
+            f[inside], n[inside] = fi, ni
+        walked[f < 0] = np.inf
+        out[walk] = np.minimum(out[walk], walked)
+        # What is left: straight lines in many directions.
+        left = walk[out[walk] > tol]
+        if len(left):
+            k = np.arange(64) + 0.5
+            z = 1 - 2 * k / 64
+            phi = np.pi * (1 + 5 ** 0.5) * k
+            dirs = np.stack([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], 1)
+            P = np.repeat(p[left], len(dirs), 0)
+            G = np.tile(dirs, (len(left), 1))
+            e = exit_along(P, G, np.full(len(P), 2 * tol), hulls).reshape(len(left), len(dirs))
+            out[left] = np.minimum(out[left], e.min(1))
     return out
 
 
-def surface_samples(cones, n, rng):
+def surface_samples(cones, hulls, n, rng):
     """Points on each hull's surface, by area, kept where no other hull holds them."""
     areas, parts = [], []
     for a, b, ra, rb in cones:
@@ -151,7 +275,7 @@ def surface_samples(cones, n, rng):
                     got.append(c + d[keep] * r)
                 pts.append(np.concatenate(got)[:mk])
     p = np.concatenate(pts)
-    return p[union(p, cones) >= -1e-9]
+    return p[hulls.union(p) >= -1e-9]
 
 
 def main():
@@ -181,6 +305,7 @@ def main():
     if m.status() != manifold3d.Error.NoError:
         failures.append(f"manifold3d: {m.status()}")
     cones = cones_of(net, report)
+    hulls = Hulls(cones, 4 * tol)
     rng = np.random.default_rng(7)
 
     V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
@@ -192,14 +317,14 @@ def main():
         T.mean(1),
         np.einsum("fkj,fjd->fkd", w, T).reshape(-1, 3),
     ])
-    out = np.concatenate([distance_bound(c, cones, tol) for c in np.array_split(pts, max(1, len(pts) // 50000))])
+    out = np.concatenate([distance_bound(c, hulls, tol) for c in np.array_split(pts, max(1, len(pts) // 200000))])
     mesh_to_surface = float(out.max())
     if mesh_to_surface > tol:
         worst = pts[int(np.argmax(out))]
         failures.append(f"mesh to surface {mesh_to_surface * 1000:.2f} um > {tol * 1000:.2f} um "
                         f"at ({worst[0]:.4f}, {worst[1]:.4f}, {worst[2]:.4f})")
 
-    surf = surface_samples(cones, a.samples, rng)
+    surf = surface_samples(cones, hulls, a.samples, rng)
     _, dist, _ = trimesh.proximity.closest_point(mesh, surf)
     surface_to_mesh = float(dist.max())
     if surface_to_mesh > tol:

@@ -11,7 +11,7 @@
 //!
 //! A vertex sits on a grid edge whose ends differ in sign. It is made once, by the brick that
 //! holds the edge's lower end, so neighbouring bricks share it by index. Its place on the edge is
-//! found with a few regula falsi steps on the exact distance (not a linear guess), and kept at
+//! found with regula falsi steps on the exact distance (not a linear guess), and kept at
 //! least `h/100` from either end. Grid values within `h/100` of zero count as outside. Together
 //! these keep every vertex at least about `h/100` from every other and no triangle degenerate,
 //! even after rounding to the 32-bit floats of an STL file (checked again after meshing).
@@ -369,13 +369,18 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
     })
 }
 
+/// The most regula falsi steps to a vertex (most stop after two or three).
+const CROSSING_STEPS: usize = 24;
+
 /// Where the surface crosses the edge from `a` (inside, `fa < 0`) to `b` (outside, `fb > 0`):
 /// Illinois regula falsi on `f`, kept at least `eps` from both ends.
 fn crossing(a: DVec3, fa: f64, b: DVec3, fb: f64, f: &impl Fn(DVec3) -> f64, eps: f64) -> DVec3 {
     let (mut t0, mut f0, mut t1, mut f1) = (0.0, fa, 1.0, fb);
     let mut t = f0 / (f0 - f1);
     let mut side = 0i8;
-    for _ in 0..4 {
+    // Where veins meet, the distance has kinks and a few steps may stop short; the bracket
+    // always shrinks, so more steps converge.
+    for _ in 0..CROSSING_STEPS {
         let ft = f(a.lerp(b, t));
         if ft.abs() < 1e-4 * eps {
             break;

@@ -417,7 +417,7 @@ pub fn solid_of(
     }
     let cavities = fill_cavities(&mut mesh);
     let simplified = opts.tolerance.map(|tol| {
-        let field = simplify::Field::new(&prims, 2.0 * opts.cell + 4.0 * tol);
+        let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
         simplify::simplify(&mut mesh, &field, tol, (opts.cell, min_radius), progress)
     });
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.

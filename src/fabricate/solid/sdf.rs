@@ -46,6 +46,16 @@ impl Primitive {
         }
     }
 
+    /// The direction the value grows fastest at `p`, unit length (zero where it has none):
+    /// exact for a cone, central differences `step` apart for the others.
+    pub fn gradient(&self, p: DVec3, reach: f64, step: f64) -> DVec3 {
+        if let Primitive::Cone(c) = self {
+            return c.gradient(p);
+        }
+        let e = |v: DVec3| self.eval(p + v * step, reach) - self.eval(p - v * step, reach);
+        DVec3::new(e(DVec3::X), e(DVec3::Y), e(DVec3::Z)).normalize_or_zero()
+    }
+
     /// Axis-aligned box holding the piece.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match self {
@@ -106,6 +116,34 @@ impl RoundCone {
     /// The two balls: (centre a, radius a, centre b, radius b).
     pub fn balls(&self) -> (DVec3, f64, DVec3, f64) {
         (self.a, self.ra, self.b, self.rb)
+    }
+
+    /// The gradient of `eval`: away from the nearer ball's centre at the ends, along the
+    /// side's normal between them.
+    pub fn gradient(&self, p: DVec3) -> DVec3 {
+        let pa = p - self.a;
+        let from_a = || pa.normalize_or_zero();
+        let from_b = || (p - self.b).normalize_or_zero();
+        if self.nested {
+            return if pa.length() - self.ra <= p.distance(self.b) - self.rb {
+                from_a()
+            } else {
+                from_b()
+            };
+        }
+        let t = pa.dot(self.axis);
+        let q = (pa.length_squared() - t * t).max(0.0).sqrt();
+        let s = t * self.cos - q * self.sin;
+        if s < 0.0 {
+            from_a()
+        } else if s > self.len * self.cos {
+            from_b()
+        } else if q > 0.0 {
+            let radial = (pa - self.axis * t) / q;
+            (self.axis * self.sin + radial * self.cos).normalize_or_zero()
+        } else {
+            DVec3::ZERO
+        }
     }
 
     pub fn eval(&self, p: DVec3) -> f64 {

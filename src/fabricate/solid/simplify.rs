@@ -14,24 +14,30 @@
 //! eight rounds, which walks the new vertices into the crease.
 //!
 //! *Simplification.* Garland and Heckbert's quadric error (planes of the triangles around each
-//! vertex, weighted by area) orders the edges and places the merged vertex. Edges are collapsed
-//! in passes: each pass takes the cheapest edges whose stars share no triangle, so their
-//! collapses are independent, checks them all (in parallel) and applies those that pass. A
-//! collapse must keep:
+//! vertex, weighted by area) orders the edges and places the merged vertex. The mesh is cut
+//! into bricks of about `BRICK_TRIANGLES` triangles (by their centres); each brick collapses
+//! its cheapest edge first, one at a time, and looks again at the edges around each collapse,
+//! until no edge within the tolerance passes. A vertex with triangles in two bricks is held,
+//! so bricks never touch the same triangle and run in parallel, each the same whatever the
+//! thread count. The next sweep shifts the bricks by half their side, so what one sweep held
+//! the next frees; sweeps go on until one makes almost no collapse. A collapse must keep:
 //! - the mesh a closed 2-manifold: the link condition (the edge's ends share exactly the two
 //!   neighbours across its triangles) and at least three neighbours left;
-//! - every triangle turned by less than 70° and not a sliver;
+//! - every triangle turned by less than 70° and not made a sliver;
 //! - the mesh within the tolerance of the surface, checked on the exact distance at the merged
 //!   vertex, the midpoints of its edges and the centres of its triangles. Inside the solid the
 //!   union's distance is only a lower bound (where two veins overlap), so a point inside must
-//!   also reach the surface along the distance's gradient within the tolerance;
+//!   also have a point outside within the tolerance: a step of the tolerance out of either of
+//!   the two nearest pieces, or failing that a walk out of the nearest piece at each step;
 //! - the surface within the tolerance of the mesh: every vertex of the refined mesh (each on the
 //!   surface) is a witness, kept by a triangle that replaced the one it had; no collapse may
 //!   leave a witness farther than the tolerance, less what the surface may bulge between
 //!   witnesses (spacing² / 8r, r the thinnest vein's radius).
 //!
-//! A rejected edge is not tried again until something around it changes. Collapses go on until
-//! a pass makes almost none.
+//! A rejected edge is not tried again until something around it changes. A triangle already a
+//! sliver (marching leaves many) may stay one, but no collapse makes one worse. Neither a
+//! split nor a collapse puts a vertex within a hundredth of the tolerance of another, which
+//! an STL's 32-bit floats could merge.
 
 use std::collections::HashMap;
 
@@ -43,14 +49,22 @@ use crate::mesh::TriMesh;
 
 /// The most grid cells of a `Field`.
 const MAX_CELLS: f64 = 4e6;
-/// The most (cell, piece) entries of a `Field`: 4 bytes each.
-const MAX_ENTRIES: usize = 100_000_000;
+/// The most (cell, piece) pairs a `Field` looks at (of its pieces' boxes), 4 bytes each.
+const MAX_ENTRIES: usize = 30_000_000;
+/// No two vertices closer than this fraction of the tolerance (an STL's 32-bit floats would
+/// make them one).
+const COINCIDENT: f64 = 0.01;
 /// Rounds of crease refinement.
 const REFINE_ROUNDS: usize = 8;
-/// Simplification stops after this many passes, or when a pass collapses fewer than
+/// Simplification stops after this many sweeps, or when a sweep collapses fewer than
 /// `SETTLED` of the vertices.
-const MAX_PASSES: usize = 80;
+const MAX_SWEEPS: usize = 12;
 const SETTLED: f64 = 0.002;
+/// About this many triangles to a brick.
+const BRICK_TRIANGLES: f64 = 30_000.0;
+/// Least triangle quality (1 equilateral, 0 flat) a collapse may make, unless the triangle
+/// was already worse.
+const MIN_QUALITY: f64 = 0.05;
 
 /// The signed distance to a union of pieces, through a grid of their boxes: exact where the
 /// union's value is within `reach`, at least `reach` (with the right sign) elsewhere.
@@ -83,7 +97,11 @@ impl<'a> Field<'a> {
         let mut sides: Vec<f64> = boxes.iter().map(|(a, b)| (*b - *a).max_element()).collect();
         sides.sort_by(f64::total_cmp);
         let median = sides.get(sides.len() / 2).copied().unwrap_or(1.0);
-        let mut cell = median.max((size.x * size.y * size.z / MAX_CELLS).cbrt());
+        // Cells about as wide as the reach (so a query meets little more than the pieces
+        // within reach of it), unless that makes too many.
+        let mut cell = reach
+            .min(median)
+            .max((size.x * size.y * size.z / MAX_CELLS).cbrt());
         loop {
             let dims = (size / cell).ceil().as_uvec3().max(glam::UVec3::ONE);
             let dims = [dims.x as usize, dims.y as usize, dims.z as usize];
@@ -115,13 +133,20 @@ impl<'a> Field<'a> {
             let cells = dims[0] * dims[1] * dims[2];
             let index = |i: usize, j: usize, k: usize| (i * dims[1] + j) * dims[2] + k;
             let mut count = vec![0u32; cells + 1];
+            // A piece is listed in the cells of its box whose centre is within reach of it
+            // and half the cell's diagonal (the pieces are 1-Lipschitz).
+            let near = reach + 0.5 * 3f64.sqrt() * cell;
             let each = |f: &mut dyn FnMut(usize, usize)| {
                 for (n, &(a, b)) in boxes.iter().enumerate() {
                     let [(i0, i1), (j0, j1), (k0, k1)] = range(a, b);
                     for i in i0..=i1 {
                         for j in j0..=j1 {
                             for k in k0..=k1 {
-                                f(index(i, j, k), n);
+                                let centre =
+                                    lo + (DVec3::new(i as f64, j as f64, k as f64) + 0.5) * cell;
+                                if prims[n].eval(centre, near) <= near {
+                                    f(index(i, j, k), n);
+                                }
                             }
                         }
                     }
@@ -132,7 +157,7 @@ impl<'a> Field<'a> {
                 count[c + 1] += count[c];
             }
             let mut fill = count.clone();
-            let mut list = vec![0u32; entries];
+            let mut list = vec![0u32; count[cells] as usize];
             each(&mut |c, n| {
                 list[fill[c] as usize] = n as u32;
                 fill[c] += 1;
@@ -151,19 +176,23 @@ impl<'a> Field<'a> {
 
     /// Signed distance to the union at `p`.
     pub fn eval(&self, p: DVec3) -> f64 {
-        self.two(p).0
+        self.two(p).0 .0
     }
 
-    /// The two least values of the pieces at `p` (each at most `reach`).
-    fn two(&self, p: DVec3) -> (f64, f64) {
+    /// The two least values of the pieces at `p` (each at most `reach`), with the pieces
+    /// (`u32::MAX` for none).
+    fn two(&self, p: DVec3) -> ((f64, u32), (f64, u32)) {
+        let none = (self.reach, u32::MAX);
         self.pieces(p)
             .iter()
-            .fold((self.reach, self.reach), |(d1, d2), &n| {
+            .fold((none, none), |(first, second), &n| {
                 let d = self.prims[n as usize].eval(p, self.reach);
-                if d < d1 {
-                    (d, d1)
+                if d < first.0 {
+                    ((d, n), first)
+                } else if d < second.0 {
+                    (first, (d, n))
                 } else {
-                    (d1, d2.min(d))
+                    (first, second)
                 }
             })
     }
@@ -182,30 +211,33 @@ impl<'a> Field<'a> {
         &self.list[self.start[at] as usize..self.start[at + 1] as usize]
     }
 
-    /// The distance's gradient at `p` (central differences), unit length or zero.
-    fn gradient(&self, p: DVec3, step: f64) -> DVec3 {
-        let e = |v: DVec3| self.eval(p + v * step) - self.eval(p - v * step);
-        DVec3::new(e(DVec3::X), e(DVec3::Y), e(DVec3::Z)).normalize_or_zero()
+    /// Piece `n`'s gradient at `p` (unit length or zero).
+    fn piece_gradient(&self, n: u32, p: DVec3, step: f64) -> DVec3 {
+        match self.prims.get(n as usize) {
+            Some(piece) => piece.gradient(p, self.reach, step),
+            None => DVec3::ZERO,
+        }
     }
 
-    /// `p` moved onto the surface along the gradient (a few Newton steps).
+    /// `p` moved onto the surface along the least piece's gradient (a few Newton steps).
     fn project(&self, p: DVec3, step: f64) -> DVec3 {
         let mut q = p;
         for _ in 0..4 {
-            let f = self.eval(q);
+            let ((f, n), _) = self.two(q);
             if f.abs() < 1e-7 {
                 break;
             }
-            q -= self.gradient(q, step) * f;
+            q -= self.piece_gradient(n, q, step) * f;
         }
         q
     }
 
     /// Whether `p` is within `tol` of the surface: outside the value is the distance; inside
-    /// it is one too where one piece alone is near; elsewhere it is only a lower bound, so the
-    /// surface must be reached along the gradient within `tol`.
+    /// it is one too where one piece alone is near. Elsewhere it is only a lower bound, so a
+    /// point outside the union must be found within `tol`: first a step of `tol` out of
+    /// either of the two least pieces, then a walk along the least piece's gradient.
     fn near(&self, p: DVec3, tol: f64) -> bool {
-        let (mut f, second) = self.two(p);
+        let ((mut f, first), (second, other)) = self.two(p);
         if f >= 0.0 {
             return f <= tol;
         }
@@ -218,12 +250,18 @@ impl<'a> Field<'a> {
             return true;
         }
         let step = 0.01 * tol;
-        let (mut q, mut walked) = (p, 0.0);
+        for n in [first, other] {
+            let g = self.piece_gradient(n, p, step);
+            if g != DVec3::ZERO && self.eval(p + g * tol) >= 0.0 {
+                return true;
+            }
+        }
+        let (mut q, mut walked, mut n) = (p, 0.0, first);
         for _ in 0..6 {
             if -f + walked > tol {
                 return false;
             }
-            let g = self.gradient(q, step);
+            let g = self.piece_gradient(n, q, step);
             if g == DVec3::ZERO {
                 return false;
             }
@@ -231,7 +269,7 @@ impl<'a> Field<'a> {
             let s = -f + 1e-7;
             q += g * s;
             walked += s;
-            f = self.eval(q);
+            ((f, n), _) = self.two(q);
             if f >= 0.0 {
                 return walked <= tol;
             }
@@ -248,7 +286,7 @@ pub struct Simplified {
     pub marched: usize,
     pub refined: usize,
     pub triangles: usize,
-    pub passes: usize,
+    pub sweeps: usize,
 }
 
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of
@@ -262,34 +300,61 @@ pub fn simplify(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Simplified {
     let marched = mesh.triangles.len();
+    let debug = std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some();
+    let clock = std::time::Instant::now();
     refine(mesh, field, tol);
+    if debug {
+        eprintln!(
+            "refined: {} triangles, {:.2} s",
+            mesh.triangles.len(),
+            clock.elapsed().as_secs_f64()
+        );
+    }
     let refined = mesh.triangles.len();
     // Between two witnesses the surface bulges by up to about spacing² / 8r: witnesses are
     // held that much closer.
     let bulge = spacing * spacing / (8.0 * radius.max(1e-9));
-    let mut s = Simplifier::new(mesh, field, tol, (tol - bulge).max(0.5 * tol));
-    let mut passes = 0;
-    while passes < MAX_PASSES {
-        passes += 1;
-        let made = s.pass(passes as u32);
-        if std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some() {
+    let limits = Limits {
+        field,
+        tol,
+        witness_tol: (tol - bulge).max(0.5 * tol),
+    };
+    let mut whole = Whole::new(mesh);
+    let mut sweeps = 0;
+    while sweeps < MAX_SWEEPS {
+        sweeps += 1;
+        // Bricks of about BRICK_TRIANGLES triangles of the mesh as it is now, shifted by
+        // half a brick every other sweep so each sweep frees the last one's borders.
+        let area: f64 = whole
+            .triangles
+            .par_iter()
+            .map(|t| {
+                let p = t.map(|v| whole.positions[v as usize]);
+                0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+            })
+            .sum();
+        let side = (BRICK_TRIANGLES * area / whole.triangles.len().max(1) as f64).sqrt();
+        let phase = if sweeps % 2 == 0 { 0.5 } else { 0.0 };
+        let made = whole.sweep(&limits, sweeps as u32, side.max(1e-9), phase);
+        if debug {
             eprintln!(
-                "pass {passes}: {made} collapses, {} triangles",
-                s.triangles.len()
+                "sweep {sweeps}: {made} collapses, {} triangles, bricks of {side:.3} mm, {:.2} s",
+                whole.triangles.len(),
+                clock.elapsed().as_secs_f64()
             );
         }
-        progress(passes as u64, MAX_PASSES as u64);
-        if (made as f64) < SETTLED * s.live as f64 {
+        progress(sweeps as u64, MAX_SWEEPS as u64);
+        if (made as f64) < SETTLED * whole.live as f64 {
             break;
         }
     }
-    s.finish(mesh);
+    whole.finish(mesh);
     Simplified {
         tolerance_mm: tol,
         marched,
         refined,
         triangles: mesh.triangles.len(),
-        passes,
+        sweeps,
     }
 }
 
@@ -328,7 +393,26 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
         let mut ends = vec![false; first];
         let mut mid: HashMap<u64, u32, Quick> =
             HashMap::with_capacity_and_hasher(split.len(), Quick);
+        // No new vertex on another (two midpoints may move onto one crease point).
+        let apart = COINCIDENT * tol;
+        let mut taken: HashMap<[i64; 3], Vec<DVec3>, Quick> = HashMap::with_hasher(Quick);
+        let cell_of = |p: DVec3| (p / apart).floor().as_i64vec3().to_array();
         for (a, b, p) in split {
+            let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+            let c = cell_of(p);
+            let crowded = (-1..=1).any(|i| {
+                (-1..=1).any(|j| {
+                    (-1..=1).any(|k| {
+                        taken
+                            .get(&[c[0] + i, c[1] + j, c[2] + k])
+                            .is_some_and(|near| near.iter().any(|q| q.distance(p) < apart))
+                    })
+                })
+            });
+            if crowded || pa.distance(p) < apart || pb.distance(p) < apart {
+                continue;
+            }
+            taken.entry(c).or_default().push(p);
             mid.insert(edge_key(a, b), mesh.positions.len() as u32);
             mesh.positions.push(p);
             ends[a as usize] = true;
@@ -489,39 +573,31 @@ struct Collapse {
     witnesses: Vec<(u32, u32)>,
 }
 
-struct Simplifier<'f, 'a> {
-    field: &'f Field<'a>,
-    tol: f64,
-    /// How near each witness must stay.
-    witness_tol: f64,
+/// The whole mesh between sweeps.
+struct Whole {
     positions: Vec<DVec3>,
-    triangles: Vec<[u32; 3]>,
     quadrics: Vec<Quadric>,
+    triangles: Vec<[u32; 3]>,
     /// Surface points the mesh must stay near, and the triangle that keeps each.
     witness: Vec<DVec3>,
     owner: Vec<u32>,
-    /// The pass in which each vertex's star last changed, and edges rejected (by the pass).
+    /// The sweep in which each vertex's star last changed, and edges rejected (by the sweep).
     changed: Vec<u32>,
     rejected: HashMap<u64, u32, Quick>,
     /// Vertices in use.
     live: usize,
-    // Per pass: vertex -> triangles, triangle -> witnesses.
-    vt_start: Vec<u32>,
-    vt: Vec<u32>,
-    tw_start: Vec<u32>,
-    tw: Vec<u32>,
 }
 
-impl<'f, 'a> Simplifier<'f, 'a> {
-    fn new(mesh: &TriMesh, field: &'f Field<'a>, tol: f64, witness_tol: f64) -> Self {
+impl Whole {
+    /// Takes the mesh's vertices and triangles (`finish` puts the simplified ones back).
+    fn new(mesh: &mut TriMesh) -> Whole {
         let n = mesh.positions.len();
         let mut quadrics = vec![Quadric::default(); n];
         let mut owner = vec![u32::MAX; n];
         for (k, t) in mesh.triangles.iter().enumerate() {
             let p = t.map(|v| mesh.positions[v as usize]);
             let c = (p[1] - p[0]).cross(p[2] - p[0]);
-            let area = 0.5 * c.length();
-            let q = Quadric::plane(c.normalize_or_zero(), p[0], area);
+            let q = Quadric::plane(c.normalize_or_zero(), p[0], 0.5 * c.length());
             for &v in t {
                 quadrics[v as usize] = quadrics[v as usize].add(&q);
                 if owner[v as usize] == u32::MAX {
@@ -529,160 +605,337 @@ impl<'f, 'a> Simplifier<'f, 'a> {
                 }
             }
         }
-        let used = owner.iter().filter(|&&o| o != u32::MAX).count();
-        let (witness, owner) = mesh
+        let (witness, owner): (Vec<DVec3>, Vec<u32>) = mesh
             .positions
             .iter()
             .zip(&owner)
             .filter(|(_, &o)| o != u32::MAX)
             .map(|(&p, &o)| (p, o))
             .unzip();
-        Simplifier {
-            field,
-            tol,
-            witness_tol,
-            positions: mesh.positions.clone(),
-            triangles: mesh.triangles.clone(),
+        Whole {
+            positions: std::mem::take(&mut mesh.positions),
             quadrics,
+            triangles: std::mem::take(&mut mesh.triangles),
+            live: witness.len(),
             witness,
             owner,
             changed: vec![0; n],
             rejected: HashMap::with_hasher(Quick),
-            live: used,
-            vt_start: Vec::new(),
-            vt: Vec::new(),
-            tw_start: Vec::new(),
-            tw: Vec::new(),
         }
     }
 
-    fn star(&self, v: u32) -> &[u32] {
-        &self.vt[self.vt_start[v as usize] as usize..self.vt_start[v as usize + 1] as usize]
-    }
-
-    fn witnesses(&self, t: u32) -> &[u32] {
-        &self.tw[self.tw_start[t as usize] as usize..self.tw_start[t as usize + 1] as usize]
-    }
-
-    /// Counting sort of `keys` into (start, items).
-    fn group(n: usize, items: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
-        let mut start = vec![0u32; n + 1];
-        for (k, _) in items.clone() {
-            start[k as usize + 1] += 1;
+    /// One sweep: the mesh cut into bricks of side `side` (shifted by `phase` of a side),
+    /// each simplified on its own with its border held, in parallel; returns the collapses.
+    fn sweep(&mut self, limits: &Limits, sweep: u32, side: f64, phase: f64) -> usize {
+        let brick_of = |t: &[u32; 3]| {
+            let c = t.iter().map(|&v| self.positions[v as usize]).sum::<DVec3>() / 3.0;
+            let k = (c / side + phase).floor();
+            let key = |x: f64| (x as i64).clamp(-(1 << 20), 1 << 20) + (1 << 20);
+            (key(k.x) << 42 | key(k.y) << 21 | key(k.z)) as u64
+        };
+        let keys: Vec<u64> = self.triangles.par_iter().map(brick_of).collect();
+        // A vertex whose triangles lie in two bricks is held where it is.
+        let mut home = vec![u64::MAX; self.positions.len()];
+        let mut held = vec![false; self.positions.len()];
+        for (t, &key) in self.triangles.iter().zip(&keys) {
+            for &v in t {
+                let h = &mut home[v as usize];
+                if *h == u64::MAX {
+                    *h = key;
+                } else if *h != key {
+                    held[v as usize] = true;
+                }
+            }
         }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut out = vec![0u32; start[n] as usize];
-        for (k, v) in items {
-            out[fill[k as usize] as usize] = v;
-            fill[k as usize] += 1;
-        }
-        (start, out)
-    }
-
-    /// One pass; returns how many edges collapsed.
-    fn pass(&mut self, pass: u32) -> usize {
-        let tris = &self.triangles;
-        (self.vt_start, self.vt) = Self::group(
-            self.positions.len(),
-            tris.iter()
-                .enumerate()
-                .flat_map(|(k, t)| t.map(|v| (v, k as u32))),
-        );
-        (self.tw_start, self.tw) = Self::group(
-            tris.len(),
+        let mut order: Vec<u32> = (0..self.triangles.len() as u32).collect();
+        order.par_sort_unstable_by_key(|&t| (keys[t as usize], t));
+        let mut bricks: Vec<&[u32]> = order
+            .chunk_by(|&x, &y| keys[x as usize] == keys[y as usize])
+            .collect();
+        // The biggest first, so the last to start are short.
+        bricks.sort_by_key(|b| std::cmp::Reverse(b.len()));
+        let by_owner = group(
+            self.triangles.len(),
             self.owner.iter().enumerate().map(|(w, &t)| (t, w as u32)),
         );
-
-        // Candidates, cheapest first.
-        let tol2 = self.tol * self.tol;
-        let mut edges: Vec<(f64, u32, u32)> = self
-            .triangles
+        let whole = &*self;
+        let done: Vec<Done> = bricks
             .par_iter()
-            .flat_map_iter(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .filter(|&(a, b)| a < b)
-            .filter(|&(a, b)| {
-                self.rejected.get(&edge_key(a, b)).is_none_or(|&when| {
-                    self.changed[a as usize].max(self.changed[b as usize]) >= when
-                })
-            })
-            .filter_map(|(a, b)| {
-                let q = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
-                let (_, e) = q.best(self.positions[a as usize], self.positions[b as usize]);
-                (e <= tol2).then_some((e, a, b))
+            .map(|tris| {
+                let mut b = Brick::new(whole, tris, &held, (&by_owner.0, &by_owner.1));
+                b.run(limits);
+                b.done()
             })
             .collect();
-        edges.par_sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        drop(by_owner);
 
-        // Rounds of independent ones (stars that share no triangle), checked in parallel;
-        // what a failed check held is free for the next round. A triangle changed this pass
-        // is not touched again until the next.
-        const CHANGED: u32 = u32::MAX;
-        let mut claim = vec![0u32; self.triangles.len()];
-        let mut dead = vec![false; self.triangles.len()];
-        let mut open: Vec<(u32, u32)> = edges.iter().map(|&(_, a, b)| (a, b)).collect();
+        // Stitch: each brick's triangles, in brick order; vertices off the borders moved.
+        let mut triangles = Vec::with_capacity(self.triangles.len());
         let mut made = 0;
-        for round in 1..=4u32 {
-            let mut chosen = Vec::new();
-            let mut later = Vec::new();
-            for &(a, b) in &open {
-                let stars = || self.star(a).iter().chain(self.star(b));
-                if stars().any(|&t| claim[t as usize] == CHANGED) {
-                    continue;
-                }
-                if stars().any(|&t| claim[t as usize] == round) {
-                    later.push((a, b));
-                    continue;
-                }
-                for &t in stars() {
-                    claim[t as usize] = round;
-                }
-                chosen.push((a, b));
+        for d in done {
+            made += d.made;
+            let first = triangles.len() as u32;
+            triangles.extend(d.triangles);
+            for (g, p, q) in d.moved {
+                self.positions[g as usize] = p;
+                self.quadrics[g as usize] = q;
             }
-            if chosen.is_empty() {
-                break;
+            for g in d.changed {
+                self.changed[g as usize] = sweep;
             }
-            let checked: Vec<Result<Collapse, (u32, u32)>> = chosen
-                .par_iter()
-                .map(|&(a, b)| self.check(a, b).ok_or((a, b)))
-                .collect();
-            for c in checked {
-                match c {
-                    Ok(c) => {
-                        made += 1;
-                        for &t in self.star(c.a).iter().chain(self.star(c.b)) {
-                            claim[t as usize] = CHANGED;
-                        }
-                        self.apply(&c, pass, &mut dead);
-                    }
-                    Err((a, b)) => {
-                        self.rejected.insert(edge_key(a, b), pass);
-                    }
-                }
+            for (w, t) in d.owners {
+                self.owner[w as usize] = first + t;
             }
-            open = later;
-        }
-        // Compact the triangles; witnesses follow theirs.
-        let mut remap = vec![u32::MAX; self.triangles.len()];
-        let mut kept = Vec::with_capacity(self.triangles.len());
-        for (k, t) in self.triangles.iter().enumerate() {
-            if !dead[k] {
-                remap[k] = kept.len() as u32;
-                kept.push(*t);
+            for e in d.rejected {
+                self.rejected.insert(e, sweep);
             }
         }
-        self.triangles = kept;
-        for o in &mut self.owner {
-            *o = remap[*o as usize];
-        }
+        self.triangles = triangles;
+        self.live -= made;
         made
     }
 
+    /// The simplified mesh, its unused vertices dropped.
+    fn finish(self, mesh: &mut TriMesh) {
+        let mut index = vec![u32::MAX; self.positions.len()];
+        let mut positions = Vec::new();
+        let mut triangles = self.triangles;
+        for t in &mut triangles {
+            for v in t.iter_mut() {
+                if index[*v as usize] == u32::MAX {
+                    index[*v as usize] = positions.len() as u32;
+                    positions.push(self.positions[*v as usize]);
+                }
+                *v = index[*v as usize];
+            }
+        }
+        mesh.positions = positions;
+        mesh.triangles = triangles;
+        mesh.colors = None;
+    }
+}
+
+/// What a brick hands back: its live triangles (whole indices), the vertices it moved, the
+/// stars it changed, each witness's triangle (among its live ones), the edges it rejected.
+struct Done {
+    triangles: Vec<[u32; 3]>,
+    moved: Vec<(u32, DVec3, Quadric)>,
+    changed: Vec<u32>,
+    owners: Vec<(u32, u32)>,
+    rejected: Vec<u64>,
+    made: usize,
+}
+
+/// Counting sort of (key, item) pairs: (start, items), key k's items at start[k]..start[k + 1].
+fn group(n: usize, items: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; n + 1];
+    for (k, _) in items.clone() {
+        start[k as usize + 1] += 1;
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut out = vec![0u32; start[n] as usize];
+    for (k, v) in items {
+        out[fill[k as usize] as usize] = v;
+        fill[k as usize] += 1;
+    }
+    (start, out)
+}
+
+/// What a collapse must keep (see the module notes).
+struct Limits<'f, 'a> {
+    field: &'f Field<'a>,
+    tol: f64,
+    /// How near each witness must stay.
+    witness_tol: f64,
+}
+
+/// One brick of the mesh, simplified on its own: its triangles, the vertices they use (those
+/// also used by another brick's triangles held), and the witnesses its triangles keep.
+struct Brick {
+    global: Vec<u32>,
+    held: Vec<bool>,
+    positions: Vec<DVec3>,
+    quadrics: Vec<Quadric>,
+    triangles: Vec<[u32; 3]>,
+    dead: Vec<bool>,
+    /// Vertex -> its live triangles.
+    stars: Vec<Vec<u32>>,
+    /// Witnesses: where, which in the whole, and the triangle that keeps each; and each
+    /// triangle's.
+    witness: Vec<DVec3>,
+    wglobal: Vec<u32>,
+    owner: Vec<u32>,
+    kept: Vec<Vec<u32>>,
+    /// Stars changed here; edges (whole keys) rejected here; collapses made.
+    changed: Vec<bool>,
+    rejected: Vec<u64>,
+    made: usize,
+    /// Edges the whole rejected in an earlier sweep and when, for those within this brick.
+    before: HashMap<u64, u32, Quick>,
+    before_changed: Vec<u32>,
+}
+
+impl Brick {
+    fn new(whole: &Whole, tris: &[u32], held: &[bool], by_owner: (&[u32], &[u32])) -> Brick {
+        let mut local: HashMap<u32, u32, Quick> = HashMap::with_hasher(Quick);
+        let mut global = Vec::new();
+        let mut triangles = Vec::with_capacity(tris.len());
+        for &t in tris {
+            triangles.push(whole.triangles[t as usize].map(|v| {
+                *local.entry(v).or_insert_with(|| {
+                    global.push(v);
+                    global.len() as u32 - 1
+                })
+            }));
+        }
+        let n = global.len();
+        let mut stars = vec![Vec::new(); n];
+        for (k, t) in triangles.iter().enumerate() {
+            for &v in t {
+                stars[v as usize].push(k as u32);
+            }
+        }
+        let (mut witness, mut wglobal, mut owner) = (Vec::new(), Vec::new(), Vec::new());
+        let mut kept = vec![Vec::new(); triangles.len()];
+        for (k, &t) in tris.iter().enumerate() {
+            let (start, list) = by_owner;
+            for &w in &list[start[t as usize] as usize..start[t as usize + 1] as usize] {
+                kept[k].push(witness.len() as u32);
+                witness.push(whole.witness[w as usize]);
+                wglobal.push(w);
+                owner.push(k as u32);
+            }
+        }
+        let mut before = HashMap::with_hasher(Quick);
+        for t in &triangles {
+            for k in 0..3 {
+                let e = edge_key(global[t[k] as usize], global[t[(k + 1) % 3] as usize]);
+                if let Some(&when) = whole.rejected.get(&e) {
+                    before.insert(e, when);
+                }
+            }
+        }
+        Brick {
+            held: global.iter().map(|&g| held[g as usize]).collect(),
+            positions: global
+                .iter()
+                .map(|&g| whole.positions[g as usize])
+                .collect(),
+            quadrics: global.iter().map(|&g| whole.quadrics[g as usize]).collect(),
+            before_changed: global.iter().map(|&g| whole.changed[g as usize]).collect(),
+            global,
+            dead: vec![false; triangles.len()],
+            triangles,
+            stars,
+            witness,
+            wglobal,
+            owner,
+            kept,
+            changed: vec![false; n],
+            rejected: Vec::new(),
+            made: 0,
+            before,
+        }
+    }
+
+    fn key(&self, a: u32, b: u32) -> u64 {
+        edge_key(self.global[a as usize], self.global[b as usize])
+    }
+
+    /// Whether the edge is worth trying: both ends free, and not rejected before with
+    /// nothing around it changed since.
+    fn open(&self, a: u32, b: u32) -> bool {
+        if self.held[a as usize] || self.held[b as usize] {
+            return false;
+        }
+        self.before.get(&self.key(a, b)).is_none_or(|&when| {
+            self.changed[a as usize]
+                || self.changed[b as usize]
+                || self.before_changed[a as usize].max(self.before_changed[b as usize]) > when
+        })
+    }
+
+    /// The edge's cost (quadric error per unit weight at its best point).
+    fn cost(&self, a: u32, b: u32) -> f64 {
+        let q = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
+        q.best(self.positions[a as usize], self.positions[b as usize])
+            .1
+    }
+
+    /// Greedy edge collapse, cheapest first, until no edge within the tolerance passes.
+    fn run(&mut self, limits: &Limits) {
+        use std::cmp::Reverse;
+        let tol2 = limits.tol * limits.tol;
+        // (cost bits, a, b, a's version): costs are never negative, so their bits order them.
+        let mut heap = std::collections::BinaryHeap::new();
+        let mut version = vec![0u32; self.positions.len()];
+        let push = |heap: &mut std::collections::BinaryHeap<_>, s: &Brick, v: &[u32], a, b| {
+            if a != b && s.open(a, b) {
+                let (a, b) = (a.min(b), a.max(b));
+                let e = s.cost(a, b);
+                if e <= tol2 {
+                    let key = (e.to_bits(), a, b, v[a as usize], v[b as usize]);
+                    heap.push(Reverse(key));
+                }
+            }
+        };
+        for t in 0..self.triangles.len() {
+            let tri = self.triangles[t];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                if a < b {
+                    push(&mut heap, self, &version, a, b);
+                }
+            }
+        }
+        let mut tried = std::collections::HashSet::with_hasher(Quick);
+        while let Some(Reverse((_, a, b, va, vb))) = heap.pop() {
+            if version[a as usize] != va || version[b as usize] != vb {
+                continue;
+            }
+            if self.stars[a as usize].is_empty() || self.stars[b as usize].is_empty() {
+                continue;
+            }
+            match self.check(limits, a, b) {
+                None => {
+                    tried.insert(edge_key(a, b));
+                }
+                Some(c) => {
+                    let ring = self.apply(&c);
+                    version[a as usize] += 1;
+                    version[b as usize] += 1;
+                    // The merged vertex's edges anew; edges rejected around it again.
+                    for &v in &ring {
+                        push(&mut heap, self, &version, a, v);
+                    }
+                    for &v in &ring {
+                        for &t in &self.stars[v as usize] {
+                            for &w in &self.triangles[t as usize] {
+                                if w != v && w != a && tried.remove(&edge_key(v, w)) {
+                                    push(&mut heap, self, &version, v, w);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        self.rejected = tried
+            .into_iter()
+            .map(|e| {
+                let (a, b) = ((e >> 32) as u32, e as u32);
+                self.key(a, b)
+            })
+            .collect();
+        self.rejected.sort_unstable();
+    }
+
     /// Checks collapsing `b` into `a` (see the module notes).
-    fn check(&self, a: u32, b: u32) -> Option<Collapse> {
-        let (sa, sb) = (self.star(a), self.star(b));
+    fn check(&self, limits: &Limits, a: u32, b: u32) -> Option<Collapse> {
+        let (sa, sb) = (&self.stars[a as usize], &self.stars[b as usize]);
         let ring = |s: &[u32], me: u32| {
             let mut r: Vec<u32> = s
                 .iter()
@@ -709,6 +962,13 @@ impl<'f, 'a> Simplifier<'f, 'a> {
         let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
         let q = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
         let (to, _) = q.best(pa, pb);
+        let apart = COINCIDENT * limits.tol;
+        if around
+            .iter()
+            .any(|&v| self.positions[v as usize].distance(to) < apart)
+        {
+            return None;
+        }
 
         let mut stars: Vec<u32> = sa.iter().chain(sb).copied().collect();
         stars.sort_unstable();
@@ -733,12 +993,10 @@ impl<'f, 'a> Simplifier<'f, 'a> {
             });
             let n_old = (old[1] - old[0]).cross(old[2] - old[0]).normalize_or_zero();
             let c = (p[1] - p[0]).cross(p[2] - p[0]);
-            let len2 = (p[1] - p[0]).length_squared()
-                + (p[2] - p[1]).length_squared()
-                + (p[0] - p[2]).length_squared();
-            // 1 for an equilateral triangle, 0 for a flat one.
-            let quality = 2.0 * 3f64.sqrt() * c.length() / len2.max(1e-300);
-            if c.normalize_or_zero().dot(n_old) < cos_max || quality < 0.05 {
+            // Not turned over, and no worse a sliver than it was (marching leaves slivers).
+            if c.normalize_or_zero().dot(n_old) < cos_max
+                || quality(&p) < MIN_QUALITY.min(0.5 * quality(&old))
+            {
                 return None;
             }
             new.push((t, p));
@@ -748,34 +1006,31 @@ impl<'f, 'a> Simplifier<'f, 'a> {
         }
 
         // The mesh near the surface.
-        let tol = self.tol;
-        if !self.field.near(to, tol) {
+        let (field, tol) = (limits.field, limits.tol);
+        if !field.near(to, tol) {
             return None;
         }
         for &v in &around {
-            if !self
-                .field
-                .near(0.5 * (to + self.positions[v as usize]), tol)
-            {
+            if !field.near(0.5 * (to + self.positions[v as usize]), tol) {
                 return None;
             }
         }
         for (_, p) in &new {
-            if !self.field.near((p[0] + p[1] + p[2]) / 3.0, tol) {
+            if !field.near((p[0] + p[1] + p[2]) / 3.0, tol) {
                 return None;
             }
         }
         // The surface near the mesh.
         let mut witnesses = Vec::new();
         for &t in &stars {
-            for &w in self.witnesses(t) {
+            for &w in &self.kept[t as usize] {
                 let x = self.witness[w as usize];
                 // Any triangle within the tolerance keeps it: first the one that replaces
                 // its own.
                 let own = new.iter().position(|(k, _)| *k == t).unwrap_or(0);
                 let k = (0..new.len())
                     .map(|i| (i + own) % new.len())
-                    .find(|&i| point_triangle(x, &new[i].1) <= self.witness_tol)?;
+                    .find(|&i| point_triangle(x, &new[i].1) <= limits.witness_tol)?;
                 witnesses.push((w, new[k].0));
             }
         }
@@ -787,13 +1042,58 @@ impl<'f, 'a> Simplifier<'f, 'a> {
         })
     }
 
-    fn apply(&mut self, c: &Collapse, pass: u32, dead: &mut [bool]) {
+    fn done(self) -> Done {
+        let mut index = vec![u32::MAX; self.triangles.len()];
+        let mut triangles = Vec::with_capacity(self.triangles.len());
+        for (k, t) in self.triangles.iter().enumerate() {
+            if !self.dead[k] {
+                index[k] = triangles.len() as u32;
+                triangles.push(t.map(|v| self.global[v as usize]));
+            }
+        }
+        let moved = (0..self.global.len())
+            .filter(|&l| self.changed[l] && !self.held[l])
+            .map(|l| (self.global[l], self.positions[l], self.quadrics[l]))
+            .collect();
+        Done {
+            triangles,
+            moved,
+            changed: (0..self.global.len())
+                .filter(|&l| self.changed[l])
+                .map(|l| self.global[l])
+                .collect(),
+            owners: self
+                .wglobal
+                .iter()
+                .zip(&self.owner)
+                .map(|(&w, &t)| (w, index[t as usize]))
+                .collect(),
+            rejected: self.rejected,
+            made: self.made,
+        }
+    }
+
+    /// Makes the collapse; returns the merged vertex's ring.
+    fn apply(&mut self, c: &Collapse) -> Vec<u32> {
         let (a, b) = (c.a, c.b);
-        let stars: Vec<u32> = self.star(a).iter().chain(self.star(b)).copied().collect();
-        for &t in &stars {
+        let mut star: Vec<u32> = Vec::new();
+        let mut ring: Vec<u32> = Vec::new();
+        let both: Vec<u32> = self.stars[a as usize]
+            .iter()
+            .chain(&self.stars[b as usize])
+            .copied()
+            .collect();
+        for t in both {
             let tri = &mut self.triangles[t as usize];
             if tri.contains(&a) && tri.contains(&b) {
-                dead[t as usize] = true;
+                if !self.dead[t as usize] {
+                    self.dead[t as usize] = true;
+                    for &v in tri.iter() {
+                        if v != a && v != b {
+                            self.stars[v as usize].retain(|&x| x != t);
+                        }
+                    }
+                }
                 continue;
             }
             for v in tri.iter_mut() {
@@ -801,36 +1101,39 @@ impl<'f, 'a> Simplifier<'f, 'a> {
                     *v = a;
                 }
             }
-            for &v in tri.iter() {
-                self.changed[v as usize] = pass;
-            }
+            star.push(t);
+            ring.extend(tri.iter().copied().filter(|&v| v != a));
         }
+        ring.sort_unstable();
+        ring.dedup();
+        for &v in &ring {
+            self.changed[v as usize] = true;
+        }
+        self.changed[a as usize] = true;
+        self.stars[a as usize] = star;
+        self.stars[b as usize] = Vec::new();
         self.positions[a as usize] = c.to;
         self.quadrics[a as usize] = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
-        self.live -= 1;
         for &(w, t) in &c.witnesses {
-            self.owner[w as usize] = t;
-        }
-    }
-
-    /// The simplified mesh, its unused vertices dropped.
-    fn finish(self, mesh: &mut TriMesh) {
-        let mut index = vec![u32::MAX; self.positions.len()];
-        let mut positions = Vec::new();
-        let mut triangles = self.triangles;
-        for t in &mut triangles {
-            for v in t.iter_mut() {
-                if index[*v as usize] == u32::MAX {
-                    index[*v as usize] = positions.len() as u32;
-                    positions.push(self.positions[*v as usize]);
-                }
-                *v = index[*v as usize];
+            let old = self.owner[w as usize];
+            if old != t {
+                self.kept[old as usize].retain(|&x| x != w);
+                self.kept[t as usize].push(w);
+                self.owner[w as usize] = t;
             }
         }
-        mesh.positions = positions;
-        mesh.triangles = triangles;
-        mesh.colors = None;
+        self.made += 1;
+        ring
     }
+}
+
+/// 1 for an equilateral triangle, 0 for a flat one.
+fn quality(p: &[DVec3; 3]) -> f64 {
+    let c = (p[1] - p[0]).cross(p[2] - p[0]);
+    let len2 = (p[1] - p[0]).length_squared()
+        + (p[2] - p[1]).length_squared()
+        + (p[0] - p[2]).length_squared();
+    2.0 * 3f64.sqrt() * c.length() / len2.max(1e-300)
 }
 
 /// Distance from `x` to the triangle `p`.
