@@ -86,6 +86,34 @@ fn solid_of_a_looped_network_is_closed_with_genus_one_and_repeatable() -> TestRe
 }
 
 #[test]
+fn simplifying_gives_the_same_bytes_on_any_number_of_threads() -> TestResult {
+    // Bricks are simplified on their own, each in one thread, and stitched in a fixed order.
+    let dir = tempfile::tempdir()?;
+    let net = fixture("networks/small_loop.json");
+    let mut outs = Vec::new();
+    for threads in ["1", "3"] {
+        let out = dir.path().join(format!("t{threads}.stl"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lamina"))
+            .args([
+                "solid",
+                net.to_str().ok_or("path")?,
+                "--cell",
+                "0.05",
+                "--tolerance",
+            ])
+            .arg("-o")
+            .arg(&out)
+            .env("RAYON_NUM_THREADS", threads)
+            .output()?;
+        assert!(o.status.success(), "{}", stderr(&o));
+        outs.push(std::fs::read(&out)?);
+    }
+    assert!(outs[0].len() > 84);
+    assert!(outs[0] == outs[1], "1 and 3 threads give different meshes");
+    Ok(())
+}
+
+#[test]
 fn simplifying_keeps_the_solid_closed_and_its_volume_with_far_fewer_triangles() -> TestResult {
     let dir = tempfile::tempdir()?;
     let net = fixture("networks/small_loop.json");

@@ -418,7 +418,9 @@ pub fn solid_of(
     let cavities = fill_cavities(&mut mesh);
     let simplified = opts.tolerance.map(|tol| {
         let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
-        simplify::simplify(&mut mesh, &field, tol, (opts.cell, min_radius), progress)
+        // A marched edge spans at most a cell's diagonal.
+        let spacing = 3f64.sqrt() * opts.cell;
+        simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress)
     });
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
     let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));

@@ -10,8 +10,9 @@
 //! base's) cuts it off: there the surface is farther from the mesh than the tolerance. An edge
 //! whose midpoint is off the surface by more than a quarter of the tolerance outside (a bridge:
 //! the crease below it is up to four times farther at a 30° notch) or half of it inside (a cut
-//! rim) is split at its midpoint moved onto the surface; split edges are split again, up to
-//! eight rounds, which walks the new vertices into the crease.
+//! rim) is split at its midpoint moved onto the surface, and so is the longest edge of a
+//! triangle whose centre is that far off (a corner where three veins meet); split edges are
+//! split again, up to eight rounds, which walks the new vertices into the crease.
 //!
 //! *Simplification.* Garland and Heckbert's quadric error (planes of the triangles around each
 //! vertex, weighted by area) orders the edges and places the merged vertex. The mesh is cut
@@ -32,7 +33,8 @@
 //! - the surface within the tolerance of the mesh: every vertex of the refined mesh (each on the
 //!   surface) is a witness, kept by a triangle that replaced the one it had; no collapse may
 //!   leave a witness farther than the tolerance, less what the surface may bulge between
-//!   witnesses (spacing² / 8r, r the thinnest vein's radius).
+//!   witnesses (spacing² / 8r, spacing the longest edge marching makes, a cell's diagonal,
+//!   and r the thinnest vein's radius).
 //!
 //! A rejected edge is not tried again until something around it changes. A triangle already a
 //! sliver (marching leaves many) may stay one, but no collapse makes one worse. Neither a
@@ -290,7 +292,7 @@ pub struct Simplified {
 }
 
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of
-/// `field`, edges about `spacing` long) so it stays within `tol` of the surface, whose least
+/// `field`, edges at most `spacing` long) so it stays within `tol` of the surface, whose least
 /// radius of curvature is about `radius`. `progress(done, total)` counts passes.
 pub fn simplify(
     mesh: &mut TriMesh,
@@ -378,14 +380,54 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
             .collect();
         edges.sort_unstable();
         let positions = &mesh.positions;
-        let split: Vec<(u32, u32, DVec3)> = edges
+        let off = |p: DVec3| {
+            let f = field.eval(p);
+            f > 0.25 * tol || f < -0.5 * tol
+        };
+        let on_surface = |a: u32, b: u32| {
+            let m = 0.5 * (positions[a as usize] + positions[b as usize]);
+            (a, b, field.project(m, step))
+        };
+        let mut split: Vec<(u32, u32, DVec3)> = edges
             .par_iter()
-            .filter_map(|&(a, b)| {
-                let m = 0.5 * (positions[a as usize] + positions[b as usize]);
-                let f = field.eval(m);
-                (f > 0.25 * tol || f < -0.5 * tol).then(|| (a, b, field.project(m, step)))
+            .filter(|&&(a, b)| off(0.5 * (positions[a as usize] + positions[b as usize])))
+            .map(|&(a, b)| on_surface(a, b))
+            .collect();
+        // A triangle whose centre is off (in a corner where three veins meet) though no
+        // edge's midpoint is: its longest edge is split too.
+        let mut longest: Vec<(u32, u32)> = mesh
+            .triangles
+            .par_iter()
+            .filter(|t| fresh.is_none_or(|first| t.iter().any(|&v| v as usize >= first)))
+            .filter_map(|t| {
+                let p = t.map(|v| positions[v as usize]);
+                if !off((p[0] + p[1] + p[2]) / 3.0) {
+                    return None;
+                }
+                let k = (0..3)
+                    .max_by(|&i, &j| {
+                        let len = |k: usize| p[k].distance_squared(p[(k + 1) % 3]);
+                        len(i).total_cmp(&len(j))
+                    })
+                    .unwrap_or(0);
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                Some((a.min(b), a.max(b)))
             })
             .collect();
+        longest.sort_unstable();
+        longest.dedup();
+        longest.retain(|&(a, b)| {
+            split
+                .binary_search_by(|&(x, y, _)| (x, y).cmp(&(a, b)))
+                .is_err()
+        });
+        split.extend(
+            longest
+                .par_iter()
+                .map(|&(a, b)| on_surface(a, b))
+                .collect::<Vec<_>>(),
+        );
+        split.sort_unstable_by_key(|&(a, b, _)| (a, b));
         if split.is_empty() {
             break;
         }
