@@ -15,7 +15,8 @@ z = 0 (as `solid` places it). Checks:
   (where hulls overlap) a surface point is found, and its distance bounds the distance from
   above: where a straight line out of either of the two nearest hulls leaves the union
   (bisection), the end of steps along the union's gradient or out of the deepest hull (their
-  total length), and for points still not placed, lines in 64 directions;
+  total length), a point where the two nearest hulls' surfaces meet outside the others (a
+  crease, by Gauss-Newton), and for points still not placed, lines in 64 directions;
 - surface to mesh: random points on the exact surface (on each hull, outside the others),
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - both ways, a point beyond T in a gap between facing veins (outward directions more than
@@ -154,6 +155,28 @@ def exit_along(p, g, length, hulls):
     return out
 
 
+def crease_distance(p, a, b, hulls):
+    """For each point: its distance to a point where hulls a and b's surfaces meet outside
+    every other hull (so a point of the union's surface), found by Gauss-Newton on the two
+    distances with the least step from p (inf where none is found)."""
+    ok = (a >= 0) & (b >= 0)
+    a, b = np.where(ok, a, 0), np.where(ok, b, 0)
+    q = p.copy()
+    for _ in range(12):
+        fa, fb = hulls.distance(q, a), hulls.distance(q, b)
+        ga, gb = hulls.hull_gradient(q, a), hulls.hull_gradient(q, b)
+        aa, ab, bb = (ga * ga).sum(1), (ga * gb).sum(1), (gb * gb).sum(1)
+        det = aa * bb - ab * ab
+        ok &= det > 1e-6
+        det = np.where(ok, det, 1.0)
+        lam = (-fa * bb + fb * ab) / det
+        mu = (-fb * aa + fa * ab) / det
+        q += np.where(ok[:, None], lam[:, None] * ga + mu[:, None] * gb, 0.0)
+    on = ok & (np.abs(hulls.distance(q, a)) < 1e-9) & (np.abs(hulls.distance(q, b)) < 1e-9)
+    on &= hulls.union(q) > -1e-9
+    return np.where(on, np.linalg.norm(q - p, axis=1), np.inf)
+
+
 def distance_bound(p, hulls, tol):
     """An upper bound of each point's distance to the surface (inf when none within 2 tol)."""
     d1, i1, d2, i2 = hulls.two_least(p, ids=True)
@@ -200,6 +223,10 @@ def distance_bound(p, hulls, tol):
             f[inside], n[inside] = fi, ni
         walked[f < 0] = np.inf
         out[walk] = np.minimum(out[walk], walked)
+        # Where the two nearest hulls' surfaces meet (a crease between two veins).
+        left = walk[out[walk] > tol]
+        if len(left):
+            out[left] = np.minimum(out[left], crease_distance(p[left], i1[left], i2[left], hulls))
         # What is left: straight lines in many directions.
         left = walk[out[walk] > tol]
         if len(left):
@@ -285,7 +312,8 @@ def surface_samples(cones, hulls, n, rng):
 def slot_width(p, hulls):
     """For each point: the width of the gap it lies in between facing veins, that is its
     distance outside its nearest hull plus the distance to the nearest hull whose outward
-    direction there is more than 120 degrees from the nearest one's (inf where none)."""
+    direction there is more than 120 degrees from the nearest one's (inf where none, and for a
+    point inside the solid)."""
     width = np.full(len(p), np.inf)
     if len(p) == 0:
         return width
@@ -299,7 +327,8 @@ def slot_width(p, hulls):
     d = hulls.distance(p[point], hull)
     facing = (hulls.hull_gradient(p[point], hull) * own[point]).sum(1) < -0.5
     np.minimum.at(width, point[facing], d[facing])
-    return width + np.maximum(d1, 0)
+    # A point inside the solid is in no gap (a surface sample is on it, to rounding).
+    return np.where(d1 < -1e-6, np.inf, width + np.maximum(d1, 0))
 
 
 def main():

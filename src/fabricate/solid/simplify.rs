@@ -10,9 +10,11 @@
 //! base's) cuts it off: there the surface is farther from the mesh than the tolerance. An edge
 //! whose midpoint is off the surface by more than a quarter of the tolerance outside (a bridge:
 //! the crease below it is up to four times farther at a 30° notch) or half of it inside (a cut
-//! rim) is split at its midpoint moved onto the surface, and so is the longest edge of a
-//! triangle whose centre is that far off (a corner where three veins meet); split edges are
-//! split again, up to eight rounds, which walks the new vertices into the crease.
+//! rim) is split, and so is the longest edge of a triangle whose centre is that far off (a
+//! corner where three veins meet). A midpoint outside goes into the crease where the two
+//! nearest veins' surfaces meet (Gauss-Newton on both distances, the least step), when they
+//! meet near it at more than 10°; else, and inside, it moves onto the surface along the
+//! nearest piece's gradient. Split edges are split again, up to eight rounds.
 //!
 //! *Simplification.* Garland and Heckbert's quadric error (planes of the triangles around each
 //! vertex, weighted by area) orders the edges and places the merged vertex. The mesh is cut
@@ -26,10 +28,15 @@
 //!   neighbours across its triangles) and at least three neighbours left;
 //! - every triangle turned by less than 70° and not made a sliver;
 //! - the mesh within the tolerance of the surface, checked on the exact distance at the merged
-//!   vertex, the midpoints of its edges and the centres of its triangles. Inside the solid the
-//!   union's distance is only a lower bound (where two veins overlap), so a point inside must
-//!   also have a point outside within the tolerance: a step of the tolerance out of either of
-//!   the two nearest pieces, or failing that a walk out of the nearest piece at each step;
+//!   vertex, the midpoints of its edges and the centres of its triangles; and over the whole
+//!   of each new triangle: a convex piece's distance is convex, so one vein within the
+//!   tolerance of all three corners holds the triangle; a triangle no one vein holds (across a
+//!   crease, or along a vein's joints) is checked at its sides' quarter points and three
+//!   points inside as well (a crease's ridge can pass between the centre and the corners).
+//!   Inside the solid the union's distance is only a lower bound (where two veins overlap),
+//!   so a point inside must also have a point outside within the tolerance: a step of the
+//!   tolerance out of either of the two nearest pieces, or failing that a walk out of the
+//!   nearest piece at each step;
 //! - the surface within the tolerance of the mesh: every vertex of the refined mesh (each on the
 //!   surface) is a witness, kept by a triangle that replaced the one it had; no collapse may
 //!   leave a witness farther than the tolerance, less what the surface may bulge between
@@ -181,6 +188,12 @@ impl<'a> Field<'a> {
         self.two(p).0 .0
     }
 
+    /// The two pieces least at `p`.
+    fn least(&self, p: DVec3) -> [u32; 2] {
+        let ((_, a), (_, b)) = self.two(p);
+        [a, b]
+    }
+
     /// The two least values of the pieces at `p` (each at most `reach`), with the pieces
     /// (`u32::MAX` for none).
     fn two(&self, p: DVec3) -> ((f64, u32), (f64, u32)) {
@@ -232,6 +245,79 @@ impl<'a> Field<'a> {
             q -= self.piece_gradient(n, q, step) * f;
         }
         q
+    }
+
+    /// The point nearest `p` (to first order) where the surfaces of the two pieces least at
+    /// `p` meet: a crease where two veins join. None where they do not meet near `p` (within
+    /// `limit`), meet at less than 10° (one vein's segments, which join smoothly), or meet
+    /// inside a third piece.
+    fn crease(&self, p: DVec3, limit: f64, step: f64) -> Option<DVec3> {
+        let ((_, a), (_, b)) = self.two(p);
+        let (pa, pb) = (self.prims.get(a as usize)?, self.prims.get(b as usize)?);
+        let sin2_min = 10f64.to_radians().sin().powi(2);
+        let mut q = p;
+        for _ in 0..8 {
+            let (fa, fb) = (pa.eval(q, self.reach), pb.eval(q, self.reach));
+            if fa.abs().max(fb.abs()) < 1e-7 {
+                // On both, and on the union's surface (no third piece over it).
+                return (q.distance(p) <= limit && self.eval(q) > -1e-6).then_some(q);
+            }
+            let (ga, gb) = (
+                self.piece_gradient(a, q, step),
+                self.piece_gradient(b, q, step),
+            );
+            let (aa, ab, bb) = (ga.dot(ga), ga.dot(gb), gb.dot(gb));
+            let det = aa * bb - ab * ab;
+            if det < sin2_min * aa * bb {
+                return None;
+            }
+            // The least step d with ga·d = −fa and gb·d = −fb: d = λ ga + μ gb.
+            let lambda = (-fa * bb + fb * ab) / det;
+            let mu = (-fb * aa + fa * ab) / det;
+            q += ga * lambda + gb * mu;
+            if q.distance(p) > 2.0 * limit {
+                return None;
+            }
+        }
+        None
+    }
+
+    /// Whether the triangle `p`, whose corners and centre are within `tol` of the surface, is
+    /// within it everywhere. A convex piece's distance is convex, and the union's is at most
+    /// each piece's: one convex piece within `tol` of all three corners holds the whole
+    /// triangle within `tol` outside. Else (a triangle across a crease, or along a vein's
+    /// smooth joints) the triangle is sampled at the quarter points of its sides and inside.
+    /// `near` are the two pieces least at each corner.
+    fn holds(&self, p: &[DVec3; 3], near: [[u32; 2]; 3], tol: f64) -> bool {
+        let tried = near.as_flattened();
+        for (k, &n) in tried.iter().enumerate() {
+            if tried[..k].contains(&n) {
+                continue;
+            }
+            let Some(piece) = self.prims.get(n as usize) else {
+                continue;
+            };
+            if !matches!(piece, Primitive::Prism(_))
+                && p.iter().all(|&v| piece.eval(v, self.reach) <= tol)
+            {
+                return true;
+            }
+        }
+        // The points (i, j, k) / 4, i + j + k = 4, but the corners and midpoints.
+        const QUARTERS: [[f64; 3]; 9] = [
+            [3.0, 1.0, 0.0],
+            [1.0, 3.0, 0.0],
+            [0.0, 3.0, 1.0],
+            [0.0, 1.0, 3.0],
+            [1.0, 0.0, 3.0],
+            [3.0, 0.0, 1.0],
+            [2.0, 1.0, 1.0],
+            [1.0, 2.0, 1.0],
+            [1.0, 1.0, 2.0],
+        ];
+        QUARTERS
+            .iter()
+            .all(|w| self.near((p[0] * w[0] + p[1] * w[1] + p[2] * w[2]) / 4.0, tol))
     }
 
     /// Whether `p` is within `tol` of the surface: outside the value is the distance; inside
@@ -384,9 +470,15 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
             let f = field.eval(p);
             f > 0.25 * tol || f < -0.5 * tol
         };
+        // A midpoint outside bridges a crease (or a gap): it goes into the crease where there
+        // is one near, else onto the surface.
         let on_surface = |a: u32, b: u32| {
-            let m = 0.5 * (positions[a as usize] + positions[b as usize]);
-            (a, b, field.project(m, step))
+            let (pa, pb) = (positions[a as usize], positions[b as usize]);
+            let m = 0.5 * (pa + pb);
+            let crease = (field.eval(m) > 0.25 * tol)
+                .then(|| field.crease(m, pa.distance(pb), step))
+                .flatten();
+            (a, b, crease.unwrap_or_else(|| field.project(m, step)))
         };
         let mut split: Vec<(u32, u32, DVec3)> = edges
             .par_iter()
@@ -612,6 +704,8 @@ struct Collapse {
     a: u32,
     b: u32,
     to: DVec3,
+    /// The two pieces least at `to`.
+    least: [u32; 2],
     witnesses: Vec<(u32, u32)>,
 }
 
@@ -704,7 +798,8 @@ impl Whole {
         let done: Vec<Done> = bricks
             .par_iter()
             .map(|tris| {
-                let mut b = Brick::new(whole, tris, &held, (&by_owner.0, &by_owner.1));
+                let mut b =
+                    Brick::new(whole, limits.field, tris, &held, (&by_owner.0, &by_owner.1));
                 b.run(limits);
                 b.done()
             })
@@ -811,6 +906,8 @@ struct Brick {
     wglobal: Vec<u32>,
     owner: Vec<u32>,
     kept: Vec<Vec<u32>>,
+    /// The two pieces least at each vertex.
+    least: Vec<[u32; 2]>,
     /// Stars changed here; edges (whole keys) rejected here; collapses made.
     changed: Vec<bool>,
     rejected: Vec<u64>,
@@ -821,7 +918,13 @@ struct Brick {
 }
 
 impl Brick {
-    fn new(whole: &Whole, tris: &[u32], held: &[bool], by_owner: (&[u32], &[u32])) -> Brick {
+    fn new(
+        whole: &Whole,
+        field: &Field,
+        tris: &[u32],
+        held: &[bool],
+        by_owner: (&[u32], &[u32]),
+    ) -> Brick {
         let mut local: HashMap<u32, u32, Quick> = HashMap::with_hasher(Quick);
         let mut global = Vec::new();
         let mut triangles = Vec::with_capacity(tris.len());
@@ -867,6 +970,10 @@ impl Brick {
                 .map(|&g| whole.positions[g as usize])
                 .collect(),
             quadrics: global.iter().map(|&g| whole.quadrics[g as usize]).collect(),
+            least: global
+                .iter()
+                .map(|&g| field.least(whole.positions[g as usize]))
+                .collect(),
             before_changed: global.iter().map(|&g| whole.changed[g as usize]).collect(),
             global,
             dead: vec![false; triangles.len()],
@@ -1062,6 +1169,19 @@ impl Brick {
                 return None;
             }
         }
+        let least = field.least(to);
+        let corners = |t: u32| {
+            self.triangles[t as usize].map(|v| {
+                if v == a || v == b {
+                    least
+                } else {
+                    self.least[v as usize]
+                }
+            })
+        };
+        if !new.iter().all(|&(t, p)| field.holds(&p, corners(t), tol)) {
+            return None;
+        }
         // The surface near the mesh.
         let mut witnesses = Vec::new();
         for &t in &stars {
@@ -1080,6 +1200,7 @@ impl Brick {
             a,
             b,
             to,
+            least,
             witnesses,
         })
     }
@@ -1155,6 +1276,7 @@ impl Brick {
         self.stars[a as usize] = star;
         self.stars[b as usize] = Vec::new();
         self.positions[a as usize] = c.to;
+        self.least[a as usize] = c.least;
         self.quadrics[a as usize] = self.quadrics[a as usize].add(&self.quadrics[b as usize]);
         for &(w, t) in &c.witnesses {
             let old = self.owner[w as usize];
@@ -1208,6 +1330,57 @@ fn point_triangle(x: DVec3, p: &[DVec3; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fabricate::solid::sdf::RoundCone;
+
+    /// Two veins of radius 1 crossing at right angles, along x and y.
+    fn cross() -> Vec<Primitive> {
+        vec![
+            Primitive::Cone(RoundCone::new(DVec3::X * -5.0, DVec3::X * 5.0, 1.0, 1.0)),
+            Primitive::Cone(RoundCone::new(DVec3::Y * -5.0, DVec3::Y * 5.0, 1.0, 1.0)),
+        ]
+    }
+
+    #[test]
+    fn a_point_over_a_crease_goes_into_it() {
+        let prims = cross();
+        let field = Field::new(&prims, 0.5);
+        // Above the notch between the +x and +y arms, outside both.
+        let p = DVec3::new(1.2, 1.2, 0.3);
+        assert!(field.eval(p) > 0.0);
+        let q = field.crease(p, 1.0, 1e-6).expect("a crease near");
+        for piece in &prims {
+            assert!(piece.eval(q, 0.5).abs() < 1e-6);
+        }
+        assert!(q.distance(p) < 1.0);
+        // One vein alone has no crease.
+        let one = vec![prims[0].clone()];
+        assert!(Field::new(&one, 0.5).crease(p, 1.0, 1e-6).is_none());
+    }
+
+    #[test]
+    fn a_triangle_across_a_crease_is_held_only_if_all_of_it_is_near() {
+        let prims = cross();
+        let field = Field::new(&prims, 0.5);
+        let tol = 0.01;
+        let least = |p: &[DVec3; 3]| p.map(|v| field.least(v));
+        // On the top of the x vein: held by that vein alone.
+        let flat = [
+            DVec3::new(2.0, -0.1, 1.0),
+            DVec3::new(3.0, 0.1, 1.0),
+            DVec3::new(2.5, 0.1, 1.0),
+        ];
+        assert!(field.holds(&flat, least(&flat), tol));
+        // Corners on the two veins' sides, one in the notch: the flat triangle spans the notch.
+        let on = |p: DVec3| field.project(p, 1e-6);
+        let notch = [
+            on(DVec3::new(1.6, 0.6, 0.0)),
+            on(DVec3::new(0.6, 1.6, 0.0)),
+            on(DVec3::new(1.1, 1.1, 0.45)),
+        ];
+        let corners_near = notch.iter().all(|&v| field.eval(v).abs() < tol);
+        assert!(corners_near);
+        assert!(!field.holds(&notch, least(&notch), tol));
+    }
 
     #[test]
     fn a_point_over_a_triangle_is_its_height_and_beside_it_the_nearest_edge() {
