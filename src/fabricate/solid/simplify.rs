@@ -10,11 +10,9 @@
 //! base's) cuts it off: there the surface is farther from the mesh than the tolerance. An edge
 //! whose midpoint is off the surface by more than a quarter of the tolerance outside (a bridge:
 //! the crease below it is up to four times farther at a 30° notch) or half of it inside (a cut
-//! rim) is split, and so is the longest edge of a triangle whose centre is that far off (a
-//! corner where three veins meet). A midpoint outside goes into the crease where the two
-//! nearest veins' surfaces meet (Gauss-Newton on both distances, the least step), when they
-//! meet near it at more than 10°; else, and inside, it moves onto the surface along the
-//! nearest piece's gradient. Split edges are split again, up to eight rounds.
+//! rim) is split at its midpoint moved onto the surface, and so is the longest edge of a
+//! triangle whose centre is that far off (a corner where three veins meet); split edges are
+//! split again, up to eight rounds, which walks the new vertices into the crease.
 //!
 //! *Simplification.* Garland and Heckbert's quadric error (planes of the triangles around each
 //! vertex, weighted by area) orders the edges and places the merged vertex. The mesh is cut
@@ -247,41 +245,6 @@ impl<'a> Field<'a> {
         q
     }
 
-    /// The point nearest `p` (to first order) where the surfaces of the two pieces least at
-    /// `p` meet: a crease where two veins join. None where they do not meet near `p` (within
-    /// `limit`), meet at less than 10° (one vein's segments, which join smoothly), or meet
-    /// inside a third piece.
-    fn crease(&self, p: DVec3, limit: f64, step: f64) -> Option<DVec3> {
-        let ((_, a), (_, b)) = self.two(p);
-        let (pa, pb) = (self.prims.get(a as usize)?, self.prims.get(b as usize)?);
-        let sin2_min = 10f64.to_radians().sin().powi(2);
-        let mut q = p;
-        for _ in 0..8 {
-            let (fa, fb) = (pa.eval(q, self.reach), pb.eval(q, self.reach));
-            if fa.abs().max(fb.abs()) < 1e-7 {
-                // On both, and on the union's surface (no third piece over it).
-                return (q.distance(p) <= limit && self.eval(q) > -1e-6).then_some(q);
-            }
-            let (ga, gb) = (
-                self.piece_gradient(a, q, step),
-                self.piece_gradient(b, q, step),
-            );
-            let (aa, ab, bb) = (ga.dot(ga), ga.dot(gb), gb.dot(gb));
-            let det = aa * bb - ab * ab;
-            if det < sin2_min * aa * bb {
-                return None;
-            }
-            // The least step d with ga·d = −fa and gb·d = −fb: d = λ ga + μ gb.
-            let lambda = (-fa * bb + fb * ab) / det;
-            let mu = (-fb * aa + fa * ab) / det;
-            q += ga * lambda + gb * mu;
-            if q.distance(p) > 2.0 * limit {
-                return None;
-            }
-        }
-        None
-    }
-
     /// Whether the triangle `p`, whose corners and centre are within `tol` of the surface, is
     /// within it everywhere. A convex piece's distance is convex, and the union's is at most
     /// each piece's: one convex piece within `tol` of all three corners holds the whole
@@ -470,15 +433,9 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
             let f = field.eval(p);
             f > 0.25 * tol || f < -0.5 * tol
         };
-        // A midpoint outside bridges a crease (or a gap): it goes into the crease where there
-        // is one near, else onto the surface.
         let on_surface = |a: u32, b: u32| {
-            let (pa, pb) = (positions[a as usize], positions[b as usize]);
-            let m = 0.5 * (pa + pb);
-            let crease = (field.eval(m) > 0.25 * tol)
-                .then(|| field.crease(m, pa.distance(pb), step))
-                .flatten();
-            (a, b, crease.unwrap_or_else(|| field.project(m, step)))
+            let m = 0.5 * (positions[a as usize] + positions[b as usize]);
+            (a, b, field.project(m, step))
         };
         let mut split: Vec<(u32, u32, DVec3)> = edges
             .par_iter()
@@ -1338,23 +1295,6 @@ mod tests {
             Primitive::Cone(RoundCone::new(DVec3::X * -5.0, DVec3::X * 5.0, 1.0, 1.0)),
             Primitive::Cone(RoundCone::new(DVec3::Y * -5.0, DVec3::Y * 5.0, 1.0, 1.0)),
         ]
-    }
-
-    #[test]
-    fn a_point_over_a_crease_goes_into_it() {
-        let prims = cross();
-        let field = Field::new(&prims, 0.5);
-        // Above the notch between the +x and +y arms, outside both.
-        let p = DVec3::new(1.2, 1.2, 0.3);
-        assert!(field.eval(p) > 0.0);
-        let q = field.crease(p, 1.0, 1e-6).expect("a crease near");
-        for piece in &prims {
-            assert!(piece.eval(q, 0.5).abs() < 1e-6);
-        }
-        assert!(q.distance(p) < 1.0);
-        // One vein alone has no crease.
-        let one = vec![prims[0].clone()];
-        assert!(Field::new(&one, 0.5).crease(p, 1.0, 1e-6).is_none());
     }
 
     #[test]
