@@ -26,11 +26,11 @@
 //!   neighbours across its triangles) and at least three neighbours left;
 //! - every triangle turned by less than 70° and not made a sliver;
 //! - the mesh within the tolerance of the surface, checked on the exact distance at the merged
-//!   vertex, the midpoints of its edges and the centres of its triangles; and over the whole
-//!   of each new triangle: a convex piece's distance is convex, so one vein within the
-//!   tolerance of all three corners holds the triangle; a triangle no one vein holds (across a
-//!   crease, or along a vein's joints) is checked at its sides' quarter points and three
-//!   points inside as well (a crease's ridge can pass between the centre and the corners).
+//!   vertex, the midpoints of its edges and the centres of its triangles; and, outside the
+//!   solid, over the whole of each new triangle: a convex piece's distance is convex, so one
+//!   vein within the tolerance of all three corners holds the triangle; one no vein holds
+//!   (across a crease, or along a vein's joints) is checked at its sides' quarter points and
+//!   three points inside as well (a crease's ridge can pass between centre and corners).
 //!   Inside the solid the union's distance is only a lower bound (where two veins overlap),
 //!   so a point inside must also have a point outside within the tolerance: a step of the
 //!   tolerance out of either of the two nearest pieces, or failing that a walk out of the
