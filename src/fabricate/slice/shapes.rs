@@ -19,6 +19,8 @@
 //! area of a square cut by a straight line is then exact. Pixels farther than 0.75 pixel from
 //! the surface in 3D are wholly in or out without a gradient.
 
+use std::ops::Range;
+
 use glam::{DVec2, DVec3};
 
 use super::{encode_grey, in_batches, Layer, Placement, Printer};
@@ -298,10 +300,7 @@ pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) 
             continue;
         }
         if centre < -reach_tile {
-            for r in r0..r1 {
-                image[r * w + c0..r * w + c1].fill(255);
-            }
-            total += 255 * ((r1 - r0) * (c1 - c0)) as u64;
+            total += light(&mut image, w, r0..r1, c0..c1);
             continue;
         }
         // Quarters of the tile (4 × 4 pixels) far from the surface are wholly dark or lit the
@@ -319,19 +318,17 @@ pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) 
                 continue;
             }
             if qr1 - qr0 == HALF && qc1 - qc0 == HALF {
+                // Values beyond the reach asked for may come back as ±reach: ask for more.
                 let d = dist(
                     group,
                     at((qc0 + HALF / 2) as f64, (qr0 + HALF / 2) as f64),
-                    px,
+                    reach_tile,
                 );
                 if d > reach_quarter {
                     continue;
                 }
                 if d < -reach_quarter {
-                    for r in qr0..qr1 {
-                        image[r * w + qc0..r * w + qc1].fill(255);
-                    }
-                    total += 255 * (HALF * HALF) as u64;
+                    total += light(&mut image, w, qr0..qr1, qc0..qc1);
                     continue;
                 }
             }
@@ -365,6 +362,15 @@ pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) 
         }
     }
     (image, total as f64 / 255.0 * px * px)
+}
+
+/// Lights the block of `rows` × `cols` of an image `width` wide; returns the grey added.
+fn light(image: &mut [u8], width: usize, rows: Range<usize>, cols: Range<usize>) -> u64 {
+    let count = rows.len() * cols.len();
+    for r in rows {
+        image[r * width + cols.start..r * width + cols.end].fill(255);
+    }
+    255 * count as u64
 }
 
 /// The part of the pixel (side `side` mm) centred at `q` in the layer's plane that the section
