@@ -26,6 +26,8 @@ use super::input::{reference_normals, ReadArgs};
 pub enum MethodArg {
     Lbfgs,
     Projection,
+    /// Gauss-Newton with a sparse Cholesky solve: iterations that do not grow with the network
+    Newton,
 }
 
 #[derive(ClapArgs)]
@@ -135,6 +137,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         method: match args.method {
             MethodArg::Lbfgs => Method::Lbfgs,
             MethodArg::Projection => Method::Projection,
+            MethodArg::Newton => Method::Newton,
         },
         alpha: args.alpha,
         tolerance: args.tolerance,
@@ -288,6 +291,7 @@ fn report_of(args: &Args, sol: &Solution, quads: &[[DVec3; 4]], seconds: f64) ->
                 match sol.method {
                     Method::Lbfgs => "L-BFGS (argmin)",
                     Method::Projection => "iterative projection",
+                    Method::Newton => "Gauss-Newton (sparse Cholesky)",
                 }
                 .into(),
             ),

@@ -16,6 +16,7 @@
 //! axis along their intersection.
 
 mod lbfgs;
+mod newton;
 pub mod objective;
 mod projection;
 pub mod synthetic;
@@ -30,6 +31,8 @@ use objective::{Frame, Objective};
 pub enum Method {
     Lbfgs,
     Projection,
+    /// Gauss-Newton through a sparse Cholesky factorisation of the edges' system (`newton.rs`).
+    Newton,
 }
 
 /// Which nodes or edges an override applies to: `x<V`, `y>=V`, `z<=V`, … (an edge when both its
@@ -189,6 +192,8 @@ pub enum PlanarizeError {
     Direction(DVec3),
     #[error("node {0} lies on edges with three or more different fixed panel normals: no axis fits them all")]
     ConflictingNormals(u32),
+    #[error("the sparse factorisation could not allocate its memory")]
+    OutOfMemory,
 }
 
 /// What planarize needs: positions, edges, reference directions d⁰ (unit), heights.
@@ -279,6 +284,13 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
     let mut iterations = 0;
     let mut x = vec![0.0; dims];
     let mut axes: Vec<DVec3> = frames.iter().map(|f| f.base).collect();
+    let mut pattern = match opts.method {
+        Method::Newton => {
+            Some(newton::Pattern::new(&frames, &edges).map_err(|_| PlanarizeError::OutOfMemory)?)
+        }
+        _ => None,
+    };
+    let mut schedule = Schedule::default();
     loop {
         let budget = opts.max_iterations.saturating_sub(iterations);
         if budget == 0 {
@@ -312,9 +324,32 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
                 history.extend(run.history);
                 run.iterations
             }
+            Method::Newton => {
+                let pattern = pattern.as_mut().expect("built for this method");
+                let run = newton::solve(&obj, pattern, x.clone(), budget)
+                    .map_err(|_| PlanarizeError::OutOfMemory)?;
+                x = run.x;
+                axes = obj.axes(&x);
+                history.extend(run.history);
+                run.iterations
+            }
         };
         iterations += used;
         let dev = max_dev(&axes);
+        if opts.method == Method::Newton {
+            match newton_alpha(&mut schedule, alpha, dev, opts.tolerance, &axes) {
+                Next::Try(a) => alpha = a,
+                Next::Stop => break,
+                Next::Return(a, saved_axes) => {
+                    (alpha, axes) = (a, saved_axes);
+                    break;
+                }
+            }
+            if alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
+                break;
+            }
+            continue;
+        }
         if dev <= opts.tolerance || alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
             break;
         }
@@ -506,6 +541,76 @@ fn frames(
         offset += dof;
     }
     Ok((frames, offset, edge_normal))
+}
+
+/// What the Gauss-Newton solve has learnt of α: the smallest α tried that left the tolerance
+/// unmet, the largest that met it (with its axes), the α before, and how many α were tried
+/// between the two.
+#[derive(Default)]
+struct Schedule {
+    over: Option<(f64, f64)>,
+    under: Option<(f64, f64, Vec<DVec3>)>,
+    last: Option<(f64, f64)>,
+    between: usize,
+}
+
+/// α tried between one that met the tolerance and one that did not.
+const REFINEMENTS: usize = 2;
+
+enum Next {
+    Try(f64),
+    Stop,
+    /// Go back to this α and its axes.
+    Return(f64, Vec<DVec3>),
+}
+
+/// Gauss-Newton converges exactly at each α, so the α to keep is the largest whose solution
+/// meets the tolerance (the axes as close to their references as the tolerance allows). The
+/// deviation left goes as about α^p: cut α aiming at 0.9 × tolerance, p taken from the last
+/// two α tried (1 at first). When an α lands well inside the tolerance (under 0.6 ×), up to
+/// `REFINEMENTS` α between it and the smallest that missed are tried (interpolated on the same
+/// power law), and the largest that holds is kept.
+fn newton_alpha(s: &mut Schedule, alpha: f64, dev: f64, tolerance: f64, axes: &[DVec3]) -> Next {
+    let target = 0.9 * tolerance;
+    // α for the target on the power law through (a0, d0) and (alpha, dev).
+    let aim = |(a0, d0): (f64, f64)| -> f64 {
+        let p = if a0 != alpha && d0 != dev && d0 > 0.0 && dev > 0.0 {
+            ((d0 / dev).ln() / (a0 / alpha).ln()).clamp(0.25, 4.0)
+        } else {
+            1.0
+        };
+        alpha * (target / dev.max(f64::MIN_POSITIVE)).powf(1.0 / p)
+    };
+    // Strictly between lo and hi, geometrically.
+    let inside =
+        |a: f64, lo: f64, hi: f64| a.clamp(lo * (hi / lo).powf(0.1), lo * (hi / lo).powf(0.9));
+    let last = s.last.replace((alpha, dev));
+    if dev <= tolerance {
+        s.under = Some((alpha, dev, axes.to_vec()));
+        match s.over {
+            Some(over) if dev < 0.6 * tolerance && s.between < REFINEMENTS => {
+                s.between += 1;
+                Next::Try(inside(aim(over), alpha, over.0))
+            }
+            _ => Next::Stop,
+        }
+    } else {
+        s.over = Some((alpha, dev));
+        match &s.under {
+            Some((lo, lo_dev, _)) if s.between < REFINEMENTS => {
+                s.between += 1;
+                Next::Try(inside(aim((*lo, *lo_dev)), *lo, alpha))
+            }
+            Some(_) => {
+                let (lo, _, lo_axes) = s.under.take().expect("just matched");
+                Next::Return(lo, lo_axes)
+            }
+            None => {
+                let p_from = last.unwrap_or((alpha, dev));
+                Next::Try(alpha * (aim(p_from) / alpha).clamp(1e-4, 0.9))
+            }
+        }
+    }
 }
 
 #[cfg(test)]

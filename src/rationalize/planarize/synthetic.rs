@@ -12,6 +12,31 @@ use super::Input;
 /// - the hyperboloid of one sheet (x² + y²)/150² − z²/150² = 1, z ≥ 0, like the Calyx band:
 ///   rows are horizontal arcs, row 0 lies at z = 0, normals are horizontal at the base.
 pub fn honeycomb_on(n: usize, h: f64, seed: u64, calyx: bool) -> Input {
+    honeycomb_shaped(
+        n,
+        h,
+        seed,
+        if calyx {
+            Shape::Hyperboloid
+        } else {
+            Shape::Paraboloid
+        },
+    )
+}
+
+/// The surface a brick-wall network is laid on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shape {
+    Paraboloid,
+    /// The saddle z = (x² − y²)/(400·max(1, n/16)): the paraboloid's curvature, of both signs.
+    Saddle,
+    Hyperboloid,
+}
+
+/// [`honeycomb_on`] on any [`Shape`].
+pub fn honeycomb_shaped(n: usize, h: f64, seed: u64, shape: Shape) -> Input {
+    let calyx = shape == Shape::Hyperboloid;
+    let sign = if shape == Shape::Saddle { -1.0 } else { 1.0 };
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let half = (n as f64 - 1.0) * 5.0;
     let mut positions = Vec::new();
@@ -31,8 +56,8 @@ pub fn honeycomb_on(n: usize, h: f64, seed: u64, calyx: bool) -> Input {
             } else {
                 let (x, y) = (u, w - half);
                 let c = 1.0 / (400.0 * (n as f64 / 16.0).max(1.0));
-                positions.push(DVec3::new(x, y, c * (x * x + y * y)));
-                reference.push(DVec3::new(-2.0 * c * x, -2.0 * c * y, 1.0).normalize());
+                positions.push(DVec3::new(x, y, c * (x * x + sign * y * y)));
+                reference.push(DVec3::new(-2.0 * c * x, -2.0 * c * sign * y, 1.0).normalize());
             }
         }
     }
@@ -81,4 +106,125 @@ pub fn square_grid(nx: usize, ny: usize) -> (Vec<DVec3>, Vec<[u32; 2]>) {
 
 pub fn honeycomb(n: usize, h: f64, seed: u64) -> Input {
     honeycomb_on(n, h, seed, false)
+}
+
+/// The dual of a frequency-`f` geodesic icosphere (every face cut into f² triangles; a node per
+/// triangle, an edge per pair of triangles sharing a side: degree 3 everywhere, 20·f² nodes,
+/// hexagonal faces and twelve pentagons), mapped onto the ellipsoid with semi-axes `axes`, with
+/// its surface normals as references and every height `h`.
+pub fn ellipsoid_dual(f: usize, axes: DVec3, h: f64) -> Input {
+    use std::collections::HashMap;
+    let g = (1.0 + 5f64.sqrt()) / 2.0;
+    let ico: Vec<DVec3> = [
+        (-1.0, g, 0.0),
+        (1.0, g, 0.0),
+        (-1.0, -g, 0.0),
+        (1.0, -g, 0.0),
+        (0.0, -1.0, g),
+        (0.0, 1.0, g),
+        (0.0, -1.0, -g),
+        (0.0, 1.0, -g),
+        (g, 0.0, -1.0),
+        (g, 0.0, 1.0),
+        (-g, 0.0, -1.0),
+        (-g, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
+    .collect();
+    let faces: [[usize; 3]; 20] = [
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    let f = f.max(1);
+    // Grid points keyed so that faces sharing a side or corner share them exactly.
+    #[derive(Hash, PartialEq, Eq)]
+    enum Key {
+        Corner(usize),
+        Side(usize, usize, usize),
+        Inner(usize, usize, usize),
+    }
+    let mut ids: HashMap<Key, u32> = HashMap::new();
+    let mut sphere: Vec<DVec3> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for (fi, &[a, b, c]) in faces.iter().enumerate() {
+        let mut point = |i: usize, j: usize| -> u32 {
+            let k = f - i - j;
+            let weights = [(a, k), (b, i), (c, j)];
+            let nonzero: Vec<(usize, usize)> =
+                weights.iter().copied().filter(|w| w.1 > 0).collect();
+            let key = match nonzero.as_slice() {
+                [(v, _)] => Key::Corner(*v),
+                [(u, wu), (v, _)] => {
+                    if u < v {
+                        Key::Side(*u, *v, *wu)
+                    } else {
+                        Key::Side(*v, *u, f - wu)
+                    }
+                }
+                _ => Key::Inner(fi, i, j),
+            };
+            let next = sphere.len() as u32;
+            *ids.entry(key).or_insert_with(|| {
+                let p = ico[a] * k as f64 + ico[b] * i as f64 + ico[c] * j as f64;
+                sphere.push(p.normalize());
+                next
+            })
+        };
+        for j in 0..f {
+            for i in 0..f - j {
+                let (p, q, r) = (point(i, j), point(i + 1, j), point(i, j + 1));
+                triangles.push([p, q, r]);
+                if i + j + 2 <= f {
+                    let s = point(i + 1, j + 1);
+                    triangles.push([q, s, r]);
+                }
+            }
+        }
+    }
+    let mut positions = Vec::with_capacity(triangles.len());
+    let mut reference = Vec::with_capacity(triangles.len());
+    for t in &triangles {
+        let u = (sphere[t[0] as usize] + sphere[t[1] as usize] + sphere[t[2] as usize]).normalize();
+        let p = u * axes;
+        positions.push(p);
+        reference.push((p / (axes * axes)).normalize());
+    }
+    let mut sides: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut edges = Vec::with_capacity(triangles.len() * 3 / 2);
+    for (ti, t) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let key = (u.min(v), u.max(v));
+            if let Some(other) = sides.remove(&key) {
+                edges.push([other, ti as u32]);
+            } else {
+                sides.insert(key, ti as u32);
+            }
+        }
+    }
+    Input {
+        heights: vec![h; positions.len()],
+        positions,
+        edges,
+        reference,
+    }
 }

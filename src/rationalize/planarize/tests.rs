@@ -30,7 +30,8 @@ fn both_agree(input: &Input) {
     assert!(before > 0.1, "the reference axes are not planar: {before}");
     let l = solve(&input, Method::Lbfgs);
     let p = solve(&input, Method::Projection);
-    for s in [&l, &p] {
+    let g = solve(&input, Method::Newton);
+    for s in [&l, &p, &g] {
         assert!(s.converged, "{:?}: {} mm", s.method, s.max_deviation);
         assert!(s.max_deviation < 0.01);
         assert!(s.over_constrained.is_empty());
@@ -52,7 +53,7 @@ fn random_networks_of_degree_at_most_three_converge() {
         // Drop a few edges at random: tips and degree-2 nodes appear.
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + 100);
         input.edges.retain(|_| rng.random_range(0.0..1.0) > 0.15);
-        for method in [Method::Lbfgs, Method::Projection] {
+        for method in [Method::Lbfgs, Method::Projection, Method::Newton] {
             let s = solve(&input, method);
             assert!(
                 s.converged,
@@ -94,7 +95,7 @@ fn fixed_normals_make_flat_base_plates() {
         fix_normals: vec![(Selector::parse("z<0.5").expect("selector"), DVec3::Z)],
         ..Default::default()
     };
-    for method in [Method::Lbfgs, Method::Projection] {
+    for method in [Method::Lbfgs, Method::Projection, Method::Newton] {
         let s = planarize(&input, &opts(method)).expect("valid");
         assert!(s.converged, "{method:?}: {}", s.max_deviation);
         let base: Vec<&Panel> = s
@@ -118,13 +119,100 @@ fn fixed_normals_make_flat_base_plates() {
 #[test]
 fn fixed_axes_stay_put() {
     let input = honeycomb(6, 100.0, 2);
+    for method in [Method::Lbfgs, Method::Newton] {
+        let opts = PlanarizeOptions {
+            method,
+            fix_axes: vec![(Selector::Node(7), DVec3::new(0.0, 0.1, 1.0))],
+            ..Default::default()
+        };
+        let s = planarize(&input, &opts).expect("valid");
+        assert!(s.converged, "{method:?}");
+        assert_eq!(
+            s.axes[7],
+            DVec3::new(0.0, 0.1, 1.0).normalize(),
+            "{method:?}"
+        );
+    }
+}
+
+/// Mean and largest angle of the axes from their references, degrees.
+fn spread(s: &Solution) -> (f64, f64) {
+    let a = &s.axis_deviation_deg;
+    (
+        a.iter().sum::<f64>() / a.len() as f64,
+        a.iter().fold(0.0, |m: f64, &d| m.max(d)),
+    )
+}
+
+#[test]
+fn newton_is_as_close_to_the_references_as_lbfgs() {
+    let mut inputs = vec![
+        honeycomb_on(16, 100.0, 1, false),
+        honeycomb_on(16, 100.0, 2, true),
+        synthetic::honeycomb_shaped(20, 100.0, 3, synthetic::Shape::Saddle),
+        synthetic::ellipsoid_dual(5, DVec3::new(1000.0, 700.0, 500.0), 100.0),
+    ];
+    let mut tips = honeycomb(9, 60.0, 4);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(40);
+    tips.edges.retain(|_| rng.random_range(0.0..1.0) > 0.15);
+    inputs.push(tips);
+    for (k, input) in inputs.iter().enumerate() {
+        let l = solve(input, Method::Lbfgs);
+        let g = solve(input, Method::Newton);
+        assert!(l.converged && g.converged, "input {k}");
+        let ((lm, lx), (gm, gx)) = (spread(&l), spread(&g));
+        assert!(
+            gm <= lm + 0.01 && gx <= lx + 0.01,
+            "input {k}: Newton {gm:.4}° mean, {gx:.4}° largest; L-BFGS {lm:.4}°, {lx:.4}°"
+        );
+    }
+}
+
+#[test]
+fn newton_needs_no_more_iterations_on_a_larger_network() {
+    let small = solve(&honeycomb(12, 100.0, 1), Method::Newton);
+    let large = solve(&honeycomb(48, 100.0, 1), Method::Newton);
+    assert!(small.converged && large.converged);
+    assert!(
+        large.iterations <= small.iterations + 4,
+        "{} iterations at 144 nodes, {} at 2,304",
+        small.iterations,
+        large.iterations
+    );
+}
+
+#[test]
+fn newton_gives_the_same_axes_on_any_number_of_threads() {
+    let input = synthetic::ellipsoid_dual(6, DVec3::new(1000.0, 700.0, 500.0), 100.0);
     let opts = PlanarizeOptions {
-        fix_axes: vec![(Selector::Node(7), DVec3::new(0.0, 0.1, 1.0))],
+        method: Method::Newton,
+        fix_axes: vec![(Selector::Node(3), DVec3::Z)],
         ..Default::default()
     };
-    let s = planarize(&input, &opts).expect("valid");
-    assert!(s.converged);
-    assert!(s.axes[7].distance(DVec3::new(0.0, 0.1, 1.0).normalize()) < 1e-15);
+    let on = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a pool")
+            .install(|| planarize(&input, &opts).expect("valid"))
+    };
+    let one = on(1);
+    for threads in [2, 3, 5] {
+        let other = on(threads);
+        assert_eq!(one.axes, other.axes, "{threads} threads");
+        assert_eq!(one.iterations, other.iterations);
+        assert_eq!(one.history, other.history);
+    }
+}
+
+#[test]
+fn newton_keeps_a_degree_four_node_and_reports_it() {
+    let mut input = honeycomb(6, 100.0, 3);
+    input.edges.push([14, 2]);
+    let s = solve(&input, Method::Newton);
+    assert!(s.over_constrained.contains(&14));
+    assert!(s.axes.iter().all(|a| a.is_finite()));
+    assert!(s.max_deviation.is_finite());
 }
 
 #[test]
