@@ -27,10 +27,14 @@
 //! and every sum is taken in a fixed order, so the result does not depend on the thread count;
 //! the factorisation itself is sequential (faer without its rayon feature).
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymmetricOrdering,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Mat, Side};
+use faer::{Conj, Mat, MatMut, Par, Side};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -67,10 +71,15 @@ pub struct Pattern {
 struct System {
     /// Lower triangle, column-major.
     structure: SymbolicSparseColMat<usize>,
-    symbolic: SymbolicLlt<usize>,
-    /// The last numeric factorisation and its α, kept as the preconditioner of the next
-    /// solves at that α.
-    factor: Option<(Llt<usize, f64>, f64)>,
+    symbolic: SymbolicCholesky<usize>,
+    /// The last numeric factorisation, kept as the preconditioner of the next solves at the
+    /// same α; `factor_alpha` is that α (None before the first).
+    factor: Vec<f64>,
+    factor_alpha: Option<f64>,
+    /// Workspace of the factorisation and of the triangular solves, kept between iterations
+    /// (allocating them afresh each time was a fifth of the time on a million nodes).
+    factor_scratch: MemBuffer,
+    solve_scratch: MemBuffer,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -156,14 +165,33 @@ impl Pattern {
             pair_start.push(pair_pos.len());
         }
         let structure = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
-        let symbolic = SymbolicLlt::try_new(structure.as_ref(), Side::Lower)
+        let symbolic = factorize_symbolic_cholesky(
+            structure.as_ref(),
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|_| NewtonError::OutOfMemory)?;
+        let mut factor = Vec::new();
+        factor
+            .try_reserve_exact(symbolic.len_val())
+            .map_err(|_| NewtonError::OutOfMemory)?;
+        factor.resize(symbolic.len_val(), 0.0);
+        let factor_scratch = MemBuffer::try_new(
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+        )
+        .map_err(|_| NewtonError::OutOfMemory)?;
+        let solve_scratch = MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq))
             .map_err(|_| NewtonError::OutOfMemory)?;
         Ok(Pattern {
             rows,
             system: System {
                 structure,
                 symbolic,
-                factor: None,
+                factor,
+                factor_alpha: None,
+                factor_scratch,
+                solve_scratch,
             },
             node_start,
             node_rows,
@@ -174,60 +202,91 @@ impl Pattern {
     }
 }
 
-impl System {
-    /// S·x for the lower triangle `values` of S.
-    fn product(&self, values: &[f64], x: &[f64]) -> Vec<f64> {
-        let col_ptr = self.structure.col_ptr();
-        let row_idx = self.structure.row_idx();
-        let mut y = vec![0.0; x.len()];
-        for j in 0..x.len() {
-            for p in col_ptr[j]..col_ptr[j + 1] {
-                let (i, v) = (row_idx[p], values[p]);
-                y[i] += v * x[j];
-                if i != j {
-                    y[j] += v * x[i];
-                }
+/// S·x for the lower triangle `values` of S.
+fn product(structure: &SymbolicSparseColMat<usize>, values: &[f64], x: &[f64]) -> Vec<f64> {
+    let col_ptr = structure.col_ptr();
+    let row_idx = structure.row_idx();
+    let mut y = vec![0.0; x.len()];
+    for j in 0..x.len() {
+        for p in col_ptr[j]..col_ptr[j + 1] {
+            let (i, v) = (row_idx[p], values[p]);
+            y[i] += v * x[j];
+            if i != j {
+                y[j] += v * x[i];
             }
         }
-        y
     }
+    y
+}
 
+impl System {
     /// Solves S·μ = rhs. The factorisation of an earlier S preconditions conjugate gradients
     /// on this one (S changes little between Gauss-Newton iterations, so a few steps do); S is
     /// factorised afresh only when that does not converge, or α has changed (a new α moves
     /// S's smallest eigenvalues too far for a few steps). None if S is not positive definite.
     fn solve(&mut self, values: &[f64], rhs: Mat<f64>, alpha: f64) -> Option<Mat<f64>> {
         let m = rhs.nrows();
-        if let Some((llt, _)) = self.factor.as_ref().filter(|f| f.1 == alpha) {
+        if self.factor_alpha == Some(alpha) {
             let b: Vec<f64> = (0..m).map(|i| rhs[(i, 0)]).collect();
-            if let Some(x) = self.pcg(llt, values, &b) {
+            if let Some(x) = self.pcg(values, &b) {
                 return Some(Mat::from_fn(m, 1, |i, _| x[i]));
             }
         }
+        self.factor_alpha = None;
         let s = SparseColMatRef::new(self.structure.as_ref(), values);
-        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), s, Side::Lower).ok()?;
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut self.factor,
+                s,
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut self.factor_scratch),
+                Default::default(),
+            )
+            .ok()?;
+        self.factor_alpha = Some(alpha);
         let mut x = rhs;
-        llt.solve_in_place(x.as_mut());
-        self.factor = Some((llt, alpha));
+        self.precondition(x.as_mut());
         Some(x)
+    }
+
+    /// x ← (the factorised S)⁻¹·x.
+    fn precondition(&mut self, x: MatMut<'_, f64>) {
+        LltRef::new(&self.symbolic, &self.factor).solve_in_place_with_conj(
+            Conj::No,
+            x,
+            Par::Seq,
+            MemStack::new(&mut self.solve_scratch),
+        );
     }
 
     /// Preconditioned conjugate gradients; None if the relative residual does not reach
     /// `PCG_TOLERANCE` in `PCG_STEPS` steps.
-    fn pcg(&self, llt: &Llt<usize, f64>, values: &[f64], b: &[f64]) -> Option<Vec<f64>> {
+    fn pcg(&mut self, values: &[f64], b: &[f64]) -> Option<Vec<f64>> {
         let m = b.len();
-        let precondition = |r: &[f64]| -> Vec<f64> {
-            let mut z = Mat::from_fn(m, 1, |i, _| r[i]);
-            llt.solve_in_place(z.as_mut());
-            (0..m).map(|i| z[(i, 0)]).collect()
+        let mut buffer = Mat::<f64>::zeros(m, 1);
+        let (symbolic, factor, scratch) = (&self.symbolic, &self.factor, &mut self.solve_scratch);
+        let mut precondition = |r: &[f64]| -> Vec<f64> {
+            for (i, v) in r.iter().enumerate() {
+                buffer[(i, 0)] = *v;
+            }
+            LltRef::new(symbolic, factor).solve_in_place_with_conj(
+                Conj::No,
+                buffer.as_mut(),
+                Par::Seq,
+                MemStack::new(scratch),
+            );
+            (0..m).map(|i| buffer[(i, 0)]).collect()
         };
+        let structure = &self.structure;
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         let norm_b = dot(b, b).sqrt();
         if norm_b == 0.0 {
             return Some(vec![0.0; m]);
         }
         let mut x = precondition(b);
-        let sx = self.product(values, &x);
+        let sx = product(structure, values, &x);
         let mut r: Vec<f64> = b.iter().zip(&sx).map(|(b, s)| b - s).collect();
         let mut z = precondition(&r);
         let mut p = z.clone();
@@ -236,7 +295,7 @@ impl System {
             if dot(&r, &r).sqrt() <= PCG_TOLERANCE * norm_b {
                 return Some(x);
             }
-            let sp = self.product(values, &p);
+            let sp = product(structure, values, &p);
             let psp = dot(&p, &sp);
             if psp.is_nan() || psp <= 0.0 {
                 return None;
