@@ -149,8 +149,8 @@ fn demo_writes_every_output_and_an_index() -> TestResult {
         out.join("surfaces/calyx.info.json"),
     )?)?;
     assert_eq!(calyx["topology"]["genus"], 0);
-    // The optimizer path: cells, then both methods within 0.01 mm, their reports linked.
-    for method in ["lbfgs", "projection"] {
+    // The optimizer path: cells, then every method within 0.01 mm, their reports linked.
+    for method in ["lbfgs", "projection", "newton"] {
         assert!(index.contains(&format!("href=\"calyx/{method}-report.html\"")));
         let r: Value = serde_json::from_str(&std::fs::read_to_string(
             out.join(format!("calyx/{method}-report.json")),

@@ -301,6 +301,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     for (method, name) in [
         (MethodArg::Lbfgs, "lbfgs"),
         (MethodArg::Projection, "projection"),
+        (MethodArg::Newton, "newton"),
     ] {
         let file = |ext: &str| dir.join(format!("{name}{ext}"));
         let done = super::planarize::execute(&super::planarize::Args {
@@ -337,14 +338,18 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         }
         axes.push(s.axes.clone());
     }
-    let apart = axes[0]
-        .iter()
-        .zip(&axes[1])
-        .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
-        .fold(0.0, f64::max);
+    let apart = |k: usize| {
+        axes[0]
+            .iter()
+            .zip(&axes[k])
+            .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
+            .fold(0.0, f64::max)
+    };
     let _ = write!(
         facts,
-        "The two methods' axes differ by at most {apart:.3}°."
+        "Projection's axes differ from L-BFGS's by at most {:.3}°, Gauss-Newton's by {:.3}°.",
+        apart(1),
+        apart(2)
     );
     let panels = read_mesh(&dir.join("lbfgs-panels.obj"))?;
     write_mesh(&panels, &dir.join("panels.png"), size)?;
@@ -352,7 +357,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     Ok(Entry {
         name: "Calyx: cells and planar panels".into(),
         about: "`lamina cells` on the venation network and its guide surface, then `lamina \
-                planarize` by L-BFGS and by iterative projection: 100 mm panels on every vein, \
+                planarize` by L-BFGS, by iterative projection and by Gauss-Newton: 100 mm panels on every vein, \
                 tolerance 0.01 mm, base plates held to +Z (`--fix-normal 'z<1:0,0,1'`)"
             .into(),
         outputs,
