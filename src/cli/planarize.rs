@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use clap::{Args as ClapArgs, ValueEnum};
 use glam::DVec3;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
 use lamina::files::write_atomic;
@@ -15,7 +16,7 @@ use lamina::rationalize::audit::{audit, read_panels, Panel};
 use lamina::rationalize::axes::{write_axes, write_panels_obj, Axes};
 use lamina::rationalize::panels::MAX_FLATNESS_CORNERS;
 use lamina::rationalize::planarize::{
-    planarize, Input, Method, PlanarizeOptions, Selector, Solution,
+    planarize_with, Input, Method, PlanarizeOptions, Selector, Solution,
 };
 use lamina::rationalize::tolerance::{Allowance, Judged, Rule, Rules};
 use lamina::report::planarity::{Context, Metric, PanelRow, Report};
@@ -168,7 +169,25 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         heights,
     };
     let start = Instant::now();
-    let sol = planarize(&input, &opts)?;
+    // A spinner with the last round's figures (hidden when stderr is not a terminal).
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} node axes, {msg} {elapsed}").expect("template"),
+    );
+    bar.set_message(format!(
+        "{} nodes, α {:.1e}",
+        input.positions.len(),
+        opts.alpha
+    ));
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    let sol = planarize_with(&input, &opts, &|r| {
+        bar.set_message(format!(
+            "{} iterations, α {:.1e}: max deviation {:.4} mm",
+            r.iterations, r.alpha, r.max_deviation
+        ))
+    });
+    bar.finish_and_clear();
+    let sol = sol?;
     let seconds = start.elapsed().as_secs_f64();
     let axes = Axes::solved(&input, &sol, net.edges.iter().map(|e| e.radius).collect());
     let summary = summary(&sol);

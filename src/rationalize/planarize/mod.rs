@@ -244,6 +244,23 @@ pub struct Solution {
 const ALPHA_FLOOR: f64 = 1e-10;
 
 pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, PlanarizeError> {
+    planarize_with(input, opts, &|_| {})
+}
+
+/// Where a solve stands after a round at one α.
+#[derive(Clone, Copy, Debug)]
+pub struct Round {
+    pub iterations: usize,
+    pub alpha: f64,
+    pub max_deviation: f64,
+}
+
+/// [`planarize`], telling `progress` after every round (each α tried).
+pub fn planarize_with(
+    input: &Input,
+    opts: &PlanarizeOptions,
+    progress: &dyn Fn(Round),
+) -> Result<Solution, PlanarizeError> {
     check(input, opts)?;
     let n = input.positions.len();
     let (frames, dims, edge_normal) = frames(input, opts)?;
@@ -336,21 +353,24 @@ pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, Pla
         };
         iterations += used;
         let dev = max_dev(&axes);
+        progress(Round {
+            iterations,
+            alpha,
+            max_deviation: dev,
+        });
+        let floor = alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0;
         if opts.method == Method::Newton {
             match newton_alpha(&mut schedule, alpha, dev, opts.tolerance, &axes) {
-                Next::Try(a) => alpha = a,
-                Next::Stop => break,
+                Next::Try(a) if !floor => alpha = a,
+                Next::Try(_) | Next::Stop => break,
                 Next::Return(a, saved_axes) => {
                     (alpha, axes) = (a, saved_axes);
                     break;
                 }
             }
-            if alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
-                break;
-            }
             continue;
         }
-        if dev <= opts.tolerance || alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0 {
+        if dev <= opts.tolerance || floor {
             break;
         }
         // The deviation left at a converged α falls about in proportion to α: aim at half the
