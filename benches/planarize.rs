@@ -12,12 +12,13 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 #[path = "common/calyx.rs"]
 mod common_calyx;
+#[path = "common/network_file.rs"]
+mod network_file;
 
 use common_calyx::calyx;
-use lamina::network::io::{write_network, RenderOptions};
-use lamina::network::{Edge, Network, Node};
 use lamina::rationalize::planarize::synthetic::honeycomb;
 use lamina::rationalize::planarize::{planarize, Input, Method, PlanarizeOptions, Selector};
+use network_file::write_network_file;
 
 /// The Calyx job for the peer: positions, edges, references, heights, the base plates.
 fn write_peer_job(input: &Input) {
@@ -34,27 +35,6 @@ fn write_peer_job(input: &Input) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
     std::fs::create_dir_all(&dir).expect("bench-data folder");
     std::fs::write(dir.join("planarize-calyx.json"), job.to_string()).expect("peer job");
-}
-
-/// A synthetic input as network JSON (positions, normals), for the whole-process runs.
-fn write_network_file(input: &Input, name: &str) {
-    let net = Network {
-        nodes: input
-            .positions
-            .iter()
-            .zip(&input.reference)
-            .map(|(p, n)| Node {
-                p: *p,
-                normal: Some(*n),
-                radius: 0.0,
-            })
-            .collect(),
-        edges: input.edges.iter().map(|&[a, b]| Edge::new(a, b)).collect(),
-        ..Default::default()
-    };
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
-    std::fs::create_dir_all(&dir).expect("bench-data folder");
-    write_network(&net, &dir.join(name), &RenderOptions::default()).expect("network file");
 }
 
 fn bench(c: &mut Criterion) {

@@ -12,10 +12,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use glam::DVec3;
-use lamina::network::io::{write_network, RenderOptions};
-use lamina::network::{Edge, Network, Node};
+#[path = "common/network_file.rs"]
+mod network_file;
 use lamina::rationalize::planarize::synthetic::{ellipsoid_dual, honeycomb_shaped, Shape};
 use lamina::rationalize::planarize::{planarize, Input, Method, PlanarizeOptions, Solution};
+use network_file::write_network_file;
 
 fn network(surface: &str, nodes: usize) -> Input {
     match surface {
@@ -37,28 +38,8 @@ fn network(surface: &str, nodes: usize) -> Input {
 }
 
 fn write(input: &Input, stem: &str) {
+    write_network_file(input, &format!("{stem}.json"));
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-data");
-    std::fs::create_dir_all(&dir).expect("bench-data folder");
-    let net = Network {
-        nodes: input
-            .positions
-            .iter()
-            .zip(&input.reference)
-            .map(|(p, n)| Node {
-                p: *p,
-                normal: Some(*n),
-                radius: 0.0,
-            })
-            .collect(),
-        edges: input.edges.iter().map(|&[a, b]| Edge::new(a, b)).collect(),
-        ..Default::default()
-    };
-    write_network(
-        &net,
-        &dir.join(format!("{stem}.json")),
-        &RenderOptions::default(),
-    )
-    .expect("network file");
     let v = |p: &[DVec3]| p.iter().map(|q| q.to_array()).collect::<Vec<_>>();
     let job = serde_json::json!({
         "positions": v(&input.positions),
