@@ -3,7 +3,9 @@
 //! change against L-BFGS's on the same input.
 //!
 //! `cargo bench --bench planarize_scale -- [SURFACE:NODES …] [--methods newton,lbfgs]
-//! [--write]`: SURFACE is paraboloid, saddle or ellipsoid; NODES is the size asked for (the
+//! [--write]`: SURFACE is paraboloid (10 mm brick wall, the bowl growing with the network),
+//! scaled-saddle (the same with the curvature of both signs), saddle (a fixed 2 × 2 m saddle,
+//! z = (x² − y²)/2000 mm, finer as the network grows) or ellipsoid; NODES is the size asked for (the
 //! network has the nearest size its construction allows). `--write` also writes each network
 //! to `target/bench-data/planarize-SURFACE-NODES.json` (stored normals as references) and the
 //! scipy peer's job to `…-NODES.peer.json`, for the whole-process runs in `scripts/bench`.
@@ -14,7 +16,7 @@ use std::time::Instant;
 use glam::DVec3;
 #[path = "common/network_file.rs"]
 mod network_file;
-use lamina::rationalize::planarize::synthetic::{ellipsoid_dual, honeycomb_shaped, Shape};
+use lamina::rationalize::planarize::synthetic::{ellipsoid_dual, honeycomb_shaped, saddle, Shape};
 use lamina::rationalize::planarize::{planarize, Input, Method, PlanarizeOptions, Solution};
 use network_file::write_network_file;
 
@@ -24,16 +26,20 @@ fn network(surface: &str, nodes: usize) -> Input {
             let f = ((nodes as f64 / 20.0).sqrt().round() as usize).max(1);
             ellipsoid_dual(f, DVec3::new(1000.0, 700.0, 500.0), 100.0)
         }
-        "paraboloid" | "saddle" => {
+        "paraboloid" | "scaled-saddle" => {
             let n = (nodes as f64).sqrt().round() as usize;
-            let shape = if surface == "saddle" {
+            let shape = if surface == "scaled-saddle" {
                 Shape::Saddle
             } else {
                 Shape::Paraboloid
             };
             honeycomb_shaped(n, 100.0, 1, shape)
         }
-        other => panic!("unknown surface {other}: paraboloid, saddle or ellipsoid"),
+        "saddle" => {
+            let n = (nodes as f64).sqrt().round() as usize;
+            saddle(n, 1000.0, 1000.0, 100.0, 1)
+        }
+        other => panic!("unknown surface {other}: paraboloid, saddle, scaled-saddle or ellipsoid"),
     }
 }
 

@@ -61,22 +61,10 @@ pub fn honeycomb_shaped(n: usize, h: f64, seed: u64, shape: Shape) -> Input {
             }
         }
     }
-    let id = |i: usize, j: usize| (j * n + i) as u32;
-    let mut edges = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            if i + 1 < n {
-                edges.push([id(i, j), id(i + 1, j)]);
-            }
-            if j + 1 < n && (i + j) % 2 == 0 {
-                edges.push([id(i, j), id(i, j + 1)]);
-            }
-        }
-    }
     Input {
         heights: vec![h; positions.len()],
         positions,
-        edges,
+        edges: brick_edges(n),
         reference,
     }
 }
@@ -227,4 +215,48 @@ pub fn ellipsoid_dual(f: usize, axes: DVec3, h: f64) -> Input {
         edges,
         reference,
     }
+}
+
+/// A brick-wall network (degree 3 inside) of `n` × `n` nodes over the square |x|, |y| ≤ `half`
+/// mm, jittered by up to a fifth of the spacing, on the saddle z = (x² − y²)/(2·`radius`), with
+/// its surface normals as references and every height `h`. Unlike [`honeycomb_shaped`], the
+/// surface stays the same as `n` grows: more nodes make shorter, narrower panels on it.
+pub fn saddle(n: usize, half: f64, radius: f64, h: f64, seed: u64) -> Input {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let n = n.max(2);
+    let step = 2.0 * half / (n - 1) as f64;
+    let jitter = 0.2 * step;
+    let mut positions = Vec::with_capacity(n * n);
+    let mut reference = Vec::with_capacity(n * n);
+    for j in 0..n {
+        for i in 0..n {
+            let x = -half + i as f64 * step + rng.random_range(-jitter..jitter);
+            let y = -half + j as f64 * step + rng.random_range(-jitter..jitter);
+            positions.push(DVec3::new(x, y, (x * x - y * y) / (2.0 * radius)));
+            reference.push(DVec3::new(-x / radius, y / radius, 1.0).normalize());
+        }
+    }
+    Input {
+        heights: vec![h; positions.len()],
+        positions,
+        edges: brick_edges(n),
+        reference,
+    }
+}
+
+/// The brick wall's edges on an `n` × `n` grid numbered row by row.
+fn brick_edges(n: usize) -> Vec<[u32; 2]> {
+    let id = |i: usize, j: usize| (j * n + i) as u32;
+    let mut edges = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            if i + 1 < n {
+                edges.push([id(i, j), id(i + 1, j)]);
+            }
+            if j + 1 < n && (i + j) % 2 == 0 {
+                edges.push([id(i, j), id(i, j + 1)]);
+            }
+        }
+    }
+    edges
 }

@@ -151,6 +151,7 @@ fn newton_is_as_close_to_the_references_as_lbfgs() {
         honeycomb_on(16, 100.0, 2, true),
         synthetic::honeycomb_shaped(20, 100.0, 3, synthetic::Shape::Saddle),
         synthetic::ellipsoid_dual(5, DVec3::new(1000.0, 700.0, 500.0), 100.0),
+        synthetic::saddle(30, 1000.0, 1000.0, 100.0, 5),
     ];
     let mut tips = honeycomb(9, 60.0, 4);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(40);
