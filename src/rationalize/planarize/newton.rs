@@ -449,7 +449,6 @@ pub fn solve(
             // Not positive definite (α = 0 on an over-constrained node): stop where we are.
             break;
         };
-        let rhs = mu;
         // δ_v = M⁻¹(Σ_r g_rv μ_r − q_v).
         let delta: Vec<[f64; 2]> = (0..lin.len())
             .into_par_iter()
@@ -458,8 +457,8 @@ pub fn solve(
                 let mut acc = [-l.q[0], -l.q[1]];
                 for &r in &pattern.node_rows[pattern.node_start[v]..pattern.node_start[v + 1]] {
                     let g = coef(r, v);
-                    acc[0] += g[0] * rhs[(r, 0)];
-                    acc[1] += g[1] * rhs[(r, 0)];
+                    acc[0] += g[0] * mu[(r, 0)];
+                    acc[1] += g[1] * mu[(r, 0)];
                 }
                 apply(&l.m_inv, acc)
             })
