@@ -343,8 +343,7 @@ pub fn planarize_with(
             }
             Method::Newton => {
                 let pattern = pattern.as_mut().expect("built for this method");
-                let run = newton::solve(&obj, pattern, x.clone(), budget)
-                    .map_err(|_| PlanarizeError::OutOfMemory)?;
+                let run = newton::solve(&obj, pattern, x.clone(), budget);
                 x = run.x;
                 axes = obj.axes(&x);
                 history.extend(run.history);

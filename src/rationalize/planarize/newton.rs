@@ -34,7 +34,7 @@ use faer::sparse::linalg::cholesky::{
     SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Mat, MatMut, Par, Side};
+use faer::{Conj, MatMut, Par, Side};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -220,16 +220,15 @@ fn product(structure: &SymbolicSparseColMat<usize>, values: &[f64], x: &[f64]) -
 }
 
 impl System {
-    /// Solves S·μ = rhs. The factorisation of an earlier S preconditions conjugate gradients
-    /// on this one (S changes little between Gauss-Newton iterations, so a few steps do); S is
-    /// factorised afresh only when that does not converge, or α has changed (a new α moves
-    /// S's smallest eigenvalues too far for a few steps). None if S is not positive definite.
-    fn solve(&mut self, values: &[f64], rhs: Mat<f64>, alpha: f64) -> Option<Mat<f64>> {
-        let m = rhs.nrows();
+    /// Solves S·μ = rhs in place. The factorisation of an earlier S preconditions conjugate
+    /// gradients on this one (S changes little between Gauss-Newton iterations, so a few steps
+    /// do); S is factorised afresh only when that does not converge, or α has changed (a new α
+    /// moves S's smallest eigenvalues too far for a few steps). None if S is not positive
+    /// definite.
+    fn solve(&mut self, values: &[f64], mut rhs: Vec<f64>, alpha: f64) -> Option<Vec<f64>> {
         if self.factor_alpha == Some(alpha) {
-            let b: Vec<f64> = (0..m).map(|i| rhs[(i, 0)]).collect();
-            if let Some(x) = self.pcg(values, &b) {
-                return Some(Mat::from_fn(m, 1, |i, _| x[i]));
+            if let Some(x) = self.pcg(values, &rhs) {
+                return Some(x);
             }
         }
         self.factor_alpha = None;
@@ -246,16 +245,16 @@ impl System {
             )
             .ok()?;
         self.factor_alpha = Some(alpha);
-        let mut x = rhs;
-        self.precondition(x.as_mut());
-        Some(x)
+        self.precondition(&mut rhs);
+        Some(rhs)
     }
 
     /// x ← (the factorised S)⁻¹·x.
-    fn precondition(&mut self, x: MatMut<'_, f64>) {
+    fn precondition(&mut self, x: &mut [f64]) {
+        let m = x.len();
         LltRef::new(&self.symbolic, &self.factor).solve_in_place_with_conj(
             Conj::No,
-            x,
+            MatMut::from_column_major_slice_mut(x, m, 1),
             Par::Seq,
             MemStack::new(&mut self.solve_scratch),
         );
@@ -264,53 +263,40 @@ impl System {
     /// Preconditioned conjugate gradients; None if the relative residual does not reach
     /// `PCG_TOLERANCE` in `PCG_STEPS` steps.
     fn pcg(&mut self, values: &[f64], b: &[f64]) -> Option<Vec<f64>> {
-        let m = b.len();
-        let mut buffer = Mat::<f64>::zeros(m, 1);
-        let (symbolic, factor, scratch) = (&self.symbolic, &self.factor, &mut self.solve_scratch);
-        let mut precondition = |r: &[f64]| -> Vec<f64> {
-            for (i, v) in r.iter().enumerate() {
-                buffer[(i, 0)] = *v;
-            }
-            LltRef::new(symbolic, factor).solve_in_place_with_conj(
-                Conj::No,
-                buffer.as_mut(),
-                Par::Seq,
-                MemStack::new(scratch),
-            );
-            (0..m).map(|i| buffer[(i, 0)]).collect()
-        };
-        let structure = &self.structure;
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
         let norm_b = dot(b, b).sqrt();
         if norm_b == 0.0 {
-            return Some(vec![0.0; m]);
+            return Some(vec![0.0; b.len()]);
         }
-        let mut x = precondition(b);
-        let sx = product(structure, values, &x);
+        let mut x = b.to_vec();
+        self.precondition(&mut x);
+        let sx = product(&self.structure, values, &x);
         let mut r: Vec<f64> = b.iter().zip(&sx).map(|(b, s)| b - s).collect();
-        let mut z = precondition(&r);
+        let mut z = r.clone();
+        self.precondition(&mut z);
         let mut p = z.clone();
         let mut rz = dot(&r, &z);
         for _ in 0..PCG_STEPS {
             if dot(&r, &r).sqrt() <= PCG_TOLERANCE * norm_b {
                 return Some(x);
             }
-            let sp = product(structure, values, &p);
+            let sp = product(&self.structure, values, &p);
             let psp = dot(&p, &sp);
             if psp.is_nan() || psp <= 0.0 {
                 return None;
             }
             let a = rz / psp;
-            for i in 0..m {
+            for i in 0..x.len() {
                 x[i] += a * p[i];
                 r[i] -= a * sp[i];
             }
-            z = precondition(&r);
+            z.copy_from_slice(&r);
+            self.precondition(&mut z);
             let rz_next = dot(&r, &z);
             let beta = rz_next / rz;
             rz = rz_next;
-            for i in 0..m {
-                p[i] = z[i] + beta * p[i];
+            for (p, z) in p.iter_mut().zip(&z) {
+                *p = z + beta * *p;
             }
         }
         (dot(&r, &r).sqrt() <= PCG_TOLERANCE * norm_b).then_some(x)
@@ -369,24 +355,18 @@ pub struct Run {
 
 /// Gauss-Newton from `x0` at the objective's α until the step is negligible or `budget`
 /// iterations are spent.
-pub fn solve(
-    obj: &Objective,
-    pattern: &mut Pattern,
-    x0: Vec<f64>,
-    budget: usize,
-) -> Result<Run, NewtonError> {
+pub fn solve(obj: &Objective, pattern: &mut Pattern, x0: Vec<f64>, budget: usize) -> Run {
     let mut x = x0;
     let mut history = Vec::new();
     let mut iterations = 0;
     if pattern.rows.is_empty() {
-        return Ok(Run {
+        return Run {
             x,
             iterations,
             history,
-        });
+        };
     }
     let mut cost = obj.cost(&x);
-    let m = pattern.rows.len();
     let mut values = vec![0.0; pattern.system.structure.compute_nnz()];
     let mut last_step: Option<f64> = None;
     while iterations < budget {
@@ -423,10 +403,7 @@ pub fn solve(
         for &p in &pattern.diag {
             values[p] = obj.alpha;
         }
-        let mut rhs = Mat::<f64>::zeros(m, 1);
-        for (r, j) in jac.iter().enumerate() {
-            rhs[(r, 0)] = -j.2;
-        }
+        let mut rhs: Vec<f64> = jac.iter().map(|j| -j.2).collect();
         for (v, l) in lin.iter().enumerate() {
             let inc = &pattern.node_rows[pattern.node_start[v]..pattern.node_start[v + 1]];
             if inc.is_empty() {
@@ -437,7 +414,7 @@ pub fn solve(
             for (i, &ri) in inc.iter().enumerate() {
                 let gi = coef(ri, v);
                 let mg = apply(&l.m_inv, gi);
-                rhs[(ri, 0)] += gi[0] * mq[0] + gi[1] * mq[1];
+                rhs[ri] += gi[0] * mq[0] + gi[1] * mq[1];
                 for &rj in &inc[i..] {
                     let gj = coef(rj, v);
                     values[pattern.pair_pos[p]] += mg[0] * gj[0] + mg[1] * gj[1];
@@ -457,8 +434,8 @@ pub fn solve(
                 let mut acc = [-l.q[0], -l.q[1]];
                 for &r in &pattern.node_rows[pattern.node_start[v]..pattern.node_start[v + 1]] {
                     let g = coef(r, v);
-                    acc[0] += g[0] * mu[(r, 0)];
-                    acc[1] += g[1] * mu[(r, 0)];
+                    acc[0] += g[0] * mu[r];
+                    acc[1] += g[1] * mu[r];
                 }
                 apply(&l.m_inv, acc)
             })
@@ -512,9 +489,9 @@ pub fn solve(
         }
         last_step = Some(moved_by);
     }
-    Ok(Run {
+    Run {
         x,
         iterations,
         history,
-    })
+    }
 }

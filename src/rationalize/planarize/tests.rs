@@ -171,12 +171,14 @@ fn newton_is_as_close_to_the_references_as_lbfgs() {
 
 #[test]
 fn newton_needs_no_more_iterations_on_a_larger_network() {
-    let small = solve(&honeycomb(12, 100.0, 1), Method::Newton);
-    let large = solve(&honeycomb(48, 100.0, 1), Method::Newton);
+    // The same 2 × 2 m saddle meshed 8 times finer: L-BFGS goes from 106 to 189 iterations.
+    let on_saddle = |n| synthetic::saddle(n, 1000.0, 1000.0, 100.0, 1);
+    let small = solve(&on_saddle(12), Method::Newton);
+    let large = solve(&on_saddle(96), Method::Newton);
     assert!(small.converged && large.converged);
     assert!(
         large.iterations <= small.iterations + 4,
-        "{} iterations at 144 nodes, {} at 2,304",
+        "{} iterations at 144 nodes, {} at 9,216",
         small.iterations,
         large.iterations
     );
