@@ -44,6 +44,10 @@ enum Command {
     /// embedding, buds with tropism, splitting, line buds and holes; STL/OBJ with textures as
     /// geometry
     Buds(Box<cli::buds::Args>),
+    /// Fewer, straighter members for fabrication: chains of degree-2 nodes to the fewest straight
+    /// members within a deviation, junctions merged, branches pruned by Horton-Strahler order,
+    /// sharp joints repaired; a report before and after; exit 1 when a sharp joint is left.
+    Simplify(Box<cli::simplify::Args>),
     /// The closed cells of a network on a surface (faces of its rotation system), triangulated
     /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
     Cells(cli::cells::Args),
@@ -118,6 +122,7 @@ fn main() -> ExitCode {
         Command::Sl1(args) => cli::sl1::run(args).map(within),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
+        Command::Simplify(args) => cli::simplify::run(*args).map(within),
         Command::Planarize(args) => cli::planarize::run(*args).map(within),
         Command::Size(args) => cli::size::run(*args).map(within),
         Command::Plates(args) => cli::plates::run(args).map(within),

@@ -14,6 +14,7 @@ pub mod planarize;
 pub mod plates;
 pub mod print;
 pub mod render;
+pub mod simplify;
 pub mod size;
 pub mod sl1;
 pub mod slice;

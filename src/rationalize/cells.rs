@@ -135,20 +135,8 @@ pub fn cells(
         faces.push(face(&walk, &from, positions, normals));
     }
 
-    let mut degree = vec![0usize; n];
-    for &[a, b] in edges {
-        degree[a as usize] += 1;
-        degree[b as usize] += 1;
-    }
-    let vertices = degree.iter().filter(|&&d| d > 0).count();
-    let components = components(n, edges, &degree);
-    let euler = Euler {
-        vertices,
-        edges: edges.len(),
-        faces: faces.len(),
-        chi: vertices as i64 - edges.len() as i64 + faces.len() as i64,
-        components,
-    };
+    let degree = degrees(n, edges);
+    let euler = euler_of(edges, &degree, faces.len());
 
     let mut mesh = TriMesh {
         positions: positions.to_vec(),
@@ -243,6 +231,51 @@ fn check(positions: &[DVec3], edges: &[[u32; 2]], normals: &[DVec3]) -> Result<(
 /// For each half-edge u→v, the half-edge that follows it on its face: v→w, where w is the
 /// neighbour of v just clockwise of u (counter-clockwise order about v's normal). At a tip,
 /// w = u: the face turns back.
+/// V − E + F of the network drawn on the surface whose normal at node i is `normals[i]`, the
+/// faces traced as `cells` traces them, without triangulating them.
+pub fn euler(
+    positions: &[DVec3],
+    edges: &[[u32; 2]],
+    normals: &[DVec3],
+) -> Result<Euler, CellError> {
+    check(positions, edges, normals)?;
+    let next = rotation_system(positions, edges, normals);
+    let mut seen = vec![false; next.len()];
+    let mut faces = 0;
+    for start in 0..next.len() {
+        if seen[start] {
+            continue;
+        }
+        faces += 1;
+        let mut h = start;
+        while !seen[h] {
+            seen[h] = true;
+            h = next[h];
+        }
+    }
+    Ok(euler_of(edges, &degrees(positions.len(), edges), faces))
+}
+
+fn degrees(n: usize, edges: &[[u32; 2]]) -> Vec<usize> {
+    let mut degree = vec![0usize; n];
+    for &[a, b] in edges {
+        degree[a as usize] += 1;
+        degree[b as usize] += 1;
+    }
+    degree
+}
+
+fn euler_of(edges: &[[u32; 2]], degree: &[usize], faces: usize) -> Euler {
+    let vertices = degree.iter().filter(|&&d| d > 0).count();
+    Euler {
+        vertices,
+        edges: edges.len(),
+        faces,
+        chi: vertices as i64 - edges.len() as i64 + faces as i64,
+        components: components(degree.len(), edges, degree),
+    }
+}
+
 fn rotation_system(positions: &[DVec3], edges: &[[u32; 2]], normals: &[DVec3]) -> Vec<usize> {
     let n = positions.len();
     // Outgoing half-edges of each node, sorted by angle in its tangent plane.

@@ -9,5 +9,6 @@ pub mod groups;
 pub mod panels;
 pub mod planarize;
 pub mod plates;
+pub mod simplify;
 pub mod tolerance;
 pub mod welds;
