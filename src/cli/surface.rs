@@ -154,6 +154,8 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
     g.sources_per_step = args.sources_per_step.unwrap_or(0);
     g.join_distance = args.join_distance;
     g.join_angle = args.join_angle;
+    g.min_joint_angle = args.min_joint_angle;
+    g.min_member = args.min_member;
     opts.tip_radius = args.tip_radius.unwrap_or(g.step / 7.5);
     opts.reach = args.reach;
     opts.edge_tolerance = args.edge_tolerance;

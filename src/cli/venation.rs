@@ -195,6 +195,15 @@ pub struct Args {
     /// Closed venation: an open tip joins a node at most this many degrees off its heading
     #[arg(long, default_value_t = 60.0)]
     pub join_angle: f64,
+    /// No two vein segments at a node meet at less than this many degrees: a step that would
+    /// is turned to it (or not taken), a join that would is not made [default: joins only, at
+    /// 25]
+    #[arg(long, value_name = "DEG")]
+    pub min_joint_angle: Option<f64>,
+    /// A branch or join that would leave a member (the veins between two three-legged joints)
+    /// shorter than this is not made, mm; 0: off
+    #[arg(long, value_name = "MM", default_value_t = 0.0)]
+    pub min_member: f64,
     /// Murray exponent n: r_parent^n = sum of r_child^n
     #[arg(long, default_value_t = 3.0)]
     pub murray: f64,
@@ -286,6 +295,8 @@ fn setup(args: &Args) -> Result<Setup> {
         }),
         join_distance: args.join_distance,
         join_angle: args.join_angle,
+        min_joint_angle: args.min_joint_angle,
+        min_member: args.min_member,
     };
     let mut opts = LeafOptions {
         growth,

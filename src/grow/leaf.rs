@@ -313,6 +313,12 @@ pub fn growth_network<V>(
         put("join_distance", o.join_distance().into());
         put("join_angle", o.join_angle.into());
     }
+    if let Some(a) = o.min_joint_angle {
+        put("min_joint_angle", a.into());
+    }
+    if o.min_member > 0.0 {
+        put("min_member", o.min_member.into());
+    }
     net
 }
 

@@ -87,6 +87,13 @@ pub struct VenationOptions {
     /// Closed venation: an open tip joins a node at most this many degrees off its heading.
     /// Default 60.
     pub join_angle: f64,
+    /// No two edges at a node meet at less than this many degrees: a step that would is turned
+    /// to this angle (or not taken), a join that would is not made. Default: joins only, at
+    /// `MIN_JOINT_ANGLE`.
+    pub min_joint_angle: Option<f64>,
+    /// A branch or join that would leave a member (a run of edges between joints of three legs)
+    /// shorter than this is not made, mm. Default 0: off.
+    pub min_member: f64,
 }
 
 impl Default for VenationOptions {
@@ -102,6 +109,8 @@ impl Default for VenationOptions {
             sources_per_step: 0,
             join_distance: None,
             join_angle: 60.0,
+            min_joint_angle: None,
+            min_member: 0.0,
         }
     }
 }
@@ -144,6 +153,10 @@ pub enum VenationError {
     JoinDistance(f64),
     #[error("--join-angle must be between 0 and 180 degrees, got {0}")]
     JoinAngle(f64),
+    #[error("--min-joint-angle must be between 0 and 90 degrees (exclusive), got {0}")]
+    MinJointAngle(f64),
+    #[error("--min-member must be a distance in mm, 0 or more, got {0}")]
+    MinMember(f64),
     #[error("--initial-scale must be in (0, 1], got {0}")]
     InitialScale(f64),
     #[error("--blade-rate must be a positive fraction per step, got {0}")]
@@ -345,6 +358,14 @@ pub(crate) fn check(opts: &VenationOptions) -> Result<(), VenationError> {
     }
     if opts.sources_per_step > MAX_SOURCES_PER_STEP {
         return Err(VenationError::SourcesPerStep(opts.sources_per_step));
+    }
+    if let Some(a) = opts.min_joint_angle {
+        if !(a > 0.0 && a < 90.0) {
+            return Err(VenationError::MinJointAngle(a));
+        }
+    }
+    if !(opts.min_member.is_finite() && opts.min_member >= 0.0) {
+        return Err(VenationError::MinMember(opts.min_member));
     }
     if opts.blade != BladeGrowth::None {
         if !(positive(opts.initial_scale) && opts.initial_scale <= 1.0) {
@@ -666,7 +687,7 @@ impl<D: Domain> Grower<D> {
                         .step(from, closest, step)
                         .filter(|&at| self.may_step(v, from, at, crowd2))
                 };
-                let Some(at) = at else {
+                let Some(at) = at.and_then(|at| self.shaped(v, from, at, step, crowd2)) else {
                     self.retire(v);
                     continue;
                 };
@@ -709,6 +730,91 @@ impl<D: Domain> Grower<D> {
             .next()
             .is_none()
             && !self.crosses(from, at, v, u32::MAX)
+    }
+
+    /// With a minimum joint angle or member: node `v`'s step from `from` to `at` as it may be
+    /// taken, turned away from a leg it would meet too sharply, or None when it cannot be.
+    fn shaped(&self, v: u32, from: D::V, at: D::V, step: f64, crowd2: f64) -> Option<D::V> {
+        let legs: Vec<D::V> = self
+            .neighbours(v)
+            .iter()
+            .filter_map(|&w| (self.positions[w as usize] - from).try_normalize())
+            .collect();
+        if legs.len() >= 2 && self.junction_within(v, None, self.domain.eff(self.opts.min_member))
+        {
+            return None;
+        }
+        let Some(min) = self.opts.min_joint_angle else {
+            return Some(at);
+        };
+        let cos_min = min.to_radians().cos();
+        let clear = |p: D::V| {
+            (p - from)
+                .try_normalize()
+                .is_some_and(|d| legs.iter().all(|l| l.dot(d) <= cos_min))
+        };
+        if clear(at) {
+            return Some(at);
+        }
+        // Turn in the plane of the step and its nearest leg to a little past the minimum.
+        let d = (at - from).try_normalize()?;
+        let leg = *legs
+            .iter()
+            .max_by(|x, y| x.dot(d).total_cmp(&y.dot(d)))
+            .expect("a leg");
+        let perp = (d - leg * leg.dot(d)).try_normalize()?;
+        let turn = (min + 1.0).to_radians();
+        let dir = leg * turn.cos() + perp * turn.sin();
+        let turned = self.domain.step(from, dir, step)?;
+        (clear(turned) && self.may_step(v, from, turned, crowd2)).then_some(turned)
+    }
+
+    /// Whether a joint of three legs (other than `v` itself) lies within `reach` of node `v`
+    /// along its edges, going through nodes of two legs only; `skip` is a neighbour not to go
+    /// towards. False when `reach` is 0.
+    fn junction_within(&self, v: u32, skip: Option<u32>, reach: f64) -> bool {
+        if reach <= 0.0 {
+            return false;
+        }
+        for &first in self.neighbours(v) {
+            if Some(first) == skip {
+                continue;
+            }
+            let (mut prev, mut at) = (v, first);
+            let mut run = self.positions[v as usize].distance(self.positions[at as usize]);
+            while run < reach {
+                match self.degree[at as usize] {
+                    2 => {}
+                    d if d as usize >= MAX_DEGREE => return true,
+                    _ => break,
+                }
+                let Some(&next) = self.neighbours(at).iter().find(|&&w| w != prev) else {
+                    break;
+                };
+                run += self.positions[at as usize].distance(self.positions[next as usize]);
+                (prev, at) = (at, next);
+                if at == v {
+                    break;
+                }
+            }
+        }
+        false
+    }
+
+    /// How far node `v`, a tip, is from the joint its vein leaves (or the root), along the vein.
+    fn run_to_joint(&self, v: u32) -> f64 {
+        let (mut prev, mut at) = (u32::MAX, v);
+        let mut run = 0.0;
+        loop {
+            let Some(&next) = self.neighbours(at).iter().find(|&&w| w != prev) else {
+                return run;
+            };
+            run += self.positions[at as usize].distance(self.positions[next as usize]);
+            (prev, at) = (at, next);
+            if self.degree[at as usize] != 2 || at == v {
+                return run;
+            }
+        }
     }
 
     /// Throws this step's darts; returns how many were kept.
@@ -1038,7 +1144,27 @@ impl<D: Domain> Grower<D> {
         if self.tree_hops_below(a, b, MIN_LOOP - 1) || !self.domain.holds_edge(pa, pb) {
             return false;
         }
-        let cos_min = MIN_JOINT_ANGLE.to_radians().cos();
+        let min_member = self.domain.eff(self.opts.min_member);
+        for (x, y) in [(a, b), (b, a)] {
+            let short = match self.degree[x as usize] {
+                // x becomes a joint of three legs: none may be within the minimum member.
+                2 => self.junction_within(x, None, min_member),
+                // x's vein runs on to y, which becomes a joint when it has legs already.
+                1 if self.degree[y as usize] >= 2 && min_member > 0.0 => {
+                    self.run_to_joint(x) + len < min_member
+                }
+                _ => false,
+            };
+            if short {
+                return false;
+            }
+        }
+        let cos_min = self
+            .opts
+            .min_joint_angle
+            .unwrap_or(MIN_JOINT_ANGLE)
+            .to_radians()
+            .cos();
         for (x, y) in [(a, b), (b, a)] {
             let px = self.positions[x as usize];
             let dir = (self.positions[y as usize] - px) / len;
