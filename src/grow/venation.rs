@@ -740,8 +740,7 @@ impl<D: Domain> Grower<D> {
             .iter()
             .filter_map(|&w| (self.positions[w as usize] - from).try_normalize())
             .collect();
-        if legs.len() >= 2 && self.junction_within(v, None, self.domain.eff(self.opts.min_member))
-        {
+        if legs.len() >= 2 && self.junction_within(v, None, self.domain.eff(self.opts.min_member)) {
             return None;
         }
         let Some(min) = self.opts.min_joint_angle else {
@@ -1147,12 +1146,18 @@ impl<D: Domain> Grower<D> {
         let min_member = self.domain.eff(self.opts.min_member);
         for (x, y) in [(a, b), (b, a)] {
             let short = match self.degree[x as usize] {
-                // x becomes a joint of three legs: none may be within the minimum member.
-                2 => self.junction_within(x, None, min_member),
-                // x's vein runs on to y, which becomes a joint when it has legs already.
-                1 if self.degree[y as usize] >= 2 && min_member > 0.0 => {
-                    self.run_to_joint(x) + len < min_member
+                // x becomes a joint of three legs: none may be within the minimum member, and
+                // the new edge is a member by itself when y becomes one too.
+                2 => {
+                    self.junction_within(x, None, min_member)
+                        || (self.degree[y as usize] == 2 && len < min_member)
                 }
+                // x's vein runs on to y, which becomes a joint when it has two legs already,
+                // or on through y's vein when y is a tip too.
+                1 if min_member > 0.0 => match self.degree[y as usize] {
+                    1 => self.run_to_joint(x) + len + self.run_to_joint(y) < min_member,
+                    _ => self.run_to_joint(x) + len < min_member,
+                },
                 _ => false,
             };
             if short {
@@ -1406,6 +1411,66 @@ mod tests {
                 g.sources_left,
                 g.sources_placed
             );
+        }
+    }
+
+    /// The smallest angle between two edges at any node, degrees.
+    fn smallest_joint(net: &crate::network::Network) -> f64 {
+        let adj = net.adjacency();
+        let mut least = 180.0f64;
+        for v in 0..net.nodes.len() as u32 {
+            let p = net.nodes[v as usize].p;
+            let d: Vec<_> = adj
+                .neighbours(v)
+                .iter()
+                .map(|&(w, _)| (net.nodes[w as usize].p - p).normalize())
+                .collect();
+            for i in 0..d.len() {
+                for j in i + 1..d.len() {
+                    least = least.min(d[i].dot(d[j]).clamp(-1.0, 1.0).acos().to_degrees());
+                }
+            }
+        }
+        least
+    }
+
+    #[test]
+    fn a_minimum_joint_angle_and_member_hold_in_the_grown_network() {
+        for (m, shape, angle) in [
+            (Mode::Closed, Shape::Ovate, 50.0),
+            (Mode::Open, Shape::Cordate, 70.0),
+        ] {
+            let free = network(&grow_with(shape, 3, &mode(m)).1);
+            let opts = VenationOptions {
+                min_joint_angle: Some(angle),
+                min_member: 3.0,
+                ..mode(m)
+            };
+            let (_, g) = grow_with(shape, 3, &opts);
+            let net = network(&g);
+            assert!(
+                smallest_joint(&free) < angle,
+                "{m:?}: the test needs sharp joints to avoid"
+            );
+            let least = smallest_joint(&net);
+            assert!(least >= angle, "{m:?}: joint of {least}°");
+            assert!(
+                g.sources_left * 10 < g.sources_placed,
+                "{m:?}: growth stalled"
+            );
+            // Every run of edges between two joints of three legs is at least 3 mm long.
+            let adj = net.adjacency();
+            for c in net.chains() {
+                let (a, b) = (c.nodes[0], *c.nodes.last().unwrap());
+                if adj.degree(a) == 3 && adj.degree(b) == 3 && a != b {
+                    let len: f64 = c
+                        .edges
+                        .iter()
+                        .map(|&k| net.edge_length(&net.edges[k as usize]))
+                        .sum();
+                    assert!(len >= 3.0 - 1e-9, "{m:?}: member of {len} mm: {c:?}");
+                }
+            }
         }
     }
 
