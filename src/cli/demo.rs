@@ -1,7 +1,8 @@
 //! `lamina demo [--out DIR]`: the whole way on the embedded fixtures: read each fixture, check
 //! it, convert it to every format and render it; grow two leaves; run the Calyx network through
 //! cells and node axes with planarity reports, then into plates, assembly groups and nested
-//! cut sheets; grow veins on the Calyx band, a sphere, a torus and a density plate (surface
+//! cut sheets; simplify the Calyx network and take it to cut sheets too, and simplify the
+//! band's surface venation and a closed leaf; grow veins on the Calyx band, a sphere, a torus and a density plate (surface
 //! venation and geodesic veins, each rendered on its surface); draw the façade paper's L-system
 //! tree and fit it to a 12 m × 4 m façade; make a leaf solid and slice it for the DMP-SL
 //! printer; write an index.html linking everything. Later stages add their steps here.
@@ -9,6 +10,7 @@
 mod buds;
 mod facade;
 mod print;
+mod simplify;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -108,7 +110,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
     let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 4 + 4 + 3),
+        Some(FIXTURES.len() as u64 + 5 + 4 + 3),
         ProgressDrawTarget::stderr(),
     );
     bar.set_style(
@@ -133,6 +135,9 @@ pub fn run(args: Args) -> Result<()> {
     bar.inc(1);
     bar.set_message("calyx: plates, groups, cut sheets");
     entries.push(steel(out)?);
+    bar.inc(1);
+    bar.set_message("simplified networks: calyx to cut sheets, band, leaf");
+    entries.push(simplify::simplified(out, &inputs, args.size)?);
     bar.inc(1);
     for (name, bytes, _) in SURFACES {
         write_atomic(&inputs.join(name), |w| std::io::Write::write_all(w, bytes))?;

@@ -201,7 +201,7 @@ pub fn simplify(
         normals: reference_normals(net, surface),
         index: surface.map(SurfaceIndex::new),
     };
-    let normals = (!guide.normals.iter().any(|n| *n == DVec3::ZERO)).then_some(&guide.normals);
+    let normals = (!guide.normals.contains(&DVec3::ZERO)).then_some(&guide.normals);
     let before = Figures::of(net, normals.map(|n| n.as_slice()));
 
     let pruned = prune::prune(net, opts.prune_order, opts.min_length);
