@@ -1,5 +1,5 @@
-//! `lamina simplify` end to end: the Calyx network on its guide surface, then `cells` and
-//! `planarize` on the result; bad flags exit 2 and write nothing.
+//! `lamina simplify` end to end: the Calyx network on its guide surface, then `cells`,
+//! `planarize`, `size` and `plates` on the result; bad flags exit 2 and write nothing.
 
 mod common;
 
@@ -12,7 +12,7 @@ fn s(p: &Path) -> &str {
 }
 
 #[test]
-fn the_calyx_network_simplifies_and_goes_on_to_cells_and_axes() -> TestResult {
+fn the_calyx_network_simplifies_and_goes_on_to_cells_axes_sizing_and_plates() -> TestResult {
     let dir = tempfile::tempdir()?;
     let out = dir.path().join("simple.json");
     let report = dir.path().join("r.json");
@@ -57,6 +57,22 @@ fn the_calyx_network_simplifies_and_goes_on_to_cells_and_axes() -> TestResult {
         s(&axes),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let sizing = dir.path().join("sizing.json");
+    let o = lamina(&[
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1:fixed",
+        "--load",
+        "self-weight",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let plates = dir.path().join("plates");
+    let o = lamina(&["plates", s(&axes), "--sizing", s(&sizing), "-o", s(&plates)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(plates.join("plates.json").exists());
     Ok(())
 }
 

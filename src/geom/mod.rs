@@ -200,6 +200,18 @@ pub fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
     on(c, d, a) || on(c, d, b) || on(a, b, c) || on(a, b, d)
 }
 
+/// The distance from `p` to the segment ab in space.
+pub fn point_segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let ab = b - a;
+    let len2 = ab.length_squared();
+    let t = if len2 > 0.0 {
+        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    p.distance(a + t * ab)
+}
+
 /// The distance between segments ab and cd in space (Ericson, Real-Time Collision Detection
 /// §5.1.9: the closest points by clamped parameters).
 pub fn segment_distance(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {

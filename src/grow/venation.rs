@@ -735,6 +735,9 @@ impl<D: Domain> Grower<D> {
     /// With a minimum joint angle or member: node `v`'s step from `from` to `at` as it may be
     /// taken, turned away from a leg it would meet too sharply, or None when it cannot be.
     fn shaped(&self, v: u32, from: D::V, at: D::V, step: f64, crowd2: f64) -> Option<D::V> {
+        if self.opts.min_joint_angle.is_none() && self.opts.min_member <= 0.0 {
+            return Some(at);
+        }
         let legs: Vec<D::V> = self
             .neighbours(v)
             .iter()

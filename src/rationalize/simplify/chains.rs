@@ -9,6 +9,7 @@ use rstar::{RTree, AABB};
 
 use super::prune::subnetwork;
 use super::{carried_edge, carried_node, Guide, Options, DP_SHARE};
+use crate::geom::{point_segment_distance as point_segment, segment_distance};
 use crate::network::Network;
 
 /// A chain of the network: original nodes from one junction to the next (the same node twice
@@ -592,18 +593,6 @@ fn douglas_peucker(pos: &[DVec3], nodes: &[u32], tol: f64) -> Vec<usize> {
     (0..nodes.len()).filter(|&j| keep[j]).collect()
 }
 
-/// Distance from `p` to the segment a–b.
-pub(super) fn point_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    p.distance(a + t * ab)
-}
-
 /// Whether segments a–b and c–d cross in the plane ⊥ `normal` at points within `near` of each
 /// other in space; with no normal, whether they meet in space.
 fn cross(a: DVec3, b: DVec3, c: DVec3, d: DVec3, normal: DVec3, near: f64) -> bool {
@@ -625,29 +614,4 @@ fn cross(a: DVec3, b: DVec3, c: DVec3, d: DVec3, normal: DVec3, near: f64) -> bo
     let s = o3 / (o3 - o4);
     let t = o1 / (o1 - o2);
     (a + s * (b - a)).distance(c + t * (d - c)) <= near
-}
-
-/// Shortest distance between segments a–b and c–d (sampled closest points, exact enough to
-/// tell touching from apart).
-fn segment_distance(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
-    let (u, v, w) = (b - a, d - c, a - c);
-    let (aa, bb, cc, dd, ee) = (u.dot(u), u.dot(v), v.dot(v), u.dot(w), v.dot(w));
-    let den = aa * cc - bb * bb;
-    let mut s = if den > 1e-300 {
-        ((bb * ee - cc * dd) / den).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let mut t = if cc > 0.0 {
-        ((bb * s + ee) / cc).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    if aa > 0.0 {
-        s = ((bb * t - dd) / aa).clamp(0.0, 1.0);
-    }
-    if cc > 0.0 {
-        t = ((bb * s + ee) / cc).clamp(0.0, 1.0);
-    }
-    (a + s * u).distance(c + t * v)
 }

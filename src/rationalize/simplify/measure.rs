@@ -4,7 +4,7 @@
 use glam::DVec3;
 use rstar::{PointDistance, RTree, RTreeObject, AABB};
 
-use super::chains::point_segment;
+use crate::geom::point_segment_distance as point_segment;
 use crate::network::Network;
 use crate::rationalize::cells::euler;
 
