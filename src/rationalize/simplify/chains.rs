@@ -236,22 +236,17 @@ impl Work {
             let kept_home: Vec<Vec<usize>> =
                 lines.iter().map(|&i| self.lines[i].kept.clone()).collect();
             let mut best = (members(self), home);
-            let (t0, t1) = normal.normalize().any_orthonormal_pair();
-            for r in [0.25, 0.5, 0.75, 1.0] {
-                for k in 0..16 {
-                    let t = std::f64::consts::TAU * k as f64 / 16.0;
-                    let trial = guide.project(home + r * tol * (t.cos() * t0 + t.sin() * t1));
-                    if trial.distance(self.orig[v as usize]) > tol {
-                        continue;
-                    }
-                    self.pos[v as usize] = trial;
-                    for &i in &lines {
-                        self.fit(i, tol);
-                    }
-                    let m = members(self);
-                    if m < best.0 {
-                        best = (m, trial);
-                    }
+            for trial in guide.ring(home, normal, tol) {
+                if trial.distance(self.orig[v as usize]) > tol {
+                    continue;
+                }
+                self.pos[v as usize] = trial;
+                for &i in &lines {
+                    self.fit(i, tol);
+                }
+                let m = members(self);
+                if m < best.0 {
+                    best = (m, trial);
                 }
             }
             self.pos[v as usize] = best.1;

@@ -1,6 +1,6 @@
 //! Joint repair: where two members meet at less than the minimum angle, the joint's node or
 //! the node at the far end of one of the two members moves, on the surface (or in the plane of
-//! its normal), to the best of a ring of trial positions within the deviation. "Best" is the
+//! its normal), to the best of a ring of trial positions (`Guide::ring`) within the deviation. "Best" is the
 //! smallest angle at the moved node and its neighbours, counted up to the minimum, then their
 //! sum; a move is taken only when it is better and every node its members stand for stays
 //! within the deviation.
@@ -12,9 +12,6 @@ use glam::DVec3;
 use super::chains::{Leg, Work};
 use super::{Guide, Options};
 
-/// Trial radii as fractions of the deviation, and directions per radius.
-const RADII: [f64; 4] = [0.25, 0.5, 0.75, 1.0];
-const DIRECTIONS: usize = 16;
 /// Moves per node and per sharp joint before giving up on it.
 const WALKS: usize = 4;
 
@@ -128,21 +125,15 @@ fn improve(
         n if n != DVec3::ZERO => n,
         _ => plane_of(work, own, m),
     };
-    let (t0, t1) = normal.normalize().any_orthonormal_pair();
-    for r in RADII {
-        for k in 0..DIRECTIONS {
-            let t = std::f64::consts::TAU * k as f64 / DIRECTIONS as f64;
-            let trial = guide.project(home + r * max_deviation * (t.cos() * t0 + t.sin() * t1));
-            work.pos[m as usize] = trial;
-            if !holds(work) {
-                continue;
-            }
-            let s = score(work);
-            let better =
-                s.0 > best.0 .0 + 1e-9 || (s.0 >= best.0 .0 - 1e-12 && s.1 > best.0 .1 + 1e-9);
-            if better {
-                best = (s, trial);
-            }
+    for trial in guide.ring(home, normal, max_deviation) {
+        work.pos[m as usize] = trial;
+        if !holds(work) {
+            continue;
+        }
+        let s = score(work);
+        let better = s.0 > best.0 .0 + 1e-9 || (s.0 >= best.0 .0 - 1e-12 && s.1 > best.0 .1 + 1e-9);
+        if better {
+            best = (s, trial);
         }
     }
     work.pos[m as usize] = best.1;

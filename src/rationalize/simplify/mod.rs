@@ -173,6 +173,19 @@ impl Guide<'_> {
         }
     }
 
+    /// Trial positions around `home`: 16 directions in the plane ⊥ `normal` at a quarter, half,
+    /// three quarters and all of `reach`, each put on the surface.
+    pub fn ring(&self, home: DVec3, normal: DVec3, reach: f64) -> impl Iterator<Item = DVec3> + '_ {
+        const DIRECTIONS: usize = 16;
+        let (t0, t1) = normal.normalize().any_orthonormal_pair();
+        [0.25, 0.5, 0.75, 1.0].into_iter().flat_map(move |r| {
+            (0..DIRECTIONS).map(move |k| {
+                let t = std::f64::consts::TAU * k as f64 / DIRECTIONS as f64;
+                self.project(home + r * reach * (t.cos() * t0 + t.sin() * t1))
+            })
+        })
+    }
+
     /// The surface normal at the point closest to `p`, turned to agree with `near`.
     pub fn normal_at(&self, p: DVec3, near: DVec3) -> DVec3 {
         match self.index.as_ref().and_then(|i| i.closest(p)) {
