@@ -10,7 +10,11 @@ shapely):
   edges' directions);
 - deviation: every node of the original lies within `--max-deviation` of some edge of the
   simplified network (exact point-to-segment distance, all pairs, in blocks);
-- cycles: the same number of independent cycles, E - V + C (scipy's connected components);
+- cycles: the same number of components and independent cycles, E - V + C (scipy's
+  connected components);
+- faces: where every node stores a normal, the faces of the rotation system (edges ordered
+  by angle about each node's normal; a face leaves each node by the edge just clockwise of the
+  one it came in on), so V - E + F on the surface, the same before and after;
 - with `--flat` (a 2D network): no two simplified edges cross (shapely, STRtree), and the
   bounded faces of both networks (shapely.polygonize) match in count.
 With `--report`, lamina's own report must agree with these figures (members, cycles, the
@@ -34,16 +38,52 @@ def load(path):
         d = json.load(f)
     p = np.array([n["p"] for n in d["nodes"]], dtype=float).reshape(-1, 3)
     e = np.array([[x["a"], x["b"]] for x in d["edges"]], dtype=np.int64).reshape(-1, 2)
-    return p, e
+    normals = [n.get("normal") for n in d["nodes"]]
+    normals = None if any(n is None for n in normals) else np.array(normals, dtype=float)
+    return p, e, normals
 
 
-def cycles(p, e):
+def components_and_cycles(p, e):
     used = np.unique(e)
     n = len(p)
     g = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
     _, labels = connected_components(g, directed=False)
     comps = len(np.unique(labels[used]))
-    return len(e) - len(used) + comps
+    return comps, len(e) - len(used) + comps
+
+
+def rotation_faces(p, e, normals):
+    """Faces traced through the rotation system about the nodes' normals."""
+    out = {}
+    for k, (a, b) in enumerate(e):
+        out.setdefault(a, []).append((b, 2 * k))      # half-edge 2k: a -> b
+        out.setdefault(b, []).append((a, 2 * k + 1))  # 2k + 1: b -> a
+    pos = {}
+    order = {}
+    for v, hs in out.items():
+        n = normals[v] / np.linalg.norm(normals[v])
+        t0 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        t0 /= np.linalg.norm(t0)
+        t1 = np.cross(n, t0)
+        ang = [np.arctan2((p[w] - p[v]) @ t1, (p[w] - p[v]) @ t0) for w, _ in hs]
+        ring = [h for _, h in sorted(zip(ang, [h for _, h in hs]))]
+        order[v] = ring
+        for i, h in enumerate(ring):
+            pos[h] = i
+    head = lambda h: e[h // 2][1] if h % 2 == 0 else e[h // 2][0]
+    seen = np.zeros(2 * len(e), bool)
+    faces = 0
+    for start in range(2 * len(e)):
+        if seen[start]:
+            continue
+        faces += 1
+        h = start
+        while not seen[h]:
+            seen[h] = True
+            v = head(h)
+            ring = order[v]
+            h = ring[(pos[h ^ 1] - 1) % len(ring)]
+    return faces
 
 
 def smallest_joint(p, e):
@@ -66,7 +106,7 @@ def smallest_joint(p, e):
     return best
 
 
-def distances(points, p, e, block=2048):
+def distances(points, p, e, block=512):
     a, b = p[e[:, 0]], p[e[:, 1]]
     ab = b - a
     l2 = np.maximum((ab * ab).sum(1), 1e-300)
@@ -114,18 +154,18 @@ def main():
     ap.add_argument("--flat", action="store_true")
     args = ap.parse_args()
     failures = []
-    p0, e0 = load(args.original)
+    p0, e0, n0 = load(args.original)
     if args.simple is None:
         angle, node = smallest_joint(p0, e0)
         print(f"{args.original}: {len(e0)} edges, smallest joint {angle:.3f} deg at node {node}")
         if angle < args.min_angle - 1e-9:
             failures.append(f"joint of {angle:.3f} deg at node {node} < {args.min_angle}")
     else:
-        p1, e1 = load(args.simple)
+        p1, e1, n1 = load(args.simple)
         cut = 1.0 - len(e1) / len(e0)
         angle, node = smallest_joint(p1, e1)
         dev = distances(p0, p1, e1)
-        c0, c1 = cycles(p0, e0), cycles(p1, e1)
+        (k0, c0), (k1, c1) = components_and_cycles(p0, e0), components_and_cycles(p1, e1)
         print(
             f"{args.simple}: {len(e0)} -> {len(e1)} members ({100 * cut:.1f} % fewer), "
             f"smallest joint {angle:.3f} deg, largest deviation {dev.max():.4f} mm "
@@ -140,14 +180,23 @@ def main():
             failures.append(f"original node {k} is {dev.max():.4f} mm from the network (> {args.max_deviation})")
         if c0 != c1:
             failures.append(f"independent cycles {c0} -> {c1}")
+        if k0 != k1:
+            failures.append(f"components {k0} -> {k1}")
+        if n0 is not None and n1 is not None:
+            f0, f1 = rotation_faces(p0, e0, n0), rotation_faces(p1, e1, n1)
+            chi0 = len(np.unique(e0)) - len(e0) + f0
+            chi1 = len(np.unique(e1)) - len(e1) + f1
+            print(f"  on the surface: faces {f0} -> {f1}, V - E + F {chi0} -> {chi1}")
+            if (f0, chi0) != (f1, chi1):
+                failures.append(f"faces {f0} -> {f1}, V - E + F {chi0} -> {chi1}")
         if args.flat:
             x = crossings(p1, e1)
-            f0, f1 = faces(p0, e0), faces(p1, e1)
-            print(f"  flat: {x} crossings; bounded faces {f0} -> {f1}")
+            b0, b1 = faces(p0, e0), faces(p1, e1)
+            print(f"  flat: {x} crossings; bounded faces {b0} -> {b1}")
             if x:
                 failures.append(f"{x} pairs of simplified edges cross")
-            if f0 != f1:
-                failures.append(f"bounded faces {f0} -> {f1}")
+            if b0 != b1:
+                failures.append(f"bounded faces {b0} -> {b1}")
         if args.report:
             with open(args.report) as f:
                 r = json.load(f)
@@ -156,7 +205,10 @@ def main():
                 ("members after", r["after"]["members"], len(e1)),
                 ("cycles before", r["before"]["cycles"], c0),
                 ("cycles after", r["after"]["cycles"], c1),
+                ("components after", r["after"]["components"], k1),
             ]
+            if n0 is not None and n1 is not None:
+                checks += [("faces before", r["before"]["faces"], f0), ("faces after", r["after"]["faces"], f1)]
             for name, theirs, ours in checks:
                 if theirs != ours:
                     failures.append(f"report {name} {theirs}, measured {ours}")

@@ -143,7 +143,9 @@ fn human(args: &Args, r: &Report) -> String {
     s += &line("after", &r.after);
     let mut done = Vec::new();
     for (n, what) in [
+        (r.isolated_nodes_dropped, "isolated nodes (no edge) dropped"),
         (r.pruned_members, "edges pruned"),
+        (r.pruned_nodes, "nodes pruned"),
         (r.stubs_removed, "stubs removed"),
         (r.merged_junctions, "junctions merged"),
         (r.merges_refused, "merges refused"),
@@ -156,7 +158,6 @@ fn human(args: &Args, r: &Report) -> String {
             r.short_members_left,
             "members still shorter than --min-length",
         ),
-        (r.input_crossings, "crossings in the input"),
     ] {
         if n > 0 {
             done.push(format!("{n} {what}"));
@@ -164,6 +165,13 @@ fn human(args: &Args, r: &Report) -> String {
     }
     if !done.is_empty() {
         s += &format!("  {}\n", done.join(", "));
+    }
+    if r.input_crossings > 0 {
+        s += &format!(
+            "  NOTE: {} pair(s) of edges cross or touch in the input without a node: the drawing is not \
+             noded (give --split-crossings), so its faces mean little\n",
+            r.input_crossings
+        );
     }
     if r.options.min_angle > 0.0 {
         if r.sharp_joints.is_empty() {

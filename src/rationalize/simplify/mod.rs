@@ -132,7 +132,10 @@ pub struct Report {
     pub max_distance: f64,
     pub mean_distance: f64,
     pub pruned_members: usize,
+    /// Nodes that lost every edge to pruning.
     pub pruned_nodes: usize,
+    /// Input nodes with no edge at all: a network of members has no place for them.
+    pub isolated_nodes_dropped: usize,
     pub stubs_removed: usize,
     pub merged_junctions: usize,
     /// Merges not made: the merged joint would have had more legs than the input allowed, or a
@@ -264,6 +267,7 @@ pub fn simplify(
     let distances = distance_to(&network, &represented);
     let max_distance = distances.iter().copied().fold(0.0, f64::max);
     let mean_distance = distances.iter().sum::<f64>() / distances.len().max(1) as f64;
+    let isolated = net.nodes.len() - before.nodes;
     let report = Report {
         options: *opts,
         before,
@@ -271,7 +275,8 @@ pub fn simplify(
         max_distance,
         mean_distance,
         pruned_members: pruned.members,
-        pruned_nodes: pruned.keep_node.iter().filter(|&&k| !k).count(),
+        pruned_nodes: pruned.keep_node.iter().filter(|&&k| !k).count() - isolated,
+        isolated_nodes_dropped: isolated,
         stubs_removed: pruned.stubs,
         merged_junctions: merges.merged,
         merges_refused: merges.refused,
