@@ -1,12 +1,15 @@
-//! `lamina simplify` at scale: a degree-3 honeycomb on a paraboloid whose every edge is a chain
-//! of wobbling degree-2 nodes (as grown veins are), about 100,000 nodes; the time of one
-//! simplification at a deviation of half the wobble's reach, best of three.
+//! `lamina simplify` at scale: a degree-3 honeycomb on a paraboloid (or flat, `--flat`) whose
+//! every edge is a chain of wobbling degree-2 nodes (as grown veins are), about 100,000 nodes;
+//! the time of one simplification at a deviation of half the mean segment, best of three.
+//! `--write FILE` also writes the network, for `lamina simplify` and the shapely peer
+//! (`scripts/bench simplify`).
 //!
-//!     cargo bench --bench simplify [-- NODES]
+//!     cargo bench --bench simplify [-- NODES] [--flat] [--write FILE]
 
 use std::time::Instant;
 
 use glam::DVec3;
+use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::{Edge, Network, Node};
 use lamina::rationalize::planarize::synthetic::{honeycomb_shaped, Shape};
 use lamina::rationalize::simplify::{simplify, Options};
@@ -14,10 +17,15 @@ use lamina::rationalize::simplify::{simplify, Options};
 /// Each honeycomb edge becomes this many segments.
 const SEGMENTS: usize = 8;
 
-fn network(target: usize) -> Network {
+fn network(target: usize, flat: bool) -> Network {
     // A brick wall of n × n nodes has about 1.5 n² edges, each adding SEGMENTS - 1 nodes.
     let side = (target as f64 / (1.0 + 1.5 * (SEGMENTS - 1) as f64)).sqrt() as usize;
-    let input = honeycomb_shaped(side.max(2), 100.0, 1, Shape::Paraboloid);
+    let mut input = honeycomb_shaped(side.max(2), 100.0, 1, Shape::Paraboloid);
+    if flat {
+        for (p, n) in input.positions.iter_mut().zip(&mut input.reference) {
+            (p.z, *n) = (0.0, DVec3::Z);
+        }
+    }
     let mut nodes: Vec<Node> = input
         .positions
         .iter()
@@ -58,11 +66,17 @@ fn network(target: usize) -> Network {
 }
 
 fn main() {
-    let target = std::env::args()
-        .skip(1)
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let target = args
+        .iter()
         .find_map(|a| a.parse::<usize>().ok())
         .unwrap_or(100_000);
-    let net = network(target);
+    let flat = args.iter().any(|a| a == "--flat");
+    let net = network(target, flat);
+    if let Some(k) = args.iter().position(|a| a == "--write") {
+        let path = std::path::Path::new(args.get(k + 1).expect("--write FILE"));
+        write_network(&net, path, &RenderOptions::default()).expect("a writable file");
+    }
     let mean = net.lengths().map_or(1.0, |l| l.mean);
     let opts = Options {
         max_deviation: 0.5 * mean,
@@ -79,8 +93,9 @@ fn main() {
     }
     let r = last.expect("three runs").report;
     println!(
-        "simplify: {} nodes, {} edges -> {} members ({:.1} % fewer), largest deviation {:.3} mm \
+        "simplify{}: {} nodes, {} edges -> {} members ({:.1} % fewer), largest deviation {:.3} mm \
          of {:.3}, smallest joint {:.1}°, cycles {} -> {}: best of 3 {:.3} s",
+        if flat { " (flat)" } else { "" },
         net.nodes.len(),
         net.edges.len(),
         r.after.members,
