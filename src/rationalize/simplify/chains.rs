@@ -8,7 +8,7 @@ use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
 use super::prune::subnetwork;
-use super::{carried_edge, carried_node, Guide, Options, DP_SHARE};
+use super::{carried_edge, carried_node, Guide, Options};
 use crate::geom::{point_segment_distance as point_segment, segment_distance};
 use crate::network::Network;
 
@@ -212,6 +212,41 @@ impl Work {
         }
     }
 
+    /// Gives the lines at `nodes` room: every line with an end at one of them is fitted again
+    /// at `tight` from its original positions, with its ends back where they were; other lines
+    /// at those ends are fitted again at `tol`. Returns how many lines were fitted.
+    pub fn loosen(&mut self, nodes: &[u32], tight: f64, tol: f64) -> usize {
+        let at = |l: &Line, v: u32| l.nodes[0] == v || l.nodes[l.nodes.len() - 1] == v;
+        let near: Vec<usize> = (0..self.lines.len())
+            .filter(|&i| self.lines[i].alive && nodes.iter().any(|&v| at(&self.lines[i], v)))
+            .collect();
+        let mut ends: Vec<u32> = near
+            .iter()
+            .flat_map(|&i| {
+                let l = &self.lines[i];
+                [l.nodes[0], l.nodes[l.nodes.len() - 1]]
+            })
+            .collect();
+        ends.sort_unstable();
+        ends.dedup();
+        let touched: Vec<usize> = (0..self.lines.len())
+            .filter(|&i| self.lines[i].alive && ends.iter().any(|&v| at(&self.lines[i], v)))
+            .collect();
+        for &v in &ends {
+            self.pos[v as usize] = self.orig[v as usize];
+        }
+        for &i in &touched {
+            let n = self.lines[i].nodes.len();
+            for j in 1..n - 1 {
+                let v = self.lines[i].nodes[j] as usize;
+                self.pos[v] = self.orig[v];
+            }
+            let t = if near.contains(&i) { tight } else { tol };
+            self.fit(i, t);
+        }
+        touched.len()
+    }
+
     /// Moves each junction and tip (on the surface, within `tol` of where it was) to the trial
     /// position where its lines, fitted again, need the fewest members. Returns how many moved.
     pub fn relocate_junctions(&mut self, guide: &Guide, tol: f64) -> usize {
@@ -282,13 +317,13 @@ impl Work {
     }
 
     /// Skips a line's kept node where a member is shorter than `min_length` and the merged
-    /// member still holds its nodes within the Douglas-Peucker share of the deviation. Returns
-    /// how many members are still short.
+    /// member still holds its nodes within the deviation. Returns how many members are still
+    /// short.
     pub fn skip_short(&mut self, opts: &Options) -> usize {
         if opts.min_length <= 0.0 {
             return 0;
         }
-        let tol = DP_SHARE * opts.max_deviation;
+        let tol = opts.max_deviation;
         for i in 0..self.lines.len() {
             if !self.lines[i].alive {
                 continue;

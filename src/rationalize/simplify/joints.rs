@@ -52,6 +52,18 @@ pub(super) fn repair(work: &mut Work, guide: &Guide, opts: &Options) -> usize {
     repaired
 }
 
+/// The kept nodes where two members still meet under the minimum angle, in node order.
+pub(super) fn sharp(work: &Work, opts: &Options) -> Vec<u32> {
+    if opts.min_angle <= 0.0 {
+        return Vec::new();
+    }
+    let legs = work.legs();
+    legs.keys()
+        .copied()
+        .filter(|&v| smallest_angle(work, &legs, v).is_some_and(|a| a < opts.min_angle))
+        .collect()
+}
+
 fn direction(work: &Work, from: u32, to: u32) -> DVec3 {
     (work.pos[to as usize] - work.pos[from as usize]).normalize_or_zero()
 }

@@ -11,8 +11,8 @@
 //!    junctions. Junctions joined by a chain shorter than `merge_distance` (or `min_length`)
 //!    merge when the merged joint has no more legs than the input allowed (three where the
 //!    input had at most three) and every node of the chain stays within the deviation.
-//! 3. **Douglas-Peucker** on each chain, at `DP_SHARE` of the deviation so that joint repair has
-//!    room; a chain that closes a loop keeps three members, and of chains joining the same two
+//! 3. **Douglas-Peucker** on each chain at the deviation (at `DP_SHARE` of it, from the original
+//!    positions, for the chains at a joint that repair could not open the first time); a chain that closes a loop keeps three members, and of chains joining the same two
 //!    junctions only one may become a single member, so no loop collapses.
 //! 4. **Embedding**: members that cross, or joints whose members' order around the node's
 //!    normal changed, get back the original node farthest from the member, until neither
@@ -38,7 +38,8 @@ use crate::network::{Edge, Network, Node};
 
 pub use measure::{distance_to, Figures};
 
-/// Douglas-Peucker runs at this share of the deviation; the rest is joint repair's to use.
+/// Where a joint is still sharp after repair, its lines are fitted again at this share of the
+/// deviation, so that repair has the rest to use.
 pub const DP_SHARE: f64 = 0.75;
 
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -146,6 +147,8 @@ pub struct Report {
     pub short_members_left: usize,
     pub nodes_restored_for_embedding: usize,
     pub joints_repaired: usize,
+    /// Chains fitted again, more tightly, to give a sharp joint room for repair.
+    pub chains_refitted: usize,
     pub sharp_joints: Vec<Joint>,
     /// Crossings between members that could not be undone because they are in the input.
     pub input_crossings: usize,
@@ -223,19 +226,29 @@ pub fn simplify(
     let pruned = prune::prune(net, opts.prune_order, opts.min_length);
     let mut work = chains::Work::new(net, &pruned.keep_edge);
     let merges = work.merge_junctions(opts, &guide);
-    work.douglas_peucker(DP_SHARE * opts.max_deviation);
-    let relocated = work.relocate_junctions(&guide, DP_SHARE * opts.max_deviation);
+    work.douglas_peucker(opts.max_deviation);
+    let relocated = work.relocate_junctions(&guide, opts.max_deviation);
     let short_left = work.skip_short(opts);
     let mut restored = 0;
     let mut repaired = 0;
-    for _ in 0..4 {
-        let (r, _) = work.restore_embedding(&guide, opts.max_deviation);
-        restored += r;
-        let fixed = joints::repair(&mut work, &guide, opts);
-        repaired += fixed;
-        if fixed == 0 {
+    let mut refitted = 0;
+    for pass in 0..2 {
+        for _ in 0..4 {
+            let (r, _) = work.restore_embedding(&guide, opts.max_deviation);
+            restored += r;
+            let fixed = joints::repair(&mut work, &guide, opts);
+            repaired += fixed;
+            if fixed == 0 {
+                break;
+            }
+        }
+        // The whole deviation went to fewer members; where a joint is still sharp, its lines
+        // are fitted again within `DP_SHARE` of it, from where they were, to leave repair room.
+        let sharp = joints::sharp(&work, opts);
+        if pass == 1 || sharp.is_empty() {
             break;
         }
+        refitted = work.loosen(&sharp, DP_SHARE * opts.max_deviation, opts.max_deviation);
     }
     // A repair may have moved a member across another: take nodes back once more.
     let (r, input_crossings) = work.restore_embedding(&guide, opts.max_deviation);
@@ -284,6 +297,7 @@ pub fn simplify(
         short_members_left: short_left,
         nodes_restored_for_embedding: restored,
         joints_repaired: repaired,
+        chains_refitted: refitted,
         sharp_joints: sharp,
         input_crossings,
     };

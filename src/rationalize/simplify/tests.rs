@@ -186,6 +186,28 @@ fn a_sharp_branch_is_opened_to_the_minimum_angle_within_the_deviation() {
     assert!(s.report.sharp_joints.is_empty());
     assert!(s.report.joints_repaired >= 1);
     assert!(s.report.max_distance <= 10.0 + 1e-9);
+    // At any deviation the result holds it, and a joint left sharp is reported.
+    for dev in [0.5, 1.0, 2.0, 3.0, 5.0, 7.5] {
+        let s = simplify(
+            &n,
+            None,
+            &Options {
+                min_angle: 30.0,
+                ..opts(dev)
+            },
+        )
+        .unwrap();
+        let least = joint_angles(&s.network)
+            .iter()
+            .map(|x| x.1)
+            .fold(180.0, f64::min);
+        assert!(
+            s.report.max_distance <= dev * (1.0 + 1e-12),
+            "{dev}: {}",
+            s.report.max_distance
+        );
+        assert_eq!(least < 30.0, !s.report.sharp_joints.is_empty(), "{dev}");
+    }
     // With too small a deviation the joint cannot open: it is reported, not hidden.
     let tight = simplify(
         &n,
