@@ -308,7 +308,7 @@ fn subdivide(
     let (a, z) = (project(b[0]), project(b[b.len() - 1]));
     let flat = b[1..b.len() - 1]
         .iter()
-        .all(|c| segment_distance(project(*c), a, z) <= tol);
+        .all(|c| super::point_segment_distance(project(*c), a, z) <= tol);
     if flat || depth >= 48 {
         if *budget == 0 {
             return Err(Exhausted);
@@ -342,17 +342,6 @@ fn too_many(limit: usize) -> CurveError {
         needed: format!("more than {limit}"),
         limit,
     }
-}
-
-fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let ab = b - a;
-    let len2 = ab.length_squared();
-    let t = if len2 > 0.0 {
-        ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (p - (a + ab * t)).length()
 }
 
 /// A curve through `points` (a centripetal Catmull-Rom spline, as cubic Béziers) flattened
