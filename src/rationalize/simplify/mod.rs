@@ -11,14 +11,17 @@
 //!    junctions. Junctions joined by a chain shorter than `merge_distance` (or `min_length`)
 //!    merge when the merged joint has no more legs than the input allowed (three where the
 //!    input had at most three) and every node of the chain stays within the deviation.
-//! 3. **Douglas-Peucker** on each chain at the deviation (at `DP_SHARE` of it, from the original
-//!    positions, for the chains at a joint that repair could not open the first time); a chain that closes a loop keeps three members, and of chains joining the same two
-//!    junctions only one may become a single member, so no loop collapses.
+//! 3. **Douglas-Peucker** on each chain at the deviation; a chain that closes a loop keeps three
+//!    members, and of chains joining the same two junctions only one may become a single
+//!    member, so no loop collapses. Then each junction and tip moves (on the surface, within
+//!    the deviation) to where its chains, fitted again, need the fewest members.
 //! 4. **Embedding**: members that cross, or joints whose members' order around the node's
 //!    normal changed, get back the original node farthest from the member, until neither
 //!    happens. So the faces (cells) are the same as the input's.
 //! 5. **Joints** (`joints.rs`): a node whose members meet at less than `min_angle` is moved (on
-//!    the surface) or has a neighbour moved, within the deviation, or is reported.
+//!    the surface) or has a neighbour moved, within the deviation. Where a joint is still
+//!    sharp, the chains at it are fitted again at `DP_SHARE` of the deviation from their
+//!    original positions and repair runs once more; a joint left sharp is reported.
 //!
 //! Every original node that is not pruned stays within `max_deviation` of the member its chain
 //! became (so of the network); `measure.rs` measures that exactly afterwards, along with the
