@@ -91,6 +91,8 @@ fn bad_flags_exit_2_and_write_nothing() -> TestResult {
         &["--min-length", "nan"],
         &["--merge-distance=-1"],
         &["--prune-order", "-1"],
+        &["--max-deviation", "1e300"],
+        &["--min-length", "1e9"],
     ] {
         let mut args = vec!["simplify", s(&input), "-o", s(&out)];
         args.extend_from_slice(flags);

@@ -45,6 +45,9 @@ pub use measure::{distance_to, Figures};
 /// deviation, so that repair has the rest to use.
 pub const DP_SHARE: f64 = 0.75;
 
+/// The largest distance any option may give, mm: beyond it a network of members means nothing.
+pub const MAX_DISTANCE: f64 = 1e6;
+
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct Options {
     /// Every original node stays within this distance of the simplified network, mm.
@@ -82,6 +85,8 @@ pub enum SimplifyError {
         "--min-angle must be below 90 degrees (no three members can all meet at more), not {0}"
     )]
     AngleTooLarge(f64),
+    #[error("{0} must be at most 1e6 mm (1 km), not {1:e}")]
+    TooLarge(&'static str, f64),
     #[error("node {0} has a position or normal that is not finite")]
     NonFinite(u32),
     #[error("edge {0} refers to node {1}, which does not exist")]
@@ -107,6 +112,15 @@ impl Options {
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(SimplifyError::Negative(name, v));
+            }
+        }
+        for (name, v) in [
+            ("--max-deviation", d),
+            ("--min-length", self.min_length),
+            ("--merge-distance", self.merge_distance),
+        ] {
+            if v > MAX_DISTANCE {
+                return Err(SimplifyError::TooLarge(name, v));
             }
         }
         if self.min_angle >= 90.0 {
