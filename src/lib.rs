@@ -14,6 +14,7 @@ pub mod network;
 pub mod rationalize;
 pub mod report;
 pub mod text;
+pub mod view;
 
 pub use files::{ReadError, WriteError};
 pub use mesh::TriMesh;

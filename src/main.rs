@@ -80,6 +80,10 @@ enum Command {
     Print(Box<cli::print::Args>),
     /// Read an SL1 archive back and check it (ours or PrusaSlicer's).
     Sl1(cli::sl1::Args),
+    /// One offline HTML page to look before you cut: networks, meshes, panels by deviation,
+    /// plates by group, gauge or utilisation with their welds, cut sheets, print layers with
+    /// islands (three.js embedded; opens without a network).
+    View(Box<cli::view::Args>),
     /// Run the whole way on the embedded fixtures and write every output with an index.html.
     Demo(cli::demo::Args),
 }
@@ -120,6 +124,7 @@ fn main() -> ExitCode {
         Command::Slice(args) => cli::slice::run(*args).map(Within::from),
         Command::Print(args) => cli::print::run(*args).map(Within::from),
         Command::Sl1(args) => cli::sl1::run(args).map(within),
+        Command::View(args) => cli::view::run(*args).map(Within::from),
         Command::Demo(args) => cli::demo::run(args).map(Within::from),
         Command::Cells(args) => cli::cells::run(args).map(Within::from),
         Command::Simplify(args) => cli::simplify::run(*args).map(within),

@@ -910,3 +910,46 @@ pub fn read_gauges(
     }
     Ok((file.edges.iter().map(|e| e.gauge).collect(), file.gauges))
 }
+
+#[derive(serde::Deserialize)]
+struct CheckFile {
+    edges: Vec<CheckEdge>,
+}
+
+/// One member's result in a sizing file.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+pub struct CheckEdge {
+    pub gauge: f64,
+    pub utilisation: f64,
+    /// What governs it (stress, buckling, ...).
+    pub check: String,
+    /// The load case that governs it.
+    pub load: String,
+}
+
+/// A sizing file's result per edge, for the viewer.
+pub fn read_checks(path: &std::path::Path) -> Result<Vec<CheckEdge>, crate::files::ReadError> {
+    use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
+    let text = utf8_text(path, read_nonempty(path)?)?;
+    check_format(
+        path,
+        &text,
+        FORMAT,
+        VERSION,
+        "the sizing file `lamina size` writes",
+    )?;
+    let file: CheckFile =
+        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+    if let Some(k) = file
+        .edges
+        .iter()
+        .position(|e| !(e.gauge.is_finite() && e.utilisation.is_finite()))
+    {
+        return Err(ReadError::record(
+            path,
+            format!("edge {k}"),
+            "its gauge or utilisation is not a finite number",
+        ));
+    }
+    Ok(file.edges)
+}

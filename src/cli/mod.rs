@@ -22,3 +22,4 @@ pub mod solid;
 pub mod surface;
 pub mod veins;
 pub mod venation;
+pub mod view;

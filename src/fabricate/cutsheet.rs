@@ -393,3 +393,61 @@ mod tests {
         assert!(place_joints(&tiny, 2, 0.5, 2.0).is_empty());
     }
 }
+
+/// A polyline read back from a cut file, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadPath {
+    pub layer: String,
+    pub closed: bool,
+    pub points: Vec<DVec2>,
+}
+
+/// The largest cut file read back (a sheet of a few thousand parts is a few megabytes).
+pub const MAX_SHEET_BYTES: u64 = 256 << 20;
+
+/// A cut file's LWPOLYLINEs and LINEs (as two-point paths), in file order, and how many other
+/// entities it holds (not read).
+pub fn read_cut_dxf(path: &Path) -> Result<(Vec<ReadPath>, usize), crate::files::ReadError> {
+    use crate::files::ReadError;
+    use dxf::entities::EntityType;
+    let size = std::fs::metadata(path)
+        .map_err(|e| ReadError::io(path, e))?
+        .len();
+    if size > MAX_SHEET_BYTES {
+        return Err(ReadError::file(
+            path,
+            format!("{size} bytes, more than a cut file may have ({MAX_SHEET_BYTES})"),
+        ));
+    }
+    let drawing = dxf::Drawing::load_file(path)
+        .map_err(|e| ReadError::file(path, format!("not a DXF lamina can read: {e}")))?;
+    let (mut paths, mut other) = (Vec::new(), 0);
+    for e in drawing.entities() {
+        let layer = e.common.layer.clone();
+        match &e.specific {
+            EntityType::LwPolyline(p) => paths.push(ReadPath {
+                layer,
+                closed: p.is_closed(),
+                points: p.vertices.iter().map(|v| DVec2::new(v.x, v.y)).collect(),
+            }),
+            EntityType::Line(l) => paths.push(ReadPath {
+                layer,
+                closed: false,
+                points: vec![DVec2::new(l.p1.x, l.p1.y), DVec2::new(l.p2.x, l.p2.y)],
+            }),
+            _ => other += 1,
+        }
+    }
+    if let Some(k) = paths.iter().position(|p| {
+        p.points
+            .iter()
+            .any(|q| !(q.is_finite() && q.abs().max_element() < 1e7))
+    }) {
+        return Err(ReadError::record(
+            path,
+            format!("polyline {k}"),
+            "a point is not a finite number within 1e7 mm",
+        ));
+    }
+    Ok((paths, other))
+}

@@ -8,6 +8,7 @@ pub mod cutplan;
 pub mod cutsheet;
 pub mod estimate;
 pub mod nest;
+pub mod nest_file;
 pub mod plates_file;
 pub mod preview;
 pub mod sl1;

@@ -32,6 +32,8 @@ pub struct PlateRecord {
     pub holes: Vec<DVec2>,
     /// Size, d0 and ordered length of the bolts through them.
     pub bolt: Option<BoltRecord>,
+    /// The network edge it stands on (files since version 2 say it).
+    pub edge: Option<u32>,
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -90,6 +92,8 @@ struct End {
 #[derive(Deserialize)]
 struct Record {
     id: String,
+    #[serde(default)]
+    edge: Option<u32>,
     group: u32,
     thickness: f64,
     ends: [End; 2],
@@ -195,6 +199,7 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
             bolted_to: r.bolted_to,
             holes: r.holes.iter().map(|p| DVec2::from_array(*p)).collect(),
             bolt: r.bolt,
+            edge: r.edge,
         };
         if rec.area() < 1e-9 {
             return Err(ReadError::record(
@@ -224,4 +229,64 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
         }
     }
     Ok((out, file.cores))
+}
+
+pub const WELDS_FORMAT: &str = "lamina-welds";
+pub const WELDS_VERSION: u32 = 1;
+
+/// Two plates side by side at a node, as welds.json says.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct WeldPair {
+    /// Each side's plate tag (a bolted seam as `A+B`).
+    pub plates: [String; 2],
+    pub dihedral_deg: f64,
+    pub root_gap_mm: f64,
+    pub gap_within_tolerance: bool,
+    /// The access class (`60–120°: fillet (EN 1993-1-8)`, ...).
+    pub access: String,
+}
+
+/// A node of welds.json: its plates, their pairs, and whether its gaps are even.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+pub struct WeldNode {
+    pub node: u32,
+    pub status: String,
+    pub plates: Vec<String>,
+    pub pairs: Vec<WeldPair>,
+}
+
+#[derive(Deserialize)]
+struct WeldFile {
+    weld_gap: f64,
+    weld_gap_tolerance: f64,
+    nodes: Vec<WeldNode>,
+}
+
+/// The weld report `lamina plates` writes beside plates.json: the target gap and its
+/// tolerance, mm, and the nodes.
+pub fn read_welds(path: &Path) -> Result<(f64, f64, Vec<WeldNode>), ReadError> {
+    let text = utf8_text(path, read_nonempty(path)?)?;
+    check_format(
+        path,
+        &text,
+        WELDS_FORMAT,
+        WELDS_VERSION,
+        "the weld report `lamina plates` writes",
+    )?;
+    let file: WeldFile =
+        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+    for (k, n) in file.nodes.iter().enumerate() {
+        if n.pairs.iter().any(|p| {
+            !(p.dihedral_deg.is_finite()
+                && p.root_gap_mm.is_finite()
+                && p.root_gap_mm.abs() < MAX_COORD)
+        }) {
+            return Err(ReadError::record(
+                path,
+                format!("node {k} ({})", n.node),
+                "a pair's dihedral angle or root gap is not a finite number",
+            ));
+        }
+    }
+    Ok((file.weld_gap, file.weld_gap_tolerance, file.nodes))
 }

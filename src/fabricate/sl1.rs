@@ -70,6 +70,15 @@ pub struct Sl1Check {
 
 /// Reads and checks the archive at `path`.
 pub fn check(path: &Path) -> Result<Sl1Check, Sl1Error> {
+    check_layers(path, &mut |_, _, _| {})
+}
+
+/// Reads and checks the archive at `path`, handing each layer image that decoded (its index and
+/// grey bytes, rows from the top, and the display's width in pixels) to `on_layer`, in order.
+pub fn check_layers(
+    path: &Path,
+    on_layer: &mut dyn FnMut(usize, &[u8], usize),
+) -> Result<Sl1Check, Sl1Error> {
     let not = |msg: String| Sl1Error::NotSl1 {
         path: path.to_path_buf(),
         msg,
@@ -190,6 +199,7 @@ pub fn check(path: &Path) -> Result<Sl1Check, Sl1Error> {
                     finder.layer_owned(k, vec![0; px as usize * py as usize]);
                 }
                 Ok(Some(Ok(img))) => {
+                    on_layer(k, &img, px as usize);
                     let sum: u64 = img.iter().map(|&g| u64::from(g)).sum();
                     grey += sum as f64 / 255.0;
                     if sum == 0 {

@@ -102,9 +102,8 @@ struct FileRecord {
     format: String,
     #[allow(dead_code)]
     version: u32,
-    /// Read so that files carrying it parse; the figures in it are not needed to rebuild.
+    /// The solve's figures (method, tolerance, deviation); not needed to rebuild the axes.
     #[serde(default)]
-    #[allow(dead_code)]
     summary: serde_json::Value,
     nodes: Vec<NodeRecord>,
     edges: Vec<EdgeRecord>,
@@ -151,6 +150,11 @@ pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Resu
 }
 
 pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
+    read_axes_and_summary(path).map(|(axes, _)| axes)
+}
+
+/// The axes and the summary the solve wrote beside them (its tolerance, method, figures).
+pub fn read_axes_and_summary(path: &Path) -> Result<(Axes, serde_json::Value), ReadError> {
     let bytes = read_nonempty(path)?;
     let text = utf8_text(path, bytes)?;
     check_format(
@@ -184,7 +188,7 @@ pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
         ));
     }
     let v = |a: [f64; 3]| DVec3::from_array(a);
-    Ok(Axes {
+    let axes = Axes {
         positions: rec.nodes.iter().map(|r| v(r.p)).collect(),
         axes: rec.nodes.iter().map(|r| v(r.axis)).collect(),
         heights: rec.nodes.iter().map(|r| r.height).collect(),
@@ -192,7 +196,8 @@ pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
         edges: rec.edges.iter().map(|e| [e.a, e.b]).collect(),
         fixed_normals: rec.edges.iter().map(|e| e.fixed_normal.map(v)).collect(),
         edge_radii: rec.edges.iter().map(|e| e.radius).collect(),
-    })
+    };
+    Ok((axes, rec.summary))
 }
 
 /// The panels as OBJ: four `v` per panel and one quad `f`, panel k named `o panel-k`.

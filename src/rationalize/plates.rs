@@ -292,40 +292,57 @@ impl Plate {
     /// The plate as a closed prism: outline at z = ±t/2, holes as `HOLE_SEGMENTS`-gons through
     /// it, caps by constrained Delaunay, outward-facing triangles.
     pub fn prism(&self) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let mut loops = vec![self.outline.clone()];
-        loops.extend(
-            self.holes
-                .iter()
-                .map(|c| hole_polygon(*c, self.hole_diameter())),
-        );
-        let flat: Vec<DVec2> = loops.iter().flatten().copied().collect();
-        let n = flat.len() as u32;
-        let h = self.thickness / 2.0;
-        let mut v: Vec<DVec3> = flat.iter().map(|p| self.placement.world(*p, -h)).collect();
-        v.extend(flat.iter().map(|p| self.placement.world(*p, h)));
-        let mut t = Vec::new();
-        for [a, b, c] in cap_triangles(&loops) {
-            t.push([a, c, b]); // bottom, facing −z
-            t.push([n + a, n + b, n + c]); // top, facing +z
-        }
-        let mut base = 0u32;
-        for (k, l) in loops.iter().enumerate() {
-            let m = l.len() as u32;
-            for i in 0..m {
-                let (p, q) = (base + i, base + (i + 1) % m);
-                // The outline runs counter-clockwise, the holes too: their walls face inward.
-                if k == 0 {
-                    t.push([p, q, n + q]);
-                    t.push([p, n + q, n + p]);
-                } else {
-                    t.push([q, p, n + p]);
-                    t.push([q, n + p, n + q]);
-                }
-            }
-            base += m;
-        }
-        (v, t)
+        prism(
+            &self.outline,
+            &self.holes,
+            self.hole_diameter(),
+            self.thickness,
+            |p, z| self.placement.world(p, z),
+        )
     }
+}
+
+/// A plate as a closed prism: `outline` (counter-clockwise, in the plate's frame) at z = ±t/2,
+/// holes of `hole_diameter` at `holes` as `HOLE_SEGMENTS`-gons through it, caps by constrained
+/// Delaunay, outward-facing triangles; `world` places a frame point at a height. The first
+/// `outline.len()` points are the outline at −t/2, the same number from `n` (the loops' point
+/// count) at +t/2.
+pub fn prism(
+    outline: &[DVec2],
+    holes: &[DVec2],
+    hole_diameter: f64,
+    thickness: f64,
+    world: impl Fn(DVec2, f64) -> DVec3,
+) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut loops = vec![outline.to_vec()];
+    loops.extend(holes.iter().map(|c| hole_polygon(*c, hole_diameter)));
+    let flat: Vec<DVec2> = loops.iter().flatten().copied().collect();
+    let n = flat.len() as u32;
+    let h = thickness / 2.0;
+    let mut v: Vec<DVec3> = flat.iter().map(|p| world(*p, -h)).collect();
+    v.extend(flat.iter().map(|p| world(*p, h)));
+    let mut t = Vec::new();
+    for [a, b, c] in cap_triangles(&loops) {
+        t.push([a, c, b]); // bottom, facing −z
+        t.push([n + a, n + b, n + c]); // top, facing +z
+    }
+    let mut base = 0u32;
+    for (k, l) in loops.iter().enumerate() {
+        let m = l.len() as u32;
+        for i in 0..m {
+            let (p, q) = (base + i, base + (i + 1) % m);
+            // The outline runs counter-clockwise, the holes too: their walls face inward.
+            if k == 0 {
+                t.push([p, q, n + q]);
+                t.push([p, n + q, n + p]);
+            } else {
+                t.push([q, p, n + p]);
+                t.push([q, n + p, n + q]);
+            }
+        }
+        base += m;
+    }
+    (v, t)
 }
 
 /// Counter-clockwise triangles covering the first loop less the others (holes inside it), as

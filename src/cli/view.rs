@@ -1,0 +1,265 @@
+//! `lamina view FILE… -o view.html`: one offline page that shows any lamina input or output.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args as ClapArgs;
+use glam::DVec3;
+
+use super::input::{load, Loaded, ReadArgs};
+use lamina::files::{extension, write_atomic};
+use lamina::report::planarity::Metric;
+use lamina::view::pack::{self, PlateExtras};
+use lamina::view::{flat, page, Scene};
+
+#[derive(ClapArgs)]
+pub struct Args {
+    /// Files to show together: a network (.json .obj .dxf), a mesh (.obj .stl), axes.json (its
+    /// panels), plates.json (with welds.json, sizing.json and axes.json beside it when given
+    /// too), nest.json (its sheets, read from the cut DXFs beside it), an SL1 archive
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// The page to write
+    #[arg(short, long, value_name = "HTML")]
+    pub output: PathBuf,
+    /// The page's title [default: the files' names]
+    #[arg(long)]
+    pub title: Option<String>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+}
+
+/// What a file turned out to be.
+enum Input {
+    Network(Box<lamina::Network>),
+    Mesh(lamina::TriMesh),
+    Axes(Box<lamina::rationalize::axes::Axes>, Option<f64>),
+    Plates(
+        Vec<lamina::fabricate::plates_file::PlateRecord>,
+        Vec<lamina::fabricate::plates_file::CoreRecord>,
+    ),
+    Welds(f64, f64, Vec<lamina::fabricate::plates_file::WeldNode>),
+    Sizing(Vec<lamina::analyze::sizing::CheckEdge>),
+    Nest,
+    Print,
+}
+
+/// The `"format"` a lamina JSON file declares, if any (some write their keys sorted, so it can
+/// come after the data).
+fn json_format(path: &Path) -> Result<Option<String>> {
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?
+        .take(MAX_JSON_BYTES)
+        .read_to_end(&mut head)?;
+    let text = String::from_utf8_lossy(&head);
+    let Some(at) = text.find("\"format\"") else {
+        return Ok(None);
+    };
+    let rest = text[at + 8..]
+        .trim_start()
+        .strip_prefix(':')
+        .map(str::trim_start);
+    Ok(rest
+        .and_then(|r| r.strip_prefix('"'))
+        .and_then(|r| r.split('"').next())
+        .map(str::to_string))
+}
+
+/// The most of a JSON file searched for its format.
+const MAX_JSON_BYTES: u64 = 1 << 30;
+
+fn read(path: &Path, args: &ReadArgs) -> Result<Input> {
+    let ext = extension(path);
+    if ext == "sl1" {
+        return Ok(Input::Print);
+    }
+    if ext == "json" {
+        match json_format(path)?.as_deref() {
+            Some("lamina-axes") => {
+                let (axes, summary) = lamina::rationalize::axes::read_axes_and_summary(path)?;
+                let tolerance = summary["tolerance"].as_f64().filter(|t| *t > 0.0);
+                return Ok(Input::Axes(Box::new(axes), tolerance));
+            }
+            Some("lamina-plates") => {
+                let (p, c) = lamina::fabricate::plates_file::read_plates(path)?;
+                return Ok(Input::Plates(p, c));
+            }
+            Some("lamina-welds") => {
+                let (g, t, n) = lamina::fabricate::plates_file::read_welds(path)?;
+                return Ok(Input::Welds(g, t, n));
+            }
+            Some("lamina-sizing") => {
+                return Ok(Input::Sizing(lamina::analyze::sizing::read_checks(path)?))
+            }
+            Some("lamina-nest") => return Ok(Input::Nest),
+            _ => {}
+        }
+    }
+    Ok(match load(path, args, false)? {
+        Loaded::Network(imp) => Input::Network(Box::new(imp.network)),
+        Loaded::Mesh(mesh, _) => Input::Mesh(mesh),
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if extension(&args.output) != "html" {
+        bail!("{}: the viewer is an .html page", args.output.display());
+    }
+    let inputs: Vec<(PathBuf, Input)> = args
+        .files
+        .iter()
+        .map(|p| Ok((p.clone(), read(p, &args.read)?)))
+        .collect::<Result<_>>()?;
+    let scene = scene(&inputs, args.title.clone())?;
+    let html = page(&scene);
+    write_atomic(&args.output, |w| w.write_all(html.as_bytes()))?;
+    for n in &scene.notes {
+        eprintln!("lamina: {n}");
+    }
+    eprintln!(
+        "lamina: wrote {} ({:.1} MB): {}",
+        args.output.display(),
+        html.len() as f64 / 1e6,
+        what(&scene)
+    );
+    Ok(())
+}
+
+use std::io::Write as _;
+
+/// One line on what the page shows.
+fn what(scene: &Scene) -> String {
+    let mut parts: Vec<String> = scene
+        .layers
+        .iter()
+        .map(|l| format!("{} {}", l.objects.len(), l.name))
+        .collect();
+    if !scene.sheets.is_empty() {
+        parts.push(format!("{} sheets", scene.sheets.len()));
+    }
+    if let Some(p) = &scene.print {
+        parts.push(format!(
+            "{} print layers, {} islands",
+            p.images.len(),
+            p.islands.len() + p.more_islands
+        ));
+    }
+    parts.join(", ")
+}
+
+/// The scene of the inputs together: plates take the welds, sizing and axes given beside
+/// them; axes alone are shown as panels.
+fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
+    let names: Vec<String> = inputs
+        .iter()
+        .map(|(p, _)| {
+            p.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .collect();
+    let mut scene = Scene {
+        title: title.unwrap_or_else(|| format!("lamina: {}", names.join(", "))),
+        ..Scene::default()
+    };
+    let mut points: Vec<DVec3> = Vec::new();
+    for (_, input) in inputs {
+        match input {
+            Input::Network(n) => points.extend(n.nodes.iter().map(|n| n.p)),
+            Input::Mesh(m) => points.extend(m.positions.iter().copied()),
+            Input::Axes(a, _) => points.extend(a.positions.iter().copied()),
+            Input::Plates(p, _) => points.extend(
+                p.iter()
+                    .map(|p| DVec3::new(p.matrix[0][3], p.matrix[1][3], p.matrix[2][3])),
+            ),
+            _ => {}
+        }
+    }
+    let origin = pack::middle(points);
+    scene.origin = origin.to_array();
+    let find = |f: &dyn Fn(&Input) -> bool| inputs.iter().find(|(_, i)| f(i));
+    let has_plates = find(&|i| matches!(i, Input::Plates(..))).is_some();
+    for (path, input) in inputs {
+        match input {
+            Input::Network(n) => scene.layers.extend(pack::network(n, origin)?),
+            Input::Mesh(m) => {
+                let name = path
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "mesh".into());
+                scene.layers.push(pack::mesh(m, &name, origin)?);
+            }
+            Input::Axes(a, tolerance) => {
+                if has_plates {
+                    // Beside plates the axes only place the welds; the panels would hide them.
+                    continue;
+                }
+                let t = tolerance.unwrap_or_else(|| {
+                    scene.notes.push(format!(
+                        "{}: no tolerance in its summary; panels held to 0.01 mm",
+                        path.display()
+                    ));
+                    0.01
+                });
+                let (quads, rows) = pack::axes_rows(a, t);
+                scene
+                    .layers
+                    .push(pack::panels(&quads, &rows, Metric::Corner, origin)?);
+                scene.layers.push(pack::node_axes(a, origin)?);
+            }
+            Input::Plates(p, c) => {
+                let welds = find(&|i| matches!(i, Input::Welds(..))).and_then(|(_, i)| match i {
+                    Input::Welds(g, t, n) => Some((*g, *t, n.as_slice())),
+                    _ => None,
+                });
+                let checks = find(&|i| matches!(i, Input::Sizing(..))).and_then(|(_, i)| match i {
+                    Input::Sizing(c) => Some(c.as_slice()),
+                    _ => None,
+                });
+                let axes = find(&|i| matches!(i, Input::Axes(..))).and_then(|(_, i)| match i {
+                    Input::Axes(a, _) => Some(a.as_ref()),
+                    _ => None,
+                });
+                let extras = PlateExtras {
+                    welds,
+                    checks,
+                    axes,
+                };
+                let (layers, notes) = pack::plates(p, c, extras, origin)?;
+                scene.layers.extend(layers);
+                scene.notes.extend(notes);
+            }
+            Input::Welds(..) | Input::Sizing(_) if !has_plates => scene.notes.push(format!(
+                "{}: shown with plates.json only; give it too",
+                path.display()
+            )),
+            Input::Welds(..) | Input::Sizing(_) => {}
+            Input::Nest => {
+                let (sheets, notes) = flat::sheets(path)?;
+                scene.sheets.extend(sheets);
+                scene.notes.extend(notes);
+            }
+            Input::Print => {
+                if scene.print.is_some() {
+                    bail!("{}: one SL1 archive per page", path.display());
+                }
+                scene.print = Some(flat::print(path)?);
+            }
+        }
+    }
+    Ok(scene)
+}
+
+/// Writes the viewer page of `files` to `output` (for the demo and the reports' callers).
+pub fn write_view(files: &[&Path], output: &Path, title: &str) -> Result<Scene> {
+    let args = ReadArgs::default();
+    let inputs: Vec<(PathBuf, Input)> = files
+        .iter()
+        .map(|p| Ok((p.to_path_buf(), read(p, &args)?)))
+        .collect::<Result<_>>()?;
+    let scene = scene(&inputs, Some(title.to_string()))?;
+    write_atomic(output, |w| w.write_all(page(&scene).as_bytes()))?;
+    Ok(scene)
+}

@@ -1,0 +1,613 @@
+// lamina's viewer: the scene in #lamina-data drawn with three.js (embedded beside this script as
+// text and imported from Blob URLs, so the page needs no network). Written for lamina; see
+// src/view/mod.rs for what the page promises (data-ready, #select=ID, #lamina-info).
+const root = document.getElementById("lamina-viewer");
+const text = (id) => document.getElementById(id).textContent;
+const scriptUrl = (t) => URL.createObjectURL(new Blob([t], { type: "text/javascript" }));
+
+function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "class") e.className = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else e.setAttribute(k, v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+}
+
+const SVG = "http://www.w3.org/2000/svg";
+function svgEl(tag, attrs = {}) {
+  const e = document.createElementNS(SVG, tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+  return e;
+}
+
+function bytes(b64) {
+  const s = atob(b64);
+  const out = new Uint8Array(s.length);
+  for (let i = 0; i < s.length; i++) out[i] = s.charCodeAt(i);
+  return out.buffer;
+}
+
+// Colours. A scale with a limit runs green → amber → red from 0 to the limit and stays dark
+// red beyond; without one it runs over the values' range (viridis stops).
+const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+const TRAFFIC = [[26, 150, 65], [166, 217, 106], [253, 174, 97], [215, 25, 28]];
+const BEYOND = [120, 0, 10];
+const PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
+  "#7f7f7f", "#bcbd22", "#17becf", "#393b79", "#ad494a", "#637939", "#e7ba52", "#7b4173"];
+const GREY = [170, 170, 170];
+
+function ramp(stops, t) {
+  t = Math.min(1, Math.max(0, t));
+  const x = t * (stops.length - 1);
+  const i = Math.min(stops.length - 2, Math.floor(x));
+  const f = x - i;
+  return stops[i].map((a, k) => a + (stops[i + 1][k] - a) * f);
+}
+
+function hexRgb(h) {
+  return [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16));
+}
+
+function scaleOf(c) {
+  const vals = c.values.filter((v) => v !== null && Number.isFinite(v));
+  if (c.labels.length) return { kind: "cat" };
+  const lo = c.limit !== null ? 0 : Math.min(...vals, 0);
+  let hi = c.limit !== null ? c.limit : Math.max(...vals, lo);
+  if (!(hi > lo)) hi = lo + 1;
+  return { kind: "scale", lo, hi };
+}
+
+function colourOf(c, s, v) {
+  if (v === null || v === undefined || !Number.isFinite(v)) return GREY;
+  if (s.kind === "cat") return hexRgb(PALETTE[v % PALETTE.length]);
+  if (c.limit !== null) return v > c.limit ? BEYOND : ramp(TRAFFIC, v / c.limit);
+  return ramp(VIRIDIS, (v - s.lo) / (s.hi - s.lo));
+}
+
+const fmt = (v) => (Math.abs(v) >= 1000 || v === 0 ? v.toFixed(0) : Math.abs(v) >= 1 ? v.toFixed(3) : v.toPrecision(3));
+
+function start(data) {
+  // The page: a bar (tabs, search, title), the stage, and a side panel.
+  const tabs = el("div", { class: "lv-tabs" });
+  const search = el("input", { type: "search", placeholder: "find a tag or id (e.g. 2-041)", "aria-label": "find" });
+  const found = el("span", { class: "lv-found" });
+  const bar = el("div", { class: "lv-bar" }, el("strong", {}, data.title), tabs,
+    el("form", { class: "lv-search", onsubmit: (e) => { e.preventDefault(); find(search.value); } }, search, found));
+  const stage = el("div", { class: "lv-stage" });
+  const side = el("div", { class: "lv-side" });
+  const info = el("div", { id: "lamina-info", class: "lv-info" }, el("p", { class: "lv-hint" }, "Hover or click a part for its id and figures."));
+  const layersBox = el("div", { class: "lv-layers" });
+  const legend = el("div", { class: "lv-legend" });
+  const notes = el("div", { class: "lv-notes" });
+  for (const n of data.notes) notes.append(el("p", {}, n));
+  side.append(info, layersBox, legend, notes);
+  root.append(bar, el("div", { class: "lv-main" }, stage, side));
+  const tip = el("div", { class: "lv-tip" });
+  stage.append(tip);
+
+  const views = {};
+  if (data.layers.length) views["3d"] = build3d(data, stage, layersBox, legend, info, tip);
+  if (data.sheets.length) views.sheets = buildSheets(data, stage, info);
+  if (data.print) views.print = buildPrint(data.print, stage, info);
+  let current = null;
+  function show(name) {
+    if (!views[name]) return;
+    current = name;
+    for (const [k, v] of Object.entries(views)) {
+      v.node.style.display = k === name ? "" : "none";
+      v.tab.classList.toggle("on", k === name);
+    }
+    layersBox.style.display = legend.style.display = name === "3d" ? "" : "none";
+    views[name].shown?.();
+  }
+  const titles = { "3d": "3D", sheets: "Sheets", print: "Print layers" };
+  for (const k of Object.keys(views)) {
+    views[k].tab = el("button", { type: "button", onclick: () => show(k) }, titles[k]);
+    tabs.append(views[k].tab);
+  }
+
+  function find(q) {
+    q = q.trim();
+    if (!q) return false;
+    const lower = q.toLowerCase();
+    for (const exact of [true, false]) {
+      for (const k of Object.keys(views)) {
+        const hit = views[k].find(lower, exact);
+        if (hit) {
+          show(k);
+          hit();
+          found.textContent = "";
+          return true;
+        }
+      }
+    }
+    found.textContent = "not found";
+    return false;
+  }
+
+  function applyHash() {
+    const h = new URLSearchParams(location.hash.slice(1));
+    if (h.get("view") && views[h.get("view")]) show(h.get("view"));
+    if (h.get("layer") !== null && views.print) {
+      show("print");
+      views.print.go(Number(h.get("layer")));
+    }
+    if (h.get("select")) {
+      search.value = h.get("select");
+      find(h.get("select"));
+    }
+  }
+  show(Object.keys(views)[0]);
+  applyHash();
+  window.addEventListener("hashchange", applyHash);
+  window.lamina = { find, show, data };
+  requestAnimationFrame(() => requestAnimationFrame(() => { document.body.dataset.ready = "1"; }));
+}
+
+function figuresTable(title, sub, figures) {
+  const t = el("table");
+  for (const [k, v] of figures) t.append(el("tr", {}, el("th", {}, k), el("td", {}, v)));
+  return [el("h3", { class: "lv-id" }, title), el("p", { class: "lv-sub" }, sub), t];
+}
+
+// ---------------------------------------------------------------- 3D
+function build3d(data, stage, layersBox, legend, info, tip) {
+  const node = el("div", { class: "lv-3d" });
+  stage.append(node);
+  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  node.append(renderer.domElement);
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xf3f4f6);
+  const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1e7);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x667080, 2.2));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+  sun.position.set(0.4, 0.6, 1);
+  camera.add(sun);
+  scene.add(camera);
+  const controls = new OrbitControls(camera, renderer.domElement);
+  controls.screenSpacePanning = true;
+  const render = () => renderer.render(scene, camera);
+  controls.addEventListener("change", render);
+
+  const dot = document.createElement("canvas");
+  dot.width = dot.height = 64;
+  const g = dot.getContext("2d");
+  g.beginPath();
+  g.arc(32, 32, 28, 0, 2 * Math.PI);
+  g.fillStyle = "#fff";
+  g.fill();
+  const dotTexture = new THREE.CanvasTexture(dot);
+
+  const layers = [];
+  const box = new THREE.Box3();
+  for (const L of data.layers) {
+    const pos = new Float32Array(bytes(L.positions));
+    const idx = new Uint32Array(bytes(L.indices));
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute("position", new THREE.BufferAttribute(pos, 3));
+    const colours = new Float32Array(pos.length);
+    geo.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+    let obj;
+    const per = L.kind === "faces" ? 3 : L.kind === "lines" ? 2 : 1;
+    if (L.kind !== "points") geo.setIndex(new THREE.BufferAttribute(idx, 1));
+    if (L.kind === "faces") {
+      geo.computeVertexNormals();
+      obj = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({
+        vertexColors: true, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1,
+      }));
+      const out = new Uint32Array(bytes(L.outline));
+      if (out.length) {
+        const og = new THREE.BufferGeometry();
+        og.setAttribute("position", geo.getAttribute("position"));
+        og.setIndex(new THREE.BufferAttribute(out, 1));
+        obj.add(new THREE.LineSegments(og, new THREE.LineBasicMaterial({ color: 0x30343a, transparent: true, opacity: 0.55 })));
+      }
+    } else if (L.kind === "lines") {
+      obj = new THREE.LineSegments(geo, new THREE.LineBasicMaterial({ vertexColors: true }));
+    } else {
+      obj = new THREE.Points(geo, new THREE.PointsMaterial({
+        vertexColors: true, size: 9, sizeAttenuation: false, map: dotTexture, alphaTest: 0.5,
+      }));
+    }
+    // Which object each element belongs to, and each element's vertices.
+    const owner = new Uint32Array(L.kind === "points" ? pos.length / 3 : idx.length / per);
+    L.objects.forEach((o, k) => owner.fill(k, o.first, o.first + o.count));
+    const vertsOf = (k) => {
+      const o = L.objects[k];
+      if (L.kind === "points") return [o.first];
+      const v = [];
+      for (let i = o.first * per; i < (o.first + o.count) * per; i++) v.push(idx[i]);
+      return v;
+    };
+    obj.visible = L.visible;
+    scene.add(obj);
+    if (pos.length) {
+      geo.computeBoundingBox();
+      if (L.visible) box.union(geo.boundingBox);
+    }
+    const layer = { L, obj, geo, colours, owner, vertsOf, per, coloring: L.colorings.length ? 0 : -1 };
+    layers.push(layer);
+    paint(layer);
+  }
+  if (box.isEmpty()) box.set(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
+  camera.near = radius / 1000;
+  camera.far = radius * 100;
+  camera.up.set(0, 0, 1);
+
+  function paint(layer) {
+    const { L, colours } = layer;
+    const c = L.colorings[layer.coloring];
+    const s = c ? scaleOf(c) : null;
+    const base = L.kind === "lines" ? [40, 60, 90] : L.kind === "points" ? [200, 80, 30] : [160, 170, 185];
+    L.objects.forEach((o, k) => {
+      const rgb = c ? colourOf(c, s, c.values[k]) : base;
+      for (const v of layer.vertsOf(k)) colours.set(rgb.map((x) => x / 255), 3 * v);
+    });
+    layer.geo.getAttribute("color").needsUpdate = true;
+  }
+
+  function fit(centreAt = centre, r = radius, keep = false) {
+    const dir = keep
+      ? camera.position.clone().sub(controls.target).normalize()
+      : new THREE.Vector3(1, -1.3, 0.9).normalize();
+    const dist = r / Math.sin((camera.fov * Math.PI) / 360) * 1.05;
+    controls.target.copy(centreAt);
+    camera.position.copy(centreAt).addScaledVector(dir, dist);
+    camera.updateProjectionMatrix();
+    controls.update();
+    render();
+  }
+
+  let flight = null;
+  function flyTo(c, r) {
+    const from = { t: controls.target.clone(), p: camera.position.clone() };
+    const dir = camera.position.clone().sub(controls.target).normalize();
+    const dist = Math.max(r, radius * 0.03) / Math.sin((camera.fov * Math.PI) / 360) * 1.6;
+    const to = { t: c.clone(), p: c.clone().addScaledVector(dir, dist) };
+    const t0 = performance.now();
+    cancelAnimationFrame(flight);
+    const step = (now) => {
+      const f = Math.min(1, (now - t0) / 500);
+      const e = f * f * (3 - 2 * f);
+      controls.target.lerpVectors(from.t, to.t, e);
+      camera.position.lerpVectors(from.p, to.p, e);
+      controls.update();
+      render();
+      if (f < 1) flight = requestAnimationFrame(step);
+    };
+    flight = requestAnimationFrame(step);
+  }
+
+  // Selection: the object drawn again in a bright colour over the rest.
+  const marks = new THREE.Group();
+  scene.add(marks);
+  let selected = null;
+  function select(li, k, fly) {
+    const layer = layers[li];
+    const o = layer.L.objects[k];
+    marks.clear();
+    const pos = layer.geo.getAttribute("position");
+    const vs = layer.vertsOf(k);
+    const pts = new Float32Array(vs.length * 3);
+    vs.forEach((v, i) => pts.set([pos.getX(v), pos.getY(v), pos.getZ(v)], 3 * i));
+    const g2 = new THREE.BufferGeometry();
+    g2.setAttribute("position", new THREE.BufferAttribute(pts, 3));
+    const hl = 0xffb000;
+    if (layer.L.kind === "faces") {
+      marks.add(new THREE.Mesh(g2, new THREE.MeshBasicMaterial({ color: hl, side: THREE.DoubleSide, transparent: true, opacity: 0.85, depthTest: false })));
+    } else if (layer.L.kind === "lines") {
+      marks.add(new THREE.LineSegments(g2, new THREE.LineBasicMaterial({ color: hl, depthTest: false })));
+    }
+    const c = new THREE.Vector3(...o.center).sub(new THREE.Vector3(...data.origin));
+    const ring = new THREE.Mesh(new THREE.SphereGeometry(Math.max(o.radius * 0.08, radius * 0.008), 16, 12),
+      new THREE.MeshBasicMaterial({ color: hl, depthTest: false, transparent: true, opacity: 0.9 }));
+    ring.position.copy(c);
+    marks.add(ring);
+    marks.renderOrder = 10;
+    selected = { li, k };
+    info.replaceChildren(...figuresTable(o.id, layer.L.name, o.figures));
+    info.dataset.selected = o.id;
+    if (fly) flyTo(c, o.radius);
+    render();
+  }
+
+  // Picking: the nearest visible element under the pointer.
+  const ray = new THREE.Raycaster();
+  ray.params.Line.threshold = radius * 0.006;
+  ray.params.Points.threshold = radius * 0.012;
+  function pick(ev) {
+    const r = renderer.domElement.getBoundingClientRect();
+    const p = new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
+    ray.setFromCamera(p, camera);
+    const objs = layers.filter((l) => l.obj.visible).map((l) => l.obj);
+    for (const hit of ray.intersectObjects(objs, false)) {
+      const li = layers.findIndex((l) => l.obj === hit.object);
+      const layer = layers[li];
+      const element = layer.L.kind === "faces" ? hit.faceIndex : layer.L.kind === "lines" ? hit.index / 2 : hit.index;
+      if (element === null || element === undefined) continue;
+      return { li, k: layer.owner[element] };
+    }
+    return null;
+  }
+  let down = null;
+  renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
+  renderer.domElement.addEventListener("pointerup", (e) => {
+    if (down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 4) {
+      const hit = pick(e);
+      if (hit) select(hit.li, hit.k, false);
+    }
+    down = null;
+  });
+  let hoverQueued = false;
+  renderer.domElement.addEventListener("pointermove", (e) => {
+    if (hoverQueued || e.buttons) return;
+    hoverQueued = true;
+    requestAnimationFrame(() => {
+      hoverQueued = false;
+      const hit = pick(e);
+      if (!hit) { tip.style.display = "none"; return; }
+      const o = layers[hit.li].L.objects[hit.k];
+      const r = node.getBoundingClientRect();
+      tip.textContent = `${o.id}: ${o.figures.slice(0, 2).map(([a, b]) => `${a} ${b}`).join(", ")}`;
+      tip.style.left = `${e.clientX - r.left + 14}px`;
+      tip.style.top = `${e.clientY - r.top + 10}px`;
+      tip.style.display = "block";
+    });
+  });
+  renderer.domElement.addEventListener("pointerleave", () => { tip.style.display = "none"; });
+
+  // Layer list: visibility and colouring; the legend of the first visible coloured layer.
+  function drawLegend() {
+    legend.replaceChildren();
+    for (const layer of layers) {
+      const c = layer.L.colorings[layer.coloring];
+      if (!layer.obj.visible || !c) continue;
+      const s = scaleOf(c);
+      const box = el("div", { class: "lv-legend-item" }, el("h4", {}, `${layer.L.name}: ${c.name}${c.unit ? ` (${c.unit})` : ""}`));
+      if (s.kind === "cat") {
+        const counts = new Map();
+        c.values.forEach((v) => counts.set(v, (counts.get(v) || 0) + 1));
+        c.labels.forEach((label, i) => {
+          box.append(el("div", { class: "lv-swatch" }, el("span", { style: `background:${PALETTE[i % PALETTE.length]}` }), `${label} (${counts.get(i) || 0})`));
+        });
+      } else {
+        const stops = (c.limit !== null ? TRAFFIC : VIRIDIS).map((rgb, i, a) => `rgb(${rgb.join(",")}) ${(100 * i) / (a.length - 1)}%`);
+        const gradient = el("div", { class: "lv-gradient", style: `background:linear-gradient(to right,${stops.join(",")})` });
+        const u = c.unit ? ` ${c.unit}` : "";
+        box.append(gradient, el("div", { class: "lv-ticks" }, el("span", {}, `${fmt(s.lo)}${u}`), el("span", {}, `${fmt(s.hi)}${u}`)));
+        if (c.limit !== null) box.append(el("p", { class: "lv-sub" }, `red at the limit (${fmt(c.limit)}${u}); dark red beyond it`));
+        if (c.values.some((v) => v === null)) box.append(el("p", { class: "lv-sub" }, "grey: no value"));
+      }
+      box.append(el("p", { class: "lv-def" }, c.definition));
+      legend.append(box);
+    }
+  }
+  layers.forEach((layer) => {
+    const check = el("input", { type: "checkbox" });
+    check.checked = layer.obj.visible;
+    check.addEventListener("change", () => { layer.obj.visible = check.checked; drawLegend(); render(); });
+    const row = el("div", { class: "lv-layer" }, el("label", {}, check, ` ${layer.L.name} (${layer.L.objects.length})`));
+    if (layer.L.colorings.length > 1) {
+      const sel = el("select", { "aria-label": `${layer.L.name} colour` });
+      layer.L.colorings.forEach((c, i) => sel.append(el("option", { value: i }, `by ${c.name}`)));
+      sel.addEventListener("change", () => { layer.coloring = Number(sel.value); paint(layer); drawLegend(); render(); });
+      row.append(sel);
+    } else if (layer.L.colorings.length === 1) {
+      row.append(el("span", { class: "lv-sub" }, ` by ${layer.L.colorings[0].name}`));
+    }
+    layersBox.append(row);
+  });
+  layersBox.append(el("button", { type: "button", onclick: () => fit() }, "Fit"));
+  drawLegend();
+
+  function resize() {
+    const w = node.clientWidth, h = node.clientHeight;
+    if (!w || !h) return;
+    renderer.setSize(w, h);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+    render();
+  }
+  new ResizeObserver(resize).observe(node);
+  resize();
+  fit();
+
+  const index = new Map();
+  layers.forEach((layer, li) => layer.L.objects.forEach((o, k) => {
+    const key = o.id.toLowerCase();
+    if (!index.has(key)) index.set(key, [li, k]);
+  }));
+  return {
+    node,
+    shown: resize,
+    find(q, exact) {
+      let hit = index.get(q);
+      if (!hit && !exact) {
+        for (const [key, v] of index) if (key.includes(q)) { hit = v; break; }
+      }
+      return hit ? () => select(hit[0], hit[1], true) : null;
+    },
+  };
+}
+
+// ---------------------------------------------------------------- sheets
+const LAYER_STYLE = {
+  CUT_OUTER: "stroke:#111;stroke-width:1.2", CUT_INNER: "stroke:#1565c0;stroke-width:1",
+  ETCH: "stroke:#c62828;stroke-width:0.6", LEAD: "stroke:#2e7d32;stroke-width:0.8",
+  JOINT: "stroke:#ef6c00;stroke-width:1.5", SHEET: "stroke:#9e9e9e;stroke-width:1;stroke-dasharray:6 4",
+  REMNANT: "stroke:#8bc34a;stroke-width:0.8;stroke-dasharray:3 3",
+};
+
+function buildSheets(data, stage, info) {
+  const node = el("div", { class: "lv-sheets" });
+  stage.append(node);
+  const legend = el("p", { class: "lv-sub" });
+  for (const [k, s] of Object.entries(LAYER_STYLE)) {
+    const sw = svgEl("svg", { width: 22, height: 8 });
+    sw.append(svgEl("line", { x1: 1, y1: 4, x2: 21, y2: 4, style: s }));
+    legend.append(sw, ` ${k.toLowerCase().replace("_", " ")}  `);
+  }
+  node.append(legend, el("p", { class: "lv-sub" }, "Blue numbers: the cut order on each sheet. Wheel to zoom, drag to pan, click a part."));
+  const partEls = [];
+  let selectedEl = null;
+  data.sheets.forEach((sheet, si) => {
+    const [w, h] = sheet.size;
+    const svg = svgEl("svg", { viewBox: `${-0.02 * w} ${-1.02 * h} ${1.04 * w} ${1.04 * h}`, class: "lv-sheet" });
+    const g = svgEl("g", { transform: "scale(1,-1)" });
+    g.append(svgEl("rect", { x: 0, y: 0, width: w, height: h, style: "fill:#fff;stroke:#9e9e9e;stroke-width:1" }));
+    const scale = Math.max(w, h) / 900;
+    for (const p of sheet.paths) {
+      const pts = [];
+      for (let i = 0; i < p.points.length; i += 2) pts.push(`${p.points[i]},${p.points[i + 1]}`);
+      const e = svgEl(p.closed ? "polygon" : "polyline", { points: pts.join(" "), style: `fill:none;${LAYER_STYLE[p.layer] || "stroke:#555"}`, "vector-effect": "non-scaling-stroke" });
+      g.append(e);
+    }
+    sheet.parts.forEach((part, pi) => {
+      const [x0, y0, x1, y1] = part.bbox;
+      const hit = svgEl("rect", { x: x0, y: y0, width: x1 - x0, height: y1 - y0, class: "lv-part" });
+      hit.addEventListener("click", () => selectPart(si, pi, false));
+      hit.append(svgEl("title"));
+      hit.firstChild.textContent = part.id;
+      g.append(hit);
+      const t = svgEl("text", { x: part.start[0], y: -part.start[1], transform: "scale(1,-1)", class: "lv-order", "font-size": 14 * scale });
+      t.textContent = part.order;
+      g.append(t);
+      partEls.push({ si, pi, hit, id: part.id.toLowerCase() });
+    });
+    svg.append(g);
+    zoomable(svg);
+    const fig = el("figure", { class: "lv-sheet-fig", id: `sheet-${si}` }, svg,
+      el("figcaption", {}, `${sheet.name}: ${sheet.figures.map(([k, v]) => `${k} ${v}`).join(" · ")}`));
+    fig.addEventListener("click", (e) => {
+      if (e.target.classList?.contains("lv-part")) return;
+      info.replaceChildren(...figuresTable(sheet.name, "sheet", sheet.figures));
+    });
+    node.append(fig);
+  });
+
+  function selectPart(si, pi, scroll) {
+    const sheet = data.sheets[si];
+    const part = sheet.parts[pi];
+    selectedEl?.classList.remove("sel");
+    selectedEl = partEls.find((p) => p.si === si && p.pi === pi).hit;
+    selectedEl.classList.add("sel");
+    info.replaceChildren(...figuresTable(part.id, `part on ${sheet.name}`, part.figures));
+    info.dataset.selected = part.id;
+    if (scroll) selectedEl.closest("figure").scrollIntoView({ block: "center" });
+  }
+  return {
+    node,
+    find(q, exact) {
+      const p = partEls.find((p) => (exact ? p.id === q : p.id.includes(q)));
+      return p ? () => selectPart(p.si, p.pi, true) : null;
+    },
+  };
+}
+
+function zoomable(svg) {
+  const vb = () => svg.getAttribute("viewBox").split(" ").map(Number);
+  svg.addEventListener("wheel", (e) => {
+    e.preventDefault();
+    const [x, y, w, h] = vb();
+    const r = svg.getBoundingClientRect();
+    const fx = (e.clientX - r.left) / r.width, fy = (e.clientY - r.top) / r.height;
+    const k = e.deltaY > 0 ? 1.2 : 1 / 1.2;
+    svg.setAttribute("viewBox", `${x + fx * w * (1 - k)} ${y + fy * h * (1 - k)} ${w * k} ${h * k}`);
+  }, { passive: false });
+  let drag = null;
+  svg.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY, vb()]; });
+  svg.addEventListener("pointermove", (e) => {
+    if (!drag || !e.buttons) return;
+    const [cx, cy, [x, y, w, h]] = drag;
+    const r = svg.getBoundingClientRect();
+    svg.setAttribute("viewBox", `${x - ((e.clientX - cx) * w) / r.width} ${y - ((e.clientY - cy) * h) / r.height} ${w} ${h}`);
+  });
+  svg.addEventListener("pointerup", () => { drag = null; });
+}
+
+// ---------------------------------------------------------------- print layers
+function buildPrint(P, stage, info) {
+  const node = el("div", { class: "lv-print" });
+  stage.append(node);
+  const n = P.images.length;
+  const slider = el("input", { type: "range", min: 0, max: Math.max(0, n - 1), value: 0, "aria-label": "layer" });
+  const label = el("span", { class: "lv-layer-label" });
+  const byLayer = new Map();
+  for (const i of P.islands) {
+    if (!byLayer.has(i.layer)) byLayer.set(i.layer, []);
+    byLayer.get(i.layer).push(i);
+  }
+  const islandLayers = [...byLayer.keys()].sort((a, b) => a - b);
+  const prev = el("button", { type: "button", onclick: () => jump(-1) }, "◀ island");
+  const next = el("button", { type: "button", onclick: () => jump(1) }, "island ▶");
+  const [x0, y0, x1, y1] = P.region;
+  const svg = svgEl("svg", { viewBox: `${x0} ${-y1} ${x1 - x0} ${y1 - y0}`, class: "lv-layer-img" });
+  const img = svgEl("image", { x: x0, y: -y1, width: x1 - x0, height: y1 - y0, preserveAspectRatio: "none" });
+  img.setAttribute("style", "image-rendering:pixelated");
+  const marks = svgEl("g");
+  svg.append(svgEl("rect", { x: x0, y: -y1, width: x1 - x0, height: y1 - y0, fill: "#000" }), img, marks);
+  zoomable(svg);
+  node.append(el("div", { class: "lv-print-bar" }, prev, slider, next, label), svg);
+  const size = Math.max(x1 - x0, y1 - y0);
+
+  function go(k) {
+    k = Math.max(0, Math.min(n - 1, Math.round(k) || 0));
+    slider.value = k;
+    const url = P.images[k];
+    if (url) img.setAttribute("href", url); else img.removeAttribute("href");
+    marks.replaceChildren();
+    const here = byLayer.get(k) || [];
+    for (const i of here) {
+      const r = Math.max(Math.sqrt(i.area_mm2 / Math.PI) * 1.8, size * 0.012);
+      const c = svgEl("circle", { cx: i.x_mm, cy: -i.y_mm, r, class: "lv-island" });
+      c.append(svgEl("title"));
+      c.firstChild.textContent = `island at (${i.x_mm.toFixed(2)}, ${i.y_mm.toFixed(2)}) mm, ${i.area_mm2.toFixed(3)} mm²`;
+      marks.append(c);
+    }
+    const z = ((k + 1) * P.layer_mm).toFixed(3);
+    label.textContent = `layer ${k} of ${n} (top at ${z} mm): ${here.length} island${here.length === 1 ? "" : "s"} start here`;
+    const rows = [["layer", `${k} of ${n}`], ["top", `${z} mm`], ["islands starting here", String(here.length)]];
+    here.slice(0, 20).forEach((i, j) => rows.push([`island ${j + 1}`, `(${i.x_mm.toFixed(2)}, ${i.y_mm.toFixed(2)}) mm, ${i.area_mm2.toFixed(3)} mm²`]));
+    info.replaceChildren(...figuresTable(`layer ${k}`, P.name, rows.concat(P.figures)));
+    info.dataset.selected = `layer ${k}`;
+    node.dataset.layer = k;
+  }
+  function jump(dir) {
+    const k = Number(slider.value);
+    const t = dir > 0 ? islandLayers.find((l) => l > k) : [...islandLayers].reverse().find((l) => l < k);
+    if (t !== undefined) go(t);
+  }
+  slider.addEventListener("input", () => go(Number(slider.value)));
+  let started = false;
+  return {
+    node,
+    go,
+    shown() { if (!started) { started = true; go(Number(slider.value)); } },
+    find(q) {
+      const m = /^layer\s*(\d+)$/.exec(q);
+      return m ? () => { started = true; go(Number(m[1])); } : null;
+    },
+  };
+}
+
+// ---------------------------------------------------------------- start
+let THREE, OrbitControls;
+try {
+  const data = JSON.parse(text("lamina-data"));
+  if (data.layers.length) {
+    const core = scriptUrl(text("three-core"));
+    const moduleUrl = scriptUrl(text("three-module").replaceAll('"./three.core.min.js"', JSON.stringify(core)));
+    THREE = await import(moduleUrl);
+    ({ OrbitControls } = await import(scriptUrl(text("three-orbit").replaceAll("from 'three'", `from ${JSON.stringify(moduleUrl)}`))));
+  }
+  start(data);
+} catch (e) {
+  root.append(el("p", { class: "lv-error" }, `The viewer could not start: ${e && e.message ? e.message : e}`));
+  throw e;
+}
