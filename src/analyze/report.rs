@@ -1,5 +1,6 @@
-//! The sizing report: one self-contained HTML page with SVG views of the structure coloured
-//! by utilisation and by gauge, the deformed shape, and tables.
+//! The sizing report: one self-contained HTML page with the frame in the 3D viewer, SVG views of
+//! the structure coloured by utilisation and by gauge, the deformed shape, the figures' definitions
+//! and tables.
 
 use crate::text::html;
 use std::fmt::Write as _;
@@ -8,6 +9,89 @@ use glam::DVec3;
 
 use super::material::Material;
 use super::sizing::Sizing;
+
+/// What the sizing figures mean (sizing.json's `definitions` and the page say the same).
+pub const UTILISATION: &str = "the largest over the load cases and five points along the member of: stress = von Mises of the largest corner normal stress (N, My, Mz) and the largest shear stress (torsion + 1.5 V/A) over f_y/gamma_M0; buckling = compression over the weak-axis flexural buckling resistance as a pin-ended strut (EN 1993-1-1 6.3.1.2, curve c), chi A f_y/gamma_M1";
+pub const WELD_UTILISATION: &str = "EN 1993-1-8 4.5.3.3 simplified method: the force per length on the two fillet welds (throat a = throat factor x the thinner plate at the node) along each member end's depth, over f_u/(sqrt(3) beta_w gamma_M2) a; the largest over the node's member ends and the cases";
+pub const DISPLACEMENT: &str =
+    "under the sum of the loads, at the model's node (mid-height of the axis)";
+
+/// The frame in the viewer: members coloured by utilisation or gauge, nodes by displacement or
+/// weld utilisation.
+fn viewer(s: &Sizing) -> String {
+    use crate::view::{embed, fig, Coloring, Kind, LayerBuilder, Scene};
+    let m = &s.model;
+    let origin = crate::view::pack::middle(m.nodes.iter().copied());
+    let mut members = LayerBuilder::new("members", Kind::Lines, origin);
+    for (k, e) in m.members.iter().enumerate() {
+        let c = &s.checks[k];
+        members.lines(
+            format!("E{k}"),
+            vec![
+                fig("nodes", format!("N{} – N{}", e.a, e.b)),
+                fig("gauge", format!("{} mm", s.gauges[k])),
+                fig("depth", format!("{:.1} mm", e.section.depth)),
+                fig(
+                    "utilisation",
+                    format!(
+                        "{:.3} ({}, {})",
+                        c.utilisation, c.check, s.cases[c.case].name
+                    ),
+                ),
+            ],
+            &[[m.nodes[e.a], m.nodes[e.b]]],
+        );
+    }
+    let mut util = Coloring::scale(
+        "utilisation",
+        "",
+        UTILISATION,
+        s.checks.iter().map(|c| Some(c.utilisation)).collect(),
+    );
+    util.limit = Some(1.0);
+    let gauges: Vec<String> = s.gauges.iter().map(|g| format!("{g} mm")).collect();
+    let gauge = Coloring::categories("gauge", "the plate thickness the sizing chose", &gauges);
+    let total = s.total();
+    let mut nodes = LayerBuilder::new("nodes", Kind::Points, origin);
+    let mut moved = Vec::new();
+    for (i, &p) in m.nodes.iter().enumerate() {
+        let d = total.displacements[i];
+        let len = DVec3::new(d[0], d[1], d[2]).length();
+        moved.push(Some(len));
+        let mut f = vec![fig("displacement", format!("{len:.4} mm"))];
+        if let Some(w) = &s.welds[i] {
+            f.push(fig(
+                "weld utilisation",
+                format!("{:.3} ({})", w.utilisation, s.cases[w.case].name),
+            ));
+        }
+        nodes.point(format!("N{i}"), f, p, 0.0);
+    }
+    let mut weld = Coloring::scale(
+        "weld utilisation",
+        "",
+        WELD_UTILISATION,
+        s.welds
+            .iter()
+            .map(|w| w.as_ref().map(|w| w.utilisation))
+            .collect(),
+    );
+    weld.limit = Some(1.0);
+    let displaced = Coloring::scale("displacement", "mm", DISPLACEMENT, moved);
+    let scene = Scene {
+        title: "sizing".into(),
+        origin: origin.to_array(),
+        layers: vec![
+            members.finish(vec![util, gauge], true),
+            nodes.finish(vec![displaced, weld], true),
+        ],
+        ..Default::default()
+    };
+    format!(
+        "<h2>Look around</h2><p>The analysis model: a member per edge between nodes at mid-height of the node axes. Hover or click a member or node for its figures; find one by its id (E or N and its index).</p>{}",
+        embed(&scene, "70vh")
+    )
+}
 
 /// Green (0) to yellow to red (1 and over).
 fn ramp(t: f64) -> String {
@@ -164,6 +248,14 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
             .unwrap_or_default(),
         total.residual
     );
+    let _ = write!(
+        h,
+        "<h2>Figures</h2><dl><dt>utilisation</dt><dd>{}</dd><dt>weld utilisation</dt><dd>{}</dd><dt>displacement (mm)</dt><dd>{}</dd></dl>",
+        html(UTILISATION),
+        html(WELD_UTILISATION),
+        html(DISPLACEMENT)
+    );
+    h.push_str(&viewer(s));
     h.push_str("<h2>Utilisation</h2><p>Green 0, yellow 0.5, red 1 or more: the larger of the stress and buckling checks over every case.</p><div class=\"views\">");
     figures(&mut h, &util);
     let _ = write!(

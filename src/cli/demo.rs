@@ -160,9 +160,11 @@ pub fn run(args: Args) -> Result<()> {
     bar.set_message("print: leaf, solid, slices");
     entries.push(print::print_leaf(out, args.size)?);
     bar.inc(1);
+    bar.set_message("viewers");
+    let viewers = viewers(out, &entries)?;
     bar.finish_and_clear();
     let index = out.join("index.html");
-    let html = index_html(&entries);
+    let html = index_html(&entries, &viewers);
     write_atomic(&index, |w| std::io::Write::write_all(w, html.as_bytes()))?;
     println!("wrote {} ({} fixtures)", index.display(), entries.len());
     Ok(())
@@ -655,25 +657,107 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     })
 }
 
-fn index_html(entries: &[Entry]) -> String {
+/// The viewer pages under `view/`, each listed with the entry (by name) whose outputs it shows.
+const VIEWERS: &[(&str, &str, &str, &[&str])] = &[
+    (
+        "calyx_veins.json",
+        "network",
+        "calyx-network.html",
+        &["inputs/calyx_veins.json"],
+    ),
+    (
+        "Calyx: cells and planar panels",
+        "panels by deviation",
+        "calyx-panels.html",
+        &["calyx/newton-axes.json"],
+    ),
+    (
+        "Calyx: plates, bolted seams, welds and the cut plan",
+        "plates, welds, utilisation",
+        "calyx-plates.html",
+        &[
+            "calyx/plates/plates.json",
+            "calyx/plates/welds.json",
+            "calyx/sizing.json",
+            "calyx/lbfgs-axes.json",
+        ],
+    ),
+    (
+        "Calyx: plates, bolted seams, welds and the cut plan",
+        "cut sheets",
+        "calyx-sheets.html",
+        &["calyx/cut/nest.json"],
+    ),
+    (
+        "Fabrication-aware networks: simplified, then cut",
+        "simplified band",
+        "band-simple.html",
+        &["simplify/band-simple.json"],
+    ),
+    (
+        "growth forms (bud programs)",
+        "holes (mesh)",
+        "buds-holes.html",
+        &["buds/holes.stl"],
+    ),
+    (
+        "print: leaf → solid → slices",
+        "print layers and islands",
+        "print-layers.html",
+        &["print/leaf.sl1"],
+    ),
+];
+
+/// Writes the viewers; per entry, the (label, page) pairs to link.
+fn viewers(out: &Path, entries: &[Entry]) -> Result<Vec<Vec<(String, String)>>> {
+    let dir = out.join("view");
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    let mut links = vec![Vec::new(); entries.len()];
+    for (entry, label, page, files) in VIEWERS {
+        let k = entries
+            .iter()
+            .position(|e| e.name == *entry)
+            .with_context(|| format!("the demo has no entry `{entry}` for its {label} viewer"))?;
+        let paths: Vec<std::path::PathBuf> = files.iter().map(|f| out.join(f)).collect();
+        let refs: Vec<&Path> = paths.iter().map(|p| p.as_path()).collect();
+        super::view::write_view(&refs, &dir.join(page), &format!("lamina demo: {label}"))?;
+        links[k].push((label.to_string(), format!("view/{page}")));
+    }
+    Ok(links)
+}
+
+fn index_html(entries: &[Entry], viewers: &[Vec<(String, String)>]) -> String {
     let mut s = String::from(
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>lamina demo</title>\n\
          <style>body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:70em;color:#222}\
          section{border-top:1px solid #ccc;padding:1em 0;display:flex;gap:2em}\
          img{width:26em;max-height:26em;object-fit:contain;background:#fff;border:1px solid #ddd}\
-         code{background:#f3f3f3;padding:0 .3em}</style></head><body>\n\
+         code{background:#f3f3f3;padding:0 .3em}a.view{font-weight:600}</style></head><body>\n\
          <h1>lamina demo</h1>\n<p>Every fixture read, checked, converted to each format and rendered. \
          Made by <code>lamina demo</code>.</p>\n",
     );
-    for e in entries {
+    for (e, views) in entries.iter().zip(viewers) {
         let _ = write!(
             s,
-            "<section><a href=\"{p}\"><img src=\"{p}\" alt=\"{n}\"></a><div><h2>{n}</h2><p>{a}</p><p>{f}</p><ul>",
+            "<section><a href=\"{p}\"><img src=\"{p}\" alt=\"{n}\"></a><div><h2>{n}</h2><p>{a}</p><p>{f}</p>",
             p = e.preview,
             n = e.name,
             a = e.about,
             f = e.facts
         );
+        if !views.is_empty() {
+            let links: Vec<String> = views
+                .iter()
+                .map(|(label, href)| format!("<a class=\"view\" href=\"{href}\">{label}</a>"))
+                .collect();
+            let _ = write!(
+                s,
+                "<p><strong>Look in the viewer:</strong> {}</p>",
+                links.join(" · ")
+            );
+        }
+        s.push_str("<ul>");
         for o in &e.outputs {
             let _ = write!(s, "<li><a href=\"{o}\">{o}</a></li>");
         }

@@ -256,7 +256,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     write_mesh(&assembly(&set), &args.output.join("assembly.stl"), 0)?;
     write_assembly_obj(&set, &args.output.join("assembly.obj"))?;
     let tags = write_parts(&set, &args.output)?;
-    let weld = write_weld_report(&set, &opts, args.min_weld_angle, &args.output)?;
+    let weld = write_weld_report(&set, &opts, args, &args.output)?;
     Ok(Outcome { set, tags, weld })
 }
 
@@ -541,9 +541,10 @@ fn write_plates_json(set: &PlateSet, opts: &PlateOptions, path: &Path) -> Result
 fn write_weld_report(
     set: &PlateSet,
     opts: &PlateOptions,
-    min_angle: Option<f64>,
+    args: &Args,
     dir: &Path,
 ) -> Result<WeldSummary> {
+    let min_angle = args.min_weld_angle;
     let ids = |k: usize| -> String {
         let v: Vec<&str> = set.by_edge[k]
             .iter()
@@ -651,6 +652,22 @@ fn write_weld_report(
     });
     let text = serde_json::to_string_pretty(&doc)?;
     write_atomic(&dir.join("welds.json"), |w| writeln!(w, "{text}"))?;
+    // The plates and their welds in the viewer, read back from the files just written.
+    let (plates_file, welds_file) = (dir.join("plates.json"), dir.join("welds.json"));
+    let mut files = vec![
+        plates_file.as_path(),
+        welds_file.as_path(),
+        args.input.as_path(),
+    ];
+    if let Some(s) = &args.sizing {
+        files.push(s.as_path());
+    }
+    let scene = super::view::scene_of(&files, "plates and welds")?;
+    let viewer = format!(
+        "<h2>Look around</h2>\n<p>Plates coloured by group, gauge{} (the menu beside them); each pair of plates side by side at a node is a dot in the wedge between them, coloured by its access class or root gap. Hover or click for figures; find a plate by its tag or a pair as W, its node and its number (W12-2).</p>\n{}",
+        if args.sizing.is_some() { " or utilisation" } else { "" },
+        lamina::view::embed(&scene, "70vh")
+    );
     let html = format!(
         "<!doctype html><meta charset=\"utf-8\"><title>lamina weld report</title>\n\
 <style>body{{font:14px system-ui,sans-serif;margin:2em}}table{{border-collapse:collapse}}\
@@ -665,6 +682,8 @@ in the plane perpendicular to the node axis: the weld's root opening along the l
 neighbours: the wedge a fillet weld fills. Below 60° there is no prequalified fillet weld; 60–120° is \
 prequalified by EN 1993-1-8 §4.3.2.1; AWS D1.1 allows up to 135°; above that the plates meet end to end \
 (a butt weld).</dd></dl>\n\
+{viewer}\n\
+<h2>Pairs</h2>\n\
 <table><tr><th>node</th><th>status</th><th>plates</th><th>root gap, mm</th><th>dihedral, °</th><th>access</th></tr>\n{rows}</table>\n",
         sum.nodes,
         sum.pairs,

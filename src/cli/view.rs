@@ -252,14 +252,19 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
     Ok(scene)
 }
 
-/// Writes the viewer page of `files` to `output` (for the demo and the reports' callers).
-pub fn write_view(files: &[&Path], output: &Path, title: &str) -> Result<Scene> {
+/// The scene of `files` read with the default reader options (for the demo and the reports).
+pub fn scene_of(files: &[&Path], title: &str) -> Result<Scene> {
     let args = ReadArgs::default();
     let inputs: Vec<(PathBuf, Input)> = files
         .iter()
         .map(|p| Ok((p.to_path_buf(), read(p, &args)?)))
         .collect::<Result<_>>()?;
-    let scene = scene(&inputs, Some(title.to_string()))?;
+    scene(&inputs, Some(title.to_string()))
+}
+
+/// Writes the viewer page of `files` to `output`.
+pub fn write_view(files: &[&Path], output: &Path, title: &str) -> Result<Scene> {
+    let scene = scene_of(files, title)?;
     write_atomic(output, |w| w.write_all(page(&scene).as_bytes()))?;
     Ok(scene)
 }

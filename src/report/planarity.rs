@@ -16,6 +16,8 @@ pub const WORST: usize = 20;
 pub const BINS: usize = 20;
 /// The most panels a view draws (the page stays a few megabytes).
 pub const VIEW_PANELS: usize = 20_000;
+/// The most panels the embedded 3D viewer shows (about 40 MB of page).
+pub const VIEWER_PANELS: usize = 200_000;
 
 /// The figure a tolerance is held against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
@@ -389,6 +391,7 @@ impl Report {
             let _ = writeln!(h, "<dt>{k}</dt><dd>{}</dd>", html(v));
         }
         h.push_str("</dl>\n");
+        h.push_str(&self.viewer());
         let _ = writeln!(
             h,
             "<h2>Panels by {}</h2>\n<div class=\"views\">",
@@ -418,11 +421,31 @@ impl Report {
                 String::new()
             }
         );
-        h.push_str("<h2>Histogram</h2>\n");
+        let _ = writeln!(
+            h,
+            "<h2>Histogram</h2>\n<p>How many panels have each value of the held figure ({}; defined above), in {BINS} equal bins from 0 to the largest.</p>",
+            s.metric.name()
+        );
         h.push_str(&self.histogram_svg());
         if !c.history.is_empty() {
-            h.push_str("<h2>Convergence</h2>\n");
-            h.push_str(&curve_svg(&c.history));
+            // Projection records its largest deviation; the solvers their objective.
+            let projection = c
+                .method
+                .as_deref()
+                .is_some_and(|m| m.to_lowercase().contains("projection"));
+            let (label, what) = if projection {
+                (
+                    "largest panel deviation, mm (log scale)",
+                    "The largest corner deviation over the panels after each sweep.",
+                )
+            } else {
+                (
+                    "objective E, no unit (log scale)",
+                    "The objective after each iteration: E = Σ over edges of w·(ê·(dᵢ × dⱼ))² + α·Σ over nodes of |dᵢ − bᵢ|², the first term zero exactly when every panel is planar (ê the edge's unit direction, dᵢ the node axes), the second holding axes near their references bᵢ (α as used above).",
+                )
+            };
+            let _ = writeln!(h, "<h2>Convergence</h2>\n<p>{what}</p>");
+            h.push_str(&curve_svg(&c.history, label));
         }
         h.push_str("<h2>Worst panels (by figure over tolerance)</h2>\n<table><tr><th>panel</th><th>nodes</th><th>name / layer / group</th><th>tolerance mm</th><th>flatness mm</th>\
                     <th>best fit mm</th><th>corner mm</th><th>diagonals mm</th><th>diag / edge</th><th>diag / diag</th><th>torsion °</th></tr>\n");
@@ -452,6 +475,33 @@ impl Report {
         }
         h.push_str("</table>\n</body></html>\n");
         h
+    }
+
+    /// The panels in the 3D viewer, coloured by the held figure (or a note when there are too
+    /// many for a page).
+    fn viewer(&self) -> String {
+        if self.panels.len() > VIEWER_PANELS {
+            return format!(
+                "<p>{} panels: more than the 3D viewer embeds ({VIEWER_PANELS}); the views below draw a sample.</p>\n",
+                self.panels.len()
+            );
+        }
+        let origin = crate::view::pack::middle(self.quads.iter().flatten().copied());
+        match crate::view::pack::panels(&self.quads, &self.panels, self.summary.metric, origin) {
+            Ok(layer) => {
+                let scene = crate::view::Scene {
+                    title: self.context.title.clone(),
+                    origin: origin.to_array(),
+                    layers: vec![layer],
+                    ..Default::default()
+                };
+                format!(
+                    "<h2>Look around</h2>\n<p>Drag to turn, right-drag to pan, wheel to zoom; hover or click a panel for its figures; find a panel by its id (P and its index).</p>\n{}",
+                    crate::view::embed(&scene, "70vh")
+                )
+            }
+            Err(e) => format!("<p>No 3D view: {}</p>\n", html(&e.to_string())),
+        }
     }
 
     fn view_svg(&self, view: View) -> String {
@@ -552,18 +602,18 @@ impl Report {
     fn histogram_svg(&self) -> String {
         let hgm = &self.histogram;
         let max = hgm.counts.iter().copied().max().unwrap_or(1).max(1) as f64;
-        let (bw, hh) = (24.0, 160.0);
+        let (bw, hh, left) = (24.0, 160.0, 64.0);
+        let width = bw * BINS as f64 + left + 30.0;
         let mut s = format!(
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\">",
-            bw * BINS as f64 + 80.0,
-            hh + 40.0
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{}\" font-size=\"11\">",
+            hh + 64.0
         );
         for (k, &c) in hgm.counts.iter().enumerate() {
             let bh = hh * c as f64 / max;
             let _ = write!(
                 s,
                 "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"#5a8f4e\"><title>{:.4}–{:.4} mm: {c}</title></rect>",
-                k as f64 * bw + 40.0,
+                k as f64 * bw + left,
                 hh - bh + 10.0,
                 bw - 2.0,
                 bh,
@@ -571,15 +621,27 @@ impl Report {
                 hgm.edges[k + 1]
             );
         }
+        let right = bw * BINS as f64 + left;
+        let held = self.summary.metric.name();
         let _ = write!(
             s,
-            "<text x=\"40\" y=\"{:.0}\" font-size=\"11\">0</text><text x=\"{:.0}\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">{:.4} mm</text>\
-             <text x=\"34\" y=\"18\" font-size=\"11\" text-anchor=\"end\">{}</text></svg>",
-            hh + 26.0,
-            bw * BINS as f64 + 40.0,
-            hh + 26.0,
-            hgm.edges[BINS],
-            max as usize
+            "<line x1=\"{left}\" y1=\"{b}\" x2=\"{right}\" y2=\"{b}\" stroke=\"#444\"/>\
+             <line x1=\"{l}\" y1=\"10\" x2=\"{l}\" y2=\"{b}\" stroke=\"#444\"/>\
+             <text x=\"{left}\" y=\"{t}\" text-anchor=\"middle\">0</text>\
+             <text x=\"{right}\" y=\"{t}\" text-anchor=\"middle\">{top:.4}</text>\
+             <text x=\"{l2}\" y=\"14\" text-anchor=\"end\">{max}</text>\
+             <text x=\"{l2}\" y=\"{b}\" text-anchor=\"end\">0</text>\
+             <text x=\"{mid}\" y=\"{xt}\" text-anchor=\"middle\" font-size=\"12\">{held} of the panel, mm ({BINS} bins)</text>\
+             <text transform=\"translate(16 {ym}) rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">panels</text></svg>",
+            b = hh + 10.0,
+            l = left - 2.0,
+            l2 = left - 6.0,
+            t = hh + 24.0,
+            top = hgm.edges[BINS],
+            max = max as usize,
+            mid = (left + right) / 2.0,
+            xt = hh + 44.0,
+            ym = hh / 2.0 + 10.0,
         );
         s
     }
@@ -592,38 +654,68 @@ enum View {
     Iso,
 }
 
-/// The convergence curve on a log scale.
-fn curve_svg(history: &[f64]) -> String {
+/// The convergence curve on a log scale, with a tick at each power of ten it spans.
+fn curve_svg(history: &[f64], label: &str) -> String {
     let vals: Vec<f64> = history.iter().map(|v| v.max(1e-300).log10()).collect();
     let (lo, hi) = vals
         .iter()
         .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
-    let span = (hi - lo).max(1e-9);
-    let (w, h) = (560.0, 200.0);
+    // Whole decades around the values, so every tick is a power of ten.
+    let (lo, hi) = (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
+    let span = hi - lo;
+    let (w, h, left) = (560.0, 200.0, 70.0);
     let n = (vals.len().max(2) - 1) as f64;
+    let x = |i: f64| left + w * i / n;
+    let y = |v: f64| 10.0 + h * (hi - v) / span;
     let mut d = String::new();
     for (i, v) in vals.iter().enumerate() {
         let _ = write!(
             d,
             "{}{:.1} {:.1}",
             if i == 0 { "M" } else { " L" },
-            50.0 + w * i as f64 / n,
-            10.0 + h * (hi - v) / span
+            x(i as f64),
+            y(*v)
         );
     }
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\">\
-         <path d=\"{d}\" fill=\"none\" stroke=\"#2b5d8a\" stroke-width=\"1.5\"/>\
-         <text x=\"46\" y=\"16\" font-size=\"11\" text-anchor=\"end\">1e{hi:.1}</text>\
-         <text x=\"46\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">1e{lo:.1}</text>\
-         <text x=\"{:.0}\" y=\"{:.0}\" font-size=\"11\" text-anchor=\"end\">{} iterations</text></svg>",
-        w + 60.0,
-        h + 40.0,
-        h + 12.0,
-        w + 50.0,
-        h + 32.0,
-        history.len()
-    )
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-size=\"11\">\
+         <line x1=\"{left}\" y1=\"{b}\" x2=\"{r}\" y2=\"{b}\" stroke=\"#444\"/>\
+         <line x1=\"{left}\" y1=\"10\" x2=\"{left}\" y2=\"{b}\" stroke=\"#444\"/>",
+        w + left + 20.0,
+        h + 60.0,
+        b = h + 10.0,
+        r = left + w,
+    );
+    let step = (span / 8.0).ceil().max(1.0);
+    let mut e = lo;
+    while e <= hi + 1e-9 {
+        let _ = write!(
+            s,
+            "<line x1=\"{:.1}\" y1=\"{yy:.1}\" x2=\"{left}\" y2=\"{yy:.1}\" stroke=\"#444\"/>\
+             <text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">10<tspan dy=\"-5\" font-size=\"9\">{}</tspan></text>",
+            left - 4.0,
+            left - 8.0,
+            y(e) + 4.0,
+            e as i64,
+            yy = y(e),
+        );
+        e += step;
+    }
+    let last = vals.len().saturating_sub(1);
+    let _ = write!(
+        s,
+        "<path d=\"{d}\" fill=\"none\" stroke=\"#2b5d8a\" stroke-width=\"1.5\"/>\
+         <text x=\"{left}\" y=\"{t}\" text-anchor=\"middle\">0</text>\
+         <text x=\"{r}\" y=\"{t}\" text-anchor=\"middle\">{last}</text>\
+         <text x=\"{mid}\" y=\"{xt}\" text-anchor=\"middle\" font-size=\"12\">iteration</text>\
+         <text transform=\"translate(16 {ym}) rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">{label}</text></svg>",
+        t = h + 24.0,
+        r = left + w,
+        mid = left + w / 2.0,
+        xt = h + 44.0,
+        ym = h / 2.0 + 10.0,
+    );
+    s
 }
 
 #[cfg(test)]

@@ -144,7 +144,10 @@ function start(data) {
   applyHash();
   window.addEventListener("hashchange", applyHash);
   window.lamina = { find, show, data };
-  requestAnimationFrame(() => requestAnimationFrame(() => { document.body.dataset.ready = "1"; }));
+  requestAnimationFrame(() => requestAnimationFrame(() => {
+    document.body.dataset.readyMs = performance.now().toFixed(0);
+    document.body.dataset.ready = "1";
+  }));
 }
 
 function figuresTable(title, sub, figures) {

@@ -1,0 +1,372 @@
+"""A lamina viewer page opened in headless Chromium (Debian's `chromium`), driven over the
+DevTools protocol (websocket-client), with the figures it shows checked against the source
+files read here without lamina (json, numpy, shapely, ezdxf, Pillow, scipy).
+
+    check_viewer.py PAGE.html [--select ID]... [--layer K]... [--axes AXES.json]
+        [--plates PLATES.json] [--welds WELDS.json] [--sizing SIZING.json] [--nest NEST.json]
+        [--sl1 JOB.sl1] [--network NET.json] [--max-mb MB] [--screenshot OUT.png]
+
+Every page: it opens from file:// with no network, sets `document.body.dataset.ready`, logs no
+console error and throws no exception. Where it has a WebGL canvas, a screenshot of the canvas
+is not blank (its pixels are not one colour: standard deviation and the share of pixels away
+from the background). --screenshot saves the window after the selections. `#select=ID` in the URL must show ID in `#lamina-info` with figures that
+agree with the sources:
+
+- a panel `Pk` (with --axes): the corner deviation, the distance of the fourth corner from the
+  plane of the other three, recomputed with numpy; its tolerance and pass.
+- a plate tag (with --plates): its gauge, group and area (outline less 64-gon holes, shapely);
+  with --sizing its utilisation.
+- a weld `Wn-k` (with --welds): node n's k-th pair's plates, root gap and dihedral angle.
+- a sheet part (with --nest): the sheet nest.json puts it on, its rotation, and its box, the
+  bounding box of the CUT_OUTER contour that starts at its placement's bbox_min (ezdxf).
+- a node `Nk` (with --network): its position.
+- a member `Ek` (with --sizing, on the sizing report): its utilisation, governing check and gauge.
+
+`#layer=K` (with --sl1) must show layer K and the count of islands that start there, counted here
+from the archive's images (grey >= 128, 8-connected regions with no lit pixel in the layer below).
+The time from navigation to ready is printed (not held to a limit here: machines are noisy).
+"""
+import argparse
+import base64
+import configparser
+import io
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+import zipfile
+
+import numpy as np
+from PIL import Image, ImageStat
+
+import websocket
+
+
+def fail(msg):
+    print(f"check_viewer: FAILED: {msg}", file=sys.stderr)
+    sys.exit(1)
+
+
+class Browser:
+    """Chromium headless with one page, spoken to over the DevTools protocol."""
+
+    def __init__(self, width=1280, height=800):
+        exe = shutil.which("chromium") or shutil.which("chromium-browser")
+        if not exe:
+            fail("no chromium on PATH (scripts/setup installs Debian's chromium)")
+        self.profile = tempfile.mkdtemp(prefix="lamina-chromium-")
+        self.proc = subprocess.Popen(
+            [exe, "--headless=new", "--no-sandbox", "--disable-gpu-sandbox",
+             "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+             "--remote-debugging-port=0", "--remote-allow-origins=*",
+             f"--user-data-dir={self.profile}", f"--window-size={width},{height}",
+             "--no-first-run", "--no-default-browser-check", "--disable-extensions",
+             "about:blank"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        port = None
+        deadline = time.time() + 30
+        while time.time() < deadline:
+            line = self.proc.stderr.readline()
+            if not line:
+                if self.proc.poll() is not None:
+                    break
+                continue
+            m = re.search(r"DevTools listening on ws://127\.0\.0\.1:(\d+)/", line)
+            if m:
+                port = int(m.group(1))
+                break
+        if port is None:
+            self.close()
+            fail("chromium did not start its DevTools endpoint")
+        targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10))
+        page = next(t for t in targets if t["type"] == "page")
+        self.ws = websocket.create_connection(page["webSocketDebuggerUrl"], timeout=60,
+                                              suppress_origin=True)
+        self.next_id = 0
+        self.errors = []
+        for domain in ("Page", "Runtime", "Log"):
+            self.call(f"{domain}.enable")
+
+    def call(self, method, **params):
+        self.next_id += 1
+        mine = self.next_id
+        self.ws.send(json.dumps({"id": mine, "method": method, "params": params}))
+        while True:
+            msg = json.loads(self.ws.recv())
+            if msg.get("id") == mine:
+                if "error" in msg:
+                    fail(f"{method}: {msg['error']}")
+                return msg.get("result", {})
+            self.event(msg)
+
+    def event(self, msg):
+        m, p = msg.get("method"), msg.get("params", {})
+        if m == "Runtime.exceptionThrown":
+            d = p["exceptionDetails"]
+            self.errors.append(d.get("exception", {}).get("description") or d.get("text"))
+        elif m == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
+            self.errors.append(" ".join(str(a.get("value", a.get("description", ""))) for a in p["args"]))
+        elif m == "Log.entryAdded" and p["entry"].get("level") == "error":
+            self.errors.append(f"{p['entry'].get('source')}: {p['entry'].get('text')}")
+
+    def eval(self, expr):
+        r = self.call("Runtime.evaluate", expression=expr, returnByValue=True, awaitPromise=True)
+        if "exceptionDetails" in r:
+            fail(f"evaluating {expr!r}: {r['exceptionDetails']}")
+        return r["result"].get("value")
+
+    def wait(self, expr, what, timeout=30):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            v = self.eval(expr)
+            if v:
+                return v
+            time.sleep(0.05)
+        fail(f"{what} did not happen within {timeout} s (errors: {self.errors})")
+
+    def close(self):
+        try:
+            self.proc.kill()
+            self.proc.wait(10)
+        except Exception:
+            pass
+        shutil.rmtree(self.profile, ignore_errors=True)
+
+
+def number(text):
+    m = re.search(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", text)
+    if not m:
+        fail(f"no number in {text!r}")
+    return float(m.group(0))
+
+
+def info(b):
+    return b.eval("""(() => {
+        const i = document.getElementById('lamina-info');
+        const rows = {};
+        for (const tr of i.querySelectorAll('tr')) rows[tr.cells[0].textContent] = tr.cells[1].textContent;
+        return {id: (i.querySelector('h3') || {}).textContent, sub: (i.querySelector('.lv-sub') || {}).textContent,
+                selected: i.dataset.selected, rows, text: i.innerText};
+    })()""")
+
+
+def close_to(name, shown, want, tol):
+    if not abs(shown - want) <= tol:
+        fail(f"{name}: the page shows {shown}, the source gives {want} (tolerance {tol})")
+
+
+def check_panel(ident, rows, axes):
+    k = int(ident[1:])
+    nodes, edges = axes["nodes"], axes["edges"]
+    e = edges[k]
+    p = [np.array(nodes[i]["p"]) for i in (e["a"], e["b"])]
+    d = [np.array(nodes[i]["axis"]) * nodes[i]["height"] for i in (e["a"], e["b"])]
+    q = [p[0], p[1], p[1] + d[1], p[0] + d[0]]
+    n = np.cross(q[1] - q[0], q[3] - q[0])
+    dev = abs(np.dot(q[2] - q[0], n / np.linalg.norm(n)))
+    held = next((v for key, v in rows.items() if key.startswith("corner")), None)
+    if held is None:
+        fail(f"{ident}: no corner deviation among {list(rows)}")
+    close_to(f"{ident} corner deviation", number(held), dev, 6e-7)
+    tol = axes["summary"]["tolerance"]
+    close_to(f"{ident} tolerance", number(rows["tolerance"]), tol, 1e-9)
+    want = "yes" if dev <= tol else "no"
+    if rows.get("within tolerance") != want and abs(dev - tol) > 1e-9:
+        fail(f"{ident}: shown as within tolerance = {rows.get('within tolerance')}, {dev} against {tol}")
+    return f"{ident} deviation {dev:.6f} mm"
+
+
+def check_plate(ident, rows, plates, sizing):
+    from shapely.geometry import Polygon
+    doc = plates
+    p = next(p for p in doc["plates"] if p["id"] == ident)
+    close_to(f"{ident} gauge", number(rows["gauge"]), p["thickness"], 5e-4)
+    if int(number(rows["group"])) != p["group"]:
+        fail(f"{ident}: group {rows['group']}, plates.json says {p['group']}")
+    area = Polygon(p["outline"]).area
+    if p.get("holes"):
+        r = p["bolt"]["hole_diameter"] / 2
+        n = doc.get("hole_segments", 64)
+        area -= len(p["holes"]) * 0.5 * n * r * r * math.sin(2 * math.pi / n)
+    close_to(f"{ident} area", number(rows["area"]), area, 0.51)
+    said = f"{ident} gauge {p['thickness']} mm, area {area:.0f} mm²"
+    if sizing is not None:
+        u = sizing["edges"][p["edge"]]["utilisation"]
+        close_to(f"{ident} utilisation", number(rows["utilisation"]), u, 5e-4)
+        said += f", utilisation {u:.3f}"
+    return said
+
+
+def check_weld(ident, rows, welds):
+    node, k = (int(v) for v in ident[1:].split("-"))
+    n = next(n for n in welds["nodes"] if n["node"] == node)
+    pair = n["pairs"][k - 1]
+    shown = rows["plates"].replace(" ", "").split("/")
+    if shown != pair["plates"]:
+        fail(f"{ident}: plates {shown}, welds.json says {pair['plates']}")
+    close_to(f"{ident} root gap", number(rows["root gap"]), pair["root_gap_mm"], 5e-4)
+    close_to(f"{ident} dihedral", number(rows["dihedral"]), pair["dihedral_deg"], 5e-3)
+    return f"{ident} gap {pair['root_gap_mm']:.3f} mm, {pair['dihedral_deg']:.2f}°"
+
+
+def check_part(ident, got, nest_path):
+    import ezdxf
+    nest = json.load(open(nest_path))
+    place = next(p for p in nest["placements"] if p["id"] == ident)
+    if place["sheet"] not in got["sub"]:
+        fail(f"{ident}: shown on {got['sub']!r}, nest.json puts it on {place['sheet']}")
+    close_to(f"{ident} rotation", number(got["rows"]["rotation"]), place["rotation_deg"], 1e-9)
+    doc = ezdxf.readfile(os.path.join(os.path.dirname(nest_path), place["sheet"]))
+    best = None
+    for e in doc.modelspace().query("LWPOLYLINE[layer=='CUT_OUTER']"):
+        pts = np.array([(x, y) for x, y, *_ in e.get_points()])
+        lo = pts.min(axis=0)
+        dist = np.linalg.norm(lo - np.array(place["bbox_min"]))
+        if best is None or dist < best[0]:
+            best = (dist, pts.max(axis=0) - lo)
+    if best is None or best[0] > 0.05:
+        fail(f"{ident}: no CUT_OUTER contour starts at its bbox_min {place['bbox_min']}")
+    w, h = (number(v) for v in got["rows"]["box"].split("×"))
+    close_to(f"{ident} box width", w, best[1][0], 0.051)
+    close_to(f"{ident} box height", h, best[1][1], 0.051)
+    return f"{ident} on {place['sheet']}, box {best[1][0]:.1f} × {best[1][1]:.1f} mm"
+
+
+def check_member(ident, rows, sizing):
+    e = sizing["edges"][int(ident[1:])]
+    close_to(f"{ident} utilisation", number(rows["utilisation"]), e["utilisation"], 5e-4)
+    close_to(f"{ident} gauge", number(rows["gauge"]), e["gauge"], 1e-9)
+    if e["check"] not in rows["utilisation"]:
+        fail(f"{ident}: governed by {rows['utilisation']!r}, sizing.json says {e['check']}")
+    return f"{ident} utilisation {e['utilisation']:.3f} ({e['check']})"
+
+
+def check_node(ident, rows, net):
+    k = int(ident[1:])
+    p = np.array(net["nodes"][k]["p"] if "p" in net["nodes"][k] else net["nodes"][k]["position"])
+    shown = np.array([float(v) for v in rows["position"].split(",")])
+    close_to(f"{ident} position", float(np.abs(shown - p).max()), 0.0, 5e-4)
+    return f"{ident} at {rows['position']}"
+
+
+def sl1_islands(path, layer):
+    """Islands starting in `layer`, counted from the archive's images."""
+    from scipy import ndimage
+    with zipfile.ZipFile(path) as z:
+        cfg = configparser.ConfigParser()
+        cfg.read_string("[c]\n" + z.read("config.ini").decode())
+        job = cfg["c"]["jobDir"]
+
+        def lit(k):
+            return np.array(Image.open(io.BytesIO(z.read(f"{job}{k:05d}.png"))).convert("L")) >= 128
+        now = lit(layer)
+        if layer == 0:
+            return 0
+        below = lit(layer - 1)
+    labels, n = ndimage.label(now, structure=np.ones((3, 3)))
+    held = set(np.unique(labels[below & now]))
+    return sum(1 for i in range(1, n + 1) if i not in held)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("page")
+    ap.add_argument("--select", action="append", default=[])
+    ap.add_argument("--layer", action="append", type=int, default=[])
+    ap.add_argument("--axes")
+    ap.add_argument("--plates")
+    ap.add_argument("--welds")
+    ap.add_argument("--sizing")
+    ap.add_argument("--nest")
+    ap.add_argument("--sl1")
+    ap.add_argument("--network")
+    ap.add_argument("--max-mb", type=float)
+    ap.add_argument("--screenshot")
+    a = ap.parse_args()
+    load = lambda p: json.load(open(p)) if p else None
+    axes, plates, welds, sizing, net = map(load, (a.axes, a.plates, a.welds, a.sizing, a.network))
+
+    size = os.path.getsize(a.page)
+    if a.max_mb is not None and size > a.max_mb * 1e6:
+        fail(f"{a.page} is {size / 1e6:.2f} MB, more than {a.max_mb} MB")
+    html = open(a.page, encoding="utf-8").read()
+    if re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", html):
+        fail("the page loads something from the network")
+
+    url = "file://" + os.path.abspath(a.page)
+    b = Browser()
+    said = []
+    try:
+        b.call("Page.navigate", url=url)
+        b.wait("document.body && document.body.dataset.ready === '1'", "the viewer getting ready")
+        ready_ms = float(b.eval("document.body.dataset.readyMs"))
+        canvas = b.eval("""(() => { const c = document.querySelector('#lamina-viewer canvas');
+            if (!c || c.offsetParent === null) return null;
+            c.scrollIntoView({block: 'center'});
+            const r = c.getBoundingClientRect(); return [r.x, r.y, r.width, r.height]; })()""")
+        if canvas:
+            shot = base64.b64decode(b.call("Page.captureScreenshot", format="png")["data"])
+            img = Image.open(io.BytesIO(shot)).convert("RGB")
+            x, y, w, h = (int(round(v)) for v in canvas)
+            crop = img.crop((x, y, x + w, y + h))
+            px = np.asarray(crop).reshape(-1, 3).astype(int)
+            bg = np.array([0xf3, 0xf4, 0xf6])
+            away = float((np.abs(px - bg).sum(axis=1) > 30).mean())
+            std = max(ImageStat.Stat(crop).stddev)
+            if away < 0.01 or std < 3:
+                fail(f"the 3D canvas looks blank: {100 * away:.2f} % of pixels away from the background, stddev {std:.1f}")
+            said.append(f"canvas {w}×{h}: {100 * away:.1f} % drawn, stddev {std:.1f}")
+        for ident in a.select:
+            b.eval(f"location.hash = {json.dumps('select=' + ident)}")
+            b.wait(f"document.getElementById('lamina-info').dataset.selected === {json.dumps(ident)}",
+                   f"selecting {ident}")
+            got = info(b)
+            if got["id"] != ident:
+                fail(f"#select={ident} shows {got['id']!r}")
+            rows = got["rows"]
+            if re.fullmatch(r"P\d+", ident) and axes:
+                said.append(check_panel(ident, rows, axes))
+            elif re.fullmatch(r"W\d+-\d+", ident) and welds:
+                said.append(check_weld(ident, rows, welds))
+            elif re.fullmatch(r"E\d+", ident) and sizing:
+                said.append(check_member(ident, rows, sizing))
+            elif re.fullmatch(r"N\d+", ident) and net:
+                said.append(check_node(ident, rows, net))
+            elif plates and any(p["id"] == ident for p in plates["plates"]) and "gauge" in rows:
+                said.append(check_plate(ident, rows, plates, sizing))
+            elif a.nest:
+                said.append(check_part(ident, got, a.nest))
+            else:
+                fail(f"{ident}: no source given to check its figures against")
+        for k in a.layer:
+            if not a.sl1:
+                fail("--layer needs --sl1")
+            b.eval(f"location.hash = 'view=print&layer={k}'")
+            b.wait(f"document.getElementById('lamina-info').dataset.selected === 'layer {k}'", f"layer {k}")
+            rows = info(b)["rows"]
+            want = sl1_islands(a.sl1, k)
+            shown = int(number(rows["islands starting here"]))
+            if shown != want:
+                fail(f"layer {k}: the page shows {shown} islands starting, the images have {want}")
+            said.append(f"layer {k}: {want} islands start")
+        time.sleep(0.7)  # a selection's flight lasts 0.5 s
+        b.eval("0")  # collect late events
+        if a.screenshot:
+            shot = base64.b64decode(b.call("Page.captureScreenshot", format="png")["data"])
+            Image.open(io.BytesIO(shot)).save(a.screenshot)
+        if b.errors:
+            fail(f"console errors: {b.errors}")
+    finally:
+        b.close()
+    print(f"check_viewer: OK: {os.path.basename(a.page)} ({size / 1e6:.2f} MB) ready in {ready_ms:.0f} ms; "
+          + "; ".join(said))
+
+
+if __name__ == "__main__":
+    main()
