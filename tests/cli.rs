@@ -205,6 +205,7 @@ fn demo_is_deterministic() -> TestResult {
         "calyx/plates",
         "calyx/plates/parts",
         "calyx/cut",
+        "view",
         ".",
     ] {
         for entry in std::fs::read_dir(a.join(sub))? {

@@ -12,8 +12,9 @@ is not blank (its pixels are not one colour: standard deviation and the share of
 from the background). --screenshot saves the window after the selections. `#select=ID` in the URL must show ID in `#lamina-info` with figures that
 agree with the sources:
 
-- a panel `Pk` (with --axes): the corner deviation, the distance of the fourth corner from the
-  plane of the other three, recomputed with numpy; its tolerance and pass.
+- a panel `Pk` (with --axes, or --panels for an audit of OBJ faces): the corner deviation, the
+  distance of the fourth corner from the plane of the other three, recomputed with numpy; with
+  --axes its tolerance and pass.
 - a plate tag (with --plates): its gauge, group and area (outline less 64-gon holes, shapely);
   with --sizing its utilisation.
 - a weld `Wn-k` (with --welds): node n's k-th pair's plates, root gap and dihedral angle.
@@ -22,7 +23,8 @@ agree with the sources:
 - a node `Nk` (with --network): its position.
 - a member `Ek` (with --sizing, on the sizing report): its utilisation, governing check and gauge.
 
-`#layer=K` (with --sl1) must show layer K and the count of islands that start there, counted here
+`#layer=K` (with --sl1; --first-island: the first layer where the images start an island, and
+the page's island count against the images' total) must show layer K and the count of islands that start there, counted here
 from the archive's images (grey >= 128, 8-connected regions with no lit pixel in the layer below).
 The time from navigation to ready is printed (not held to a limit here: machines are noisy).
 """
@@ -161,20 +163,37 @@ def close_to(name, shown, want, tol):
         fail(f"{name}: the page shows {shown}, the source gives {want} (tolerance {tol})")
 
 
-def check_panel(ident, rows, axes):
+def obj_quads(path):
+    verts, faces = [], []
+    for line in open(path):
+        t = line.split()
+        if t and t[0] == "v":
+            verts.append([float(x) for x in t[1:4]])
+        elif t and t[0] == "f":
+            faces.append([int(x.split("/")[0]) - 1 for x in t[1:]])
+    return [[np.array(verts[i]) for i in f] for f in faces]
+
+
+def check_panel(ident, rows, axes, quads=None):
     k = int(ident[1:])
-    nodes, edges = axes["nodes"], axes["edges"]
-    e = edges[k]
-    p = [np.array(nodes[i]["p"]) for i in (e["a"], e["b"])]
-    d = [np.array(nodes[i]["axis"]) * nodes[i]["height"] for i in (e["a"], e["b"])]
-    q = [p[0], p[1], p[1] + d[1], p[0] + d[0]]
+    if quads is not None:
+        q = quads[k]
+        tol = None
+    else:
+        nodes, edges = axes["nodes"], axes["edges"]
+        e = edges[k]
+        p = [np.array(nodes[i]["p"]) for i in (e["a"], e["b"])]
+        d = [np.array(nodes[i]["axis"]) * nodes[i]["height"] for i in (e["a"], e["b"])]
+        q = [p[0], p[1], p[1] + d[1], p[0] + d[0]]
+        tol = axes["summary"]["tolerance"]
     n = np.cross(q[1] - q[0], q[3] - q[0])
     dev = abs(np.dot(q[2] - q[0], n / np.linalg.norm(n)))
     held = next((v for key, v in rows.items() if key.startswith("corner")), None)
     if held is None:
         fail(f"{ident}: no corner deviation among {list(rows)}")
     close_to(f"{ident} corner deviation", number(held), dev, 6e-7)
-    tol = axes["summary"]["tolerance"]
+    if tol is None:
+        return f"{ident} corner deviation {dev:.6f} mm"
     close_to(f"{ident} tolerance", number(rows["tolerance"]), tol, 1e-9)
     want = "yes" if dev <= tol else "no"
     if rows.get("within tolerance") != want and abs(dev - tol) > 1e-9:
@@ -255,23 +274,27 @@ def check_node(ident, rows, net):
     return f"{ident} at {rows['position']}"
 
 
-def sl1_islands(path, layer):
-    """Islands starting in `layer`, counted from the archive's images."""
+def sl1_islands(path, layers=None):
+    """Per layer (all, or those asked), the islands starting there, counted from the images."""
     from scipy import ndimage
     with zipfile.ZipFile(path) as z:
         cfg = configparser.ConfigParser()
         cfg.read_string("[c]\n" + z.read("config.ini").decode())
-        job = cfg["c"]["jobDir"]
+        c = cfg["c"]
+        job, count = c["jobDir"], int(float(c["numFast"])) + int(float(c["numSlow"]))
 
         def lit(k):
             return np.array(Image.open(io.BytesIO(z.read(f"{job}{k:05d}.png"))).convert("L")) >= 128
-        now = lit(layer)
-        if layer == 0:
-            return 0
-        below = lit(layer - 1)
-    labels, n = ndimage.label(now, structure=np.ones((3, 3)))
-    held = set(np.unique(labels[below & now]))
-    return sum(1 for i in range(1, n + 1) if i not in held)
+        out = {}
+        for k in (range(count) if layers is None else layers):
+            if k == 0:
+                out[k] = 0
+                continue
+            now, below = lit(k), lit(k - 1)
+            labels, n = ndimage.label(now, structure=np.ones((3, 3)))
+            held = set(np.unique(labels[below & now]))
+            out[k] = sum(1 for i in range(1, n + 1) if i not in held)
+    return out
 
 
 def main():
@@ -280,11 +303,14 @@ def main():
     ap.add_argument("--select", action="append", default=[])
     ap.add_argument("--layer", action="append", type=int, default=[])
     ap.add_argument("--axes")
+    ap.add_argument("--panels", help="the audited panels as OBJ faces (panel k is face k)")
     ap.add_argument("--plates")
     ap.add_argument("--welds")
     ap.add_argument("--sizing")
     ap.add_argument("--nest")
     ap.add_argument("--sl1")
+    ap.add_argument("--first-island", action="store_true",
+                    help="find the first layer where an island starts (counted here) and check the page there")
     ap.add_argument("--network")
     ap.add_argument("--max-mb", type=float)
     ap.add_argument("--screenshot")
@@ -330,8 +356,8 @@ def main():
             if got["id"] != ident:
                 fail(f"#select={ident} shows {got['id']!r}")
             rows = got["rows"]
-            if re.fullmatch(r"P\d+", ident) and axes:
-                said.append(check_panel(ident, rows, axes))
+            if re.fullmatch(r"P\d+", ident) and (axes or a.panels):
+                said.append(check_panel(ident, rows, axes, obj_quads(a.panels) if a.panels else None))
             elif re.fullmatch(r"W\d+-\d+", ident) and welds:
                 said.append(check_weld(ident, rows, welds))
             elif re.fullmatch(r"E\d+", ident) and sizing:
@@ -344,13 +370,24 @@ def main():
                 said.append(check_part(ident, got, a.nest))
             else:
                 fail(f"{ident}: no source given to check its figures against")
-        for k in a.layer:
+        layers = list(a.layer)
+        if a.first_island:
+            counts = sl1_islands(a.sl1)
+            first = next((k for k in sorted(counts) if counts[k]), None)
+            if first is None:
+                fail(f"{a.sl1} has no island to look for")
+            shown = int(number(b.eval("""(() => { const f = window.lamina.data.print.figures;
+                return f.find(r => r[0] === 'islands')[1]; })()""")))
+            if shown != sum(counts.values()):
+                fail(f"the page counts {shown} islands, the images have {sum(counts.values())}")
+            layers.append(first)
+        for k in layers:
             if not a.sl1:
                 fail("--layer needs --sl1")
             b.eval(f"location.hash = 'view=print&layer={k}'")
             b.wait(f"document.getElementById('lamina-info').dataset.selected === 'layer {k}'", f"layer {k}")
             rows = info(b)["rows"]
-            want = sl1_islands(a.sl1, k)
+            want = sl1_islands(a.sl1, [k])[k]
             shown = int(number(rows["islands starting here"]))
             if shown != want:
                 fail(f"layer {k}: the page shows {shown} islands starting, the images have {want}")

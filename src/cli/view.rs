@@ -129,6 +129,13 @@ pub fn run(args: Args) -> Result<()> {
 
 use std::io::Write as _;
 
+/// A file's name, for notes on the page (the same page wherever the files lie).
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
 /// One line on what the page shows.
 fn what(scene: &Scene) -> String {
     let mut parts: Vec<String> = scene
@@ -152,14 +159,7 @@ fn what(scene: &Scene) -> String {
 /// The scene of the inputs together: plates take the welds, sizing and axes given beside
 /// them; axes alone are shown as panels.
 fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
-    let names: Vec<String> = inputs
-        .iter()
-        .map(|(p, _)| {
-            p.file_name()
-                .map(|n| n.to_string_lossy().into_owned())
-                .unwrap_or_default()
-        })
-        .collect();
+    let names: Vec<String> = inputs.iter().map(|(p, _)| file_name(p)).collect();
     let mut scene = Scene {
         title: title.unwrap_or_else(|| format!("lamina: {}", names.join(", "))),
         ..Scene::default()
@@ -185,21 +185,21 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
         match input {
             Input::Network(n) => scene.layers.extend(pack::network(n, origin)?),
             Input::Mesh(m) => {
-                let name = path
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-                    .unwrap_or_else(|| "mesh".into());
-                scene.layers.push(pack::mesh(m, &name, origin)?);
+                scene.layers.push(pack::mesh(m, &file_name(path), origin)?);
             }
             Input::Axes(a, tolerance) => {
                 if has_plates {
                     // Beside plates the axes only place the welds; the panels would hide them.
+                    scene.notes.push(format!(
+                        "{}: places the weld markers; its panels are not drawn beside the plates",
+                        file_name(path)
+                    ));
                     continue;
                 }
                 let t = tolerance.unwrap_or_else(|| {
                     scene.notes.push(format!(
                         "{}: no tolerance in its summary; panels held to 0.01 mm",
-                        path.display()
+                        file_name(path)
                     ));
                     0.01
                 });
@@ -233,7 +233,7 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
             }
             Input::Welds(..) | Input::Sizing(_) if !has_plates => scene.notes.push(format!(
                 "{}: shown with plates.json only; give it too",
-                path.display()
+                file_name(path)
             )),
             Input::Welds(..) | Input::Sizing(_) => {}
             Input::Nest => {

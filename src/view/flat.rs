@@ -13,6 +13,9 @@ use crate::fabricate::slice::encode_grey;
 
 /// How far a part's drawn outline may lie from where nest.json says its box starts, mm.
 const MATCH_MM: f64 = 0.05;
+/// The widest gap between two pieces of one micro-jointed outer contour, mm (a joint is well
+/// under 1 mm wide; the next part's contour starts much farther away).
+const PIECE_GAP_MM: f64 = 5.0;
 
 /// The sheets of a nest file, each read from its cut DXF beside it; notes say what was not
 /// shown.
@@ -88,12 +91,34 @@ fn parts_of(
             k += 1;
             continue;
         }
-        // The outer contour: one closed polyline, or open pieces with joints between them.
+        // The outer contour: one closed polyline, or open pieces in cutting order with the
+        // joints between them, each piece starting a joint's width from where the last ended.
         let mut outer = vec![k];
         k += 1;
-        while k < paths.len() && [CUT_OUTER, JOINT].contains(&paths[k].layer.as_str()) {
-            outer.push(k);
-            k += 1;
+        if !paths[outer[0]].closed {
+            let mut end = paths[outer[0]].points.last().copied();
+            while k < paths.len() {
+                let p = &paths[k];
+                let continues = match p.layer.as_str() {
+                    JOINT => true,
+                    CUT_OUTER => {
+                        !p.closed
+                            && match (end, p.points.first()) {
+                                (Some(e), Some(s)) => e.distance(*s) <= PIECE_GAP_MM,
+                                _ => false,
+                            }
+                    }
+                    _ => false,
+                };
+                if !continues {
+                    break;
+                }
+                if p.layer == CUT_OUTER {
+                    end = p.points.last().copied();
+                }
+                outer.push(k);
+                k += 1;
+            }
         }
         let pts: Vec<DVec2> = outer
             .iter()
@@ -315,4 +340,90 @@ fn lit_part(img: &[u8], width: usize) -> Option<Lit> {
         rows: [r0, r1],
         grey,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn path(layer: &str, closed: bool, pts: &[(f64, f64)]) -> ReadPath {
+        ReadPath {
+            layer: layer.into(),
+            closed,
+            points: pts.iter().map(|&(x, y)| DVec2::new(x, y)).collect(),
+        }
+    }
+
+    fn placement(id: &str, at: [f64; 2]) -> NestPlacement {
+        NestPlacement {
+            id: id.into(),
+            sheet: "s.dxf".into(),
+            bbox_min: at,
+            rotation_deg: 90.0,
+            micro_joints: 0,
+        }
+    }
+
+    #[test]
+    fn parts_follow_the_file_order_and_take_their_placement_by_box() {
+        let square = |x: f64| [(x, 0.0), (x + 10.0, 0.0), (x + 10.0, 10.0), (x, 10.0)];
+        let paths = vec![
+            path("SHEET", true, &[(0.0, 0.0), (100.0, 0.0), (100.0, 50.0)]),
+            path(ETCH, false, &[(2.0, 2.0), (4.0, 4.0)]),
+            path(CUT_INNER, true, &[(5.0, 5.0), (6.0, 5.0), (6.0, 6.0)]),
+            path(CUT_OUTER, true, &square(0.0)),
+            // A part with micro-joints: two open pieces and the joint between them.
+            path(CUT_OUTER, false, &square(20.0)[..3]),
+            path(JOINT, false, &[(30.0, 10.0), (29.5, 10.0)]),
+            path(CUT_OUTER, false, &[(29.5, 10.0), (20.0, 10.0), (20.0, 0.5)]),
+            // The next part straight after, with no etching between: its own contour.
+            path(
+                CUT_OUTER,
+                false,
+                &[(40.0, 0.0), (50.0, 0.0), (50.0, 10.0), (40.0, 10.0)],
+            ),
+            path(CUT_OUTER, false, &[(40.0, 9.5), (40.0, 0.5)]),
+        ];
+        let (b, a) = (
+            placement("1-002", [20.0, 0.0]),
+            placement("1-001", [0.0, 0.0]),
+        );
+        let (drawn, parts, unmatched) = parts_of(&paths, &[&b, &a]);
+        assert_eq!(parts.len(), 3);
+        assert_eq!(unmatched, 1, "the third outline has no placement");
+        let named: Vec<&str> = parts.iter().map(|p| p.id.as_str()).collect();
+        assert_eq!(named, ["1-001", "1-002", "part 3"]);
+        assert_eq!(parts[0].bbox, [0.0, 0.0, 10.0, 10.0]);
+        assert_eq!(parts.iter().map(|p| p.order).collect::<Vec<_>>(), [1, 2, 3]);
+        let owner: Vec<Option<u32>> = drawn.iter().map(|p| p.part).collect();
+        assert_eq!(
+            owner,
+            [
+                None,
+                Some(0),
+                Some(0),
+                Some(0),
+                Some(1),
+                Some(1),
+                Some(1),
+                Some(2),
+                Some(2)
+            ]
+        );
+        assert_eq!(parts[2].bbox, [40.0, 0.0, 50.0, 10.0]);
+        let holes = parts[0].figures.iter().find(|f| f[0] == "holes");
+        assert_eq!(holes.map(|f| f[1].as_str()), Some("1"));
+    }
+
+    #[test]
+    fn a_lit_box_holds_every_lit_pixel_and_nothing_else() {
+        let (w, h) = (6, 4);
+        let mut img = vec![0u8; w * h];
+        img[w + 2] = 200;
+        img[2 * w + 4] = 10;
+        let lit = lit_part(&img, w).expect("something is lit");
+        assert_eq!((lit.cols, lit.rows), ([2, 5], [1, 3]));
+        assert_eq!(lit.grey, vec![200, 0, 0, 0, 0, 10]);
+        assert!(lit_part(&vec![0u8; w * h], w).is_none());
+    }
 }

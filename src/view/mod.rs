@@ -461,3 +461,26 @@ mod tests {
         assert_eq!(idx, vec![0, 1, 2, 0, 2, 3, 4, 5, 6]);
     }
 }
+
+#[cfg(test)]
+mod asset_tests {
+    use super::*;
+
+    #[test]
+    fn no_embedded_script_can_end_its_element_early() {
+        for (name, text) in [
+            ("three.core", THREE_CORE),
+            ("three.module", THREE_MODULE),
+            ("orbit", ORBIT_CONTROLS),
+            ("viewer", VIEWER_JS),
+        ] {
+            let lower = text.to_ascii_lowercase();
+            assert!(!lower.contains("</script"), "{name}");
+            assert!(!lower.contains("<!--"), "{name}");
+        }
+        // The import specifiers the page rewrites are where it expects them.
+        assert!(THREE_MODULE.contains("\"./three.core.min.js\""));
+        assert!(ORBIT_CONTROLS.contains("from 'three'"));
+        assert!(THREE_LICENSE.contains("MIT"));
+    }
+}

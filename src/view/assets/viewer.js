@@ -271,7 +271,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   function flyTo(c, r) {
     const from = { t: controls.target.clone(), p: camera.position.clone() };
     const dir = camera.position.clone().sub(controls.target).normalize();
-    const dist = Math.max(r, radius * 0.03) / Math.sin((camera.fov * Math.PI) / 360) * 1.6;
+    const dist = Math.max(r, radius * 0.12) / Math.sin((camera.fov * Math.PI) / 360) * 1.6;
     const to = { t: c.clone(), p: c.clone().addScaledVector(dir, dist) };
     const t0 = performance.now();
     cancelAnimationFrame(flight);
@@ -550,11 +550,12 @@ function buildPrint(P, stage, info) {
   const prev = el("button", { type: "button", onclick: () => jump(-1) }, "◀ island");
   const next = el("button", { type: "button", onclick: () => jump(1) }, "island ▶");
   const [x0, y0, x1, y1] = P.region;
-  const svg = svgEl("svg", { viewBox: `${x0} ${-y1} ${x1 - x0} ${y1 - y0}`, class: "lv-layer-img" });
+  const pad = 0.06 * Math.max(x1 - x0, y1 - y0);
+  const svg = svgEl("svg", { viewBox: `${x0 - pad} ${-y1 - pad} ${x1 - x0 + 2 * pad} ${y1 - y0 + 2 * pad}`, class: "lv-layer-img" });
   const img = svgEl("image", { x: x0, y: -y1, width: x1 - x0, height: y1 - y0, preserveAspectRatio: "none" });
   img.setAttribute("style", "image-rendering:pixelated");
   const marks = svgEl("g");
-  svg.append(svgEl("rect", { x: x0, y: -y1, width: x1 - x0, height: y1 - y0, fill: "#000" }), img, marks);
+  svg.append(svgEl("rect", { x: x0 - pad, y: -y1 - pad, width: x1 - x0 + 2 * pad, height: y1 - y0 + 2 * pad, fill: "#000" }), img, marks);
   zoomable(svg);
   node.append(el("div", { class: "lv-print-bar" }, prev, slider, next, label), svg);
   const size = Math.max(x1 - x0, y1 - y0);
@@ -574,7 +575,7 @@ function buildPrint(P, stage, info) {
       marks.append(c);
     }
     const z = ((k + 1) * P.layer_mm).toFixed(3);
-    label.textContent = `layer ${k} of ${n} (top at ${z} mm): ${here.length} island${here.length === 1 ? "" : "s"} start here`;
+    label.textContent = `layer ${k} of ${n} (top at ${z} mm): ${here.length === 1 ? "1 island starts" : `${here.length} islands start`} here`;
     const rows = [["layer", `${k} of ${n}`], ["top", `${z} mm`], ["islands starting here", String(here.length)]];
     here.slice(0, 20).forEach((i, j) => rows.push([`island ${j + 1}`, `(${i.x_mm.toFixed(2)}, ${i.y_mm.toFixed(2)}) mm, ${i.area_mm2.toFixed(3)} mm²`]));
     info.replaceChildren(...figuresTable(`layer ${k}`, P.name, rows.concat(P.figures)));
