@@ -143,7 +143,7 @@ function start(data) {
   show(Object.keys(views)[0]);
   applyHash();
   window.addEventListener("hashchange", applyHash);
-  window.lamina = { find, show, data };
+  window.lamina = { find, show, data, screenOf: (id) => views["3d"]?.screenOf(id) ?? null };
   requestAnimationFrame(() => requestAnimationFrame(() => {
     document.body.dataset.readyMs = performance.now().toFixed(0);
     document.body.dataset.ready = "1";
@@ -429,6 +429,15 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   return {
     node,
     shown: resize,
+    // Where an object's centre is on the screen (client pixels), for tests that click it.
+    screenOf(id) {
+      const hit = index.get(id.toLowerCase());
+      if (!hit) return null;
+      const o = layers[hit[0]].L.objects[hit[1]];
+      const p = new THREE.Vector3(...o.center).sub(new THREE.Vector3(...data.origin)).project(camera);
+      const r = renderer.domElement.getBoundingClientRect();
+      return [r.left + ((p.x + 1) / 2) * r.width, r.top + ((1 - p.y) / 2) * r.height];
+    },
     find(q, exact) {
       let hit = index.get(q);
       if (!hit && !exact) {
