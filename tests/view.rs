@@ -108,9 +108,7 @@ fn plates_with_welds_sizing_and_axes_and_their_cut_sheets() -> TestResult {
     let o = lamina(&[
         "view",
         s(&plates.join("plates.json")),
-        s(&plates.join("welds.json")),
         s(&sizing),
-        s(&axes),
         "-o",
         s(&page),
     ]);

@@ -65,7 +65,7 @@ fn viewer(s: &Sizing) -> String {
                 format!("{:.3} ({})", w.utilisation, s.cases[w.case].name),
             ));
         }
-        nodes.point(format!("N{i}"), f, p, 0.0);
+        nodes.point(format!("N{i}"), f, p);
     }
     let mut weld = Coloring::scale(
         "weld utilisation",

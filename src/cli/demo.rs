@@ -679,7 +679,6 @@ const VIEWERS: &[(&str, &str, &str, &[&str])] = &[
             "calyx/plates/plates.json",
             "calyx/plates/welds.json",
             "calyx/sizing.json",
-            "calyx/lbfgs-axes.json",
         ],
     ),
     (

@@ -664,7 +664,7 @@ fn write_weld_report(
     }
     let scene = super::view::scene_of(&files, "plates and welds")?;
     let viewer = format!(
-        "<h2>Look around</h2>\n<p>Plates coloured by group, gauge{} (the menu beside them); each pair of plates side by side at a node is a dot in the wedge between them, coloured by its access class or root gap. Hover or click for figures; find a plate by its tag or a pair as W, its node and its number (W12-2).</p>\n{}",
+        "<h2>Look around</h2>\n<p>Plates coloured by group, gauge{} (the menu beside them); each pair of plates side by side at a node is a dot between their edges there (mid-height of the seam), coloured by its access class or root gap. Hover or click for figures; find a plate by its tag or a pair as W, its node and its number (W12-2).</p>\n{}",
         if args.sizing.is_some() { " or utilisation" } else { "" },
         lamina::view::embed(&scene, "70vh")
     );

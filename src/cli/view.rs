@@ -16,8 +16,8 @@ use lamina::view::{flat, page, Scene};
 #[derive(ClapArgs)]
 pub struct Args {
     /// Files to show together: a network (.json .obj .dxf), a mesh (.obj .stl), axes.json (its
-    /// panels), plates.json (with welds.json, sizing.json and axes.json beside it when given
-    /// too), nest.json (its sheets, read from the cut DXFs beside it), an SL1 archive
+    /// panels), plates.json (with the welds.json beside it, and sizing.json when given too),
+    /// nest.json (its sheets, read from the cut DXFs beside it), an SL1 archive
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// The page to write
@@ -107,12 +107,8 @@ pub fn run(args: Args) -> Result<()> {
     if extension(&args.output) != "html" {
         bail!("{}: the viewer is an .html page", args.output.display());
     }
-    let inputs: Vec<(PathBuf, Input)> = args
-        .files
-        .iter()
-        .map(|p| Ok((p.clone(), read(p, &args.read)?)))
-        .collect::<Result<_>>()?;
-    let scene = scene(&inputs, args.title.clone())?;
+    let paths: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
+    let scene = scene_with(&paths, &args.read, args.title.clone())?;
     let html = page(&scene);
     write_atomic(&args.output, |w| w.write_all(html.as_bytes()))?;
     for n in &scene.notes {
@@ -189,9 +185,9 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
             }
             Input::Axes(a, tolerance) => {
                 if has_plates {
-                    // Beside plates the axes only place the welds; the panels would hide them.
+                    // The panels would hide the plates standing in them.
                     scene.notes.push(format!(
-                        "{}: places the weld markers; its panels are not drawn beside the plates",
+                        "{}: its panels are not drawn beside the plates that stand in them",
                         file_name(path)
                     ));
                     continue;
@@ -218,15 +214,7 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
                     Input::Sizing(c) => Some(c.as_slice()),
                     _ => None,
                 });
-                let axes = find(&|i| matches!(i, Input::Axes(..))).and_then(|(_, i)| match i {
-                    Input::Axes(a, _) => Some(a.as_ref()),
-                    _ => None,
-                });
-                let extras = PlateExtras {
-                    welds,
-                    checks,
-                    axes,
-                };
+                let extras = PlateExtras { welds, checks };
                 let (layers, notes) = pack::plates(p, c, extras, origin)?;
                 scene.layers.extend(layers);
                 scene.notes.extend(notes);
@@ -252,14 +240,35 @@ fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
     Ok(scene)
 }
 
+/// Reads the files, adds the weld report beside a plates file when it was not given, and makes
+/// the scene.
+fn scene_with(files: &[&Path], args: &ReadArgs, title: Option<String>) -> Result<Scene> {
+    let mut inputs: Vec<(PathBuf, Input)> = files
+        .iter()
+        .map(|p| Ok((p.to_path_buf(), read(p, args)?)))
+        .collect::<Result<_>>()?;
+    let mut notes = Vec::new();
+    let has =
+        |inputs: &[(PathBuf, Input)], f: &dyn Fn(&Input) -> bool| inputs.iter().any(|(_, i)| f(i));
+    if !has(&inputs, &|i| matches!(i, Input::Welds(..))) {
+        let beside = inputs.iter().find_map(|(p, i)| match i {
+            Input::Plates(..) => Some(p.with_file_name("welds.json")),
+            _ => None,
+        });
+        if let Some(w) = beside.filter(|w| w.is_file()) {
+            let input = read(&w, args)?;
+            notes.push("welds.json beside plates.json: its pairs are marked".to_string());
+            inputs.push((w, input));
+        }
+    }
+    let mut scene = scene(&inputs, title)?;
+    scene.notes.splice(0..0, notes);
+    Ok(scene)
+}
+
 /// The scene of `files` read with the default reader options (for the demo and the reports).
 pub fn scene_of(files: &[&Path], title: &str) -> Result<Scene> {
-    let args = ReadArgs::default();
-    let inputs: Vec<(PathBuf, Input)> = files
-        .iter()
-        .map(|p| Ok((p.to_path_buf(), read(p, &args)?)))
-        .collect::<Result<_>>()?;
-    scene(&inputs, Some(title.to_string()))
+    scene_with(files, &ReadArgs::default(), Some(title.to_string()))
 }
 
 /// Writes the viewer page of `files` to `output`.

@@ -44,7 +44,7 @@ pub struct Scene {
     /// Said above the view: what was read, what was left out and why.
     pub notes: Vec<String>,
     /// Subtracted from every 3D position before it is stored as f32 (so sub-micron detail
-    /// survives coordinates in the kilometres); the page adds it back in the figures it shows.
+    /// survives coordinates in the kilometres); the figures are written in the original ones.
     pub origin: [f64; 3],
     pub layers: Vec<Layer>,
     pub sheets: Vec<Sheet>,
@@ -75,6 +75,8 @@ pub struct Layer {
     pub indices: String,
     /// u32 segment pairs drawn dark over faces (plate and panel outlines), base64.
     pub outline: String,
+    /// The names of the objects' figures, in the order the info panel lists them.
+    pub columns: Vec<String>,
     pub objects: Vec<Object>,
     /// Ways to colour the objects; the first is shown first. None: one colour.
     pub colorings: Vec<Coloring>,
@@ -82,19 +84,15 @@ pub struct Layer {
     pub visible: bool,
 }
 
-/// One selectable thing.
+/// One selectable thing. The page finds where it is from its elements' vertices.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Object {
     pub id: String,
     /// Its first element and how many (triangles, segments or points).
     pub first: u32,
     pub count: u32,
-    /// Where the camera flies to and how far it stands off, mm (in scene coordinates, the
-    /// origin not subtracted).
-    pub center: [f64; 3],
-    pub radius: f64,
-    /// Name and value (with its unit) as the info panel lists them.
-    pub figures: Vec<[String; 2]>,
+    /// Per column of its layer, the figure's value with its unit ("" where it has none).
+    pub values: Vec<String>,
 }
 
 /// Object colours by one figure.
@@ -239,7 +237,9 @@ pub struct LayerBuilder {
     positions: Vec<f32>,
     indices: Vec<u32>,
     outline: Vec<u32>,
-    objects: Vec<Object>,
+    columns: Vec<String>,
+    /// Per object: its id, elements and (column, value) figures.
+    objects: Vec<(String, u32, u32, Vec<(usize, String)>)>,
 }
 
 impl LayerBuilder {
@@ -251,6 +251,7 @@ impl LayerBuilder {
             positions: Vec::new(),
             indices: Vec::new(),
             outline: Vec::new(),
+            columns: Vec::new(),
             objects: Vec::new(),
         }
     }
@@ -289,7 +290,7 @@ impl LayerBuilder {
         for s in outline {
             self.outline.extend(s.map(|i| base[i as usize]));
         }
-        self.push(id, figures, first, points);
+        self.push(id, figures, first);
     }
 
     /// Adds an object of segments (consecutive point pairs).
@@ -300,43 +301,33 @@ impl LayerBuilder {
             let (a, b) = (self.vertex(s[0]), self.vertex(s[1]));
             self.indices.extend([a, b]);
         }
-        let points: Vec<DVec3> = segments.iter().flatten().copied().collect();
-        self.push(id, figures, first, &points);
+        self.push(id, figures, first);
     }
 
     /// Adds a point object.
-    pub fn point(&mut self, id: String, figures: Vec<[String; 2]>, p: DVec3, radius: f64) {
+    pub fn point(&mut self, id: String, figures: Vec<[String; 2]>, p: DVec3) {
         debug_assert_eq!(self.kind, Kind::Points);
         let first = self.elements() as u32;
         self.vertex(p);
-        self.objects.push(Object {
-            id,
-            first,
-            count: 1,
-            center: p.to_array(),
-            radius,
-            figures,
-        });
+        self.push(id, figures, first);
     }
 
-    fn push(&mut self, id: String, figures: Vec<[String; 2]>, first: u32, points: &[DVec3]) {
-        let (lo, hi) = points.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        let (center, radius) = if points.is_empty() {
-            (DVec3::ZERO, 0.0)
-        } else {
-            ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
-        };
-        self.objects.push(Object {
-            id,
-            first,
-            count: self.elements() as u32 - first,
-            center: center.to_array(),
-            radius,
-            figures,
-        });
+    fn push(&mut self, id: String, figures: Vec<[String; 2]>, first: u32) {
+        let figures = figures
+            .into_iter()
+            .map(|[name, value]| {
+                let k = match self.columns.iter().position(|c| *c == name) {
+                    Some(k) => k,
+                    None => {
+                        self.columns.push(name);
+                        self.columns.len() - 1
+                    }
+                };
+                (k, value)
+            })
+            .collect();
+        let count = self.elements() as u32 - first;
+        self.objects.push((id, first, count, figures));
     }
 
     /// How many elements so far (to bound a scene before it grows).
@@ -349,13 +340,31 @@ impl LayerBuilder {
     }
 
     pub fn finish(self, colorings: Vec<Coloring>, visible: bool) -> Layer {
+        let n = self.columns.len();
+        let objects = self
+            .objects
+            .into_iter()
+            .map(|(id, first, count, figures)| {
+                let mut values = vec![String::new(); n];
+                for (k, v) in figures {
+                    values[k] = v;
+                }
+                Object {
+                    id,
+                    first,
+                    count,
+                    values,
+                }
+            })
+            .collect();
         Layer {
             name: self.name,
             kind: self.kind,
             positions: f32_blob(self.positions),
             indices: u32_blob(self.indices),
             outline: u32_blob(self.outline),
-            objects: self.objects,
+            columns: self.columns,
+            objects,
             colorings,
             visible,
         }
@@ -445,12 +454,17 @@ mod tests {
             DVec3::new(11.0, 1.0, 0.0),
             DVec3::new(10.0, 1.0, 0.0),
         ];
-        b.faces("a".into(), vec![], &sq, &[[0, 1, 2], [0, 2, 3]], &[[0, 1]]);
-        b.faces("b".into(), vec![], &sq[..3], &[[0, 1, 2]], &[]);
+        b.faces(
+            "a".into(),
+            vec![fig("x", "1"), fig("y", "2")],
+            &sq,
+            &[[0, 1, 2], [0, 2, 3]],
+            &[[0, 1]],
+        );
+        b.faces("b".into(), vec![fig("y", "3")], &sq[..3], &[[0, 1, 2]], &[]);
         let l = b.finish(vec![], true);
         assert_eq!((l.objects[0].first, l.objects[0].count), (0, 2));
         assert_eq!((l.objects[1].first, l.objects[1].count), (2, 1));
-        assert_eq!(l.objects[0].center, [10.5, 0.5, 0.0]);
         let idx = base64::engine::general_purpose::STANDARD
             .decode(&l.indices)
             .expect("base64");
@@ -459,6 +473,8 @@ mod tests {
             .map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes")))
             .collect();
         assert_eq!(idx, vec![0, 1, 2, 0, 2, 3, 4, 5, 6]);
+        assert_eq!(l.columns, ["x", "y"]);
+        assert_eq!(l.objects[1].values, ["", "3"]);
     }
 }
 

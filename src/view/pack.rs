@@ -120,7 +120,7 @@ pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
         if let Some(v) = n.normal {
             f.push(fig("normal", format!("{:.4}, {:.4}, {:.4}", v.x, v.y, v.z)));
         }
-        nodes.point(format!("N{k}"), f, n.p, n.radius);
+        nodes.point(format!("N{k}"), f, n.p);
     }
     let degrees = Coloring::scale(
         "members at the node",
@@ -356,12 +356,10 @@ pub struct PlateExtras<'a> {
     pub welds: Option<(f64, f64, &'a [WeldNode])>,
     /// The sizing file's result per network edge.
     pub checks: Option<&'a [CheckEdge]>,
-    /// Node positions and axes, to mark the welds (welds.json names nodes, not places).
-    pub axes: Option<&'a Axes>,
 }
 
 /// Plates as solids (coloured by group, gauge and, with a sizing file, utilisation), node
-/// cores, and with welds.json and the axes, each pair of plates at a node as a marker.
+/// cores, and with welds.json each pair of plates at a node as a marker.
 pub fn plates(
     plates: &[PlateRecord],
     cores: &[CoreRecord],
@@ -372,7 +370,8 @@ pub fn plates(
     let mut notes = Vec::new();
     let mut layer = LayerBuilder::new("plates", Kind::Faces, origin);
     let (mut groups, mut gauges, mut util) = (Vec::new(), Vec::new(), Vec::new());
-    let mut centre_of = std::collections::HashMap::new();
+    // Per plate and node: the middle of the plate's edge at that node (where its weld runs).
+    let mut seam_of: std::collections::HashMap<(&str, u32), DVec3> = Default::default();
     for p in plates {
         let m = &p.matrix;
         let world = |q: DVec2, z: f64| {
@@ -403,9 +402,12 @@ pub fn plates(
         if let Some(e) = p.edge {
             f.push(fig("edge", format!("E{e}")));
         }
-        for (node, welded) in &p.ends {
+        for (end, (node, welded)) in ["welded at its first end", "welded at its second end"]
+            .iter()
+            .zip(&p.ends)
+        {
             if !welded.is_empty() {
-                f.push(fig(&format!("welded at N{node} to"), welded.join(", ")));
+                f.push(fig(end, format!("N{node}: to {}", welded.join(", "))));
             }
         }
         if let Some(b) = &p.bolted_to {
@@ -435,7 +437,12 @@ pub fn plates(
         util.push(check.map(|c| c.utilisation));
         groups.push(format!("group {}", p.group));
         gauges.push(mm(p.thickness));
-        centre_of.insert(p.id.as_str(), world(polygon_centre(&p.outline), 0.0));
+        for (end, (node, _)) in p.ends.iter().enumerate() {
+            seam_of.insert(
+                (p.id.as_str(), *node),
+                world(end_middle(&p.outline, end), 0.0),
+            );
+        }
         layer.faces(p.id.clone(), f, &points, &tris, &outline);
     }
     for c in cores {
@@ -474,21 +481,29 @@ pub fn plates(
         colorings.insert(0, u);
     }
     let mut layers = vec![layer.finish(colorings, true)];
-    match (extras.welds, extras.axes) {
-        (Some((gap, tol, nodes)), Some(axes)) => {
-            layers.push(welds(nodes, gap, tol, axes, &centre_of, origin)?)
+    if let Some((gap, tol, nodes)) = extras.welds {
+        let (layer, unplaced) = welds(nodes, gap, tol, &seam_of, origin)?;
+        layers.push(layer);
+        if unplaced > 0 {
+            notes.push(format!(
+                "{unplaced} weld pairs name a plate plates.json does not hold at that node: not drawn"
+            ));
         }
-        (Some(_), None) => notes.push(
-            "welds.json names nodes, not places: give the axes file too to mark the welds".into(),
-        ),
-        _ => {}
     }
     Ok((layers, notes))
 }
 
-/// The middle of a polygon's corners.
-fn polygon_centre(p: &[DVec2]) -> DVec2 {
-    p.iter().copied().sum::<DVec2>() / p.len().max(1) as f64
+/// The middle of a plate outline's edge at one end: its two corners nearest that end along the
+/// plate's x (the edge's direction from its first node), averaged.
+fn end_middle(outline: &[DVec2], end: usize) -> DVec2 {
+    let mut xs: Vec<DVec2> = outline.to_vec();
+    xs.sort_by(|a, b| a.x.total_cmp(&b.x));
+    let two: Vec<DVec2> = if end == 0 {
+        xs.iter().take(2).copied().collect()
+    } else {
+        xs.iter().rev().take(2).copied().collect()
+    };
+    two.iter().copied().sum::<DVec2>() / two.len().max(1) as f64
 }
 
 /// A core tube as a closed mesh (outer and inner `HOLE_SEGMENTS`-gons).
@@ -520,37 +535,32 @@ fn tube(c: &CoreRecord) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (v, t)
 }
 
-/// Each pair of plates side by side at a node: a marker at mid-height of the node axis, set
-/// off into the wedge between the two plates, coloured by access class and by root gap.
+/// Each pair of plates side by side at a node: a marker between the middles of the two plates'
+/// edges at the node (mid-height of the seam, in the wedge between them), coloured by access
+/// class and by root gap. Returns the layer and how many pairs could not be placed.
 fn welds(
     nodes: &[WeldNode],
     gap: f64,
     tolerance: f64,
-    axes: &Axes,
-    centre_of: &std::collections::HashMap<&str, DVec3>,
+    seam_of: &std::collections::HashMap<(&str, u32), DVec3>,
     origin: DVec3,
-) -> Result<Layer, ViewError> {
+) -> Result<(Layer, usize), ViewError> {
     let pairs: usize = nodes.iter().map(|n| n.pairs.len()).sum();
     bound("welds", pairs, "pairs", "")?;
     let mut layer = LayerBuilder::new("welds", Kind::Points, origin);
     let (mut class, mut gaps, mut even) = (Vec::new(), Vec::new(), Vec::new());
+    let mut unplaced = 0;
     for n in nodes {
-        let Some(&p) = axes.positions.get(n.node as usize) else {
-            continue;
-        };
-        let (d, h) = (axes.axes[n.node as usize], axes.heights[n.node as usize]);
-        let mid = p + d * (h / 2.0);
         for (k, pair) in n.pairs.iter().enumerate() {
             // A bolted seam is named `A+B`: its first plate stands for it.
-            let toward = |tag: &str| {
+            let seam = |tag: &str| {
                 let first = tag.split('+').next().unwrap_or(tag);
-                centre_of
-                    .get(first)
-                    .map(|c| (*c - p).reject_from_normalized(d).normalize_or_zero())
-                    .unwrap_or(DVec3::ZERO)
+                seam_of.get(&(first, n.node)).copied()
             };
-            let wedge = (toward(&pair.plates[0]) + toward(&pair.plates[1])).normalize_or_zero();
-            let at = mid + wedge * (0.12 * h);
+            let (Some(a), Some(b)) = (seam(&pair.plates[0]), seam(&pair.plates[1])) else {
+                unplaced += 1;
+                continue;
+            };
             layer.point(
                 format!("W{}-{}", n.node, k + 1),
                 vec![
@@ -571,8 +581,7 @@ fn welds(
                     fig("dihedral", deg(pair.dihedral_deg)),
                     fig("access", pair.access.clone()),
                 ],
-                at,
-                0.12 * h,
+                (a + b) / 2.0,
             );
             class.push(pair.access.clone());
             gaps.push(Some(pair.root_gap_mm));
@@ -586,7 +595,7 @@ fn welds(
             );
         }
     }
-    Ok(layer.finish(
+    let layer = layer.finish(
         vec![
             Coloring::categories(
                 "access",
@@ -606,5 +615,6 @@ fn welds(
             ),
         ],
         true,
-    ))
+    );
+    Ok((layer, unplaced))
 }

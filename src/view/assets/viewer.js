@@ -150,6 +150,10 @@ function start(data) {
   }));
 }
 
+// An object's figures as (name, value) pairs: its layer's columns with its values, the empty
+// ones left out.
+const figuresOf = (L, o) => L.columns.map((c, i) => [c, o.values[i]]).filter(([, v]) => v !== "");
+
 function figuresTable(title, sub, figures) {
   const t = el("table");
   for (const [k, v] of figures) t.append(el("tr", {}, el("th", {}, k), el("td", {}, v)));
@@ -226,13 +230,20 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       for (let i = o.first * per; i < (o.first + o.count) * per; i++) v.push(idx[i]);
       return v;
     };
+    // An object's bounding sphere (scene coordinates, less the origin) from its vertices.
+    const sphereOf = (k) => {
+      const b = new THREE.Box3();
+      const v3 = new THREE.Vector3();
+      for (const v of vertsOf(k)) b.expandByPoint(v3.fromArray(pos, 3 * v));
+      return { c: b.getCenter(new THREE.Vector3()), r: b.getSize(new THREE.Vector3()).length() / 2 };
+    };
     obj.visible = L.visible;
     scene.add(obj);
     if (pos.length) {
       geo.computeBoundingBox();
       if (L.visible) box.union(geo.boundingBox);
     }
-    const layer = { L, obj, geo, colours, owner, vertsOf, per, coloring: L.colorings.length ? 0 : -1 };
+    const layer = { L, obj, geo, colours, owner, vertsOf, sphereOf, per, coloring: L.colorings.length ? 0 : -1 };
     layers.push(layer);
     paint(layer);
   }
@@ -307,16 +318,16 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     } else if (layer.L.kind === "lines") {
       marks.add(new THREE.LineSegments(g2, new THREE.LineBasicMaterial({ color: hl, depthTest: false })));
     }
-    const c = new THREE.Vector3(...o.center).sub(new THREE.Vector3(...data.origin));
-    const ring = new THREE.Mesh(new THREE.SphereGeometry(Math.max(o.radius * 0.08, radius * 0.008), 16, 12),
+    const { c, r: orad } = layer.sphereOf(k);
+    const ring = new THREE.Mesh(new THREE.SphereGeometry(Math.max(orad * 0.08, radius * 0.008), 16, 12),
       new THREE.MeshBasicMaterial({ color: hl, depthTest: false, transparent: true, opacity: 0.9 }));
     ring.position.copy(c);
     marks.add(ring);
     marks.renderOrder = 10;
     selected = { li, k };
-    info.replaceChildren(...figuresTable(o.id, layer.L.name, o.figures));
+    info.replaceChildren(...figuresTable(o.id, layer.L.name, figuresOf(layer.L, o)));
     info.dataset.selected = o.id;
-    if (fly) flyTo(c, o.radius);
+    if (fly) flyTo(c, orad);
     render();
   }
 
@@ -357,7 +368,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       if (!hit) { tip.style.display = "none"; return; }
       const o = layers[hit.li].L.objects[hit.k];
       const r = node.getBoundingClientRect();
-      tip.textContent = `${o.id}: ${o.figures.slice(0, 2).map(([a, b]) => `${a} ${b}`).join(", ")}`;
+      tip.textContent = `${o.id}: ${figuresOf(layers[hit.li].L, o).slice(0, 2).map(([a, b]) => `${a} ${b}`).join(", ")}`;
       tip.style.left = `${e.clientX - r.left + 14}px`;
       tip.style.top = `${e.clientY - r.top + 10}px`;
       tip.style.display = "block";
@@ -433,8 +444,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     screenOf(id) {
       const hit = index.get(id.toLowerCase());
       if (!hit) return null;
-      const o = layers[hit[0]].L.objects[hit[1]];
-      const p = new THREE.Vector3(...o.center).sub(new THREE.Vector3(...data.origin)).project(camera);
+      const p = layers[hit[0]].sphereOf(hit[1]).c.project(camera);
       const r = renderer.domElement.getBoundingClientRect();
       return [r.left + ((p.x + 1) / 2) * r.width, r.top + ((1 - p.y) / 2) * r.height];
     },
