@@ -229,6 +229,10 @@ pub fn png_url(png: &[u8]) -> String {
     )
 }
 
+/// An object while its layer is built: id, first element, element count, (column, value)
+/// figures.
+type Pending = (String, u32, u32, Vec<(usize, String)>);
+
 /// Builds one layer: objects added one at a time, each with its own vertices.
 pub struct LayerBuilder {
     name: String,
@@ -238,8 +242,7 @@ pub struct LayerBuilder {
     indices: Vec<u32>,
     outline: Vec<u32>,
     columns: Vec<String>,
-    /// Per object: its id, elements and (column, value) figures.
-    objects: Vec<(String, u32, u32, Vec<(usize, String)>)>,
+    objects: Vec<Pending>,
 }
 
 impl LayerBuilder {
