@@ -137,10 +137,8 @@ pub(crate) fn utf8_text(path: &Path, bytes: Vec<u8>) -> Result<String, ReadError
     })
 }
 
-/// Checks a lamina JSON file's `format` and `version` before its schema, so that another lamina
-/// file given by mistake is named as such (`what` says which file was expected).
 /// The `format` a lamina JSON file names at its top level, if any.
-pub(crate) fn json_format(path: &Path, text: &str) -> Result<Option<String>, ReadError> {
+pub fn json_format(path: &Path, text: &str) -> Result<Option<String>, ReadError> {
     #[derive(serde::Deserialize)]
     struct Header {
         format: Option<String>,
@@ -150,6 +148,8 @@ pub(crate) fn json_format(path: &Path, text: &str) -> Result<Option<String>, Rea
     Ok(header.format)
 }
 
+/// Checks a lamina JSON file's `format` and `version` before its schema, so that another lamina
+/// file given by mistake is named as such (`what` says which file was expected).
 pub(crate) fn check_format(
     path: &Path,
     text: &str,
@@ -177,6 +177,18 @@ pub(crate) fn check_format(
             header.version.map_or("(none)".into(), |v| v.to_string())
         ),
     ))
+}
+
+/// Reads a lamina JSON file of `format` and `version` into `T` (only the fields `T` names).
+pub(crate) fn read_lamina_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    format: &str,
+    version: u32,
+    what: &str,
+) -> Result<T, ReadError> {
+    let text = utf8_text(path, read_nonempty(path)?)?;
+    check_format(path, &text, format, version, what)?;
+    serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))
 }
 
 #[cfg(test)]

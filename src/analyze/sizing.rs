@@ -881,17 +881,13 @@ struct GaugeEdge {
 pub fn read_gauges(
     path: &std::path::Path,
 ) -> Result<(Vec<f64>, Vec<f64>), crate::files::ReadError> {
-    use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
-    let text = utf8_text(path, read_nonempty(path)?)?;
-    check_format(
+    use crate::files::{read_lamina_json, ReadError};
+    let file: GaugeFile = read_lamina_json(
         path,
-        &text,
         FORMAT,
         VERSION,
         "the sizing file `lamina size` writes",
     )?;
-    let file: GaugeFile =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     let bad = |t: f64| !(t.is_finite() && t > 0.0 && t <= 200.0);
     if let Some(t) = file.gauges.iter().find(|t| bad(**t)) {
         return Err(ReadError::file(
@@ -929,17 +925,13 @@ pub struct CheckEdge {
 
 /// A sizing file's result per edge, for the viewer.
 pub fn read_checks(path: &std::path::Path) -> Result<Vec<CheckEdge>, crate::files::ReadError> {
-    use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
-    let text = utf8_text(path, read_nonempty(path)?)?;
-    check_format(
+    use crate::files::{read_lamina_json, ReadError};
+    let file: CheckFile = read_lamina_json(
         path,
-        &text,
         FORMAT,
         VERSION,
         "the sizing file `lamina size` writes",
     )?;
-    let file: CheckFile =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     if let Some(k) = file
         .edges
         .iter()

@@ -1,6 +1,5 @@
 //! `lamina view FILE… -o view.html`: one offline page that shows any lamina input or output.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -45,30 +44,15 @@ enum Input {
     Print,
 }
 
-/// The `"format"` a lamina JSON file declares, if any (some write their keys sorted, so it can
-/// come after the data).
+/// The `"format"` a lamina JSON file declares at its top level, if any.
 fn json_format(path: &Path) -> Result<Option<String>> {
-    let mut head = Vec::new();
-    std::fs::File::open(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?
-        .take(MAX_JSON_BYTES)
-        .read_to_end(&mut head)?;
-    let text = String::from_utf8_lossy(&head);
-    let Some(at) = text.find("\"format\"") else {
-        return Ok(None);
-    };
-    let rest = text[at + 8..]
-        .trim_start()
-        .strip_prefix(':')
-        .map(str::trim_start);
-    Ok(rest
-        .and_then(|r| r.strip_prefix('"'))
-        .and_then(|r| r.split('"').next())
-        .map(str::to_string))
+    let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    match std::str::from_utf8(&bytes) {
+        Ok(text) => Ok(lamina::files::json_format(path, text).unwrap_or(None)),
+        // Not text: the network reader says so, with the line.
+        Err(_) => Ok(None),
+    }
 }
-
-/// The most of a JSON file searched for its format.
-const MAX_JSON_BYTES: u64 = 1 << 30;
 
 fn read(path: &Path, args: &ReadArgs) -> Result<Input> {
     let ext = extension(path);

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
+use crate::files::{read_lamina_json, ReadError};
 
 pub const FORMAT: &str = "lamina-nest";
 pub const VERSION: u32 = 2;
@@ -44,16 +44,7 @@ struct File {
 
 /// The sheets and placements of a nest file.
 pub fn read_nest(path: &Path) -> Result<(Vec<NestSheet>, Vec<NestPlacement>), ReadError> {
-    let text = utf8_text(path, read_nonempty(path)?)?;
-    check_format(
-        path,
-        &text,
-        FORMAT,
-        VERSION,
-        "the nest file `lamina nest` writes",
-    )?;
-    let file: File =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+    let file: File = read_lamina_json(path, FORMAT, VERSION, "the nest file `lamina nest` writes")?;
     if file.sheets.len() > MAX_ITEMS || file.placements.len() > MAX_ITEMS {
         return Err(ReadError::file(
             path,

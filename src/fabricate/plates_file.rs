@@ -265,16 +265,12 @@ struct WeldFile {
 /// The weld report `lamina plates` writes beside plates.json: the target gap and its
 /// tolerance, mm, and the nodes.
 pub fn read_welds(path: &Path) -> Result<(f64, f64, Vec<WeldNode>), ReadError> {
-    let text = utf8_text(path, read_nonempty(path)?)?;
-    check_format(
+    let file: WeldFile = crate::files::read_lamina_json(
         path,
-        &text,
         WELDS_FORMAT,
         WELDS_VERSION,
         "the weld report `lamina plates` writes",
     )?;
-    let file: WeldFile =
-        serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
     for (k, n) in file.nodes.iter().enumerate() {
         if n.pairs.iter().any(|p| {
             !(p.dihedral_deg.is_finite()
