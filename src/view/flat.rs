@@ -204,6 +204,9 @@ fn parts_of(
 /// blocks of display pixels (the largest grey of each block, so no thin vein vanishes).
 pub const MAX_SIDE: usize = 800;
 
+/// The most bytes of layer images one page takes (a few thousand layers of a large print).
+pub const MAX_IMAGE_BYTES: usize = 256 << 20;
+
 /// The lit part of one layer: its box on the display (columns and rows, end exclusive) and the
 /// grey bytes inside it.
 struct Lit {
@@ -236,7 +239,8 @@ pub fn print(sl1: &Path) -> Result<Print, ViewError> {
     }
     let block = (c1 - c0).max(r1 - r0).div_ceil(MAX_SIDE).max(1);
     let (w, h) = ((c1 - c0).div_ceil(block), (r1 - r0).div_ceil(block));
-    let images = lit
+    let mut total = 0usize;
+    let images: Vec<Option<String>> = lit
         .iter()
         .map(|l| {
             l.as_ref().map(|l| {
@@ -250,10 +254,21 @@ pub fn print(sl1: &Path) -> Result<Print, ViewError> {
                         *o = (*o).max(g);
                     }
                 }
-                png_url(&encode_grey(&out, w as u32, h as u32))
+                let url = png_url(&encode_grey(&out, w as u32, h as u32));
+                total += url.len();
+                url
             })
         })
         .collect();
+    if total > MAX_IMAGE_BYTES {
+        return Err(ViewError::TooLarge {
+            what: sl1.display().to_string(),
+            count: total,
+            limit: MAX_IMAGE_BYTES,
+            unit: "bytes of layer images",
+            hint: "view part of the print (its layers are each a PNG in the page)",
+        });
+    }
     let pmm = check.pixel_mm;
     let mut figures = vec![
         fig("layers", check.layers.to_string()),

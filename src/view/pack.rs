@@ -20,10 +20,11 @@ pub enum ViewError {
     Read(#[from] ReadError),
     #[error(transparent)]
     Sl1(#[from] crate::fabricate::sl1::Sl1Error),
-    #[error("{what}: {count} {unit}, more than the viewer takes ({MAX_ELEMENTS}); {hint}")]
+    #[error("{what}: {count} {unit}, more than the viewer takes ({limit}); {hint}")]
     TooLarge {
         what: String,
         count: usize,
+        limit: usize,
         unit: &'static str,
         hint: &'static str,
     },
@@ -45,6 +46,7 @@ fn bound(
         return Err(ViewError::TooLarge {
             what: what.into(),
             count,
+            limit: MAX_ELEMENTS,
             unit,
             hint,
         });
