@@ -666,6 +666,24 @@ const VIEWERS: &[(&str, &str, &str, &[&str])] = &[
         &["inputs/calyx_veins.json"],
     ),
     (
+        "venation leaf (closed)",
+        "veins",
+        "leaf-closed.html",
+        &["venation/leaf-closed.json"],
+    ),
+    (
+        "veins on calyx",
+        "venation on the band",
+        "calyx-venation.html",
+        &["on-surfaces/calyx-venation.json", "inputs/calyx.obj"],
+    ),
+    (
+        "façade (L-system tree)",
+        "tree on the wall",
+        "facade-on-wall.html",
+        &["facade/facade-on-wall.json", "facade/wall.obj"],
+    ),
+    (
         "Calyx: cells and planar panels",
         "panels by deviation",
         "calyx-panels.html",

@@ -83,6 +83,9 @@ fn xyz(p: DVec3) -> String {
     format!("{:.3}, {:.3}, {:.3}", p.x, p.y, p.z)
 }
 
+/// Networks with more nodes than this open with their nodes hidden.
+pub const SHOWN_NODES: usize = 1500;
+
 /// A network: members (lines, coloured by radius) and nodes (points, by degree).
 pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
     let hint = "simplify it first (lamina simplify)";
@@ -130,9 +133,11 @@ pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
         "how many members meet at the node (1: a tip)",
         degree.iter().map(|&d| Some(f64::from(d))).collect(),
     );
+    // Thousands of node dots hide the members: then they start hidden (a checkbox away).
+    let few = net.nodes.len() <= SHOWN_NODES;
     Ok(vec![
         members.finish(vec![radius], true),
-        nodes.finish(vec![degrees], true),
+        nodes.finish(vec![degrees], few),
     ])
 }
 
@@ -201,8 +206,18 @@ pub fn mesh(m: &TriMesh, name: &str, origin: DVec3) -> Result<Layer, ViewError> 
         layer.faces(format!("body {}", b + 1), f, &points, &triangles, &[]);
         areas.push(Some(area));
     }
-    let coloring = Coloring::scale("area", "mm²", "the body's surface area", areas);
-    Ok(layer.finish(vec![coloring], true))
+    // One body takes one colour; several are told apart by their areas.
+    let colorings = if areas.len() > 1 {
+        vec![Coloring::scale(
+            "area",
+            "mm²",
+            "the body's surface area",
+            areas,
+        )]
+    } else {
+        Vec::new()
+    };
+    Ok(layer.finish(colorings, true))
 }
 
 /// Panels from rows of a planarity report (or built the same way): coloured by the figure held

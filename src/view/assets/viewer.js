@@ -217,7 +217,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       obj = new THREE.LineSegments(geo, new THREE.LineBasicMaterial({ vertexColors: true }));
     } else {
       obj = new THREE.Points(geo, new THREE.PointsMaterial({
-        vertexColors: true, size: 9, sizeAttenuation: false, map: dotTexture, alphaTest: 0.5,
+        vertexColors: true, size: 7, sizeAttenuation: false, map: dotTexture, alphaTest: 0.5,
       }));
     }
     // Which object each element belongs to, and each element's vertices.
