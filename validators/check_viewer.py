@@ -40,6 +40,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import urllib.request
 import zipfile
@@ -64,7 +65,7 @@ class Browser:
             fail("no chromium on PATH (scripts/setup installs Debian's chromium)")
         self.profile = tempfile.mkdtemp(prefix="lamina-chromium-")
         self.proc = subprocess.Popen(
-            [exe, "--headless=new", "--no-sandbox", "--disable-gpu-sandbox",
+            [exe, "--headless=new", "--no-sandbox", "--disable-gpu-sandbox", "--disable-dev-shm-usage",
              "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
              "--remote-debugging-port=0", "--remote-allow-origins=*",
              f"--user-data-dir={self.profile}", f"--window-size={width},{height}",
@@ -86,6 +87,8 @@ class Browser:
         if port is None:
             self.close()
             fail("chromium did not start its DevTools endpoint")
+        # Keep reading chromium's log so a full pipe never stalls it.
+        threading.Thread(target=lambda: [None for _ in self.proc.stderr], daemon=True).start()
         targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10))
         page = next(t for t in targets if t["type"] == "page")
         self.ws = websocket.create_connection(page["webSocketDebuggerUrl"], timeout=60,

@@ -52,10 +52,15 @@ function hexRgb(h) {
 }
 
 function scaleOf(c) {
-  const vals = c.values.filter((v) => v !== null && Number.isFinite(v));
   if (c.labels.length) return { kind: "cat" };
-  const lo = c.limit !== null ? 0 : Math.min(...vals, 0);
-  let hi = c.limit !== null ? c.limit : Math.max(...vals, lo);
+  // A loop, not Math.min(...values): spreading a million values overflows the call stack.
+  let lo = 0, hi = -Infinity;
+  for (const v of c.values) {
+    if (v === null || !Number.isFinite(v)) continue;
+    if (v < lo) lo = v;
+    if (v > hi) hi = v;
+  }
+  if (c.limit !== null) [lo, hi] = [0, c.limit];
   if (!(hi > lo)) hi = lo + 1;
   return { kind: "scale", lo, hi };
 }
@@ -282,7 +287,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   function flyTo(c, r) {
     const from = { t: controls.target.clone(), p: camera.position.clone() };
     const dir = camera.position.clone().sub(controls.target).normalize();
-    const dist = Math.max(r, radius * 0.12) / Math.sin((camera.fov * Math.PI) / 360) * 1.6;
+    const dist = Math.max(r, radius * 0.2) / Math.sin((camera.fov * Math.PI) / 360) * 1.6;
     const to = { t: c.clone(), p: c.clone().addScaledVector(dir, dist) };
     const t0 = performance.now();
     cancelAnimationFrame(flight);
@@ -314,7 +319,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     g2.setAttribute("position", new THREE.BufferAttribute(pts, 3));
     const hl = 0xffb000;
     if (layer.L.kind === "faces") {
-      marks.add(new THREE.Mesh(g2, new THREE.MeshBasicMaterial({ color: hl, side: THREE.DoubleSide, transparent: true, opacity: 0.85, depthTest: false })));
+      marks.add(new THREE.Mesh(g2, new THREE.MeshBasicMaterial({ color: hl, side: THREE.DoubleSide, transparent: true, opacity: 0.6, depthTest: false })));
     } else if (layer.L.kind === "lines") {
       marks.add(new THREE.LineSegments(g2, new THREE.LineBasicMaterial({ color: hl, depthTest: false })));
     }
