@@ -217,6 +217,10 @@ fn bad_input_exits_2_and_writes_nothing() -> TestResult {
         vec!["view", s(&bad_nest), "-o", s(&out)],
         vec!["view", s(&net), "-o", s(&png)],
         vec!["view", s(&xyz), "-o", s(&out)],
+        vec!["view", s(&net), "--weld=-1", "-o", s(&out)],
+        vec!["view", s(&net), "--chord-tolerance", "nan", "-o", s(&out)],
+        // A reader flag where no file is read by the readers.
+        vec!["view", s(&bad_nest), "--units", "in", "-o", s(&out)],
     ];
     for args in cases {
         let o = lamina(&args);

@@ -91,6 +91,30 @@ pub fn run(args: Args) -> Result<()> {
     if extension(&args.output) != "html" {
         bail!("{}: the viewer is an .html page", args.output.display());
     }
+    // Reader flags are checked whatever the files are, and refused where nothing reads them.
+    args.read.options()?;
+    let readers = args.files.iter().any(|p| {
+        let ext = extension(p);
+        ext == "obj"
+            || ext == "stl"
+            || ext == "dxf"
+            || (ext == "json"
+                && json_format(p)
+                    .ok()
+                    .flatten()
+                    .is_none_or(|f| f == "lamina-network"))
+    });
+    let r = &args.read;
+    let given = r.weld.is_some()
+        || r.weld_rel.is_some()
+        || r.units.is_some()
+        || r.chord_tolerance != ReadArgs::default().chord_tolerance
+        || r.strict
+        || r.split_crossings
+        || r.max_points.is_some();
+    if given && !readers {
+        bail!("the reader flags (--weld, --units, --chord-tolerance, …) apply to networks and meshes, and none is given");
+    }
     let paths: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();
     let scene = scene_with(&paths, &args.read, args.title.clone())?;
     let html = page(&scene);
