@@ -208,6 +208,18 @@ fn bad_input_exits_2_and_writes_nothing() -> TestResult {
         &bad_nest,
         br#"{"format": "lamina-nest", "version": 2, "sheets": [{"file": "../../etc/passwd", "thickness": 3, "size": [1, 1], "parts": [], "utilisation": 0, "cut_mm": 0, "pierces": 0, "etch_mm": 0}], "placements": []}"#,
     )?;
+    // A cut DXF the dxf crate panics on (a header date out of its range, found by fuzzing).
+    let dated = d.join("dated");
+    std::fs::create_dir_all(&dated)?;
+    std::fs::copy(
+        fixture("fuzz/P7_dxf_julian_date/in.dxf"),
+        dated.join("s.dxf"),
+    )?;
+    let dated_nest = dated.join("nest.json");
+    std::fs::write(
+        &dated_nest,
+        br#"{"format": "lamina-nest", "version": 2, "sheets": [{"file": "s.dxf", "thickness": 3, "size": [100, 100], "parts": [], "utilisation": 0, "cut_mm": 0, "pierces": 0, "etch_mm": 0}], "placements": []}"#,
+    )?;
     let net = fixture("networks/calyx_veins.json");
     let (missing, png, xyz) = (d.join("missing.json"), d.join("v.png"), d.join("x.xyz"));
     let cases: Vec<Vec<&str>> = vec![
@@ -219,6 +231,7 @@ fn bad_input_exits_2_and_writes_nothing() -> TestResult {
         vec!["view", s(&xyz), "-o", s(&out)],
         vec!["view", s(&net), "--weld=-1", "-o", s(&out)],
         vec!["view", s(&net), "--chord-tolerance", "nan", "-o", s(&out)],
+        vec!["view", s(&dated_nest), "-o", s(&out)],
         // A reader flag where no file is read by the readers.
         vec!["view", s(&bad_nest), "--units", "in", "-o", s(&out)],
     ];

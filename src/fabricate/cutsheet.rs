@@ -419,8 +419,9 @@ pub fn read_cut_dxf(path: &Path) -> Result<(Vec<ReadPath>, usize), crate::files:
             format!("{size} bytes, more than a cut file may have ({MAX_SHEET_BYTES})"),
         ));
     }
-    let drawing = dxf::Drawing::load_file(path)
-        .map_err(|e| ReadError::file(path, format!("not a DXF lamina can read: {e}")))?;
+    // On the parser thread: a value the dxf crate cannot take is this file's error, no panic.
+    let bytes = std::fs::read(path).map_err(|e| ReadError::io(path, e))?;
+    let drawing = crate::network::io::dxf::load_drawing(path, &bytes)?;
     let (mut paths, mut other) = (Vec::new(), 0);
     for e in drawing.entities() {
         let layer = e.common.layer.clone();

@@ -91,7 +91,18 @@ pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
     let hint = "simplify it first (lamina simplify)";
     bound("network", net.edges.len(), "members", hint)?;
     bound("network", net.nodes.len(), "nodes", hint)?;
-    let mut degree = vec![0u32; net.nodes.len()];
+    let n = net.nodes.len();
+    if let Some(k) = net
+        .edges
+        .iter()
+        .position(|e| e.a as usize >= n || e.b as usize >= n)
+    {
+        return Err(ViewError::Input {
+            path: "network".into(),
+            msg: format!("edge {k} joins a node beyond the {n} nodes"),
+        });
+    }
+    let mut degree = vec![0u32; n];
     for e in &net.edges {
         degree[e.a as usize] += 1;
         degree[e.b as usize] += 1;
@@ -150,8 +161,19 @@ pub fn mesh(m: &TriMesh, name: &str, origin: DVec3) -> Result<Layer, ViewError> 
         "triangles",
         "mesh it coarser (solid --tolerance) or cut it up",
     )?;
+    let n = m.positions.len();
+    if let Some(k) = m
+        .triangles
+        .iter()
+        .position(|t| t.iter().any(|&v| v as usize >= n))
+    {
+        return Err(ViewError::Input {
+            path: name.into(),
+            msg: format!("triangle {k} names a vertex beyond the {n} vertices"),
+        });
+    }
     // Bodies: triangles joined through shared vertices.
-    let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
     fn root(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
             parent[v as usize] = parent[parent[v as usize] as usize];
