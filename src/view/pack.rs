@@ -1,5 +1,5 @@
 //! Scenes from the stages' outputs: networks, meshes, panels (axes), plates with their welds and
-//! sizing in 3D; cut sheets in 2D and print layers are in `sheets` and `layers`.
+//! sizing in 3D; cut sheets and print layers are in `flat`.
 
 use glam::{DVec2, DVec3};
 use thiserror::Error;
