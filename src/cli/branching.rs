@@ -277,11 +277,11 @@ pub fn finish(
 /// Prints the report: as JSON with --json, else one line per section and the files written.
 pub fn print(report: &Value, out: &OutputArgs) -> Result<()> {
     if out.json {
-        println!("{}", serde_json::to_string_pretty(report)?);
+        outln!("{}", serde_json::to_string_pretty(report)?);
     } else {
         print_summary(report);
         for p in [&out.output, &out.svg, &out.png].into_iter().flatten() {
-            println!("wrote {}", p.display());
+            outln!("wrote {}", p.display());
         }
     }
     Ok(())
@@ -325,7 +325,7 @@ fn print_summary(report: &Value) {
                 .filter(|(_, x)| !x.is_object() && !x.is_null())
                 .map(|(k, x)| format!("{k} {x}"))
                 .collect();
-            println!("{section}: {}", parts.join(", "));
+            outln!("{section}: {}", parts.join(", "));
         }
     }
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
 use super::venation::FramesDir;
@@ -65,13 +65,13 @@ pub struct Args {
 pub fn run(args: Args) -> Result<bool> {
     let report = execute(&args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print_summary(&report);
     }
     let meets = report["skin"]["self_intersections"].as_u64().unwrap_or(0);
     if meets > 0 {
-        eprintln!(
+        errln!(
             "lamina: the form meets itself at {meets} triangle pairs (outputs written); try a \
              larger --clearance"
         );
@@ -188,7 +188,7 @@ fn report(
 
 fn print_summary(r: &serde_json::Value) {
     let g = &r["growth"];
-    println!(
+    outln!(
         "{} cells in {} rounds ({} divisions), genus {} ({} holes, {} refused), stopped by {}",
         g["cells"],
         g["rounds"],
@@ -198,20 +198,23 @@ fn print_summary(r: &serde_json::Value) {
         g["holes_refused"],
         g["stopped_by"]
     );
-    println!(
+    outln!(
         "buds: {} made, {} died, {} froze, {} still live",
-        g["buds_made"], g["buds_dead"], g["buds_frozen"], g["buds_live"]
+        g["buds_made"],
+        g["buds_dead"],
+        g["buds_frozen"],
+        g["buds_live"]
     );
     let m = &r["mesh"];
     let s = &r["skin"];
-    println!(
+    outln!(
         "mesh: {} triangles, closed {}, genus {}, volume {} mm³; {} textured cells ({} reduced), {} self-intersections",
         m["triangles"], m["closed"], m["genus"], m["volume_mm3"], s["textured_cells"], s["reduced_cells"], s["self_intersections"]
     );
 }
 
 fn progress(total: u64) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+    let bar = super::progress::bar("growing", Some(total));
     if let Ok(style) = ProgressStyle::with_template("growing {bar:40} {pos}/{len} cells {elapsed}")
     {
         bar.set_style(style);

@@ -120,7 +120,7 @@ pub fn run(args: Args) -> Result<()> {
         notes,
     } = execute(&args)?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "output": args.output,
@@ -134,7 +134,7 @@ pub fn run(args: Args) -> Result<()> {
             })
         );
     } else {
-        println!(
+        outln!(
             "{}: {} cells in {} triangles, {} hole face(s); V − E + F = {} − {} + {} = {}",
             args.output.display(),
             c.cells.len(),
@@ -146,7 +146,7 @@ pub fn run(args: Args) -> Result<()> {
             c.euler.chi
         );
         for n in &notes {
-            println!("  {n}");
+            outln!("  {n}");
         }
     }
     Ok(())

@@ -57,15 +57,15 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     if args.json {
-        println!("{summary}");
+        outln!("{summary}");
     } else if let Some(n) = summary["nodes"].as_u64() {
-        println!(
+        outln!(
             "wrote {}: {n} nodes, {} edges",
             args.output.display(),
             summary["edges"]
         );
     } else {
-        println!(
+        outln!(
             "wrote {}: {} vertices, {} triangles",
             args.output.display(),
             summary["vertices"],

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressStyle;
 
 use super::info::summary;
 use super::input::{load, Loaded, ReadArgs};
@@ -109,10 +109,7 @@ pub fn run(args: Args) -> Result<()> {
     let inputs = out.join("inputs");
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
-    let bar = ProgressBar::with_draw_target(
-        Some(FIXTURES.len() as u64 + 5 + 4 + 3),
-        ProgressDrawTarget::stderr(),
-    );
+    let bar = super::progress::bar("demo", Some(FIXTURES.len() as u64 + 5 + 4 + 3));
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -166,7 +163,7 @@ pub fn run(args: Args) -> Result<()> {
     let index = out.join("index.html");
     let html = index_html(&entries, &viewers);
     write_atomic(&index, |w| std::io::Write::write_all(w, html.as_bytes()))?;
-    println!("wrote {} ({} fixtures)", index.display(), entries.len());
+    outln!("wrote {} ({} fixtures)", index.display(), entries.len());
     Ok(())
 }
 

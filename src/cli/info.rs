@@ -26,9 +26,9 @@ pub fn run(args: Args) -> Result<()> {
     let loaded = load(&args.file, &args.weld, true)?;
     let summary = summary(&args.file, &loaded);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary)?);
+        outln!("{}", serde_json::to_string_pretty(&summary)?);
     } else {
-        print!("{}", human(&summary));
+        out!("{}", human(&summary));
     }
     Ok(())
 }

@@ -140,7 +140,7 @@ impl ReadArgs {
         })?;
         imported.network = net;
         if !quiet {
-            eprintln!(
+            errln!(
                 "lamina: {}: noded {} crossings and {} T-junctions: {} nodes and {} edges added",
                 path.display(),
                 stats.crossings,
@@ -192,10 +192,10 @@ pub fn say_import(path: &Path, imported: &Imported) {
         .as_ref()
         .filter(|u| u.assumed || u.scale_to_mm != 1.0)
     {
-        eprintln!("lamina: {}: units {}", path.display(), u.describe());
+        errln!("lamina: {}: units {}", path.display(), u.describe());
     }
     if !imported.skipped.is_empty() {
-        eprintln!(
+        errln!(
             "lamina: {}: not read: {}",
             path.display(),
             skipped_list(imported)
@@ -265,7 +265,7 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
 pub fn weld_mesh(path: &Path, mesh: &mut TriMesh, weld: Weld, quiet: bool) -> MeshWeld {
     let w = mesh.weld(weld.tolerance_for(&mesh.bbox()));
     if !quiet {
-        eprintln!(
+        errln!(
             "lamina: {}: welded {} vertices within {} mm, {} triangles collapsed and dropped",
             path.display(),
             w.merged,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressStyle};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde_json::json;
@@ -165,10 +165,7 @@ fn setup(args: &Args) -> Result<Setup> {
 /// A bar over the symbols derived, for derivations long enough to wait for.
 fn progress(grammar: &Grammar, iterations: u32) -> ProgressBar {
     let (_, most) = word_length(grammar, iterations);
-    let bar = ProgressBar::with_draw_target(
-        Some(most.min(u64::MAX as u128) as u64),
-        ProgressDrawTarget::stderr(),
-    );
+    let bar = super::progress::bar("deriving", Some(most.min(u64::MAX as u128) as u64));
     if let Ok(style) =
         ProgressStyle::with_template("deriving {bar:40} {human_pos}/{human_len} symbols {elapsed}")
     {
@@ -253,8 +250,7 @@ fn derive_only(args: &Args, s: &Setup) -> Result<()> {
     let bar = progress(&s.grammar, s.iterations);
     let mut counts = Counts::default();
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let stdout = std::io::stdout();
-    let mut word = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
+    let mut word = std::io::BufWriter::with_capacity(1 << 16, super::say::Stdout);
     let mut failed: Option<std::io::Error> = None;
     derive(&s.grammar, s.iterations, &mut rng, args.max_symbols, |c| {
         counts.feed(c);
@@ -284,11 +280,13 @@ fn derive_only(args: &Args, s: &Setup) -> Result<()> {
             "segments": counts.segments,
             "simplified_segments": counts.simplified_segments,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else if !args.string {
-        println!(
+        outln!(
             "{} symbols, {} segments, {} after simplification",
-            counts.symbols, counts.segments, counts.simplified_segments
+            counts.symbols,
+            counts.segments,
+            counts.simplified_segments
         );
     }
     Ok(())

@@ -1,4 +1,19 @@
-//! One module per subcommand: an argument struct and a `run` that calls the library.
+//! One module per subcommand: an argument struct and a `run` that calls the library. The
+//! command line itself (`Cli`, `Command`, `dispatch`) lives here so that the Python package can
+//! run a command in-process with the same parsing, code and messages as the binary.
+
+// What the commands print goes through `say` (stdout and stderr for the binary, a buffer when the
+// Python package runs a command).
+macro_rules! outln {
+    () => { $crate::cli::say::out(format_args!("\n")) };
+    ($($t:tt)*) => { $crate::cli::say::out(format_args!("{}\n", format_args!($($t)*))) };
+}
+macro_rules! out {
+    ($($t:tt)*) => { $crate::cli::say::out(format_args!($($t)*)) };
+}
+macro_rules! errln {
+    ($($t:tt)*) => { $crate::cli::say::note(format_args!($($t)*)) };
+}
 
 pub mod bifurcate;
 pub mod branching;
@@ -13,7 +28,9 @@ pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod print;
+pub mod progress;
 pub mod render;
+pub mod say;
 pub mod simplify;
 pub mod size;
 pub mod sl1;
@@ -23,3 +40,127 @@ pub mod surface;
 pub mod veins;
 pub mod venation;
 pub mod view;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "lamina",
+    version,
+    about = "Grow branching structures and turn polyline networks into buildable, checked parts"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Counts, bounding box, degrees, components, cycles, lengths and every problem of a network
+    /// (.json .obj .dxf) or a mesh (.obj .stl).
+    Info(info::Args),
+    /// Convert between formats, chosen by extension (networks: json obj dxf svg png; meshes: obj
+    /// stl png).
+    Convert(convert::Args),
+    /// Render a network (SVG or PNG) or a mesh (PNG).
+    Render(render::Args),
+    /// Grow leaf venation, open or closed, in a built-in or given blade (Runions et al. 2005),
+    /// or on a triangle mesh with --surface (Gokmen §3.3)
+    Venation(Box<venation::Args>),
+    /// Geodesic veins along the edges of a mesh, from a root vertex to source vertices
+    /// (Bachman), with shortest paths kept up to date incrementally
+    Veins(Box<veins::Args>),
+    /// Derive a bracketed L-system and draw it with a 2D/3D turtle (runs of F merged into
+    /// members), or only count it; optionally fitted to a façade boundary and projected onto a
+    /// surface (Hanafin et al.)
+    Lsystem(Box<lsystem::Args>),
+    /// A tree by recursive bifurcation (fixed or random angles and scales), optionally fitted
+    /// to a façade boundary and projected onto a surface (Hanafin et al.)
+    Bifurcate(Box<bifurcate::Args>),
+    /// Grow a bud program into a cellular surface (Hart, "Growth Forms"): cell division, spring
+    /// embedding, buds with tropism, splitting, line buds and holes; STL/OBJ with textures as
+    /// geometry
+    Buds(Box<buds::Args>),
+    /// Fewer, straighter members for fabrication: chains of degree-2 nodes to the fewest straight
+    /// members within a deviation, junctions merged, branches pruned by Horton-Strahler order,
+    /// sharp joints repaired; a report before and after; exit 1 when a sharp joint is left.
+    Simplify(Box<simplify::Args>),
+    /// The closed cells of a network on a surface (faces of its rotation system), triangulated
+    /// by constrained Delaunay, with per-node normals and V − E + F checked against the surface.
+    Cells(cells::Args),
+    /// Node axes that make every panel of a network planar (L-BFGS or iterative projection),
+    /// with the panels and a planarity report.
+    Planarize(Box<planarize::Args>),
+    /// Frame analysis of the plate network and the gauges it needs: thinnest gauges with
+    /// utilisation at most 1, a deflection limit, weld utilisation (sizing.json, HTML,
+    /// a CalculiX deck); exit 1 when the thickest gauge is not enough.
+    Size(Box<size::Args>),
+    /// Steel plates from node axes: one flat plate per edge in its panel plane, thickness from a
+    /// gauge list, cut back at the nodes so plates do not interpenetrate (plates.json,
+    /// assembly.stl).
+    Plates(plates::Args),
+    /// Nest plates on stock sheets, one sheet family per thickness: a cut DXF per sheet,
+    /// bom.csv, nest.json, assembly.scad rebuilt from the sheets, and sheets.svg.
+    Nest(Box<nest::Args>),
+    /// Check the planarity of panels (.obj faces, .dxf 3DFACE, polyface meshes, MESH and closed
+    /// polylines, lamina axes or plates): ISO flatness, best fit and the corner figure, each
+    /// panel against its tolerance class; exit 0 when all are within, 1 when some are not.
+    Audit(planarize::AuditArgs),
+    /// A vein network as one watertight, 2-manifold mesh for printing: tapered round veins,
+    /// optional lamina and base, scaled to a print size.
+    Solid(solid::Args),
+    /// Slice closed meshes for a masked-SLA (DMP-SL) printer: anti-aliased layer PNGs in an
+    /// SL1 archive (PrusaSlicer layout), with resin volume, cost and build time.
+    Slice(Box<slice::Args>),
+    /// A network's solid sliced straight from its signed distance into an SL1 archive, with no
+    /// mesh in between: the same layers as `solid` then `slice`, in a fraction of the memory.
+    Print(Box<print::Args>),
+    /// Read an SL1 archive back and check it (ours or PrusaSlicer's).
+    Sl1(sl1::Args),
+    /// One offline HTML page to look before you cut: networks, meshes, panels by deviation,
+    /// plates by group, gauge or utilisation with their welds, cut sheets, print layers with
+    /// islands (three.js embedded; opens without a network).
+    View(Box<view::Args>),
+    /// Run the whole way on the embedded fixtures and write every output with an index.html.
+    Demo(demo::Args),
+}
+
+/// Runs a parsed command: Ok(false) when its result missed its tolerance (exit 1).
+pub fn dispatch(command: Command) -> anyhow::Result<bool> {
+    match command {
+        Command::Info(args) => info::run(args).map(|()| true),
+        Command::Convert(args) => convert::run(args).map(|()| true),
+        Command::Render(args) => render::run(args).map(|()| true),
+        Command::Venation(args) => venation::run(*args).map(|()| true),
+        Command::Veins(args) => veins::run(*args).map(|()| true),
+        Command::Lsystem(args) => lsystem::run(*args).map(|()| true),
+        Command::Bifurcate(args) => bifurcate::run(*args).map(|()| true),
+        Command::Buds(args) => buds::run(*args),
+        Command::Solid(args) => solid::run(args).map(|()| true),
+        Command::Slice(args) => slice::run(*args).map(|()| true),
+        Command::Print(args) => print::run(*args).map(|()| true),
+        Command::Sl1(args) => sl1::run(args),
+        Command::View(args) => view::run(*args).map(|()| true),
+        Command::Demo(args) => demo::run(args).map(|()| true),
+        Command::Cells(args) => cells::run(args).map(|()| true),
+        Command::Simplify(args) => simplify::run(*args),
+        Command::Planarize(args) => planarize::run(*args),
+        Command::Size(args) => size::run(*args),
+        Command::Plates(args) => plates::run(args),
+        Command::Nest(args) => nest::run(*args).map(|()| true),
+        Command::Audit(args) => planarize::audit_run(args),
+    }
+}
+
+/// The message of an error as the binary prints it: the chain of causes, each once (library
+/// errors already quote their source), without control characters.
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg = format!("{msg}: {c}");
+        }
+    }
+    lamina::text::printable(&msg).into_owned()
+}

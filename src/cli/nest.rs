@@ -10,7 +10,7 @@ use std::sync::Arc;
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
 use glam::{DVec2, DVec3};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
 use lamina::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
@@ -578,7 +578,7 @@ fn named(
 }
 
 fn progress(len: u64) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+    let bar = super::progress::bar("nesting", Some(len));
     bar.set_style(
         ProgressStyle::with_template(
             "nesting {bar:40} {pos}/{len} parts placed (all tries and stock sizes) {elapsed}",
@@ -797,7 +797,7 @@ pub fn run(args: Args) -> Result<()> {
     let out = execute(&args)?;
     let cost: f64 = out.sheets.iter().map(|s| s.stock.cost).sum();
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "output": args.output,
@@ -809,7 +809,7 @@ pub fn run(args: Args) -> Result<()> {
         );
         return Ok(());
     }
-    println!(
+    outln!(
         "{}: {} plates on {} sheet(s), {:.1} % used{}",
         args.output.display(),
         out.plates.len(),
@@ -833,7 +833,7 @@ pub fn run(args: Args) -> Result<()> {
             let stock: f64 = these.iter().map(|o| o.stock.size.x * o.stock.size.y).sum();
             let remnants: usize = these.iter().map(|o| o.remnants.len()).sum();
             let laser: f64 = these.iter().map(|o| o.time_s.0).sum();
-            println!(
+            outln!(
                 "  {} mm: {} sheet(s), {:.1} % used, {remnants} remnant(s), laser about {:.0} min",
                 thickness_name(s.thickness),
                 these.len(),
@@ -851,7 +851,7 @@ pub fn run(args: Args) -> Result<()> {
             .zip(&out.plates)
             .filter(|(&n, p)| n < j.per_part && j.applies(&p.outline))
             .count();
-        println!(
+        outln!(
             "  micro-joints: {} on {small} part(s) under {} mm, {} mm wide{}; no assembly.scad (OpenSCAD drops open contours: the plates folder's rebuilds from the part DXFs)",
             out.joint_counts.iter().sum::<usize>(),
             j.below,
@@ -864,7 +864,7 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     if !out.cores.is_empty() {
-        println!(
+        outln!(
             "  {} node core(s) are tubes, not nested: cut from tube stock (rows `tube` in bom.csv)",
             out.cores.len()
         );

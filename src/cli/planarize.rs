@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use clap::{Args as ClapArgs, ValueEnum};
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressStyle;
 use serde_json::json;
 
 use lamina::files::write_atomic;
@@ -170,7 +170,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     };
     let start = Instant::now();
     // A spinner with the last round's figures (hidden when stderr is not a terminal).
-    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    let bar = super::progress::bar("node axes", None);
     bar.set_style(
         ProgressStyle::with_template("{spinner} node axes, {msg} {elapsed}").expect("template"),
     );
@@ -212,12 +212,12 @@ pub fn run(args: Args) -> Result<bool> {
         seconds,
     } = execute(&args)?;
     if args.reports.json {
-        println!(
+        outln!(
             "{}",
             json!({ "output": args.output, "summary": summary, "seconds": seconds })
         );
     } else {
-        println!(
+        outln!(
             "{} {}: max panel deviation {:.6} mm (tolerance {} mm) after {} iterations, α {:e}{}",
             if sol.converged {
                 "planar:"
@@ -239,7 +239,7 @@ pub fn run(args: Args) -> Result<bool> {
             }
         );
         for n in notes(&sol) {
-            println!("  {n}");
+            outln!("  {n}");
         }
     }
     Ok(sol.converged)
@@ -388,7 +388,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
     let read = read_panels(&args.input)?;
     let source = args.input.display().to_string();
     for note in &read.notes {
-        eprintln!("lamina: {source}: {note}");
+        errln!("lamina: {source}: {note}");
     }
     // Faces of fewer than four distinct corners are planar by construction: counted, not audited.
     let total = read.panels.len();
@@ -400,7 +400,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
         .unzip();
     let skipped = total - panels.len();
     if skipped > 0 {
-        eprintln!(
+        errln!(
             "lamina: {skipped} of {total} faces have fewer than 4 distinct corners (planar by construction): skipped"
         );
     }
@@ -419,7 +419,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
                 "{source}: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners, beyond the exact flatness search: give --metric best-fit"
             );
         }
-        eprintln!(
+        errln!(
             "lamina: {too_many} faces have more than {MAX_FLATNESS_CORNERS} corners: no flatness for them (NaN)"
         );
     }
@@ -490,9 +490,10 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
     );
     for c in &report.summary.classes {
         if c.panels == 0 {
-            eprintln!(
+            errln!(
                 "lamina: tolerance class \"{}\" ({}) matches no panel",
-                c.name, c.rule
+                c.name,
+                c.rule
             );
         }
     }
@@ -502,7 +503,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
     args.reports.write(&report)?;
     let s = &report.summary;
     if args.reports.json {
-        println!("{}", serde_json::to_string(s)?);
+        outln!("{}", serde_json::to_string(s)?);
     } else {
         let figure = |v: f64| {
             if v.is_nan() {
@@ -511,7 +512,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
                 format!("{v:.9}")
             }
         };
-        println!(
+        outln!(
             "{source}: {} panels, max {} {} mm (flatness {}, best fit {}, corner {}), {} above {}",
             s.panels,
             s.metric.name(),

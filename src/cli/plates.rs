@@ -278,7 +278,7 @@ pub fn run(args: Args) -> Result<bool> {
     let groups = plates.iter().map(|p| p.group + 1).max().unwrap_or(0);
     let ok = args.min_weld_angle.is_none_or(|_| weld.below_min == 0);
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "output": args.output,
@@ -298,7 +298,7 @@ pub fn run(args: Args) -> Result<bool> {
             })
         );
     } else {
-        println!(
+        outln!(
             "{}: {} plates in {groups} group(s), {seams} seam(s) as bolted pairs ({bolts} bolts), {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
             args.output.display(),
             plates.len(),
@@ -306,7 +306,7 @@ pub fn run(args: Args) -> Result<bool> {
             volume * 7.9e-6,
             flattening
         );
-        println!(
+        outln!(
             "  welds: {} node(s), {} pair(s); root gap {} ± {} mm at {} node(s){}; dihedral angles from {:.1}°: {} below 60°, {} 60–120°, {} 120–135°, {} over 135° (welds.html)",
             weld.nodes,
             weld.pairs,
@@ -326,7 +326,7 @@ pub fn run(args: Args) -> Result<bool> {
         );
         if !weld.uneven.is_empty() {
             let list: Vec<String> = weld.uneven.iter().take(10).map(|n| n.to_string()).collect();
-            println!(
+            outln!(
                 "  {} node(s) need a node core (no setbacks even their gaps; --node-core tube:D,T): {}{}",
                 weld.uneven.len(),
                 list.join(", "),
@@ -334,14 +334,14 @@ pub fn run(args: Args) -> Result<bool> {
             );
         }
         if untagged > 0 {
-            println!(
+            outln!(
                 "  {untagged} plate(s) too small for a {} mm tag {} mm inside the outline: not etched",
                 TAG_HEIGHT.0, TAG_MARGIN
             );
         }
     }
     if let (false, Some(a)) = (ok, args.min_weld_angle) {
-        eprintln!(
+        errln!(
             "lamina: {} pair(s) of plates meet at less than --min-weld-angle {a}° (the smallest {:.2}°): see welds.html",
             weld.below_min, weld.smallest_angle
         );

@@ -44,7 +44,7 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(within)?;
     let (scale, min_radius, max_radius) = (made.scale, made.min_radius, made.max_radius);
     if min_radius < printer.pixel_mm {
-        eprintln!(
+        errln!(
             "lamina: warning: the thinnest vein (radius {min_radius:.4} mm) is thinner than a \
              pixel ({} mm): it may print broken or not at all; use a larger --fit",
             printer.pixel_mm

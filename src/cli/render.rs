@@ -40,6 +40,6 @@ pub fn run(args: Args) -> Result<()> {
         ),
         (Loaded::Mesh(..), _) => bail!("{}: a mesh renders to .png", args.output.display()),
     }
-    println!("wrote {}", args.output.display());
+    outln!("wrote {}", args.output.display());
     Ok(())
 }

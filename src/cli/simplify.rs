@@ -107,12 +107,12 @@ pub fn run(args: Args) -> Result<bool> {
     let (done, notes) = execute(&args)?;
     let r = &done.report;
     for n in &notes {
-        eprintln!("lamina: {n}");
+        errln!("lamina: {n}");
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(r)?);
+        outln!("{}", serde_json::to_string_pretty(r)?);
     } else {
-        print!("{}", human(&args, r));
+        out!("{}", human(&args, r));
     }
     Ok(r.sharp_joints.is_empty())
 }

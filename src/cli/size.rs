@@ -115,7 +115,7 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let material_name = args.material.as_deref().unwrap_or("1.4404");
     let material = Material::get(material_name)?;
     if args.material.is_none() {
-        eprintln!(
+        errln!(
             "lamina: material 1.4404 (stainless 316L, f_y {} MPa), the default: give --material for another",
             material.fy
         );
@@ -322,7 +322,7 @@ pub fn run(args: Args) -> Result<bool> {
     let (max_u, max_w) = (s.max_utilisation(), s.max_weld_utilisation());
     let (node, d) = s.max_displacement();
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "output": args.output,
@@ -345,7 +345,7 @@ pub fn run(args: Args) -> Result<bool> {
         .iter()
         .map(|(g, n)| format!("{n} × {} mm", f64::from_bits(*g)))
         .collect();
-    println!(
+    outln!(
         "{}: {} members sized in {} round(s){}: {}; {:.1} kg",
         args.output.display(),
         s.model.members.len(),
@@ -358,7 +358,7 @@ pub fn run(args: Args) -> Result<bool> {
         mix.join(", "),
         s.mass_kg
     );
-    println!(
+    outln!(
         "  utilisation at most {max_u:.3}, welds at most {max_w:.3}; largest displacement {d:.3} mm at node {node}{}",
         match s.deflection_limit {
             Some(l) => format!(
@@ -370,7 +370,7 @@ pub fn run(args: Args) -> Result<bool> {
         }
     );
     if max_u > 1.0 || max_w > 1.0 {
-        println!(
+        outln!(
             "  NOT ENOUGH: members or welds are over-utilised even on the thickest gauge ({} mm)",
             s.gauges.iter().copied().fold(0.0, f64::max)
         );

@@ -33,7 +33,7 @@ pub fn run(args: Args) -> Result<bool> {
         Sl1Command::Check { archive, json } => {
             let c = check(&archive)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&c)?);
+                outln!("{}", serde_json::to_string_pretty(&c)?);
             } else {
                 print_check(&c);
             }
@@ -43,7 +43,7 @@ pub fn run(args: Args) -> Result<bool> {
 }
 
 fn print_check(c: &Sl1Check) {
-    println!(
+    outln!(
         "{}: {} layers of {} mm, {} × {} pixels of {:.4} mm; resin {:.4} mL from the images \
          (usedMaterial {:.4} mL); {} islands; {} empty layers",
         c.archive,
@@ -58,15 +58,20 @@ fn print_check(c: &Sl1Check) {
         c.empty_layers
     );
     for i in c.islands.iter().take(10) {
-        println!(
+        outln!(
             "  island at layer {} (z {:.3} mm): ({:.3}, {:.3}) mm, {:.4} mm², {} pixels",
-            i.layer, i.z_mm, i.x_mm, i.y_mm, i.area_mm2, i.pixels
+            i.layer,
+            i.z_mm,
+            i.x_mm,
+            i.y_mm,
+            i.area_mm2,
+            i.pixels
         );
     }
     if c.island_count > 10 {
-        println!("  … {} more", c.island_count - 10);
+        outln!("  … {} more", c.island_count - 10);
     }
     for p in &c.problems {
-        println!("problem: {p}");
+        outln!("problem: {p}");
     }
 }

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressStyle;
 use serde_json::json;
 
 use super::venation::write_json;
@@ -296,7 +296,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         let height = mesh.bbox().size().z;
         if height < 10.0 * printer.layer_mm {
-            eprintln!(
+            errln!(
                 "lamina: {}: only {:.1} layers tall ({height:.4} mm at {} mm layers): is it in \
                  metres? give --units or --scale",
                 path.display(),
@@ -324,10 +324,10 @@ pub fn tell(
     json: bool,
 ) -> Result<()> {
     if json {
-        println!("{}", serde_json::to_string_pretty(report)?);
+        outln!("{}", serde_json::to_string_pretty(report)?);
     } else {
         let placed = report["placements"].as_array().map_or(0, |p| p.len());
-        println!(
+        outln!(
             "wrote {}: {} layers of {} mm ({:.2} mm), {placed} model(s) on the plate",
             output.display(),
             e.layers,
@@ -338,9 +338,13 @@ pub fn tell(
             Some(v) => format!(" (mesh {v:.4} mL)"),
             None => String::new(),
         };
-        println!(
+        outln!(
             "  resin {:.4} mL{mesh}, cost {:.4}, {:.3} g; build {:.2} h ({})",
-            e.volume_ml, e.resin_cost, e.mass_g, e.build_time_h, e.build_time_from
+            e.volume_ml,
+            e.resin_cost,
+            e.mass_g,
+            e.build_time_h,
+            e.build_time_from
         );
     }
     // Islands are said even with --json (on stderr then): a print fails at each.
@@ -357,9 +361,9 @@ pub fn tell(
         ),
     };
     if json {
-        eprintln!("lamina: {line}");
+        errln!("lamina: {line}");
     } else {
-        println!("  {line}");
+        outln!("  {line}");
     }
     Ok(())
 }
@@ -404,8 +408,7 @@ pub fn slice_job(
         Source::Meshes(models) => layer_count(models, printer),
         Source::Shapes { model, .. } => shapes::layer_count(model, printer),
     };
-    let bar =
-        ProgressBar::with_draw_target(Some(layers_total as u64), ProgressDrawTarget::stderr());
+    let bar = super::progress::bar("slicing", Some(layers_total as u64));
     bar.set_style(ProgressStyle::with_template(
         "slicing {bar:40} {pos}/{len} layers {elapsed}",
     )?);

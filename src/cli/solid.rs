@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressStyle;
 
 use super::input::ReadArgs;
 use super::venation::write_json;
@@ -131,7 +131,7 @@ impl SupportArgs {
             base_height: base[1],
             join: self.support_join,
         };
-        let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+        let bar = super::progress::bar("supports", None);
         bar.set_style(ProgressStyle::with_template(
             "supports: slicing {bar:40} {pos}/{len} layers {elapsed}",
         )?);
@@ -146,16 +146,25 @@ impl SupportArgs {
         // Placed where they were planned, so the print's pixels are the planned ones.
         shapes.frame = Some(model.shift());
         let r = made.report;
-        eprintln!(
+        errln!(
             "lamina: supports: {} island(s) held by {} tip(s); {} pillar(s) on the plate, {} on \
              the model, {} join(s); {:.4} mL of supports for {:.4} mL of model",
-            r.islands, r.tips, r.to_plate, r.to_model, r.joins, r.support_ml, r.model_ml
+            r.islands,
+            r.tips,
+            r.to_plate,
+            r.to_model,
+            r.joins,
+            r.support_ml,
+            r.model_ml
         );
         if let Some(i) = &r.first_left {
-            eprintln!(
+            errln!(
                 "lamina: warning: {} island(s) left with supports, the first at layer {} \
                  ({:.2}, {:.2}) mm",
-                r.islands_left, i.layer, i.x_mm, i.y_mm
+                r.islands_left,
+                i.layer,
+                i.x_mm,
+                i.y_mm
             );
         }
         Ok(Some(r))
@@ -181,7 +190,7 @@ pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
     let mut opts = args.shape.options(args.cell)?;
     opts.tolerance = args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell));
-    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    let bar = super::progress::bar("meshing", None);
     bar.set_style(ProgressStyle::with_template(
         "meshing {bar:40} {pos}/{len} bricks {elapsed}",
     )?);
@@ -207,10 +216,10 @@ pub fn run(args: Args) -> Result<()> {
         write_json(path, &value)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(r)?);
+        outln!("{}", serde_json::to_string_pretty(r)?);
     } else {
         let size = [0, 1, 2].map(|a| r.bbox_max[a] - r.bbox_min[a]);
-        println!(
+        outln!(
             "wrote {}: {} triangles, {} vertices, closed 2-manifold, {} part(s), genus {}",
             args.output.display(),
             r.triangles,
@@ -218,7 +227,7 @@ pub fn run(args: Args) -> Result<()> {
             r.parts,
             r.genus
         );
-        println!(
+        outln!(
             "  {:.1} × {:.1} × {:.1} mm, volume {:.1} mm³ ({:.3} mL), cell {} mm, scale {:.4}",
             size[0],
             size[1],
@@ -228,13 +237,16 @@ pub fn run(args: Args) -> Result<()> {
             r.cell_mm,
             r.scale
         );
-        println!(
+        outln!(
             "  network: {} cycle(s), {} part(s); vein radius {:.4}..{:.4} mm",
-            r.network_cycles, r.network_parts, r.min_radius, r.max_radius
+            r.network_cycles,
+            r.network_parts,
+            r.min_radius,
+            r.max_radius
         );
     }
     for w in &r.warnings {
-        eprintln!("lamina: warning: {w}");
+        errln!("lamina: warning: {w}");
     }
     Ok(())
 }

@@ -67,7 +67,7 @@ pub fn read_surface(path: &Path, weld: &SurfaceWeld) -> Result<TriMesh> {
         );
     }
     if dropped > 0 {
-        eprintln!(
+        errln!(
             "lamina: --surface {}: {dropped} degenerate triangles (a vertex used twice or no \
              area) left out",
             path.display()
@@ -165,7 +165,7 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
         .with_context(|| format!("--surface {}", path.display()))?;
     let u = veins.quality.unrooted;
     if u.bodies_without_root > 0 {
-        eprintln!(
+        errln!(
             "lamina: --surface {}: {} of its {} bodies have no root, so growth cannot reach \
              them: {} sources there left out (give a --root on each body to grow on it)",
             path.display(),
@@ -207,9 +207,9 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
         write_json(report, &summary)?;
     }
     if args.json {
-        println!("{summary}");
+        outln!("{summary}");
     } else {
-        println!(
+        outln!(
             "wrote {}: {} steps, D = {:.4} mm, kill {:.4} mm, {} sources",
             args.output.display(),
             g.iterations,
@@ -218,7 +218,7 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
             g.sources_placed
         );
         for line in veins.quality.lines() {
-            println!("  {line}");
+            outln!("  {line}");
         }
     }
     Ok(())

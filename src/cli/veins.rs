@@ -152,9 +152,9 @@ pub fn run(args: Args) -> Result<()> {
         write_json(path, &summary)?;
     }
     if args.json {
-        println!("{summary}");
+        outln!("{summary}");
     } else {
-        println!(
+        outln!(
             "wrote {}: a tree of {} vertices reaching {} sources in {} iterations ({} labels \
              updated){}",
             args.output.display(),

@@ -356,7 +356,7 @@ pub fn run(args: Args) -> Result<()> {
         write_json(path, &summary)?;
     }
     if args.json {
-        println!("{summary}");
+        outln!("{summary}");
     } else {
         print_summary(&args.output, &leaf);
     }
@@ -469,7 +469,7 @@ fn summary(output: &Path, leaf: &Leaf) -> serde_json::Value {
 
 fn print_summary(output: &Path, leaf: &Leaf) {
     let g = &leaf.growth;
-    println!(
+    outln!(
         "wrote {}: {} steps ({}); {} of {} sources left unreached",
         output.display(),
         g.iterations,
@@ -481,7 +481,7 @@ fn print_summary(output: &Path, leaf: &Leaf) {
         g.sources_placed
     );
     for line in leaf.quality.lines() {
-        println!("  {line}");
+        outln!("  {line}");
     }
 }
 
@@ -510,7 +510,7 @@ fn sweep(args: &Args, s: Setup) -> Result<()> {
         row["r"] = json!(r);
         row["blade_rate"] = json!(opts.growth.blade_rate);
         if !args.json {
-            println!(
+            outln!(
                 "r = {r}: {} nodes, {} thick edges (radius > half the root's), {} loops",
                 leaf.network.nodes.len(),
                 leaf.quality.thick_edges,
@@ -527,9 +527,9 @@ fn sweep(args: &Args, s: Setup) -> Result<()> {
         std::io::Write::write_all(w, svg.as_bytes())
     })?;
     if args.json {
-        println!("{table}");
+        outln!("{table}");
     } else {
-        println!("wrote {}/sweep.json and sweep.svg", dir.display());
+        outln!("wrote {}/sweep.json and sweep.svg", dir.display());
     }
     Ok(())
 }

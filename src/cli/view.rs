@@ -120,9 +120,9 @@ pub fn run(args: Args) -> Result<()> {
     let html = page(&scene);
     write_atomic(&args.output, |w| w.write_all(html.as_bytes()))?;
     for n in &scene.notes {
-        eprintln!("lamina: {n}");
+        errln!("lamina: {n}");
     }
-    eprintln!(
+    errln!(
         "lamina: wrote {} ({:.1} MB): {}",
         args.output.display(),
         html.len() as f64 / 1e6,

@@ -1,0 +1,294 @@
+//! `lamina._lamina`: the commands of the lamina binary, run in-process for the Python package.
+//!
+//! The command-line modules are compiled here as they are in the binary (`cli` below is
+//! `src/cli`), so a command parses its flags, computes, writes its files and words its errors
+//! with the same code: the package's results and reports are the binary's. What a command
+//! prints is captured (`cli::say`), its notes handed back, its progress bar read by a watcher
+//! that calls the Python callback. The Python side (`python/lamina/`) moves arrays in and out
+//! of the files in a private folder.
+
+#[allow(dead_code, clippy::all)]
+#[path = "../../src/cli/mod.rs"]
+mod cli;
+
+use std::path::Path;
+use std::sync::mpsc;
+use std::time::Duration;
+
+use clap::Parser;
+use glam::DVec3;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use lamina::mesh::io::{read_mesh as read_mesh_file, write_mesh as write_mesh_file};
+use lamina::network::io::{read_network as read_network_file, ReadOptions, RenderOptions};
+use lamina::{Edge, Network, Node, TriMesh};
+
+pyo3::create_exception!(
+    _lamina,
+    LaminaError,
+    PyValueError,
+    "An error of a lamina command: bad input, a bad option or a failed write; the message is \
+     the one the lamina binary prints."
+);
+
+/// How often the progress callback is called while a command runs.
+const PROGRESS_EVERY: Duration = Duration::from_millis(100);
+
+/// Runs `lamina ARGV…` in-process with the GIL released. Returns (within, stdout, notes):
+/// within is False where the binary exits 1 (a tolerance not met). Raises LaminaError with the
+/// binary's message where it exits 2. `progress(stage, message, done, total)` is called about
+/// ten times a second while a progress bar runs (total None for a spinner).
+#[pyfunction]
+#[pyo3(signature = (argv, progress=None))]
+fn run(
+    py: Python<'_>,
+    argv: Vec<String>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(bool, String, Vec<String>)> {
+    let parsed = cli::Cli::try_parse_from(std::iter::once("lamina".to_string()).chain(argv))
+        .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    let mut callback_error: Option<PyErr> = None;
+    let (result, captured) = py.detach(|| {
+        std::thread::scope(|scope| {
+            // Dropping `done` (when the command returns) wakes the watcher at once.
+            let (done, finished) = mpsc::channel::<()>();
+            if let Some(callback) = &progress {
+                let callback_error = &mut callback_error;
+                scope.spawn(move || watch(callback, finished, callback_error));
+            }
+            cli::progress::reset();
+            let out = cli::say::capture(|| cli::dispatch(parsed.command));
+            drop(done);
+            out
+        })
+    });
+    if let Some(e) = callback_error {
+        return Err(e);
+    }
+    match result {
+        Ok(within) => Ok((within, captured.out, captured.notes)),
+        Err(e) => Err(LaminaError::new_err(cli::error_message(&e))),
+    }
+}
+
+/// Calls the progress callback with the active bar until the command is done; a callback that
+/// raises is not called again and its exception is raised when the command returns.
+fn watch(callback: &Py<PyAny>, finished: mpsc::Receiver<()>, error: &mut Option<PyErr>) {
+    while let Err(mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(PROGRESS_EVERY) {
+        let Some(p) = cli::progress::active() else {
+            continue;
+        };
+        let called = Python::attach(|py| {
+            callback
+                .call1(py, (p.stage, p.message, p.done, p.total))
+                .map(drop)
+        });
+        if let Err(e) = called {
+            *error = Some(e);
+            return;
+        }
+    }
+}
+
+fn f64s(bytes: &[u8], what: &str) -> PyResult<Vec<f64>> {
+    if !bytes.len().is_multiple_of(8) {
+        return Err(LaminaError::new_err(format!(
+            "{what}: {} bytes is not a whole number of float64 values",
+            bytes.len()
+        )));
+    }
+    Ok(bytes
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))
+        .collect())
+}
+
+fn u32s(bytes: &[u8], what: &str) -> PyResult<Vec<u32>> {
+    if !bytes.len().is_multiple_of(4) {
+        return Err(LaminaError::new_err(format!(
+            "{what}: {} bytes is not a whole number of uint32 values",
+            bytes.len()
+        )));
+    }
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes")))
+        .collect())
+}
+
+fn points(v: &[f64]) -> Vec<DVec3> {
+    v.chunks_exact(3)
+        .map(|c| DVec3::new(c[0], c[1], c[2]))
+        .collect()
+}
+
+fn f64_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = f64>) -> Bound<'py, PyBytes> {
+    let bytes: Vec<u8> = values.flat_map(f64::to_le_bytes).collect();
+    PyBytes::new(py, &bytes)
+}
+
+fn u32_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = u32>) -> Bound<'py, PyBytes> {
+    let bytes: Vec<u8> = values.flat_map(u32::to_le_bytes).collect();
+    PyBytes::new(py, &bytes)
+}
+
+/// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
+/// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
+/// float64, normals N×3 float64 or empty (no normals).
+#[pyfunction]
+#[pyo3(signature = (path, positions, edges, node_radius, edge_radius, normals))]
+fn write_network(
+    path: &str,
+    positions: &[u8],
+    edges: &[u8],
+    node_radius: &[u8],
+    edge_radius: &[u8],
+    normals: &[u8],
+) -> PyResult<()> {
+    let p = points(&f64s(positions, "positions")?);
+    let e = u32s(edges, "edges")?;
+    let (nr, er) = (
+        f64s(node_radius, "node_radius")?,
+        f64s(edge_radius, "edge_radius")?,
+    );
+    let n = points(&f64s(normals, "normals")?);
+    let net = Network {
+        nodes: p
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| Node {
+                p,
+                normal: n.get(i).copied(),
+                radius: nr[i],
+            })
+            .collect(),
+        edges: e
+            .chunks_exact(2)
+            .zip(&er)
+            .map(|(ab, &radius)| Edge {
+                a: ab[0],
+                b: ab[1],
+                radius,
+            })
+            .collect(),
+        meta: Default::default(),
+    };
+    lamina::network::io::write_network(&net, Path::new(path), &RenderOptions::default())
+        .map_err(|e| LaminaError::new_err(e.to_string()))
+}
+
+/// Reads a network file (.json .obj .dxf) into a dict of little-endian arrays: positions,
+/// edges, node_radius, edge_radius, normals (None when no node has one), meta (JSON text).
+#[pyfunction]
+fn read_network<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, PyDict>> {
+    let net = read_network_file(Path::new(path), &ReadOptions::default())
+        .map_err(|e| LaminaError::new_err(e.to_string()))?
+        .network;
+    let d = PyDict::new(py);
+    d.set_item(
+        "positions",
+        f64_bytes(py, net.nodes.iter().flat_map(|n| n.p.to_array())),
+    )?;
+    d.set_item(
+        "edges",
+        u32_bytes(py, net.edges.iter().flat_map(|e| [e.a, e.b])),
+    )?;
+    d.set_item(
+        "node_radius",
+        f64_bytes(py, net.nodes.iter().map(|n| n.radius)),
+    )?;
+    d.set_item(
+        "edge_radius",
+        f64_bytes(py, net.edges.iter().map(|e| e.radius)),
+    )?;
+    if net.nodes.iter().any(|n| n.normal.is_some()) {
+        d.set_item(
+            "normals",
+            f64_bytes(
+                py,
+                net.nodes
+                    .iter()
+                    .flat_map(|n| n.normal.unwrap_or(DVec3::NAN).to_array()),
+            ),
+        )?;
+    } else {
+        d.set_item("normals", py.None())?;
+    }
+    let m = &net.meta;
+    let meta = serde_json::json!({
+        "units": m.units,
+        "generator": m.generator,
+        "parameters": m.parameters,
+        "seed": m.seed,
+        "tags": m.tags,
+    });
+    d.set_item("meta", meta.to_string())?;
+    Ok(d)
+}
+
+/// Writes a triangle mesh (.obj .stl by extension): vertices V×3 float64, faces F×3 uint32,
+/// colours V×3 float32 in 0..=1 or empty, all little-endian bytes.
+#[pyfunction]
+fn write_mesh(path: &str, vertices: &[u8], faces: &[u8], colors: &[u8]) -> PyResult<()> {
+    let positions = points(&f64s(vertices, "vertices")?);
+    let triangles = u32s(faces, "faces")?
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let colors = (!colors.is_empty()).then(|| {
+        f64s(colors, "colors").map(|c| {
+            c.chunks_exact(3)
+                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+                .collect()
+        })
+    });
+    let mesh = TriMesh {
+        positions,
+        triangles,
+        colors: colors.transpose()?,
+    };
+    write_mesh_file(&mesh, Path::new(path), 0).map_err(|e| LaminaError::new_err(e.to_string()))
+}
+
+/// Vertices, faces and colours (or None) as little-endian bytes.
+type MeshBytes<'py> = (
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Option<Bound<'py, PyBytes>>,
+);
+
+/// Reads a triangle mesh (.obj .stl): (vertices, faces, colours or None) as little-endian
+/// float64, uint32 and float64 bytes.
+#[pyfunction]
+fn read_mesh<'py>(py: Python<'py>, path: &str) -> PyResult<MeshBytes<'py>> {
+    let mesh = read_mesh_file(Path::new(path)).map_err(|e| LaminaError::new_err(e.to_string()))?;
+    Ok((
+        f64_bytes(py, mesh.positions.iter().flat_map(|p| p.to_array())),
+        u32_bytes(py, mesh.triangles.iter().flatten().copied()),
+        mesh.colors
+            .as_ref()
+            .map(|c| f64_bytes(py, c.iter().flatten().map(|&v| f64::from(v)))),
+    ))
+}
+
+#[pymodule]
+fn _lamina(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // As in the binary: the DXF parser's panics are caught and reported as the file's error, so
+    // they print nothing.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if std::thread::current().name() != Some(lamina::network::io::dxf::PARSER_THREAD) {
+            default_hook(info);
+        }
+    }));
+    m.add("LaminaError", m.py().get_type::<LaminaError>())?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(write_network, m)?)?;
+    m.add_function(wrap_pyfunction!(read_network, m)?)?;
+    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    Ok(())
+}
