@@ -381,3 +381,78 @@ def test_compas_mesh_round_trip():
     assert len(grid["faces"]) == 2 * 12 * 12
     veins = lamina.veins(grid["vertices"], grid["faces"], sources=[5, 77, 160])
     assert veins["report"]["sources"] == 3
+
+
+# The documented examples.
+
+
+class _Point3d:
+    def __init__(self, x, y, z):
+        self.X, self.Y, self.Z = float(x), float(y), float(z)
+
+    def __add__(self, other):
+        return _Point3d(self.X + other[0], self.Y + other[1], self.Z + other[2])
+
+
+class _Line:
+    def __init__(self, a, b):
+        self.From, self.To = a, b
+
+
+class _List(list):
+    def Add(self, *xyz):
+        self.append(xyz)
+
+    def AddFace(self, *corners):
+        self.append(corners)
+
+    def ComputeNormals(self):
+        pass
+
+    def ConvertQuadsToTriangles(self):
+        pass
+
+
+class _Face:
+    def __init__(self, a, b, c):
+        self.A, self.B, self.C = a, b, c
+
+
+class _Mesh:
+    """The little of Rhino.Geometry.Mesh the Grasshopper example uses."""
+
+    def __init__(self):
+        self.Vertices, self.Faces, self.Normals = _List(), _List(), _List()
+
+
+def test_grasshopper_example_runs_on_the_calyx(monkeypatch, calyx, solved):
+    import sys
+    import types
+
+    rg = types.SimpleNamespace(Point3d=_Point3d, Line=_Line, Mesh=_Mesh, Curve=type(None))
+    rhino = types.ModuleType("Rhino")
+    rhino.Geometry = rg
+    monkeypatch.setitem(sys.modules, "Rhino", rhino)
+    monkeypatch.setitem(sys.modules, "Rhino.Geometry", rg)
+    p, e = calyx["positions"], calyx["edges"]
+    surface = lamina.read_mesh(CALYX_SURFACE)
+    guide = _Mesh()
+    guide.Vertices.extend(_Point3d(*v) for v in surface["vertices"])
+    guide.Faces.extend(_Face(*f) for f in surface["faces"])
+    scope = {"lines": [_Line(_Point3d(*p[a]), _Point3d(*p[b])) for a, b in e], "guide": guide,
+             "height": 100.0, "tolerance": 0.01}
+    exec(compile((ROOT / "python/examples/grasshopper_planarize.py").read_text(),
+                 "grasshopper_planarize.py", "exec"), scope)
+    want = lamina.planarize(calyx["positions"], calyx["edges"], surface=surface)
+    assert len(scope["panels"]) == len(e) == len(want["panels"])
+    assert len(scope["axes"]) == len(p)
+    # The same network with its nodes in another order (the example numbers them by position):
+    # the same solve up to rounding.
+    got = json.loads(scope["report"])
+    assert got["converged"] and got["max_deviation"] <= 0.01
+    assert got["iterations"] == want["summary"]["iterations"]
+    assert abs(got["max_deviation"] - want["summary"]["max_deviation"]) < 1e-6
+
+
+def test_blender_example_compiles():
+    compile((ROOT / "python/examples/blender_veins.py").read_text(), "blender_veins.py", "exec")
