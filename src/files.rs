@@ -45,7 +45,7 @@ impl ReadError {
             msg: msg.into(),
         }
     }
-    pub(crate) fn record(path: &Path, record: impl Into<String>, msg: impl Into<String>) -> Self {
+    pub fn record(path: &Path, record: impl Into<String>, msg: impl Into<String>) -> Self {
         ReadError::Record {
             path: path.to_path_buf(),
             record: record.into(),

@@ -25,7 +25,8 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from . import _lamina
-from ._job import Job, LaminaWarning, Progress, as_points, flag_value, flags
+from ._job import (Job, LaminaWarning, Progress, arrays_positions, as_points, flag_value, flags,
+                   network_arrays)
 from ._lamina import LaminaError, __version__
 
 __all__ = [
@@ -298,36 +299,31 @@ def planarize(positions: Any, edges: Any = None, normals: Any = None, *,
     (P×4×3 quads), ``within`` (the tolerance was reached), ``summary`` (the axes file's),
     ``report`` (the planarity report, ``--report``), ``report_json``, and ``axes_json`` (the
     axes file's text, for :func:`size` and :func:`plates`)."""
+    arrays = network_arrays(_network(positions, edges, normals, node_radius, edge_radius))
     with Job() as job:
-        job.write_network("network.json",
-                          _network(positions, edges, normals, node_radius, edge_radius))
-        argv = ["planarize", job.path("network.json"), "-o", job.path("axes.json"), "--report",
-                job.path("report.json"), f"--height={flag_value(float(height))}",
+        # The network stays in memory; the report names it network.json, as the command line
+        # run on a file of that name would.
+        argv = ["network.json", "-o", "axes.json", f"--height={flag_value(float(height))}",
                 f"--tolerance={flag_value(float(tolerance))}", f"--method={method}"]
         if surface is not None:
             job.write_mesh("surface.obj", *_mesh(surface, "surface"))
             argv += ["--surface", job.path("surface.obj")]
-        within = job.run(argv + flags(options), progress)
-        axes_text = job.text("axes.json")
-        doc = json.loads(axes_text)
-        report, text = _report(job, "report.json")
-        nodes = doc["nodes"]
-        return {"axes": np.asarray([n["axis"] for n in nodes], dtype=np.float64).reshape(-1, 3),
-                "heights": np.asarray([n["height"] for n in nodes], dtype=np.float64),
-                "panels": _quads(doc), "within": within,
-                "summary": doc.get("summary"), "report": report, "report_json": text,
+        try:
+            within, axes_text, text, summary, axes, heights, notes = _lamina.planarize(
+                argv + flags(options), *arrays, progress)
+        except LaminaError as e:
+            raise LaminaError(job.relative(str(e))) from None
+        job.note(notes)
+        axes = np.frombuffer(axes, "<f8").reshape(-1, 3).copy()
+        heights = np.frombuffer(heights, "<f8").copy()
+        p = arrays_positions(arrays)
+        e = np.frombuffer(arrays[1], "<u4").reshape(-1, 2).astype(np.int64)
+        a, b = e[:, 0], e[:, 1]
+        panels = np.stack([p[a], p[b], p[b] + axes[b] * heights[b, None],
+                           p[a] + axes[a] * heights[a, None]], axis=1)
+        return {"axes": axes, "heights": heights, "panels": panels, "within": within,
+                "summary": json.loads(summary), "report": json.loads(text), "report_json": text,
                 "axes_json": axes_text, "notes": job.notes}
-
-
-def _quads(doc: dict) -> np.ndarray:
-    """Each edge's panel as lamina draws it: a, b, b + axis_b·h_b, a + axis_a·h_a."""
-    nodes, edges = doc["nodes"], doc["edges"]
-    p = np.asarray([n["p"] for n in nodes], dtype=np.float64).reshape(-1, 3)
-    d = np.asarray([n["axis"] for n in nodes], dtype=np.float64).reshape(-1, 3)
-    h = np.asarray([n["height"] for n in nodes], dtype=np.float64)
-    e = np.asarray([[x["a"], x["b"]] for x in edges], dtype=np.int64).reshape(-1, 2)
-    a, b = e[:, 0], e[:, 1]
-    return np.stack([p[a], p[b], p[b] + d[b] * h[b, None], p[a] + d[a] * h[a, None]], axis=1)
 
 
 def audit(panels: Any, *, tolerance: Optional[float] = None, metric: str = "flatness",

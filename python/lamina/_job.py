@@ -126,11 +126,15 @@ class Job:
             within, _out, notes = _lamina.run([str(a) for a in argv], progress)
         except _lamina.LaminaError as e:
             raise _lamina.LaminaError(self.relative(str(e))) from None
+        self.note(notes)
+        return within
+
+    def note(self, notes: list) -> None:
+        """A command's notes, as LaminaWarnings and in ``self.notes``."""
         for n in notes:
             n = self.relative(n)
             self.notes.append(n)
-            warnings.warn(n, LaminaWarning, stacklevel=3)
-        return within
+            warnings.warn(n, LaminaWarning, stacklevel=4)
 
     def text(self, name: str) -> str:
         with open(self.path(name), encoding="utf-8") as f:
@@ -157,16 +161,7 @@ class Job:
     # Networks and meshes in and out.
 
     def write_network(self, name: str, net: dict) -> str:
-        p = as_points(net["positions"], "positions")
-        e = as_indices(net["edges"], "edges", 2, len(p))
-        nr = as_values(net.get("node_radius"), "node_radius", len(p), 0.0)
-        er = as_values(net.get("edge_radius"), "edge_radius", len(e), 0.0)
-        normals = net.get("normals")
-        n = b"" if normals is None else as_points(normals, "normals").tobytes()
-        if normals is not None and len(n) != len(p) * 24:
-            raise _lamina.LaminaError(f"normals: expected {len(p)} rows, got {len(n) // 24}")
-        _lamina.write_network(self.path(name), p.tobytes(), e.tobytes(), nr.tobytes(),
-                              er.tobytes(), n)
+        _lamina.write_network(self.path(name), *network_arrays(net))
         return self.path(name)
 
     def read_network(self, name: str) -> dict:
@@ -188,6 +183,25 @@ class Job:
     def read_mesh(self, name: str) -> dict:
         v, f, c = _lamina.read_mesh(self.path(name))
         return mesh_of(v, f, c)
+
+
+def network_arrays(net: dict) -> tuple:
+    """A network dict's arrays as the binding takes them: positions, edges, node and edge radii,
+    normals (empty for none), each little-endian bytes, checked for shape and index range."""
+    p = as_points(net["positions"], "positions")
+    e = as_indices(net["edges"], "edges", 2, len(p))
+    nr = as_values(net.get("node_radius"), "node_radius", len(p), 0.0)
+    er = as_values(net.get("edge_radius"), "edge_radius", len(e), 0.0)
+    normals = net.get("normals")
+    n = b"" if normals is None else as_points(normals, "normals").tobytes()
+    if normals is not None and len(n) != len(p) * 24:
+        raise _lamina.LaminaError(f"normals: expected {len(p)} rows, got {len(n) // 24}")
+    return p.tobytes(), e.tobytes(), nr.tobytes(), er.tobytes(), n
+
+
+def arrays_positions(arrays: tuple) -> np.ndarray:
+    """The N×3 positions of `network_arrays`' result."""
+    return np.frombuffer(arrays[0], "<f8").reshape(-1, 3)
 
 
 def network_of(d: dict, meta: str) -> dict:

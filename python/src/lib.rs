@@ -23,7 +23,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use lamina::mesh::io::{read_mesh as read_mesh_file, write_mesh as write_mesh_file};
 use lamina::network::io::{read_network as read_network_file, ReadOptions, RenderOptions};
-use lamina::{Edge, Network, Node, TriMesh};
+use lamina::{Edge, Network, Node, ReadError, TriMesh};
 
 pyo3::create_exception!(
     _lamina,
@@ -49,17 +49,28 @@ fn run(
 ) -> PyResult<(bool, String, Vec<String>)> {
     let parsed = cli::Cli::try_parse_from(std::iter::once("lamina".to_string()).chain(argv))
         .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    let (within, captured) = in_process(py, progress.as_ref(), || cli::dispatch(parsed.command))?;
+    Ok((within, captured.out, captured.notes))
+}
+
+/// Runs `work` with the GIL released and its printing captured, the progress watcher beside
+/// it; its error becomes LaminaError with the binary's message.
+fn in_process<T: Send>(
+    py: Python<'_>,
+    progress: Option<&Py<PyAny>>,
+    work: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> PyResult<(T, cli::say::Captured)> {
     let mut callback_error: Option<PyErr> = None;
     let (result, captured) = py.detach(|| {
         std::thread::scope(|scope| {
             // Dropping `done` (when the command returns) wakes the watcher at once.
             let (done, finished) = mpsc::channel::<()>();
-            if let Some(callback) = &progress {
+            if let Some(callback) = progress {
                 let callback_error = &mut callback_error;
                 scope.spawn(move || watch(callback, finished, callback_error));
             }
             cli::progress::reset();
-            let out = cli::say::capture(|| cli::dispatch(parsed.command));
+            let out = cli::say::capture(work);
             drop(done);
             out
         })
@@ -68,10 +79,78 @@ fn run(
         return Err(e);
     }
     match result {
-        Ok(within) => Ok((within, captured.out, captured.notes)),
+        Ok(value) => Ok((value, captured)),
         Err(e) => Err(LaminaError::new_err(cli::error_message(&e))),
     }
 }
+
+/// `lamina planarize ARGV…` on a network in memory (the bytes as `write_network` takes them;
+/// ARGV's input names it in the report, and no file is read or written but a `--surface`).
+/// Returns (within, axes file text, report text, summary text, axes N×3 and heights N as
+/// float64 bytes, notes).
+#[pyfunction]
+#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn planarize<'py>(
+    py: Python<'py>,
+    argv: Vec<String>,
+    positions: &[u8],
+    edges: &[u8],
+    node_radius: &[u8],
+    edge_radius: &[u8],
+    normals: &[u8],
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PlanarizeResult<'py>> {
+    let parsed = cli::Cli::try_parse_from(
+        ["lamina", "planarize"]
+            .map(String::from)
+            .into_iter()
+            .chain(argv),
+    )
+    .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    let cli::Command::Planarize(args) = parsed.command else {
+        unreachable!("parsed as planarize");
+    };
+    if args.weld.given() {
+        return Err(LaminaError::new_err(
+            "the reader flags (--weld, --units, --chord-tolerance, …) apply to files; a network \
+             from memory is taken as it is",
+        ));
+    }
+    let net = network_of(
+        &args.input,
+        positions,
+        edges,
+        node_radius,
+        edge_radius,
+        normals,
+    )?;
+    let (solved, captured) =
+        in_process(py, progress.as_ref(), || cli::planarize::solve(&args, &net))?;
+    let mut axes_text = Vec::new();
+    lamina::rationalize::axes::write_axes_to(&mut axes_text, &solved.axes, &solved.summary)
+        .map_err(|e| LaminaError::new_err(e.to_string()))?;
+    Ok((
+        solved.solution.converged,
+        String::from_utf8(axes_text).expect("JSON is UTF-8"),
+        solved.report.json(),
+        solved.summary.to_string(),
+        f64_bytes(py, solved.axes.axes.iter().flat_map(|a| a.to_array())),
+        f64_bytes(py, solved.axes.heights.iter().copied()),
+        captured.notes,
+    ))
+}
+
+/// What `planarize` hands back to Python.
+type PlanarizeResult<'py> = (
+    bool,
+    String,
+    String,
+    String,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Vec<String>,
+);
 
 /// Calls the progress callback with the active bar until the command is done; a callback that
 /// raises is not called again and its exception is raised when the command returns.
@@ -137,6 +216,84 @@ fn u32_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = u32>) -> Bound<'
 /// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
 /// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
 /// float64, normals N×3 float64 or empty (no normals).
+/// A network from little-endian arrays, checked as the JSON reader checks a file (`source`
+/// names it in errors): finite positions and normals, edges between existing nodes.
+fn network_of(
+    source: &Path,
+    positions: &[u8],
+    edges: &[u8],
+    node_radius: &[u8],
+    edge_radius: &[u8],
+    normals: &[u8],
+) -> PyResult<Network> {
+    let p = points(&f64s(positions, "positions")?);
+    let e = u32s(edges, "edges")?;
+    let (nr, er) = (
+        f64s(node_radius, "node_radius")?,
+        f64s(edge_radius, "edge_radius")?,
+    );
+    let n = points(&f64s(normals, "normals")?);
+    let counts = [
+        ("node_radius", nr.len(), p.len()),
+        ("edge_radius", er.len(), e.len() / 2),
+        (
+            "normals",
+            if n.is_empty() { p.len() } else { n.len() },
+            p.len(),
+        ),
+    ];
+    if let Some((what, got, want)) = counts.into_iter().find(|(_, got, want)| got != want) {
+        return Err(LaminaError::new_err(format!(
+            "{what}: {got} rows for {want} (one per node or edge)"
+        )));
+    }
+    let bad = |record: String, message: String| {
+        LaminaError::new_err(ReadError::record(source, record, message).to_string())
+    };
+    let mut nodes = Vec::with_capacity(p.len());
+    for (i, &p) in p.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(bad(format!("node {i}"), "position is not finite".into()));
+        }
+        let normal = n.get(i).copied();
+        if normal.is_some_and(|v| !v.is_finite()) {
+            return Err(bad(format!("node {i}"), "normal is not finite".into()));
+        }
+        nodes.push(Node {
+            p,
+            normal,
+            radius: nr[i],
+        });
+    }
+    let mut out = Vec::with_capacity(er.len());
+    for (k, (ab, &radius)) in e.chunks_exact(2).zip(&er).enumerate() {
+        if ab[0] as usize >= nodes.len() || ab[1] as usize >= nodes.len() {
+            return Err(bad(
+                format!("edge {k}"),
+                format!(
+                    "joins nodes {} and {}, but the file has {} nodes (numbered from 0)",
+                    ab[0],
+                    ab[1],
+                    nodes.len()
+                ),
+            ));
+        }
+        out.push(Edge {
+            a: ab[0],
+            b: ab[1],
+            radius,
+        });
+    }
+    Ok(Network {
+        nodes,
+        edges: out,
+        meta: Default::default(),
+    })
+}
+
+/// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
+/// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
+/// float64, normals N×3 float64 or empty (no normals).
 #[pyfunction]
 #[pyo3(signature = (path, positions, edges, node_radius, edge_radius, normals))]
 fn write_network(
@@ -147,35 +304,9 @@ fn write_network(
     edge_radius: &[u8],
     normals: &[u8],
 ) -> PyResult<()> {
-    let p = points(&f64s(positions, "positions")?);
-    let e = u32s(edges, "edges")?;
-    let (nr, er) = (
-        f64s(node_radius, "node_radius")?,
-        f64s(edge_radius, "edge_radius")?,
-    );
-    let n = points(&f64s(normals, "normals")?);
-    let net = Network {
-        nodes: p
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| Node {
-                p,
-                normal: n.get(i).copied(),
-                radius: nr[i],
-            })
-            .collect(),
-        edges: e
-            .chunks_exact(2)
-            .zip(&er)
-            .map(|(ab, &radius)| Edge {
-                a: ab[0],
-                b: ab[1],
-                radius,
-            })
-            .collect(),
-        meta: Default::default(),
-    };
-    lamina::network::io::write_network(&net, Path::new(path), &RenderOptions::default())
+    let path = Path::new(path);
+    let net = network_of(path, positions, edges, node_radius, edge_radius, normals)?;
+    lamina::network::io::write_network(&net, path, &RenderOptions::default())
         .map_err(|e| LaminaError::new_err(e.to_string()))
 }
 
@@ -286,6 +417,7 @@ fn _lamina(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LaminaError", m.py().get_type::<LaminaError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(planarize, m)?)?;
     m.add_function(wrap_pyfunction!(write_network, m)?)?;
     m.add_function(wrap_pyfunction!(read_network, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;

@@ -114,6 +114,17 @@ impl ReadArgs {
         })
     }
 
+    /// Whether any reader flag differs from its default.
+    pub fn given(&self) -> bool {
+        self.weld.is_some()
+            || self.weld_rel.is_some()
+            || self.units.is_some()
+            || self.chord_tolerance != ReadArgs::default().chord_tolerance
+            || self.strict
+            || self.split_crossings
+            || self.max_points.is_some()
+    }
+
     /// Reads a network, says on stderr what was assumed or left out (one line each), and
     /// with `--strict` refuses a file that held anything not read.
     pub fn network(&self, path: &Path) -> Result<Imported> {

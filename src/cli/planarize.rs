@@ -20,6 +20,7 @@ use lamina::rationalize::planarize::{
 };
 use lamina::rationalize::tolerance::{Allowance, Judged, Rule, Rules};
 use lamina::report::planarity::{Context, Metric, PanelRow, Report};
+use lamina::Network;
 
 use super::input::{reference_normals, ReadArgs};
 
@@ -132,9 +133,19 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-/// Solves and writes every output the arguments ask for; prints nothing.
-pub fn execute(args: &Args) -> Result<Outcome> {
-    let opts = PlanarizeOptions {
+/// A solved network, in memory: what `planarize` writes, before it is written.
+pub struct Solved {
+    pub solution: Solution,
+    pub axes: Axes,
+    /// The axes file's summary.
+    pub summary: serde_json::Value,
+    pub report: Report,
+    pub seconds: f64,
+}
+
+/// The solver's options from the flags.
+fn options(args: &Args) -> Result<PlanarizeOptions> {
+    Ok(PlanarizeOptions {
         method: match args.method {
             MethodArg::Lbfgs => Method::Lbfgs,
             MethodArg::Projection => Method::Projection,
@@ -155,9 +166,14 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             .iter()
             .map(|s| parse_override(s, "--fix-axis"))
             .collect::<Result<_>>()?,
-    };
-    let net = args.weld.network(&args.input)?.network;
-    let reference = reference_normals(&net, args.surface.as_deref())?;
+    })
+}
+
+/// Solves `net` (read from `args.input`, or handed over by the Python package) as the flags
+/// say; writes nothing. A spinner shows the rounds (hidden when stderr is not a terminal).
+pub fn solve(args: &Args, net: &Network) -> Result<Solved> {
+    let opts = options(args)?;
+    let reference = reference_normals(net, args.surface.as_deref())?;
     let heights: Vec<f64> = match args.height_from_radius {
         Some(f) => net.nodes.iter().map(|n| n.radius * f).collect(),
         None => vec![args.height; net.nodes.len()],
@@ -169,7 +185,6 @@ pub fn execute(args: &Args) -> Result<Outcome> {
         heights,
     };
     let start = Instant::now();
-    // A spinner with the last round's figures (hidden when stderr is not a terminal).
     let bar = super::progress::bar("node axes", None);
     bar.set_style(
         ProgressStyle::with_template("{spinner} node axes, {msg} {elapsed}").expect("template"),
@@ -191,17 +206,30 @@ pub fn execute(args: &Args) -> Result<Outcome> {
     let seconds = start.elapsed().as_secs_f64();
     let axes = Axes::solved(&input, &sol, net.edges.iter().map(|e| e.radius).collect());
     let summary = summary(&sol);
-    write_axes(&axes, &summary, &args.output)?;
-    let quads = axes.quads();
-    if let Some(p) = &args.panels {
-        write_panels_obj(&quads, p)?;
-    }
-    let report = report_of(args, &sol, &quads, seconds);
-    args.reports.write(&report)?;
-    Ok(Outcome {
+    let report = report_of(args, &sol, &axes.quads(), seconds);
+    Ok(Solved {
         solution: sol,
+        axes,
         summary,
+        report,
         seconds,
+    })
+}
+
+/// Solves and writes every output the arguments ask for; prints nothing.
+pub fn execute(args: &Args) -> Result<Outcome> {
+    options(args)?;
+    let net = args.weld.network(&args.input)?.network;
+    let solved = solve(args, &net)?;
+    write_axes(&solved.axes, &solved.summary, &args.output)?;
+    if let Some(p) = &args.panels {
+        write_panels_obj(&solved.axes.quads(), p)?;
+    }
+    args.reports.write(&solved.report)?;
+    Ok(Outcome {
+        solution: solved.solution,
+        summary: solved.summary,
+        seconds: solved.seconds,
     })
 }
 

@@ -104,15 +104,7 @@ pub fn run(args: Args) -> Result<()> {
                     .flatten()
                     .is_none_or(|f| f == "lamina-network"))
     });
-    let r = &args.read;
-    let given = r.weld.is_some()
-        || r.weld_rel.is_some()
-        || r.units.is_some()
-        || r.chord_tolerance != ReadArgs::default().chord_tolerance
-        || r.strict
-        || r.split_crossings
-        || r.max_points.is_some();
-    if given && !readers {
+    if args.read.given() && !readers {
         bail!("the reader flags (--weld, --units, --chord-tolerance, …) apply to networks and meshes, and none is given");
     }
     let paths: Vec<&Path> = args.files.iter().map(PathBuf::as_path).collect();

@@ -111,42 +111,49 @@ struct FileRecord {
 
 /// Writes the axes file; `summary` (method, α used, deviation, …) goes in as it is.
 pub fn write_axes(axes: &Axes, summary: &serde_json::Value, path: &Path) -> Result<(), WriteError> {
-    write_atomic(path, |w| {
-        writeln!(w, "{{")?;
-        writeln!(w, "  \"format\": \"{FORMAT}\",")?;
-        writeln!(w, "  \"version\": {VERSION},")?;
-        writeln!(w, "  \"summary\": {summary},")?;
-        writeln!(w, "  \"nodes\": [")?;
-        for (i, p) in axes.positions.iter().enumerate() {
-            let rec = NodeRecord {
-                p: p.to_array(),
-                axis: axes.axes[i].to_array(),
-                height: axes.heights[i],
-                reference: axes.reference[i].to_array(),
-            };
-            let sep = if i + 1 < axes.positions.len() {
-                ","
-            } else {
-                ""
-            };
-            writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
-        }
-        writeln!(w, "  ],")?;
-        writeln!(w, "  \"edges\": [")?;
-        for (k, &[a, b]) in axes.edges.iter().enumerate() {
-            let rec = EdgeRecord {
-                a,
-                b,
-                fixed_normal: axes.fixed_normals[k].map(|n| n.to_array()),
-                radius: axes.edge_radii[k],
-            };
-            let sep = if k + 1 < axes.edges.len() { "," } else { "" };
-            writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
-        }
-        writeln!(w, "  ]")?;
-        writeln!(w, "}}")?;
-        Ok(())
-    })
+    write_atomic(path, |w| write_axes_to(w, axes, summary))
+}
+
+/// The axes file's text, written to `w` (what `write_axes` puts in the file).
+pub fn write_axes_to(
+    w: &mut impl std::io::Write,
+    axes: &Axes,
+    summary: &serde_json::Value,
+) -> std::io::Result<()> {
+    writeln!(w, "{{")?;
+    writeln!(w, "  \"format\": \"{FORMAT}\",")?;
+    writeln!(w, "  \"version\": {VERSION},")?;
+    writeln!(w, "  \"summary\": {summary},")?;
+    writeln!(w, "  \"nodes\": [")?;
+    for (i, p) in axes.positions.iter().enumerate() {
+        let rec = NodeRecord {
+            p: p.to_array(),
+            axis: axes.axes[i].to_array(),
+            height: axes.heights[i],
+            reference: axes.reference[i].to_array(),
+        };
+        let sep = if i + 1 < axes.positions.len() {
+            ","
+        } else {
+            ""
+        };
+        writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
+    }
+    writeln!(w, "  ],")?;
+    writeln!(w, "  \"edges\": [")?;
+    for (k, &[a, b]) in axes.edges.iter().enumerate() {
+        let rec = EdgeRecord {
+            a,
+            b,
+            fixed_normal: axes.fixed_normals[k].map(|n| n.to_array()),
+            radius: axes.edge_radii[k],
+        };
+        let sep = if k + 1 < axes.edges.len() { "," } else { "" };
+        writeln!(w, "    {}{sep}", serde_json::to_string(&rec)?)?;
+    }
+    writeln!(w, "  ]")?;
+    writeln!(w, "}}")?;
+    Ok(())
 }
 
 pub fn read_axes(path: &Path) -> Result<Axes, ReadError> {
