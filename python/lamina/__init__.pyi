@@ -6,6 +6,29 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypedDi
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "LaminaError",
+    "LaminaWarning",
+    "__version__",
+    "audit",
+    "cells",
+    "command",
+    "lsystem",
+    "nest",
+    "planarize",
+    "plates",
+    "read_mesh",
+    "read_network",
+    "size",
+    "slice",
+    "solid",
+    "veins",
+    "venation",
+    "venation_on_surface",
+    "write_mesh",
+    "write_network",
+]
+
 __version__: str
 
 PathLike = Union[str, "os.PathLike[str]"]

@@ -173,10 +173,10 @@ class Job:
         f = as_indices(faces, "faces", 3, len(v))
         c = b""
         if colors is not None:
-            c = as_points(colors, "colors")
-            if len(c) != len(v):
-                raise _lamina.LaminaError(f"colors: expected {len(v)} rows, got {len(c)}")
-            c = c.tobytes()
+            rgb = as_points(colors, "colors")
+            if len(rgb) != len(v):
+                raise _lamina.LaminaError(f"colors: expected {len(v)} rows, got {len(rgb)}")
+            c = rgb.tobytes()
         _lamina.write_mesh(self.path(name), v.tobytes(), f.tobytes(), c)
         return self.path(name)
 

@@ -10,6 +10,7 @@ import json
 import os
 import re
 import subprocess
+import sys
 import threading
 import time
 import warnings
@@ -456,3 +457,27 @@ def test_grasshopper_example_runs_on_the_calyx(monkeypatch, calyx, solved):
 
 def test_blender_example_compiles():
     compile((ROOT / "python/examples/blender_veins.py").read_text(), "blender_veins.py", "exec")
+
+
+@pytest.mark.parametrize("doc", ["README.md", "docs/python.md"])
+def test_documented_snippets_run(doc, tmp_path, monkeypatch):
+    """The page's ```python blocks run as written, one after the other (fixtures from the
+    repository; files they write land in a scratch folder)."""
+    text = (ROOT / doc).read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks
+    monkeypatch.chdir(tmp_path)
+    scope = {}
+    for block in blocks:
+        block = block.replace('"fixtures/', f'"{ROOT}/fixtures/')
+        exec(compile(block, doc, "exec"), scope)
+
+
+def test_type_stubs_match_the_package():
+    """mypy's stubtest: every stub matches what the installed package has at runtime."""
+    pytest.importorskip("mypy")
+    allow = Path(__file__).with_name("stubtest-allowlist.txt")
+    p = subprocess.run([sys.executable, "-m", "mypy.stubtest", "lamina", "--allowlist",
+                        str(allow)], capture_output=True, text=True, cwd=Path(lamina.__file__)
+                       .parents[2])
+    assert p.returncode == 0, p.stdout + p.stderr

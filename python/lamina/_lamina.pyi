@@ -1,0 +1,36 @@
+"""The compiled binding (python/src/lib.rs); the package's functions wrap it."""
+
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+__all__ = [
+    "LaminaError",
+    "__version__",
+    "planarize",
+    "read_mesh",
+    "read_network",
+    "run",
+    "write_mesh",
+    "write_network",
+]
+__version__: str
+
+class LaminaError(ValueError): ...
+
+def run(
+    argv: List[str], progress: Optional[Callable[..., Any]] = None
+) -> Tuple[bool, str, List[str]]: ...
+def planarize(
+    argv: List[str],
+    positions: bytes,
+    edges: bytes,
+    node_radius: bytes,
+    edge_radius: bytes,
+    normals: bytes,
+    progress: Optional[Callable[..., Any]] = None,
+) -> Tuple[bool, str, str, str, bytes, bytes, List[str]]: ...
+def write_network(
+    path: str, positions: bytes, edges: bytes, node_radius: bytes, edge_radius: bytes, normals: bytes
+) -> None: ...
+def read_network(path: str) -> Dict[str, Any]: ...
+def write_mesh(path: str, vertices: bytes, faces: bytes, colors: bytes) -> None: ...
+def read_mesh(path: str) -> Tuple[bytes, bytes, Optional[bytes]]: ...
