@@ -65,12 +65,14 @@ fn in_process<T: Send>(
         std::thread::scope(|scope| {
             // Dropping `done` (when the command returns) wakes the watcher at once.
             let (done, finished) = mpsc::channel::<()>();
+            let worker = std::thread::current().id();
             if let Some(callback) = progress {
                 let callback_error = &mut callback_error;
-                scope.spawn(move || watch(callback, finished, callback_error));
+                scope.spawn(move || watch(callback, worker, finished, callback_error));
             }
             cli::progress::reset();
             let out = cli::say::capture(work);
+            cli::progress::reset();
             drop(done);
             out
         })
@@ -152,11 +154,16 @@ type PlanarizeResult<'py> = (
     Vec<String>,
 );
 
-/// Calls the progress callback with the active bar until the command is done; a callback that
+/// Calls the progress callback with the worker thread's bar until the command is done; a callback that
 /// raises is not called again and its exception is raised when the command returns.
-fn watch(callback: &Py<PyAny>, finished: mpsc::Receiver<()>, error: &mut Option<PyErr>) {
+fn watch(
+    callback: &Py<PyAny>,
+    worker: std::thread::ThreadId,
+    finished: mpsc::Receiver<()>,
+    error: &mut Option<PyErr>,
+) {
     while let Err(mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(PROGRESS_EVERY) {
-        let Some(p) = cli::progress::active() else {
+        let Some(p) = cli::progress::active(worker) else {
             continue;
         };
         let called = Python::attach(|py| {

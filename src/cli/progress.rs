@@ -1,14 +1,18 @@
-//! Progress bars of long commands: on stderr, hidden when it is not a terminal. The bar last
-//! made is also kept where the Python package's progress callback can read it.
+//! Progress bars of long commands: on stderr, hidden when it is not a terminal. The bar a
+//! thread made last is also kept where the Python package's progress callback can read it
+//! (each thread its own, so commands run from several Python threads at once do not mix).
 
 use std::sync::Mutex;
+use std::thread::ThreadId;
 
 use indicatif::{ProgressBar, ProgressDrawTarget};
 
-static ACTIVE: Mutex<Option<(&str, ProgressBar)>> = Mutex::new(None);
+type Active = (ThreadId, &'static str, ProgressBar);
 
-/// A new bar for `stage` (a spinner without a length) on stderr, made the one `active` reports.
-/// When a command is captured (`say::capture`), nothing is drawn.
+static ACTIVE: Mutex<Vec<Active>> = Mutex::new(Vec::new());
+
+/// A new bar for `stage` (a spinner without a length) on stderr, made the one `active` reports
+/// for this thread. When a command is captured (`say::capture`), nothing is drawn.
 pub fn bar(stage: &'static str, len: Option<u64>) -> ProgressBar {
     let target = if super::say::capturing() {
         ProgressDrawTarget::hidden()
@@ -16,13 +20,14 @@ pub fn bar(stage: &'static str, len: Option<u64>) -> ProgressBar {
         ProgressDrawTarget::stderr()
     };
     let bar = ProgressBar::with_draw_target(len, target);
+    let me = std::thread::current().id();
     if let Ok(mut active) = ACTIVE.lock() {
-        *active = Some((stage, bar.clone()));
+        active.retain(|(t, ..)| *t != me);
+        active.push((me, stage, bar.clone()));
     }
     bar
 }
 
-// The binary draws its bars; the Python package reads them (python/src/lib.rs).
 /// Where a long command is: the last bar's stage, message, position and length.
 #[allow(dead_code)]
 pub struct Progress {
@@ -32,11 +37,11 @@ pub struct Progress {
     pub total: Option<u64>,
 }
 
-/// The last bar, while it is not finished.
+/// The last bar `thread` made, while it is not finished.
 #[allow(dead_code)]
-pub fn active() -> Option<Progress> {
+pub fn active(thread: ThreadId) -> Option<Progress> {
     let active = ACTIVE.lock().ok()?;
-    let (stage, bar) = active.as_ref()?;
+    let (_, stage, bar) = active.iter().find(|(t, ..)| *t == thread)?;
     (!bar.is_finished()).then(|| Progress {
         stage,
         message: bar.message(),
@@ -45,10 +50,11 @@ pub fn active() -> Option<Progress> {
     })
 }
 
-/// Forgets the last bar (a new command starts).
+/// Forgets this thread's last bar (a command starts or ends).
 #[allow(dead_code)]
 pub fn reset() {
+    let me = std::thread::current().id();
     if let Ok(mut active) = ACTIVE.lock() {
-        *active = None;
+        active.retain(|(t, ..)| *t != me);
     }
 }

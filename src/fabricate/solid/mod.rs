@@ -104,8 +104,9 @@ pub enum SolidError {
     )]
     ToleranceTooLarge { tolerance: f64, cell: f64 },
     #[error(
-        "at --cell {cell} mm no grid point falls inside the veins (the thickest is {thickest:.4} \
-         mm in radius): the solid vanishes; use a --cell below the vein radius, or a larger --fit"
+        "at --cell {} mm no grid point falls inside the veins (the thickest is {thickest:.4} \
+         mm in radius): the solid vanishes; use a --cell below the vein radius, or a larger --fit",
+        crate::text::num(*.cell)
     )]
     Vanished { thickest: f64, cell: f64 },
     #[error(
