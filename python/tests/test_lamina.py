@@ -477,7 +477,9 @@ def test_type_stubs_match_the_package():
     """mypy's stubtest: every stub matches what the installed package has at runtime."""
     pytest.importorskip("mypy")
     allow = Path(__file__).with_name("stubtest-allowlist.txt")
-    p = subprocess.run([sys.executable, "-m", "mypy.stubtest", "lamina", "--allowlist",
-                        str(allow)], capture_output=True, text=True, cwd=Path(lamina.__file__)
-                       .parents[2])
+    # The allowlist holds an entry only older Pythons need.
+    argv = [sys.executable, "-m", "mypy.stubtest", "lamina", "--allowlist", str(allow),
+            "--ignore-unused-allowlist"]
+    p = subprocess.run(argv, capture_output=True, text=True,
+                       cwd=Path(lamina.__file__).parents[2])
     assert p.returncode == 0, p.stdout + p.stderr
