@@ -80,3 +80,56 @@ impl std::io::Write for Stdout {
         std::io::stdout().lock().flush()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn capture_takes_output_and_notes_and_restores_the_outer_capture() {
+        let ((), outer) = capture(|| {
+            outln!("kept outside");
+            let ((), inner) = capture(|| {
+                outln!("a {}", 1);
+                out!("b");
+                errln!("lamina: a note");
+            });
+            assert_eq!(inner.out, "a 1\nb");
+            assert_eq!(inner.notes, ["lamina: a note"]);
+            errln!("lamina: outer note");
+        });
+        assert_eq!(outer.out, "kept outside\n");
+        assert_eq!(outer.notes, ["lamina: outer note"]);
+        assert!(!capturing());
+    }
+
+    #[test]
+    fn stdout_writer_follows_the_capture() {
+        use std::io::Write as _;
+        let ((), c) = capture(|| {
+            let mut w = std::io::BufWriter::new(Stdout);
+            w.write_all(b"word\n").expect("write");
+        });
+        assert_eq!(c.out, "word\n");
+    }
+
+    #[test]
+    fn each_thread_has_its_own_bar() {
+        use crate::cli::progress::{active, bar, reset};
+        let here = std::thread::current().id();
+        let b = bar("here", Some(10));
+        b.set_position(3);
+        let there = std::thread::spawn(|| {
+            let b = bar("there", None);
+            (std::thread::current().id(), b)
+        });
+        let (id, other) = there.join().expect("thread");
+        let mine = active(here).expect("a bar");
+        assert_eq!((mine.stage, mine.done, mine.total), ("here", 3, Some(10)));
+        assert_eq!(active(id).expect("its bar").stage, "there");
+        other.finish();
+        assert!(active(id).is_none(), "a finished bar is not reported");
+        reset();
+        assert!(active(here).is_none());
+    }
+}
