@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import warnings
 from typing import Any, Optional, Union
 
@@ -26,7 +27,7 @@ import numpy as np
 
 from . import _lamina
 from ._job import (Job, LaminaWarning, Progress, arrays_positions, as_points, flag_value, flags,
-                   network_arrays)
+                   mesh_of, network_arrays, network_of)
 from ._lamina import LaminaError, __version__
 
 __all__ = [
@@ -68,8 +69,6 @@ def command(*argv: Any, progress: Progress = None) -> str:
 def read_network(path: PathLike) -> dict:
     """A network file (.json .obj .dxf) as a network dict (numpy arrays), read as the commands
     read it with their default flags."""
-    from ._job import network_of
-
     d = _lamina.read_network(os.fspath(path))
     return network_of(d, d["meta"])
 
@@ -80,8 +79,6 @@ def write_network(path: PathLike, network: dict) -> None:
     with Job() as job:
         job.write_network("network.json", network)
         if p.lower().endswith(".json"):
-            import shutil
-
             shutil.copyfile(job.path("network.json"), p)
         else:
             command("convert", job.path("network.json"), p)
@@ -89,8 +86,6 @@ def write_network(path: PathLike, network: dict) -> None:
 
 def read_mesh(path: PathLike) -> dict:
     """A triangle mesh file (.obj .stl) as a mesh dict (numpy arrays)."""
-    from ._job import mesh_of
-
     return mesh_of(*_lamina.read_mesh(os.fspath(path)))
 
 
