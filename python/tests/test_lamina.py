@@ -483,3 +483,35 @@ def test_type_stubs_match_the_package():
     p = subprocess.run(argv, capture_output=True, text=True,
                        cwd=Path(lamina.__file__).parents[2])
     assert p.returncode == 0, p.stdout + p.stderr
+
+
+def test_threads_run_commands_at_once():
+    """Two threads, each its own captured command: the same results as one after the other."""
+    want = [lamina.venation(shape=s, seed=4)["report_json"] for s in ("ovate", "cordate")]
+    got = [None, None]
+
+    def grow(k, shape):
+        got[k] = lamina.venation(shape=shape, seed=4)["report_json"]
+
+    threads = [threading.Thread(target=grow, args=(k, s))
+               for k, s in enumerate(("ovate", "cordate"))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert got == want
+
+
+def test_no_folder_left_behind(calyx):
+    """The private folders are removed, after a failure too."""
+    import tempfile
+
+    def ours():
+        return {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("lamina-")}
+
+    before = ours()
+    lamina.solid(lamina.read_network(SMALL_LOOP), cell=0.5)
+    with pytest.raises(lamina.LaminaError):
+        lamina.size(lamina.planarize(calyx, fix_normal=["z<1:0,0,1"]), support="z<1",
+                    load="nothing:1")
+    assert ours() <= before
