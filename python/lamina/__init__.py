@@ -433,16 +433,18 @@ def solid(positions: Any, edges: Any = None, node_radius: Any = None, edge_radiu
           *, cell: Optional[float] = None, progress: Progress = None, **options: Any) -> dict:
     """The closed, 2-manifold mesh of the network's veins (each edge a cone between its nodes'
     spheres), meshed on a grid of ``cell`` mm. Returns ``mesh``, ``report``, ``report_json``."""
+    arrays = network_arrays(_network(positions, edges, None, node_radius, edge_radius))
     with Job() as job:
-        job.write_network("network.json",
-                          _network(positions, edges, None, node_radius, edge_radius))
-        argv = ["solid", job.path("network.json"), "-o", job.path("solid.obj"), "--report",
-                job.path("report.json")]
+        # In memory, as planarize: the report names the network network.json.
+        argv = ["network.json", "-o", "solid.obj"]
         if cell is not None:
             argv.append(f"--cell={flag_value(float(cell))}")
-        job.run(argv + flags(options), progress)
-        report, text = _report(job, "report.json")
-        return {"mesh": job.read_mesh("solid.obj"), "report": report, "report_json": text,
+        try:
+            text, v, f, notes = _lamina.solid(argv + flags(options), *arrays, progress)
+        except LaminaError as e:
+            raise LaminaError(job.relative(str(e))) from None
+        job.note(notes)
+        return {"mesh": mesh_of(v, f, None), "report": json.loads(text), "report_json": text,
                 "notes": job.notes}
 
 

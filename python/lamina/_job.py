@@ -187,7 +187,8 @@ class Job:
 
 def network_arrays(net: dict) -> tuple:
     """A network dict's arrays as the binding takes them: positions, edges, node and edge radii,
-    normals (empty for none), each little-endian bytes, checked for shape and index range."""
+    normals (empty for none), each little-endian bytes, checked for shape and index range; and
+    its meta as JSON text (empty for none)."""
     p = as_points(net["positions"], "positions")
     e = as_indices(net["edges"], "edges", 2, len(p))
     nr = as_values(net.get("node_radius"), "node_radius", len(p), 0.0)
@@ -196,7 +197,8 @@ def network_arrays(net: dict) -> tuple:
     n = b"" if normals is None else as_points(normals, "normals").tobytes()
     if normals is not None and len(n) != len(p) * 24:
         raise _lamina.LaminaError(f"normals: expected {len(p)} rows, got {len(n) // 24}")
-    return p.tobytes(), e.tobytes(), nr.tobytes(), er.tobytes(), n
+    meta = net.get("meta")
+    return p.tobytes(), e.tobytes(), nr.tobytes(), er.tobytes(), n, json.dumps(meta) if meta else ""
 
 
 def arrays_positions(arrays: tuple) -> np.ndarray:

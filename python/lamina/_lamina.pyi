@@ -9,6 +9,7 @@ __all__ = [
     "read_mesh",
     "read_network",
     "run",
+    "solid",
     "write_mesh",
     "write_network",
 ]
@@ -26,10 +27,27 @@ def planarize(
     node_radius: bytes,
     edge_radius: bytes,
     normals: bytes,
+    meta: str,
     progress: Optional[Callable[..., Any]] = None,
 ) -> Tuple[bool, str, str, str, bytes, bytes, List[str]]: ...
+def solid(
+    argv: List[str],
+    positions: bytes,
+    edges: bytes,
+    node_radius: bytes,
+    edge_radius: bytes,
+    normals: bytes,
+    meta: str,
+    progress: Optional[Callable[..., Any]] = None,
+) -> Tuple[str, bytes, bytes, List[str]]: ...
 def write_network(
-    path: str, positions: bytes, edges: bytes, node_radius: bytes, edge_radius: bytes, normals: bytes
+    path: str,
+    positions: bytes,
+    edges: bytes,
+    node_radius: bytes,
+    edge_radius: bytes,
+    normals: bytes,
+    meta: str,
 ) -> None: ...
 def read_network(path: str) -> Dict[str, Any]: ...
 def write_mesh(path: str, vertices: bytes, faces: bytes, colors: bytes) -> None: ...

@@ -23,7 +23,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 use lamina::mesh::io::{read_mesh as read_mesh_file, write_mesh as write_mesh_file};
 use lamina::network::io::{read_network as read_network_file, ReadOptions, RenderOptions};
-use lamina::{Edge, Network, Node, ReadError, TriMesh};
+use lamina::{Edge, Meta, Network, Node, ReadError, TriMesh};
 
 pyo3::create_exception!(
     _lamina,
@@ -91,7 +91,7 @@ fn in_process<T: Send>(
 /// Returns (within, axes file text, report text, summary text, axes N×3 and heights N as
 /// float64 bytes, notes).
 #[pyfunction]
-#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, progress=None))]
+#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, meta, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn planarize<'py>(
     py: Python<'py>,
@@ -101,6 +101,7 @@ fn planarize<'py>(
     node_radius: &[u8],
     edge_radius: &[u8],
     normals: &[u8],
+    meta: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PlanarizeResult<'py>> {
     let parsed = cli::Cli::try_parse_from(
@@ -126,6 +127,7 @@ fn planarize<'py>(
         node_radius,
         edge_radius,
         normals,
+        meta,
     )?;
     let (solved, captured) =
         in_process(py, progress.as_ref(), || cli::planarize::solve(&args, &net))?;
@@ -142,6 +144,81 @@ fn planarize<'py>(
         captured.notes,
     ))
 }
+
+/// `lamina COMMAND ARGV…` parsed as the binary parses it (clap's message on a bad flag).
+fn parse(command: &str, argv: Vec<String>) -> PyResult<cli::Command> {
+    let parsed = cli::Cli::try_parse_from(
+        ["lamina", command]
+            .map(String::from)
+            .into_iter()
+            .chain(argv),
+    )
+    .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    Ok(parsed.command)
+}
+
+/// A network from memory is taken as it is: the reader flags have no file to act on.
+fn no_reader_flags(flags: &cli::input::ReadArgs) -> PyResult<()> {
+    if flags.given() {
+        return Err(LaminaError::new_err(
+            "the reader flags (--weld, --units, --chord-tolerance, …) apply to files; a network \
+             from memory is taken as it is",
+        ));
+    }
+    Ok(())
+}
+
+/// `lamina solid ARGV…` on a network in memory (as `planarize`): no file is read or written.
+/// Returns (report text as `--report` writes it, vertices V×3 float64 and faces F×3 uint32
+/// bytes, notes).
+#[pyfunction]
+#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, meta, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn solid<'py>(
+    py: Python<'py>,
+    argv: Vec<String>,
+    positions: &[u8],
+    edges: &[u8],
+    node_radius: &[u8],
+    edge_radius: &[u8],
+    normals: &[u8],
+    meta: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<SolidResult<'py>> {
+    let cli::Command::Solid(args) = parse("solid", argv)? else {
+        unreachable!("parsed as solid");
+    };
+    no_reader_flags(&args.weld)?;
+    let net = network_of(
+        &args.network,
+        positions,
+        edges,
+        node_radius,
+        edge_radius,
+        normals,
+        meta,
+    )?;
+    let (made, captured) = in_process(py, progress.as_ref(), || {
+        let made = cli::solid::solve(&args, &net)?;
+        let text = cli::venation::json_text(&made.value)?;
+        Ok((made.mesh, text))
+    })?;
+    let (mesh, text) = made;
+    Ok((
+        text,
+        f64_bytes(py, mesh.positions.iter().flat_map(|p| p.to_array())),
+        u32_bytes(py, mesh.triangles.iter().flatten().copied()),
+        captured.notes,
+    ))
+}
+
+/// What `solid` hands back to Python.
+type SolidResult<'py> = (
+    String,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Vec<String>,
+);
 
 /// What `planarize` hands back to Python.
 type PlanarizeResult<'py> = (
@@ -222,7 +299,7 @@ fn u32_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = u32>) -> Bound<'
 
 /// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
 /// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
-/// float64, normals N×3 float64 or empty (no normals).
+/// float64, normals N×3 float64 or empty (no normals); meta as JSON text (empty: none).
 /// A network from little-endian arrays, checked as the JSON reader checks a file (`source`
 /// names it in errors): finite positions and normals, edges between existing nodes.
 fn network_of(
@@ -232,6 +309,7 @@ fn network_of(
     node_radius: &[u8],
     edge_radius: &[u8],
     normals: &[u8],
+    meta: &str,
 ) -> PyResult<Network> {
     let p = points(&f64s(positions, "positions")?);
     let e = u32s(edges, "edges")?;
@@ -294,15 +372,55 @@ fn network_of(
     Ok(Network {
         nodes,
         edges: out,
-        meta: Default::default(),
+        meta: meta_of(meta)?,
     })
+}
+
+/// A network's meta from the JSON text of the Python dict's `meta` (empty: the defaults).
+fn meta_of(text: &str) -> PyResult<Meta> {
+    let mut meta = Meta::default();
+    if text.is_empty() {
+        return Ok(meta);
+    }
+    let bad = |what: &str| LaminaError::new_err(format!("meta: {what}"));
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| bad(&format!("not JSON ({e})")))?;
+    let Some(map) = value.as_object() else {
+        return Err(bad("expected a dict"));
+    };
+    for (key, v) in map {
+        match (key.as_str(), v) {
+            (_, serde_json::Value::Null) => {}
+            ("units", serde_json::Value::String(u)) => meta.units = u.clone(),
+            ("generator", serde_json::Value::String(g)) => meta.generator = Some(g.clone()),
+            ("seed", v) if v.as_u64().is_some() => meta.seed = v.as_u64(),
+            ("parameters", serde_json::Value::Object(p)) => {
+                meta.parameters = p.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+            }
+            ("tags", serde_json::Value::Object(t)) => {
+                for (k, v) in t {
+                    let serde_json::Value::String(v) = v else {
+                        return Err(bad(&format!("tag {k:?} is not a string")));
+                    };
+                    meta.tags.insert(k.clone(), v.clone());
+                }
+            }
+            (key, _) => {
+                return Err(bad(&format!(
+                    "{key:?} is not one of units, generator, parameters, seed, tags (or has the \
+                     wrong type)"
+                )))
+            }
+        }
+    }
+    Ok(meta)
 }
 
 /// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
 /// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
-/// float64, normals N×3 float64 or empty (no normals).
+/// float64, normals N×3 float64 or empty (no normals); meta as JSON text (empty: none).
 #[pyfunction]
-#[pyo3(signature = (path, positions, edges, node_radius, edge_radius, normals))]
+#[pyo3(signature = (path, positions, edges, node_radius, edge_radius, normals, meta))]
 fn write_network(
     path: &str,
     positions: &[u8],
@@ -310,9 +428,18 @@ fn write_network(
     node_radius: &[u8],
     edge_radius: &[u8],
     normals: &[u8],
+    meta: &str,
 ) -> PyResult<()> {
     let path = Path::new(path);
-    let net = network_of(path, positions, edges, node_radius, edge_radius, normals)?;
+    let net = network_of(
+        path,
+        positions,
+        edges,
+        node_radius,
+        edge_radius,
+        normals,
+        meta,
+    )?;
     lamina::network::io::write_network(&net, path, &RenderOptions::default())
         .map_err(|e| LaminaError::new_err(e.to_string()))
 }
@@ -425,6 +552,7 @@ fn _lamina(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(planarize, m)?)?;
+    m.add_function(wrap_pyfunction!(solid, m)?)?;
     m.add_function(wrap_pyfunction!(write_network, m)?)?;
     m.add_function(wrap_pyfunction!(read_network, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;

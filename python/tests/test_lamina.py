@@ -64,6 +64,13 @@ def same_network(py: dict, path: Path) -> None:
         assert np.array_equal(py[k], v), k
 
 
+def same_triangles(got: dict, want: dict) -> None:
+    """The same triangles in the same order, corner for corner (a file may number its vertices
+    in another order)."""
+    assert np.array_equal(got["vertices"][got["faces"]], want["vertices"][want["faces"]])
+    assert len(got["vertices"]) == len(want["vertices"])
+
+
 @pytest.fixture(scope="module")
 def calyx():
     return lamina.read_network(CALYX)
@@ -257,9 +264,7 @@ def test_solid_and_slice_equal_cli(tmp_path):
     cli(tmp_path, "solid", "network.json", "--cell", 0.25, "-o", "solid.obj", "--report",
         "report.json")
     assert untimed(py["report_json"]) == untimed((tmp_path / "report.json").read_text())
-    want = lamina.read_mesh(tmp_path / "solid.obj")
-    assert np.array_equal(py["mesh"]["vertices"], want["vertices"])
-    assert np.array_equal(py["mesh"]["faces"], want["faces"])
+    same_triangles(py["mesh"], lamina.read_mesh(tmp_path / "solid.obj"))
 
     printed = lamina.slice(py["mesh"], layer=0.05)
     lamina.write_mesh(tmp_path / "model-0.obj", py["mesh"])
@@ -515,3 +520,15 @@ def test_no_folder_left_behind(calyx):
         lamina.size(lamina.planarize(calyx, fix_normal=["z<1:0,0,1"]), support="z<1",
                     load="nothing:1")
     assert ours() <= before
+
+
+def test_solid_with_the_blade_from_meta_equals_cli(tmp_path):
+    """The leaf's outline travels in the network's meta: --lamina finds it in memory too."""
+    leaf = lamina.venation(shape="circle", seed=2)["network"]
+    assert "outline" in leaf["meta"]["parameters"]
+    py = lamina.solid(leaf, fit=10, lamina=0.3, cell=0.1)
+    lamina.write_network(tmp_path / "network.json", leaf)
+    cli(tmp_path, "solid", "network.json", "--fit", 10, "--lamina", 0.3, "--cell", 0.1,
+        "-o", "solid.obj", "--report", "report.json")
+    assert untimed(py["report_json"]) == untimed((tmp_path / "report.json").read_text())
+    same_triangles(py["mesh"], lamina.read_mesh(tmp_path / "solid.obj"))

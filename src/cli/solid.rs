@@ -12,8 +12,11 @@ use super::venation::write_json;
 use lamina::fabricate::slice::shapes::Placed;
 use lamina::fabricate::slice::supports::{plan, SupportOptions, SupportReport};
 use lamina::fabricate::slice::Printer;
-use lamina::fabricate::solid::{shapes, solid_of, Base, Shapes, SolidOptions, DEFAULT_CELL};
+use lamina::fabricate::solid::{
+    shapes, solid_of, Base, Shapes, SolidOptions, SolidReport, DEFAULT_CELL,
+};
 use lamina::mesh::io::write_mesh;
+use lamina::{Network, TriMesh};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -186,8 +189,17 @@ pub fn parse_base(text: &str) -> Result<Base> {
     }
 }
 
-pub fn run(args: Args) -> Result<()> {
-    let net = args.weld.network(&args.network)?.network;
+/// A solid made, in memory: the mesh, its report and the value `--report` writes (the report
+/// with the supports' figures).
+pub struct Made {
+    pub mesh: TriMesh,
+    pub report: SolidReport,
+    pub value: serde_json::Value,
+}
+
+/// Meshes `net` (read from `args.network`, or handed over by the Python package) as the flags
+/// say; writes nothing.
+pub fn solve(args: &Args, net: &Network) -> Result<Made> {
     let mut opts = args.shape.options(args.cell)?;
     opts.tolerance = args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell));
     let bar = super::progress::bar("meshing", None);
@@ -195,25 +207,35 @@ pub fn run(args: Args) -> Result<()> {
         "meshing {bar:40} {pos}/{len} bricks {elapsed}",
     )?);
     let within = || format!("{}", args.network.display());
-    let mut pieces = shapes(&net, &opts).with_context(within)?;
+    let mut pieces = shapes(net, &opts).with_context(within)?;
     let supports = args
         .supports
         .add(&mut pieces, opts.upright, &Printer::default())
         .with_context(within)?;
-    let made = solid_of(&net, &opts, pieces, &|done, total| {
+    let made = solid_of(net, &opts, pieces, &|done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })
     .with_context(within)?;
     bar.finish_and_clear();
+    let mut value = serde_json::to_value(&made.report)?;
+    if let Some(s) = &supports {
+        value["supports"] = serde_json::to_value(s)?;
+    }
+    Ok(Made {
+        mesh: made.mesh,
+        report: made.report,
+        value,
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let net = args.weld.network(&args.network)?.network;
+    let made = solve(&args, &net)?;
     write_mesh(&made.mesh, &args.output, 1024)?;
     let r = &made.report;
     if let Some(path) = &args.report {
-        let mut value = serde_json::to_value(r)?;
-        if let Some(s) = &supports {
-            value["supports"] = serde_json::to_value(s)?;
-        }
-        write_json(path, &value)?;
+        write_json(path, &made.value)?;
     }
     if args.json {
         outln!("{}", serde_json::to_string_pretty(r)?);

@@ -486,9 +486,14 @@ fn print_summary(output: &Path, leaf: &Leaf) {
 }
 
 pub(super) fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
-    let text = serde_json::to_string_pretty(value)? + "\n";
+    let text = json_text(value)?;
     write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     Ok(())
+}
+
+/// A report's text as `write_json` writes it: pretty, with a final line break.
+pub fn json_text(value: &serde_json::Value) -> Result<String> {
+    Ok(serde_json::to_string_pretty(value)? + "\n")
 }
 
 /// Peele Fig. 1: one leaf per r, side by side.
