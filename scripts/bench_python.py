@@ -68,6 +68,16 @@ def main():
     rows.append((f"planarize a grown leaf ({len(leaf['positions'])} nodes, Gauss-Newton)", py_t,
                  cli_t, solve, r["report"]["seconds"]))
 
+    loop = lamina.read_network(ROOT / "fixtures/networks/small_loop.json")
+    lamina.write_network(work / "loop.json", loop)
+    py_t, r = median_time(lambda: lamina.solid(loop, cell=0.03), runs=5)
+    cli_t = statistics.median(
+        _time(lambda: subprocess.run([binary, "solid", "loop.json", "--cell", "0.03", "-o",
+                                      "loop.stl", "--report", "loop.report.json"], cwd=work,
+                                     check=True, capture_output=True)) for _ in range(5))
+    rows.append((f"solid small_loop at 0.03 mm ({len(r['mesh']['faces']):,} triangles)", py_t,
+                 cli_t, None, None))
+
     solved = lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])
     plates = lamina.plates(solved, groups=7, thickness=3.0)
     (work / "plates").mkdir(exist_ok=True)
