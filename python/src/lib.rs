@@ -4,8 +4,9 @@
 //! `src/cli`), so a command parses its flags, computes, writes its files and words its errors
 //! with the same code: the package's results and reports are the binary's. What a command
 //! prints is captured (`cli::say`), its notes handed back, its progress bar read by a watcher
-//! that calls the Python callback. The Python side (`python/lamina/`) moves arrays in and out
-//! of the files in a private folder.
+//! that calls the Python callback. `planarize` and `solid` take the network from memory and hand
+//! their results back without a file; for the other commands the Python side (`python/lamina/`)
+//! moves arrays in and out of files in a private folder.
 
 #[allow(dead_code, clippy::all)]
 #[path = "../../src/cli/mod.rs"]
@@ -47,8 +48,12 @@ fn run(
     argv: Vec<String>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(bool, String, Vec<String>)> {
-    let parsed = cli::Cli::try_parse_from(std::iter::once("lamina".to_string()).chain(argv))
-        .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    let parsed = match cli::Cli::try_parse_from(std::iter::once("lamina".to_string()).chain(argv)) {
+        Ok(parsed) => parsed,
+        // `--help` and `--version` are what the command prints, not errors.
+        Err(e) if !e.use_stderr() => return Ok((true, e.render().to_string(), Vec::new())),
+        Err(e) => return Err(clap_error(&e)),
+    };
     let (within, captured) = in_process(py, progress.as_ref(), || cli::dispatch(parsed.command))?;
     Ok((within, captured.out, captured.notes))
 }
@@ -104,22 +109,10 @@ fn planarize<'py>(
     meta: &str,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PlanarizeResult<'py>> {
-    let parsed = cli::Cli::try_parse_from(
-        ["lamina", "planarize"]
-            .map(String::from)
-            .into_iter()
-            .chain(argv),
-    )
-    .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
-    let cli::Command::Planarize(args) = parsed.command else {
+    let cli::Command::Planarize(args) = parse("planarize", argv)? else {
         unreachable!("parsed as planarize");
     };
-    if args.weld.given() {
-        return Err(LaminaError::new_err(
-            "the reader flags (--weld, --units, --chord-tolerance, …) apply to files; a network \
-             from memory is taken as it is",
-        ));
-    }
+    no_reader_flags(&args.weld)?;
     let net = network_of(
         &args.input,
         positions,
@@ -153,8 +146,13 @@ fn parse(command: &str, argv: Vec<String>) -> PyResult<cli::Command> {
             .into_iter()
             .chain(argv),
     )
-    .map_err(|e| LaminaError::new_err(e.render().to_string().trim_end().to_string()))?;
+    .map_err(|e| clap_error(&e))?;
     Ok(parsed.command)
+}
+
+/// clap's message for bad arguments, as the binary prints it (without colours).
+fn clap_error(e: &clap::Error) -> PyErr {
+    LaminaError::new_err(e.render().to_string().trim_end().to_string())
 }
 
 /// A network from memory is taken as it is: the reader flags have no file to act on.

@@ -532,3 +532,12 @@ def test_solid_with_the_blade_from_meta_equals_cli(tmp_path):
         "-o", "solid.obj", "--report", "report.json")
     assert untimed(py["report_json"]) == untimed((tmp_path / "report.json").read_text())
     same_triangles(py["mesh"], lamina.read_mesh(tmp_path / "solid.obj"))
+
+
+def test_command_help_and_refused_reader_flags(calyx):
+    assert lamina.command("planarize", "--help").startswith("Node axes that make every panel")
+    assert lamina.command("--version").strip() == f"lamina {lamina.__version__}"
+    with pytest.raises(lamina.LaminaError, match="reader flags"):
+        lamina.planarize(calyx, weld=0.1)
+    with pytest.raises(lamina.LaminaError, match="reader flags"):
+        lamina.solid(calyx, split_crossings=True)
