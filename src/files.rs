@@ -52,7 +52,7 @@ impl ReadError {
             msg: msg.into(),
         }
     }
-    pub(crate) fn file(path: &Path, msg: impl Into<String>) -> Self {
+    pub fn file(path: &Path, msg: impl Into<String>) -> Self {
         ReadError::File {
             path: path.to_path_buf(),
             msg: msg.into(),

@@ -26,8 +26,8 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from . import _lamina
-from ._job import (Job, LaminaWarning, Progress, arrays_positions, as_points, flag_value, flags,
-                   mesh_of, network_arrays, network_of)
+from ._job import (Job, LaminaWarning, Progress, arrays_positions, as_indices, as_points,
+                   flag_value, flags, mesh_of, network_arrays, network_of)
 from ._lamina import LaminaError, __version__
 
 __all__ = [
@@ -455,13 +455,21 @@ def slice(models: Any, *, progress: Progress = None, **options: Any) -> dict:
     if isinstance(models, dict) or (isinstance(models, tuple) and len(models) == 2
                                      and not isinstance(models[0], (dict, tuple))):
         models = [models]
+    data = []
+    for k, m in enumerate(models):
+        vertices, faces, _colors = _mesh(m, f"model {k}")
+        v = as_points(vertices, f"model {k}: vertices")
+        f = as_indices(faces, f"model {k}: faces", 3, len(v))
+        # In memory; the report names the models model-0.obj, model-1.obj, ...
+        data.append((f"model-{k}.obj", v.tobytes(), f.tobytes()))
     with Job() as job:
-        names = []
-        for k, m in enumerate(models):
-            job.write_mesh(f"model-{k}.obj", *_mesh(m, f"model {k}"))
-            names.append(job.path(f"model-{k}.obj"))
-        argv = ["slice", *names, "-o", job.path("print.sl1"), "--report", job.path("print.json")]
-        job.run(argv + flags(options), progress)
-        report, text = _report(job, "print.json")
+        argv = ["-o", job.path("print.sl1")] + flags(options)
+        try:
+            text, notes = _lamina.slice(argv, data, progress)
+        except LaminaError as e:
+            raise LaminaError(job.relative(str(e))) from None
+        job.note(notes)
+        text = job.relative(text)
+        report = json.loads(text)
         return {"sl1": job.bytes("print.sl1"), "report": report, "report_json": text,
                 "notes": job.notes}

@@ -9,6 +9,7 @@ __all__ = [
     "read_mesh",
     "read_network",
     "run",
+    "slice",
     "solid",
     "write_mesh",
     "write_network",
@@ -40,6 +41,11 @@ def solid(
     meta: str,
     progress: Optional[Callable[..., Any]] = None,
 ) -> Tuple[str, bytes, bytes, List[str]]: ...
+def slice(
+    argv: List[str],
+    models: List[Tuple[str, bytes, bytes]],
+    progress: Optional[Callable[..., Any]] = None,
+) -> Tuple[str, List[str]]: ...
 def write_network(
     path: str,
     positions: bytes,

@@ -4,15 +4,15 @@
 //! `src/cli`), so a command parses its flags, computes, writes its files and words its errors
 //! with the same code: the package's results and reports are the binary's. What a command
 //! prints is captured (`cli::say`), its notes handed back, its progress bar read by a watcher
-//! that calls the Python callback. `planarize` and `solid` take the network from memory and hand
-//! their results back without a file; for the other commands the Python side (`python/lamina/`)
+//! that calls the Python callback. `planarize`, `solid` and `slice` take their input from
+//! memory and hand their results back without a file (but slice's archive); for the other commands the Python side (`python/lamina/`)
 //! moves arrays in and out of files in a private folder.
 
 #[allow(dead_code, clippy::all)]
 #[path = "../../src/cli/mod.rs"]
 mod cli;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -208,6 +208,76 @@ fn solid<'py>(
         u32_bytes(py, mesh.triangles.iter().flatten().copied()),
         captured.notes,
     ))
+}
+
+/// `lamina slice ARGV…` on meshes in memory: each model a (name, vertices V×3 float64 bytes,
+/// faces F×3 uint32 bytes), the names standing for ARGV's model files (checked as a mesh file
+/// is). The archive is written where ARGV's `-o` says. Returns (print.json's text, notes).
+#[pyfunction]
+#[pyo3(signature = (argv, models, progress=None))]
+fn slice(
+    py: Python<'_>,
+    argv: Vec<String>,
+    models: Vec<(String, Bound<'_, PyBytes>, Bound<'_, PyBytes>)>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<(String, Vec<String>)> {
+    let names: Vec<String> = models.iter().map(|(name, ..)| name.clone()).collect();
+    let cli::Command::Slice(args) = parse("slice", names.iter().cloned().chain(argv).collect())?
+    else {
+        unreachable!("parsed as slice");
+    };
+    let meshes = models
+        .iter()
+        .map(|(name, v, f)| {
+            let path = PathBuf::from(name);
+            mesh_from(&path, v.as_bytes(), f.as_bytes()).map(|mesh| (path, mesh))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let (text, captured) = in_process(py, progress.as_ref(), || {
+        let (report, ..) = cli::slice::slice_models(&args, meshes)?;
+        cli::venation::json_text(&report)
+    })?;
+    Ok((text, captured.notes))
+}
+
+/// A triangle mesh from little-endian bytes, checked as the mesh readers check a file (`source`
+/// names it): triangles there, corners among the vertices, finite coordinates.
+fn mesh_from(source: &Path, vertices: &[u8], faces: &[u8]) -> PyResult<TriMesh> {
+    let positions = points(&f64s(vertices, "vertices")?);
+    let corners = u32s(faces, "faces")?;
+    let bad = |e: ReadError| LaminaError::new_err(e.to_string());
+    if corners.len() < 3 {
+        return Err(bad(ReadError::file(
+            source,
+            "no triangles: nothing to read",
+        )));
+    }
+    if let Some(k) = corners.iter().position(|&i| i as usize >= positions.len()) {
+        return Err(bad(ReadError::record(
+            source,
+            format!("triangle {}", k / 3),
+            format!(
+                "corner {} is not one of the {} vertices",
+                corners[k],
+                positions.len()
+            ),
+        )));
+    }
+    if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(bad(ReadError::record(
+            source,
+            format!("vertex {v}"),
+            "coordinate is not finite",
+        )));
+    }
+    Ok(TriMesh {
+        positions,
+        triangles: corners
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+        colors: None,
+    })
 }
 
 /// What `solid` hands back to Python.
@@ -551,6 +621,7 @@ fn _lamina(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(planarize, m)?)?;
     m.add_function(wrap_pyfunction!(solid, m)?)?;
+    m.add_function(wrap_pyfunction!(slice, m)?)?;
     m.add_function(wrap_pyfunction!(write_network, m)?)?;
     m.add_function(wrap_pyfunction!(read_network, m)?)?;
     m.add_function(wrap_pyfunction!(write_mesh, m)?)?;

@@ -541,3 +541,15 @@ def test_command_help_and_refused_reader_flags(calyx):
         lamina.planarize(calyx, weld=0.1)
     with pytest.raises(lamina.LaminaError, match="reader flags"):
         lamina.solid(calyx, split_crossings=True)
+
+
+def test_slice_refuses_bad_meshes():
+    mesh = lamina.read_mesh(TORUS)
+    bad = mesh["vertices"].copy()
+    bad[3, 2] = np.inf
+    with pytest.raises(lamina.LaminaError, match="model-0.obj: vertex 3: coordinate is not finite"):
+        lamina.slice((bad, mesh["faces"]))
+    with pytest.raises(lamina.LaminaError, match="model 1: faces: index"):
+        lamina.slice([mesh, (mesh["vertices"], mesh["faces"] + len(mesh["vertices"]))])
+    with pytest.raises(lamina.LaminaError, match="--copies"):
+        lamina.slice(mesh, copies=0)

@@ -20,6 +20,7 @@ use lamina::fabricate::slice::{
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_triangles;
 use lamina::network::io::units::LengthUnit;
+use lamina::TriMesh;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -283,12 +284,27 @@ impl JobArgs {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let meshes = args
+        .models
+        .iter()
+        .map(|path| Ok((path.clone(), read_triangles(path)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let (report, e, printer) = slice_models(&args, meshes)?;
+    args.job.finish(&report, &e, &printer, &args.output)
+}
+
+/// Slices the models (each named by its path, read from it or handed over by the Python
+/// package; in the units `--units` gives, before `--scale`) and writes the archive (and the
+/// layers folder). Returns print.json, the estimate and the printer.
+pub fn slice_models(
+    args: &Args,
+    meshes: Vec<(PathBuf, TriMesh)>,
+) -> Result<(serde_json::Value, Estimate, Printer)> {
     let job = &args.job;
     let printer = job.checked_printer()?;
-    let scale = model_scale(&args)?;
-    let mut models = Vec::with_capacity(args.models.len());
-    for path in &args.models {
-        let mut mesh = read_triangles(path)?;
+    let scale = model_scale(args)?;
+    let mut models = Vec::with_capacity(meshes.len());
+    for (path, mut mesh) in meshes {
         if scale != 1.0 {
             for p in &mut mesh.positions {
                 *p *= scale;
@@ -304,15 +320,12 @@ pub fn run(args: Args) -> Result<()> {
                 printer.layer_mm
             );
         }
-        models.push(Model {
-            path: path.clone(),
-            mesh,
-        });
+        models.push(Model { path, mesh });
     }
     let placed = arrange(&models, &printer, job.copies, job.gap, args.keep_position)?;
     let spec = job.spec(&args.output);
     let (report, e, _) = slice_job(Source::Meshes(&models), &placed, &printer, &spec, &[])?;
-    job.finish(&report, &e, &printer, &args.output)
+    Ok((report, e, printer))
 }
 
 /// Says what a sliced job is: the summary (or print.json with `json`) on stdout, and its islands.
