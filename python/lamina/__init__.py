@@ -20,14 +20,13 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import warnings
 from typing import Any, Optional, Union
 
 import numpy as np
 
 from . import _lamina
 from ._job import (Job, LaminaWarning, Progress, arrays_positions, as_indices, as_points,
-                   flag_value, flags, mesh_of, network_arrays, network_of)
+                   check_progress, flag_value, flags, mesh_of, network_arrays, network_of, warn)
 from ._lamina import LaminaError, __version__
 
 __all__ = [
@@ -60,9 +59,9 @@ def command(*argv: Any, progress: Progress = None) -> str:
     """Runs ``lamina ARGV…`` in-process on files and returns what it printed. Raises
     LaminaError where the binary exits 2; a result beyond its tolerance (exit 1) is not an
     error here: pass ``--json`` and read the figures."""
+    check_progress(progress)
     _within, out, notes = _lamina.run([flag_value(a) for a in argv], progress)
-    for n in notes:
-        warnings.warn(n, LaminaWarning, stacklevel=2)
+    warn(notes)
     return out
 
 
@@ -303,9 +302,10 @@ def planarize(positions: Any, edges: Any = None, normals: Any = None, *,
         if surface is not None:
             job.write_mesh("surface.obj", *_mesh(surface, "surface"))
             argv += ["--surface", job.path("surface.obj")]
+        check_progress(progress)
         try:
             within, axes_text, text, summary, axes, heights, notes = _lamina.planarize(
-                argv + flags(options), *arrays, progress)
+                argv + flags(options), arrays, progress)
         except LaminaError as e:
             raise LaminaError(job.relative(str(e))) from None
         job.note(notes)
@@ -434,18 +434,14 @@ def solid(positions: Any, edges: Any = None, node_radius: Any = None, edge_radiu
     """The closed, 2-manifold mesh of the network's veins (each edge a cone between its nodes'
     spheres), meshed on a grid of ``cell`` mm. Returns ``mesh``, ``report``, ``report_json``."""
     arrays = network_arrays(_network(positions, edges, None, node_radius, edge_radius))
-    with Job() as job:
-        # In memory, as planarize: the report names the network network.json.
-        argv = ["network.json", "-o", "solid.obj"]
-        if cell is not None:
-            argv.append(f"--cell={flag_value(float(cell))}")
-        try:
-            text, v, f, notes = _lamina.solid(argv + flags(options), *arrays, progress)
-        except LaminaError as e:
-            raise LaminaError(job.relative(str(e))) from None
-        job.note(notes)
-        return {"mesh": mesh_of(v, f, None), "report": json.loads(text), "report_json": text,
-                "notes": job.notes}
+    check_progress(progress)
+    # In memory, as planarize (no folder): the report names the network network.json.
+    argv = ["network.json", "-o", "solid.obj"]
+    if cell is not None:
+        argv.append(f"--cell={flag_value(float(cell))}")
+    text, v, f, notes = _lamina.solid(argv + flags(options), arrays, progress)
+    return {"mesh": mesh_of(v, f, None), "report": json.loads(text), "report_json": text,
+            "notes": warn(notes)}
 
 
 def slice(models: Any, *, progress: Progress = None, **options: Any) -> dict:
@@ -464,6 +460,7 @@ def slice(models: Any, *, progress: Progress = None, **options: Any) -> dict:
         data.append((f"model-{k}.obj", v.tobytes(), f.tobytes()))
     with Job() as job:
         argv = ["-o", job.path("print.sl1")] + flags(options)
+        check_progress(progress)
         try:
             text, notes = _lamina.slice(argv, data, progress)
         except LaminaError as e:

@@ -95,6 +95,19 @@ def as_values(a: Any, what: str, count: int, default: float) -> np.ndarray:
     return np.ascontiguousarray(arr, dtype="<f8")
 
 
+def check_progress(progress: Progress) -> None:
+    if progress is not None and not callable(progress):
+        raise TypeError("progress must be callable as progress(stage, message, done, total)")
+
+
+def warn(notes: list, stacklevel: int = 3) -> list:
+    """A command's notes as LaminaWarnings (pointing at the caller of the package's function
+    that calls this with the default stacklevel)."""
+    for n in notes:
+        warnings.warn(n, LaminaWarning, stacklevel=stacklevel)
+    return list(notes)
+
+
 class Job:
     """One command's private folder; removed when the job ends."""
 
@@ -120,8 +133,7 @@ class Job:
     def run(self, argv: list, progress: Progress = None) -> bool:
         """Runs ``lamina ARGV…``; its notes become LaminaWarnings (and ``self.notes``). False
         when the command's result missed its tolerance (exit 1 on the command line)."""
-        if progress is not None and not callable(progress):
-            raise TypeError("progress must be callable as progress(stage, message, done, total)")
+        check_progress(progress)
         try:
             within, _out, notes = _lamina.run([str(a) for a in argv], progress)
         except _lamina.LaminaError as e:
@@ -131,10 +143,7 @@ class Job:
 
     def note(self, notes: list) -> None:
         """A command's notes, as LaminaWarnings and in ``self.notes``."""
-        for n in notes:
-            n = self.relative(n)
-            self.notes.append(n)
-            warnings.warn(n, LaminaWarning, stacklevel=4)
+        self.notes.extend(warn([self.relative(n) for n in notes], stacklevel=4))
 
     def text(self, name: str) -> str:
         with open(self.path(name), encoding="utf-8") as f:
@@ -161,7 +170,7 @@ class Job:
     # Networks and meshes in and out.
 
     def write_network(self, name: str, net: dict) -> str:
-        _lamina.write_network(self.path(name), *network_arrays(net))
+        _lamina.write_network(self.path(name), network_arrays(net))
         return self.path(name)
 
     def read_network(self, name: str) -> dict:

@@ -91,37 +91,23 @@ fn in_process<T: Send>(
     }
 }
 
-/// `lamina planarize ARGV…` on a network in memory (the bytes as `write_network` takes them;
+/// `lamina planarize ARGV…` on a network in memory (a `NetworkBytes` tuple;
 /// ARGV's input names it in the report, and no file is read or written but a `--surface`).
 /// Returns (within, axes file text, report text, summary text, axes N×3 and heights N as
 /// float64 bytes, notes).
 #[pyfunction]
-#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, meta, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (argv, network, progress=None))]
 fn planarize<'py>(
     py: Python<'py>,
     argv: Vec<String>,
-    positions: &[u8],
-    edges: &[u8],
-    node_radius: &[u8],
-    edge_radius: &[u8],
-    normals: &[u8],
-    meta: &str,
+    network: NetworkBytes<'py>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PlanarizeResult<'py>> {
     let cli::Command::Planarize(args) = parse("planarize", argv)? else {
         unreachable!("parsed as planarize");
     };
     no_reader_flags(&args.weld)?;
-    let net = network_of(
-        &args.input,
-        positions,
-        edges,
-        node_radius,
-        edge_radius,
-        normals,
-        meta,
-    )?;
+    let net = network.build(&args.input)?;
     let (solved, captured) =
         in_process(py, progress.as_ref(), || cli::planarize::solve(&args, &net))?;
     let mut axes_text = Vec::new();
@@ -170,32 +156,18 @@ fn no_reader_flags(flags: &cli::input::ReadArgs) -> PyResult<()> {
 /// Returns (report text as `--report` writes it, vertices V×3 float64 and faces F×3 uint32
 /// bytes, notes).
 #[pyfunction]
-#[pyo3(signature = (argv, positions, edges, node_radius, edge_radius, normals, meta, progress=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (argv, network, progress=None))]
 fn solid<'py>(
     py: Python<'py>,
     argv: Vec<String>,
-    positions: &[u8],
-    edges: &[u8],
-    node_radius: &[u8],
-    edge_radius: &[u8],
-    normals: &[u8],
-    meta: &str,
+    network: NetworkBytes<'py>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<SolidResult<'py>> {
     let cli::Command::Solid(args) = parse("solid", argv)? else {
         unreachable!("parsed as solid");
     };
     no_reader_flags(&args.weld)?;
-    let net = network_of(
-        &args.network,
-        positions,
-        edges,
-        node_radius,
-        edge_radius,
-        normals,
-        meta,
-    )?;
+    let net = network.build(&args.network)?;
     let (made, captured) = in_process(py, progress.as_ref(), || {
         let made = cli::solid::solve(&args, &net)?;
         let text = cli::venation::json_text(&made.value)?;
@@ -365,83 +337,86 @@ fn u32_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = u32>) -> Bound<'
     PyBytes::new(py, &bytes)
 }
 
-/// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
-/// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
-/// float64, normals N×3 float64 or empty (no normals); meta as JSON text (empty: none).
-/// A network from little-endian arrays, checked as the JSON reader checks a file (`source`
-/// names it in errors): finite positions and normals, edges between existing nodes.
-fn network_of(
-    source: &Path,
-    positions: &[u8],
-    edges: &[u8],
-    node_radius: &[u8],
-    edge_radius: &[u8],
-    normals: &[u8],
-    meta: &str,
-) -> PyResult<Network> {
-    let p = points(&f64s(positions, "positions")?);
-    let e = u32s(edges, "edges")?;
-    let (nr, er) = (
-        f64s(node_radius, "node_radius")?,
-        f64s(edge_radius, "edge_radius")?,
-    );
-    let n = points(&f64s(normals, "normals")?);
-    let counts = [
-        ("node_radius", nr.len(), p.len()),
-        ("edge_radius", er.len(), e.len() / 2),
-        (
-            "normals",
-            if n.is_empty() { p.len() } else { n.len() },
-            p.len(),
-        ),
-    ];
-    if let Some((what, got, want)) = counts.into_iter().find(|(_, got, want)| got != want) {
-        return Err(LaminaError::new_err(format!(
-            "{what}: {got} rows for {want} (one per node or edge)"
-        )));
-    }
-    let bad = |record: String, message: String| {
-        LaminaError::new_err(ReadError::record(source, record, message).to_string())
-    };
-    let mut nodes = Vec::with_capacity(p.len());
-    for (i, &p) in p.iter().enumerate() {
-        if !p.is_finite() {
-            return Err(bad(format!("node {i}"), "position is not finite".into()));
+/// A network as Python hands it over: a tuple of little-endian bytes (positions N×3 float64,
+/// edges E×2 uint32, node radii N and edge radii E float64, normals N×3 float64 or empty for
+/// none) and its meta as JSON text (empty for none).
+#[derive(FromPyObject)]
+struct NetworkBytes<'py>(
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    String,
+);
+
+impl NetworkBytes<'_> {
+    /// The network, checked as the JSON reader checks a file (`source` names it in errors):
+    /// finite positions and normals, edges between existing nodes.
+    fn build(&self, source: &Path) -> PyResult<Network> {
+        let NetworkBytes(positions, edges, node_radius, edge_radius, normals, meta) = self;
+        let p = points(&f64s(positions.as_bytes(), "positions")?);
+        let e = u32s(edges.as_bytes(), "edges")?;
+        let nr = f64s(node_radius.as_bytes(), "node_radius")?;
+        let er = f64s(edge_radius.as_bytes(), "edge_radius")?;
+        let n = points(&f64s(normals.as_bytes(), "normals")?);
+        let counts = [
+            ("node_radius", nr.len(), p.len()),
+            ("edge_radius", er.len(), e.len() / 2),
+            (
+                "normals",
+                if n.is_empty() { p.len() } else { n.len() },
+                p.len(),
+            ),
+        ];
+        if let Some((what, got, want)) = counts.into_iter().find(|(_, got, want)| got != want) {
+            return Err(LaminaError::new_err(format!(
+                "{what}: {got} rows for {want} (one per node or edge)"
+            )));
         }
-        let normal = n.get(i).copied();
-        if normal.is_some_and(|v| !v.is_finite()) {
-            return Err(bad(format!("node {i}"), "normal is not finite".into()));
+        let bad = |record: String, message: String| {
+            LaminaError::new_err(ReadError::record(source, record, message).to_string())
+        };
+        let mut nodes = Vec::with_capacity(p.len());
+        for (i, &p) in p.iter().enumerate() {
+            if !p.is_finite() {
+                return Err(bad(format!("node {i}"), "position is not finite".into()));
+            }
+            let normal = n.get(i).copied();
+            if normal.is_some_and(|v| !v.is_finite()) {
+                return Err(bad(format!("node {i}"), "normal is not finite".into()));
+            }
+            nodes.push(Node {
+                p,
+                normal,
+                radius: nr[i],
+            });
         }
-        nodes.push(Node {
-            p,
-            normal,
-            radius: nr[i],
-        });
-    }
-    let mut out = Vec::with_capacity(er.len());
-    for (k, (ab, &radius)) in e.chunks_exact(2).zip(&er).enumerate() {
-        if ab[0] as usize >= nodes.len() || ab[1] as usize >= nodes.len() {
-            return Err(bad(
-                format!("edge {k}"),
-                format!(
-                    "joins nodes {} and {}, but the file has {} nodes (numbered from 0)",
-                    ab[0],
-                    ab[1],
-                    nodes.len()
-                ),
-            ));
+        let mut out = Vec::with_capacity(er.len());
+        for (k, (ab, &radius)) in e.chunks_exact(2).zip(&er).enumerate() {
+            if ab[0] as usize >= nodes.len() || ab[1] as usize >= nodes.len() {
+                return Err(bad(
+                    format!("edge {k}"),
+                    format!(
+                        "joins nodes {} and {}, but the file has {} nodes (numbered from 0)",
+                        ab[0],
+                        ab[1],
+                        nodes.len()
+                    ),
+                ));
+            }
+            out.push(Edge {
+                a: ab[0],
+                b: ab[1],
+                radius,
+            });
         }
-        out.push(Edge {
-            a: ab[0],
-            b: ab[1],
-            radius,
-        });
+        Ok(Network {
+            nodes,
+            edges: out,
+            meta: meta_of(meta)?,
+        })
     }
-    Ok(Network {
-        nodes,
-        edges: out,
-        meta: meta_of(meta)?,
-    })
 }
 
 /// A network's meta from the JSON text of the Python dict's `meta` (empty: the defaults).
@@ -484,30 +459,12 @@ fn meta_of(text: &str) -> PyResult<Meta> {
     Ok(meta)
 }
 
-/// Writes a network as lamina JSON (exact: shortest round-trip numbers). Arrays come as
-/// little-endian bytes: positions N×3 float64, edges E×2 uint32, node and edge radii (N, E)
-/// float64, normals N×3 float64 or empty (no normals); meta as JSON text (empty: none).
+/// Writes a network (the tuple `NetworkBytes` describes) as lamina JSON (exact: shortest
+/// round-trip numbers), OBJ, DXF or SVG by extension.
 #[pyfunction]
-#[pyo3(signature = (path, positions, edges, node_radius, edge_radius, normals, meta))]
-fn write_network(
-    path: &str,
-    positions: &[u8],
-    edges: &[u8],
-    node_radius: &[u8],
-    edge_radius: &[u8],
-    normals: &[u8],
-    meta: &str,
-) -> PyResult<()> {
+fn write_network(path: &str, network: NetworkBytes<'_>) -> PyResult<()> {
     let path = Path::new(path);
-    let net = network_of(
-        path,
-        positions,
-        edges,
-        node_radius,
-        edge_radius,
-        normals,
-        meta,
-    )?;
+    let net = network.build(path)?;
     lamina::network::io::write_network(&net, path, &RenderOptions::default())
         .map_err(|e| LaminaError::new_err(e.to_string()))
 }
