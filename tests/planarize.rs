@@ -190,6 +190,13 @@ fn bad_networks_exit_2_naming_the_problem() -> TestResult {
         (&ok, vec!["--fix-axis", "node=0:0,0"], vec!["--fix-axis"]),
         (&ok, vec!["--tolerance", "0"], vec!["--tolerance"]),
         (&ok, vec!["--height=-5"], vec!["height"]),
+        // So tall the panel figures overflow (it was reported planar at zero deviation).
+        (
+            &ok,
+            vec!["--height", "1e300"],
+            vec!["height 1e300", "at most"],
+        ),
+        (&ok, vec!["--height", "nan"], vec!["height NaN"]),
     ] {
         let mut all = vec!["planarize", s(input), "-o", s(&out)];
         all.extend(args.iter().copied());

@@ -168,6 +168,10 @@ impl Default for PlanarizeOptions {
     }
 }
 
+/// The tallest panel accepted, mm: far beyond any plate. Far taller ones overflow the panel
+/// figures (at 1e300 mm a solve was reported planar at zero deviation).
+pub const MAX_HEIGHT: f64 = 1e6;
+
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum PlanarizeError {
     #[error("node {0} has a position that is not finite")]
@@ -180,7 +184,11 @@ pub enum PlanarizeError {
     NoReference(u32),
     #[error("node {0} has a reference direction that is not a finite non-zero vector")]
     BadReference(u32),
-    #[error("node {0} has height {1}; heights must be positive mm")]
+    #[error(
+        "node {node} has height {height}; heights must be positive mm, at most {MAX_HEIGHT} (1 km)",
+        node = .0,
+        height = crate::text::num(*.1)
+    )]
     Height(u32, f64),
     #[error("--alpha must be ≥ 0, got {0}")]
     Alpha(f64),
@@ -472,7 +480,7 @@ fn check(input: &Input, opts: &PlanarizeOptions) -> Result<(), PlanarizeError> {
     if let Some(i) = input
         .heights
         .iter()
-        .position(|h| !(h.is_finite() && *h > 0.0))
+        .position(|h| !(h.is_finite() && *h > 0.0 && *h <= MAX_HEIGHT))
     {
         return Err(PlanarizeError::Height(i as u32, input.heights[i]));
     }
