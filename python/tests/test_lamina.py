@@ -553,3 +553,28 @@ def test_slice_refuses_bad_meshes():
         lamina.slice([mesh, (mesh["vertices"], mesh["faces"] + len(mesh["vertices"]))])
     with pytest.raises(lamina.LaminaError, match="--copies"):
         lamina.slice(mesh, copies=0)
+
+
+def test_files_other_tools_wrote_and_extreme_values(tmp_path):
+    """OpenSCAD's STL sliced from memory and ezdxf's DXF made solid, each equal to the command
+    line on the file itself; 0, negative, NaN and huge values refused as the command refuses
+    them."""
+    part = lamina.read_mesh(ROOT / "fixtures/surfaces/openscad_part.stl")
+    printed = lamina.slice(part)
+    lamina.write_mesh(tmp_path / "model-0.obj", part)
+    cli(tmp_path, "slice", "model-0.obj", "-o", "print.sl1", "--report", "print.json")
+    assert untimed(printed["report_json"]) == untimed((tmp_path / "print.json").read_text())
+    veins = lamina.read_network(ROOT / "fixtures/networks/ezdxf_veins.dxf")
+    made = lamina.solid(veins, radius=0.5, cell=0.25)
+    lamina.write_network(tmp_path / "network.json", veins)
+    cli(tmp_path, "solid", "network.json", "--radius", 0.5, "--cell", 0.25, "-o", "solid.obj",
+        "--report", "report.json")
+    assert untimed(made["report_json"]) == untimed((tmp_path / "report.json").read_text())
+    flat = dict(veins, normals=np.tile([0.0, 0.0, 1.0], (len(veins["positions"]), 1)))
+    for value in (0.0, -1.0, float("nan"), 1e300):
+        calls = (lambda: lamina.planarize(flat, height=value),
+                 lambda: lamina.solid(veins, radius=0.5, cell=value),
+                 lambda: lamina.slice(part, layer=value))
+        for call in calls:
+            with pytest.raises(lamina.LaminaError):
+                call()
