@@ -16,6 +16,7 @@
 //! these keep every vertex at least about `h/100` from every other and no triangle degenerate,
 //! even after rounding to the 32-bit floats of an STL file (checked again after meshing).
 
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
@@ -24,6 +25,8 @@ use rayon::prelude::*;
 
 use super::sdf::Primitive;
 use crate::mesh::TriMesh;
+
+mod adapt;
 
 /// Cells per brick side.
 const B: usize = 8;
@@ -73,6 +76,9 @@ struct Brick {
     inside: [u64; (P * P * P).div_ceil(64)],
     keys: Vec<u32>,
     positions: Vec<DVec3>,
+    /// Cells (local index `(i·B + j)·B + k`) where two veins that share no end come near each
+    /// other: a gap between them may be narrower than the grid (only when asked for).
+    close: Vec<u16>,
 }
 
 impl Brick {
@@ -107,13 +113,24 @@ fn corner(code: u8) -> [usize; 3] {
     ]
 }
 
-/// Meshes the union of `prims` on a grid of spacing `h`. `progress(done, total)` is called as
-/// bricks finish (from several threads).
+/// What `mesh_union` made besides the mesh.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Marched {
+    /// Grid cells split finer where veins come closer than the grid resolves.
+    pub cells_refined: usize,
+    /// Tetrahedra that still join two veins at the finest level (or past the budget).
+    pub gaps_left: usize,
+}
+
+/// Meshes the union of `prims` on a grid of spacing `h`; with `gaps`, cells where a gap between
+/// veins may be narrower than the grid are split finer until no tetrahedron bridges it
+/// (`adapt`). `progress(done, total)` is called as bricks finish (from several threads).
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,
+    gaps: bool,
     progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<TriMesh, MarchError> {
+) -> Result<(TriMesh, Marched), MarchError> {
     let band = 2.0 * h;
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -123,7 +140,7 @@ pub fn mesh_union(
         hi = hi.max(b);
     }
     if prims.is_empty() {
-        return Ok(TriMesh::default());
+        return Ok((TriMesh::default(), Marched::default()));
     }
     let origin = lo - DVec3::splat(2.0 * band);
     let size = hi - lo + DVec3::splat(4.0 * band);
@@ -193,7 +210,7 @@ pub fn mesh_union(
                 .iter()
                 .map(|&p| &prims[p as usize])
                 .collect();
-            let b = evaluate(&grid, *key, &own, band);
+            let b = evaluate(&grid, *key, &own, band, gaps);
             tick();
             b
         })
@@ -210,10 +227,55 @@ pub fn mesh_union(
         return Err(MarchError::TooManyVertices(count));
     }
     let keys: Vec<u64> = bricks.iter().map(|b| b.key).collect();
+
+    // Where veins come close: bisected tetrahedra replace those cells' own.
+    let mut marched = Marched::default();
+    let mut fine: Option<(Vec<DVec3>, Vec<[u32; 3]>, HashSet<[usize; 3]>)> = None;
+    if gaps {
+        let field = GridField {
+            groups: &groups,
+            members: &members,
+            bricks: &bricks,
+            keys: &keys,
+        };
+        let mut refine = adapt::Adapt::new(&grid, prims, &field, band);
+        for b in &bricks {
+            let base = unpack(b.key).map(|c| c * B);
+            for &c in &b.close {
+                let c = c as usize;
+                refine.bring([base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B]);
+            }
+        }
+        refine.run()?;
+        let (positions, tris) = fine_triangles(&mut refine, &bricks, &keys, &offsets, count)?;
+        marched.gaps_left = refine.left;
+        let cells = std::mem::take(&mut refine.cells);
+        // Only cells something was cut in count as refined.
+        let mut cut: HashSet<[usize; 3]> = HashSet::new();
+        for t in refine.tets.iter().filter(|t| t.alive) {
+            if t.v.iter().any(|p| adapt::grid_point(*p).is_none()) {
+                let lo = [0, 1, 2].map(|a| t.v.iter().map(|p| p[a]).min().unwrap_or(0));
+                cut.insert(lo.map(|c| (c / adapt::SCALE) as usize));
+            }
+        }
+        marched.cells_refined = cut.len();
+        fine = Some((positions, tris, cells));
+    }
+    let (explicit, explicit_bricks) = match &fine {
+        Some((_, _, cells)) => (
+            Some(cells),
+            cells
+                .iter()
+                .map(|c| pack(c.map(|x| x / B)))
+                .collect::<HashSet<u64>>(),
+        ),
+        None => (None, HashSet::new()),
+    };
     let parts: Vec<Result<Vec<[u32; 3]>, MarchError>> = (0..bricks.len())
         .into_par_iter()
         .map(|i| {
-            let t = triangles(&bricks, &keys, &offsets, i);
+            let skip = explicit.filter(|_| explicit_bricks.contains(&bricks[i].key));
+            let t = triangles(&bricks, &keys, &offsets, i, skip);
             tick();
             t
         })
@@ -227,11 +289,132 @@ pub fn mesh_union(
     for b in bricks {
         positions.extend(b.positions);
     }
-    Ok(TriMesh {
+    let mut mesh = TriMesh {
         positions,
         triangles: triangles_out,
         colors: None,
-    })
+    };
+    if let Some((extra, tris, _)) = fine {
+        mesh.positions.extend(extra);
+        mesh.triangles.extend(tris);
+        drop_unused(&mut mesh);
+    }
+    Ok((mesh, marched))
+}
+
+/// The grid's pieces and signs, for `adapt`.
+struct GridField<'a> {
+    groups: &'a [(u64, std::ops::Range<usize>)],
+    members: &'a [u32],
+    bricks: &'a [Brick],
+    keys: &'a [u64],
+}
+
+impl adapt::Field for GridField<'_> {
+    fn near(&self, cell: [usize; 3]) -> &[u32] {
+        let key = pack(cell.map(|c| c / B));
+        match self.groups.binary_search_by_key(&key, |g| g.0) {
+            Ok(i) => &self.members[self.groups[i].1.clone()],
+            Err(_) => &[],
+        }
+    }
+
+    fn grid_inside(&self, g: [usize; 3]) -> Option<bool> {
+        // A point on a brick's lower face is also the top face of the brick below.
+        for code in 0..8u8 {
+            let o = corner(code);
+            if (0..3).any(|a| o[a] == 1 && (g[a] % B != 0 || g[a] < B)) {
+                continue;
+            }
+            let b = [0, 1, 2].map(|a| g[a] / B - o[a]);
+            if let Ok(i) = self.keys.binary_search(&pack(b)) {
+                let l = [0, 1, 2].map(|a| g[a] - b[a] * B);
+                return Some(self.bricks[i].is_inside(local(l[0], l[1], l[2])));
+            }
+        }
+        None
+    }
+}
+
+/// The marched triangles of the bisected tetrahedra: vertices on grid edges are the bricks'
+/// own (indices below `count`), the others new (numbered from `count`, returned).
+fn fine_triangles<F: adapt::Field>(
+    refine: &mut adapt::Adapt<F>,
+    bricks: &[Brick],
+    keys: &[u64],
+    offsets: &[usize],
+    count: usize,
+) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), MarchError> {
+    let mut positions = Vec::new();
+    let mut made: HashMap<(adapt::Pt, adapt::Pt), u32> = HashMap::new();
+    let mut out = Vec::new();
+    for id in 0..refine.tets.len() {
+        let t = refine.tets[id];
+        if !t.alive {
+            continue;
+        }
+        let mut mask = 0usize;
+        for (i, &p) in t.v.iter().enumerate() {
+            if refine.inside(p) {
+                mask |= 1 << i;
+            }
+        }
+        if mask == 0 || mask == 15 {
+            continue;
+        }
+        for tri in cases_at(&t.v, mask) {
+            let mut ids = [0u32; 3];
+            for (slot, &[i, j]) in ids.iter_mut().zip(&tri) {
+                let (p, q) = (t.v[i as usize], t.v[j as usize]);
+                *slot = if let Some((lo, dir)) = adapt::grid_edge(p, q) {
+                    grid_vertex(bricks, keys, offsets, lo, dir)?
+                } else {
+                    let key = if p <= q { (p, q) } else { (q, p) };
+                    match made.get(&key) {
+                        Some(&v) => v,
+                        None => {
+                            let (a, b) = if mask >> i & 1 == 1 { (p, q) } else { (q, p) };
+                            let (fa, fb) = (refine.signed(a), refine.signed(b));
+                            let (xa, xb) = (refine.position(a), refine.position(b));
+                            let cell = [0, 1, 2].map(|k| (a[k].min(b[k]) / adapt::SCALE) as usize);
+                            let eps = refine.eps_at(a).min(refine.eps_at(b));
+                            let f = |x: DVec3| refine.value(x, cell);
+                            let v = (count + positions.len()) as u32;
+                            positions.push(crossing(xa, fa, xb, fb, &f, eps));
+                            made.insert(key, v);
+                            v
+                        }
+                    }
+                };
+            }
+            out.push(ids);
+        }
+    }
+    if count + positions.len() > u32::MAX as usize {
+        return Err(MarchError::TooManyVertices(count + positions.len()));
+    }
+    Ok((positions, out))
+}
+
+/// Drops the vertices no triangle uses (those of grid edges the bisected cells cut).
+fn drop_unused(mesh: &mut TriMesh) {
+    let mut index = vec![u32::MAX; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            index[v as usize] = 0;
+        }
+    }
+    let mut positions = Vec::with_capacity(mesh.positions.len());
+    for (v, p) in mesh.positions.iter().enumerate() {
+        if index[v] == 0 {
+            index[v] = positions.len() as u32;
+            positions.push(*p);
+        }
+    }
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| index[v as usize]);
+    }
+    mesh.positions = positions;
 }
 
 /// Grid points within the box `a..b`, as an inclusive index range per axis (clamped).
@@ -250,8 +433,9 @@ fn point_range(grid: &Grid, a: DVec3, b: DVec3) -> [(usize, usize); 3] {
     ]
 }
 
-/// Samples one brick; `None` when the surface does not pass through it.
-fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Brick> {
+/// Samples one brick; `None` when the surface does not pass through it (and, with `gaps`, no
+/// two veins come close in it).
+fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) -> Option<Brick> {
     let bk = unpack(key);
     let base = bk.map(|b| b * B);
     let h = grid.h;
@@ -270,7 +454,10 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
 
     let last = grid.points.map(|n| n - 1);
     let mut values = [f64::INFINITY; P * P * P];
-    for prim in prims {
+    // Which piece gave each value (its index in `prims`).
+    let mut which = [u16::MAX; P * P * P];
+    for (n, prim) in prims.iter().enumerate() {
+        let n = n.min(u16::MAX as usize - 1) as u16;
         let (a, b) = prim.bounds();
         let range = point_range(grid, a - DVec3::splat(band), b + DVec3::splat(band));
         let span = |axis: usize| {
@@ -292,20 +479,26 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
                         let across = s.outline.signed_distance(p.truncate(), band);
                         for z in z0..=z1 {
                             let v = s.with_across(across, grid.origin.z + z as f64 * h);
-                            let slot = &mut values[column + z - base[2]];
-                            *slot = slot.min(v);
+                            let at = column + z - base[2];
+                            if v < values[at] {
+                                values[at] = v;
+                                which[at] = n;
+                            }
                         }
                     }
                     _ => {
                         for z in z0..=z1 {
-                            let slot = &mut values[column + z - base[2]];
+                            let at = column + z - base[2];
                             // Already deep inside: no crossing edge ends here (the surface is
                             // more than an edge away), so its exact value no longer matters.
-                            if *slot <= -band {
+                            if values[at] <= -band {
                                 continue;
                             }
                             let v = prim.eval(grid.at([x, y, z]), band);
-                            *slot = slot.min(v);
+                            if v < values[at] {
+                                values[at] = v;
+                                which[at] = n;
+                            }
                         }
                     }
                 }
@@ -325,7 +518,12 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
             any_out = true;
         }
     }
-    if !(any_in && any_out) {
+    let close = if gaps {
+        close_cells(&values, &which, prims, h, band)
+    } else {
+        Vec::new()
+    };
+    if !(any_in && any_out) && close.is_empty() {
         return None;
     }
 
@@ -366,7 +564,61 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64) -> Option<Br
         inside,
         keys,
         positions,
+        close,
     })
+}
+
+/// The brick's cells near the surface whose corners are nearest to two veins that share no
+/// end: a gap between them may be narrower than a cell (`adapt` looks closer).
+fn close_cells(
+    values: &[f64; P * P * P],
+    which: &[u16; P * P * P],
+    prims: &[&Primitive],
+    h: f64,
+    band: f64,
+) -> Vec<u16> {
+    let reach = 3f64.sqrt() * h;
+    let mut out = Vec::new();
+    for i in 0..B {
+        for j in 0..B {
+            for k in 0..B {
+                let mut near = [u16::MAX; 8];
+                let mut deep = false;
+                for (c, slot) in near.iter_mut().enumerate() {
+                    let d = corner(c as u8);
+                    let lp = local(i + d[0], j + d[1], k + d[2]);
+                    deep |= values[lp] <= -band;
+                    if values[lp] < reach {
+                        *slot = which[lp];
+                    }
+                }
+                if deep {
+                    continue;
+                }
+                let apart = near.iter().enumerate().any(|(a, &p)| {
+                    near[a + 1..]
+                        .iter()
+                        .any(|&q| p != q && p != u16::MAX && q != u16::MAX && apart(prims, p, q))
+                });
+                if apart {
+                    out.push(((i * B + j) * B + k) as u16);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Two veins that share no end (other pieces are never told apart).
+fn apart(prims: &[&Primitive], p: u16, q: u16) -> bool {
+    let (Some(Primitive::Cone(a)), Some(Primitive::Cone(b))) =
+        (prims.get(p as usize), prims.get(q as usize))
+    else {
+        return false;
+    };
+    let (a0, _, a1, _) = a.balls();
+    let (b0, _, b1, _) = b.balls();
+    a0 != b0 && a0 != b1 && a1 != b0 && a1 != b1
 }
 
 /// The most regula falsi steps to a vertex (most stop after two or three).
@@ -404,37 +656,45 @@ fn crossing(a: DVec3, fa: f64, b: DVec3, fb: f64, f: &impl Fn(DVec3) -> f64, eps
     a.lerp(b, t.clamp(margin, 1.0 - margin))
 }
 
-/// The triangles of brick `i`, with vertex indices into the concatenated vertex lists.
+/// The index of the vertex on the grid edge from point `g` along direction code `dir`: made by
+/// the brick that holds `g` as one of its own points.
+fn grid_vertex(
+    bricks: &[Brick],
+    keys: &[u64],
+    offsets: &[usize],
+    g: [usize; 3],
+    dir: u8,
+) -> Result<u32, MarchError> {
+    let nk = pack(g.map(|c| c / B));
+    let owner = keys.binary_search(&nk).map_err(|_| {
+        MarchError::Internal(format!(
+            "brick {:?} missing for a shared vertex",
+            unpack(nk)
+        ))
+    })?;
+    let lo = g.map(|c| c % B);
+    let key = (local(lo[0], lo[1], lo[2]) * 8 + dir as usize) as u32;
+    let at = bricks[owner].keys.binary_search(&key).map_err(|_| {
+        MarchError::Internal(format!(
+            "no vertex on edge {dir} at {lo:?} of brick {:?}",
+            unpack(bricks[owner].key)
+        ))
+    })?;
+    Ok((offsets[owner] + at) as u32)
+}
+
+/// The triangles of brick `i`, with vertex indices into the concatenated vertex lists; cells in
+/// `skip` are left out (bisected tetrahedra mesh them).
 fn triangles(
     bricks: &[Brick],
     keys: &[u64],
     offsets: &[usize],
     i: usize,
+    skip: Option<&HashSet<[usize; 3]>>,
 ) -> Result<Vec<[u32; 3]>, MarchError> {
     let brick = &bricks[i];
-    let bk = unpack(brick.key);
+    let base = unpack(brick.key).map(|c| c * B);
     let table = table();
-    let vertex = |origin: [usize; 3], dir: u8| -> Result<u32, MarchError> {
-        let (mut owner, mut lo) = (i, origin);
-        if origin.contains(&B) {
-            let nk = pack([0, 1, 2].map(|a| bk[a] + origin[a] / B));
-            owner = keys.binary_search(&nk).map_err(|_| {
-                MarchError::Internal(format!(
-                    "brick {:?} missing for a shared vertex",
-                    unpack(nk)
-                ))
-            })?;
-            lo = origin.map(|c| c % B);
-        }
-        let key = (local(lo[0], lo[1], lo[2]) * 8 + dir as usize) as u32;
-        let at = bricks[owner].keys.binary_search(&key).map_err(|_| {
-            MarchError::Internal(format!(
-                "no vertex on edge {dir} at {lo:?} of brick {:?}",
-                unpack(bricks[owner].key)
-            ))
-        })?;
-        Ok((offsets[owner] + at) as u32)
-    };
     let mut out = Vec::new();
     for x in 0..B {
         for y in 0..B {
@@ -449,14 +709,22 @@ fn triangles(
                 if mask == 0 || mask == 0xff {
                     continue;
                 }
+                let cell = [base[0] + x, base[1] + y, base[2] + z];
+                if skip.is_some_and(|s| s.contains(&cell)) {
+                    continue;
+                }
                 for (t, tet) in TETS.iter().enumerate() {
                     let m = (0..4).fold(0usize, |m, v| m | (((mask >> tet[v]) & 1) as usize) << v);
                     for tri in &table[t * 16 + m] {
                         let mut ids = [0u32; 3];
                         for (slot, &[vi, vj]) in ids.iter_mut().zip(tri) {
                             let o = corner(tet[vi as usize]);
-                            *slot = vertex(
-                                [x + o[0], y + o[1], z + o[2]],
+                            let g = [0, 1, 2].map(|a| cell[a] + o[a]);
+                            *slot = grid_vertex(
+                                bricks,
+                                keys,
+                                offsets,
+                                g,
                                 tet[vi as usize] ^ tet[vj as usize],
                             )?;
                         }
@@ -498,6 +766,13 @@ fn table() -> &'static Table {
 }
 
 fn cases(tet: &[u8; 4], mask: usize) -> Vec<[[u8; 2]; 3]> {
+    let at = tet.map(|code| corner(code).map(|c| c as i64));
+    cases_at(&at, mask)
+}
+
+/// The marched triangles of a tetrahedron with corners `at` (integer coordinates) and
+/// inside-mask `mask`, as pairs of corners, wound so their normals point outside.
+fn cases_at(at: &[[i64; 3]; 4], mask: usize) -> Vec<[[u8; 2]; 3]> {
     let ins: Vec<u8> = (0..4).filter(|v| mask >> v & 1 == 1).collect();
     let outs: Vec<u8> = (0..4).filter(|v| mask >> v & 1 == 0).collect();
     let edge = |a: u8, b: u8| [a.min(b), a.max(b)];
@@ -510,9 +785,12 @@ fn cases(tet: &[u8; 4], mask: usize) -> Vec<[[u8; 2]; 3]> {
         }
         _ => return Vec::new(),
     };
-    // Orientation from the exact midpoint geometry (doubled integer coordinates): the normal
-    // must point from the inside corners to the outside ones.
-    let pos = |v: u8| corner(tet[v as usize]).map(|c| c as i64);
+    // Orientation from the exact midpoint geometry (doubled integer coordinates, relative to
+    // the first corner): the normal must point from the inside corners to the outside ones.
+    let pos = |v: u8| {
+        let p = at[v as usize];
+        [p[0] - at[0][0], p[1] - at[0][1], p[2] - at[0][2]]
+    };
     let mid = |e: [u8; 2]| {
         let (p, q) = (pos(e[0]), pos(e[1]));
         [p[0] + q[0], p[1] + q[1], p[2] + q[2]]
@@ -535,7 +813,7 @@ fn cases(tet: &[u8; 4], mask: usize) -> Vec<[[u8; 2]; 3]> {
     let (ni, no) = (ins.len() as i64, outs.len() as i64);
     let away = [0, 1, 2].map(|a| so[a] * ni - si[a] * no);
     let dot = n[0] * away[0] + n[1] * away[1] + n[2] * away[2];
-    debug_assert!(dot != 0, "degenerate case {tet:?} {mask}");
+    debug_assert!(dot != 0, "degenerate case {at:?} {mask}");
     let mut polygon = polygon;
     if dot < 0 {
         polygon.reverse();
@@ -572,7 +850,7 @@ mod tests {
             1.0,
             1.0,
         ))];
-        let mesh = mesh_union(&ball, 0.05, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ball, 0.05, false, &|_, _| {}).unwrap();
         let topo = mesh.check_manifold();
         assert!(
             topo.is_manifold(),
@@ -600,7 +878,7 @@ mod tests {
                 Primitive::Cone(RoundCone::new(at(i), at((i + 1) % n), 0.3, 0.4))
             })
             .collect();
-        let mesh = mesh_union(&ring, 0.07, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ring, 0.07, false, &|_, _| {}).unwrap();
         let topo = mesh.check_manifold();
         assert!(topo.is_manifold());
         assert_eq!((topo.components, topo.genus), (1, Some(1)));

@@ -408,7 +408,8 @@ pub fn solid_of(
             cell: opts.cell,
         });
     }
-    let mut mesh = march::mesh_union(&prims, opts.cell, progress)?;
+    let (mut mesh, marched) =
+        march::mesh_union(&prims, opts.cell, opts.tolerance.is_some(), progress)?;
     if mesh.triangles.is_empty() {
         let thickest = ends.iter().flatten().copied().fold(0.0, f64::max);
         return Err(SolidError::Vanished {
@@ -421,7 +422,10 @@ pub fn solid_of(
         let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
         // A marched edge spans at most a cell's diagonal.
         let spacing = 3f64.sqrt() * opts.cell;
-        simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress)
+        let mut done = simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress);
+        done.cells_split = marched.cells_refined;
+        done.gaps_left = marched.gaps_left;
+        done
     });
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
     let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
@@ -450,6 +454,14 @@ pub fn solid_of(
             "the thinnest vein (radius {min_radius:.4} mm) is thinner than the cell \
              ({:.4} mm): it may break up; use a smaller --cell or a larger --fit",
             opts.cell
+        ));
+    }
+    if let Some(s) = simplified.as_ref().filter(|s| s.gaps_left > 0) {
+        warnings.push(format!(
+            "{} tetrahedra still join veins across a gap at the finest split (1/16 of the \
+             cell): there the mesh bridges a gap narrower than {:.2} µm",
+            s.gaps_left,
+            1000.0 * opts.cell / 16.0
         ));
     }
     let genus = topo.genus.unwrap_or(0);

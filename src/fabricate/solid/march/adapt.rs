@@ -1,0 +1,476 @@
+//! Gaps narrower than the grid: tetrahedra bisected until the mesh no longer bridges them.
+//!
+//! Two veins a few µm apart are both sampled inside at the corners of one tetrahedron, and
+//! marching joins them: the mesh closes a gap the exact union has. A tetrahedron bridges a gap
+//! when two of its inside corners lie in pieces that the segment between them leaves (it runs
+//! out of the one before it enters the other: each piece is convex, so this is exact along the
+//! segment). Such tetrahedra are bisected until none is left or the finest level is reached;
+//! where no two inside corners are apart, the tetrahedron's inside is covered by its pieces (two
+//! convex pieces that cover a tetrahedron's edges cover the tetrahedron; with three or more, the
+//! centre of the inside corners is checked too).
+//!
+//! Bisection follows Maubach's rule on the Kuhn split: a tetrahedron is an ordered list of
+//! corners x0..x3 and a tag k; it is cut at the midpoint z of x0 and xk into (x0..xk−1, z,
+//! xk+1..x3) and (x1..xk, z, xk+1..x3), whose tag is k − 1 (3 after 1). A cell's six Kuhn
+//! tetrahedra are monotone paths from its lowest corner to its highest, tag 3: three cuts make
+//! the Kuhn tetrahedra of a grid half as fine. Before an edge is cut, every tetrahedron holding
+//! it is refined until the edge is its own cut edge too, and all are cut at once (the cells
+//! around a grid edge are brought in as six tetrahedra each when first needed), so tetrahedra
+//! meet face to face and the marched surface stays a closed manifold: each of its edges lies on
+//! a face two tetrahedra share.
+//!
+//! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
+//! `eps / FINE` below zero.
+
+use std::collections::{HashMap, HashSet};
+
+use glam::DVec3;
+
+use super::{corner, Grid, MarchError, TETS};
+use crate::fabricate::solid::sdf::Primitive;
+
+/// A point in fine units: `SCALE` per grid cell.
+pub(super) type Pt = [i64; 3];
+
+/// Bisections are possible down to cells `1 / SCALE` of the grid's. Three cuts halve a cell, so
+/// `LEVELS` cuts reach 1/16 of the grid cell (2.2 µm at 35 µm); `SCALE` leaves room for the
+/// few extra cuts that keeping neighbours matched can ask.
+pub(super) const SCALE: i64 = 64;
+const LEVELS: u8 = 12;
+/// The most tetrahedra made; past it the gaps left are left bridged (and counted).
+const MAX_TETS: usize = 30_000_000;
+
+/// What a corner is: its value, its side, and the pieces holding it.
+#[derive(Clone)]
+struct Sample {
+    f: f64,
+    inside: bool,
+    pieces: Vec<u32>,
+}
+
+#[derive(Clone, Copy)]
+pub(super) struct Tet {
+    pub v: [Pt; 4],
+    tag: u8,
+    level: u8,
+    pub alive: bool,
+}
+
+fn edge_key(a: Pt, b: Pt) -> (Pt, Pt) {
+    if a <= b {
+        (a, b)
+    } else {
+        (b, a)
+    }
+}
+
+/// The field near the grid: which pieces can reach a point, and the grid's signs.
+pub(super) trait Field {
+    /// Indices of the pieces that may reach `cell`'s neighbourhood (all others are far outside).
+    fn near(&self, cell: [usize; 3]) -> &[u32];
+    /// The sign the grid gave grid point `g`, when a brick holding it was sampled.
+    fn grid_inside(&self, g: [usize; 3]) -> Option<bool>;
+}
+
+pub(super) struct Adapt<'a, F: Field> {
+    grid: &'a Grid,
+    prims: &'a [Primitive],
+    field: &'a F,
+    band: f64,
+    eps: f64,
+    samples: HashMap<Pt, Sample>,
+    pub tets: Vec<Tet>,
+    edges: HashMap<(Pt, Pt), Vec<u32>>,
+    pub cells: HashSet<[usize; 3]>,
+    work: Vec<u32>,
+    /// Tetrahedra that still bridge a gap at the finest level or past the budget.
+    pub left: usize,
+}
+
+impl<'a, F: Field> Adapt<'a, F> {
+    pub fn new(grid: &'a Grid, prims: &'a [Primitive], field: &'a F, band: f64) -> Self {
+        Adapt {
+            grid,
+            prims,
+            field,
+            band,
+            eps: 0.01 * grid.h,
+            samples: HashMap::new(),
+            tets: Vec::new(),
+            edges: HashMap::new(),
+            cells: HashSet::new(),
+            work: Vec::new(),
+            left: 0,
+        }
+    }
+
+    pub fn position(&self, p: Pt) -> DVec3 {
+        self.grid.origin
+            + DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64) * self.grid.h / SCALE as f64
+    }
+
+    fn cell_of(&self, p: Pt) -> [usize; 3] {
+        [0, 1, 2].map(|a| {
+            let c = (p[a].max(0) / SCALE) as usize;
+            c.min(self.grid.points[a].saturating_sub(2))
+        })
+    }
+
+    /// The exact value at `x`, a point of `cell`.
+    pub fn value(&self, x: DVec3, cell: [usize; 3]) -> f64 {
+        self.field
+            .near(cell)
+            .iter()
+            .map(|&i| self.prims[i as usize].eval(x, self.band))
+            .fold(self.band, f64::min)
+    }
+
+    /// The threshold below zero at which a point of fine units counts as inside.
+    pub fn eps_at(&self, p: Pt) -> f64 {
+        if p.iter().all(|c| c % SCALE == 0) {
+            self.eps
+        } else {
+            self.eps / SCALE as f64
+        }
+    }
+
+    fn sample(&mut self, p: Pt) -> &Sample {
+        if !self.samples.contains_key(&p) {
+            let x = self.position(p);
+            let cell = self.cell_of(p);
+            let eps = self.eps_at(p);
+            let mut f = self.band;
+            let mut pieces = Vec::new();
+            for &i in self.field.near(cell) {
+                let v = self.prims[i as usize].eval(x, self.band);
+                f = f.min(v);
+                if v <= -eps {
+                    pieces.push(i);
+                }
+            }
+            let on_grid = p.iter().all(|c| c % SCALE == 0);
+            let inside = on_grid
+                .then(|| self.field.grid_inside(p.map(|c| (c / SCALE) as usize)))
+                .flatten()
+                .unwrap_or(f <= -eps);
+            if !inside {
+                pieces.clear();
+            }
+            self.samples.insert(p, Sample { f, inside, pieces });
+        }
+        &self.samples[&p]
+    }
+
+    /// Whether fine point `p` counts as inside.
+    pub fn inside(&mut self, p: Pt) -> bool {
+        self.sample(p).inside
+    }
+
+    /// The value the sign was taken from at `p`, pushed off zero to its side.
+    pub fn signed(&mut self, p: Pt) -> f64 {
+        let eps = self.eps_at(p);
+        let s = self.sample(p);
+        if s.inside {
+            s.f.min(-eps)
+        } else {
+            s.f.max(eps)
+        }
+    }
+
+    fn add(&mut self, t: Tet) {
+        let id = self.tets.len() as u32;
+        for (a, b) in pairs() {
+            self.edges
+                .entry(edge_key(t.v[a], t.v[b]))
+                .or_default()
+                .push(id);
+        }
+        self.tets.push(t);
+        self.work.push(id);
+    }
+
+    fn kill(&mut self, id: u32) {
+        let t = &mut self.tets[id as usize];
+        t.alive = false;
+        let v = t.v;
+        for (a, b) in pairs() {
+            if let Some(list) = self.edges.get_mut(&edge_key(v[a], v[b])) {
+                list.retain(|&u| u != id);
+            }
+        }
+    }
+
+    /// Brings in cell `c` as its six Kuhn tetrahedra.
+    pub fn bring(&mut self, c: [usize; 3]) {
+        if (0..3).any(|a| c[a] + 1 >= self.grid.points[a]) || !self.cells.insert(c) {
+            return;
+        }
+        for tet in &TETS {
+            let v = tet.map(|code| {
+                let o = corner(code);
+                [0, 1, 2].map(|a| (c[a] + o[a]) as i64 * SCALE)
+            });
+            self.add(Tet {
+                v,
+                tag: 3,
+                level: 0,
+                alive: true,
+            });
+        }
+    }
+
+    fn cut_edge(&self, id: u32) -> (Pt, Pt) {
+        let t = &self.tets[id as usize];
+        edge_key(t.v[0], t.v[t.tag as usize])
+    }
+
+    /// The live tetrahedra holding edge `e`, bringing in the cells around it if it is a grid
+    /// edge.
+    fn around(&mut self, e: (Pt, Pt)) -> Vec<u32> {
+        let (p, q) = e;
+        let d = [0, 1, 2].map(|a| q[a] - p[a]);
+        let on_grid = p.iter().chain(&q).all(|c| c % SCALE == 0);
+        if on_grid && d.iter().all(|&x| x == 0 || x == SCALE) {
+            let g = p.map(|c| (c / SCALE) as usize);
+            for code in 0..8u8 {
+                let o = corner(code);
+                if (0..3).any(|a| o[a] == 1 && (d[a] != 0 || g[a] == 0)) {
+                    continue;
+                }
+                self.bring([0, 1, 2].map(|a| g[a] - o[a]));
+            }
+        }
+        self.edges.get(&e).cloned().unwrap_or_default()
+    }
+
+    fn bisect(&mut self, id: u32) -> Result<(), MarchError> {
+        let t = self.tets[id as usize];
+        let k = t.tag as usize;
+        let (a, b) = (t.v[0], t.v[k]);
+        if (0..3).any(|i| (a[i] + b[i]) % 2 != 0) {
+            return Err(MarchError::Internal(
+                "a tetrahedron was cut finer than the fine grid".into(),
+            ));
+        }
+        let z = [0, 1, 2].map(|i| (a[i] + b[i]) / 2);
+        let tag = if k == 1 { 3 } else { t.tag - 1 };
+        let mut first = t.v;
+        first[k] = z;
+        let mut second = t.v;
+        second[..k].copy_from_slice(&t.v[1..=k]);
+        second[k] = z;
+        self.kill(id);
+        for v in [first, second] {
+            self.add(Tet {
+                v,
+                tag,
+                level: t.level + 1,
+                alive: true,
+            });
+        }
+        Ok(())
+    }
+
+    /// Cuts tetrahedron `id` at its cut edge, with every tetrahedron that holds the edge.
+    fn refine(&mut self, id: u32, depth: usize) -> Result<(), MarchError> {
+        if depth > 64 {
+            return Err(MarchError::Internal(
+                "matching a bisection with its neighbours did not end".into(),
+            ));
+        }
+        let e = self.cut_edge(id);
+        loop {
+            let around = self.around(e);
+            if let Some(&u) = around.iter().find(|&&u| self.cut_edge(u) != e) {
+                self.refine(u, depth + 1)?;
+                continue;
+            }
+            for u in around {
+                self.bisect(u)?;
+            }
+            return Ok(());
+        }
+    }
+
+    /// Bisects until no tetrahedron bridges a gap (or the finest level or the budget is reached).
+    pub fn run(&mut self) -> Result<(), MarchError> {
+        while let Some(id) = self.work.pop() {
+            let t = self.tets[id as usize];
+            if !t.alive || !self.bridges(id) {
+                continue;
+            }
+            if t.level >= LEVELS || self.tets.len() > MAX_TETS {
+                self.left += 1;
+                continue;
+            }
+            self.refine(id, 0)?;
+        }
+        Ok(())
+    }
+
+    /// Whether the inside of tetrahedron `id`, as marching makes it (one piece, the hull of its
+    /// inside corners and crossings), holds points outside the union.
+    fn bridges(&mut self, id: u32) -> bool {
+        let v = self.tets[id as usize].v;
+        let s: Vec<Sample> = v.iter().map(|&p| self.sample(p).clone()).collect();
+        let ins: Vec<usize> = (0..4).filter(|&i| s[i].inside).collect();
+        if ins.len() < 2 {
+            return false;
+        }
+        let x = v.map(|p| self.position(p));
+        let longest = pairs()
+            .map(|(a, b)| x[a].distance(x[b]))
+            .fold(0.0, f64::max);
+        if ins.iter().any(|&i| s[i].f <= -longest) {
+            return false;
+        }
+        let common = s[ins[0]]
+            .pieces
+            .iter()
+            .any(|p| ins.iter().all(|&i| s[i].pieces.contains(p)));
+        if common {
+            return false;
+        }
+        let cell = self.cell_of(v[0]);
+        for (n, &i) in ins.iter().enumerate() {
+            for &j in &ins[n + 1..] {
+                if s[i].pieces.iter().any(|p| s[j].pieces.contains(p)) {
+                    continue;
+                }
+                if !self.joined(x[i], &s[i].pieces, x[j], &s[j].pieces) {
+                    return true;
+                }
+            }
+        }
+        if ins.len() > 2 {
+            let centre = ins.iter().map(|&i| x[i]).sum::<DVec3>() / ins.len() as f64;
+            return self.value(centre, cell) > 0.0;
+        }
+        false
+    }
+
+    /// Whether the segment from `a` (in each of `pa`) to `b` (in each of `pb`) stays in the
+    /// union of one piece of each: it must enter the second before it leaves the first.
+    fn joined(&self, a: DVec3, pa: &[u32], b: DVec3, pb: &[u32]) -> bool {
+        pa.iter().any(|&p| {
+            let first = &self.prims[p as usize];
+            let g = |t: f64| first.eval(a.lerp(b, t), self.band);
+            if g(1.0) <= 0.0 {
+                return true;
+            }
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..30 {
+                let mid = 0.5 * (lo + hi);
+                if g(mid) <= 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let exit = a.lerp(b, lo);
+            pb.iter()
+                .any(|&q| self.prims[q as usize].eval(exit, self.band) <= 0.0)
+        })
+    }
+}
+
+/// A tetrahedron's six edges as corner pairs.
+pub(super) fn pairs() -> impl Iterator<Item = (usize, usize)> {
+    (0..4).flat_map(|a| (a + 1..4).map(move |b| (a, b)))
+}
+
+/// The cell and corner offset of fine point `p` if it lies on the grid.
+pub(super) fn grid_point(p: Pt) -> Option<[usize; 3]> {
+    p.iter()
+        .all(|&c| c >= 0 && c % SCALE == 0)
+        .then(|| p.map(|c| (c / SCALE) as usize))
+}
+
+/// For a grid edge (both ends on the grid, one cell step along a subset of axes, low to high):
+/// its low end and direction code.
+pub(super) fn grid_edge(p: Pt, q: Pt) -> Option<([usize; 3], u8)> {
+    let (gp, gq) = (grid_point(p)?, grid_point(q)?);
+    let (lo, hi) = if p <= q { (gp, gq) } else { (gq, gp) };
+    let mut dir = 0u8;
+    for a in 0..3 {
+        match hi[a] as i64 - lo[a] as i64 {
+            0 => {}
+            1 => dir |= 1 << a,
+            _ => return None,
+        }
+    }
+    (dir != 0).then_some((lo, dir))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    struct Empty;
+    impl Field for Empty {
+        fn near(&self, _: [usize; 3]) -> &[u32] {
+            &[]
+        }
+        fn grid_inside(&self, _: [usize; 3]) -> Option<bool> {
+            None
+        }
+    }
+
+    fn volume(v: &[Pt; 4]) -> i128 {
+        let d = |i: usize| [0, 1, 2].map(|a| (v[i][a] - v[0][a]) as i128);
+        let (a, b, c) = (d(1), d(2), d(3));
+        (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0]))
+            .abs()
+    }
+
+    /// Random local bisections leave tetrahedra that meet face to face: every face inside the
+    /// brought-in cells is shared by two, and a face held by one is a face of the grid's own
+    /// split (so the cells left out meet it whole).
+    #[test]
+    fn bisections_keep_the_tetrahedra_matched() {
+        let grid = Grid {
+            origin: DVec3::ZERO,
+            h: 1.0,
+            points: [10, 10, 10],
+        };
+        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0);
+        adapt.bring([4, 4, 4]);
+        let mut seed = 7u64;
+        for _ in 0..400 {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let live: Vec<u32> = (0..adapt.tets.len() as u32)
+                .filter(|&i| adapt.tets[i as usize].alive && adapt.tets[i as usize].level < 9)
+                .collect();
+            let id = live[(seed >> 33) as usize % live.len()];
+            adapt.refine(id, 0).unwrap();
+        }
+        let mut faces: HashMap<[Pt; 3], usize> = HashMap::new();
+        let mut total = 0i128;
+        for t in adapt.tets.iter().filter(|t| t.alive) {
+            total += volume(&t.v);
+            for skip in 0..4 {
+                let mut f: Vec<Pt> = (0..4).filter(|&i| i != skip).map(|i| t.v[i]).collect();
+                f.sort();
+                *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
+            }
+        }
+        // Six times the volume of the brought-in cells.
+        let cell = SCALE as i128;
+        assert_eq!(total, 6 * cell * cell * cell * adapt.cells.len() as i128);
+        assert!(adapt.cells.len() > 1, "closure brought in neighbours");
+        for (f, n) in &faces {
+            assert!(*n <= 2, "face {f:?} held {n} times");
+            let top = 9 * SCALE;
+            let on_border = (0..3).any(|a| f.iter().all(|p| p[a] == 0 || p[a] == top));
+            if *n == 1 && !on_border {
+                assert!(
+                    f.iter().all(|p| grid_point(*p).is_some()),
+                    "a lone face off the grid: {f:?}"
+                );
+            }
+        }
+    }
+}
