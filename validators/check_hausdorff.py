@@ -340,6 +340,7 @@ def main():
     ap.add_argument("--samples", type=int, default=200000)
     ap.add_argument("--min-reduction", type=float, default=0.0)
     ap.add_argument("--cell", type=float, help="the mesher's grid cell (default: the report's)")
+    ap.add_argument("--show", type=int, default=0, help="list this many of the worst gap points")
     a = ap.parse_args()
     report = json.load(open(a.report))
     net = json.load(open(a.network))
@@ -389,6 +390,10 @@ def main():
         if in_slot.any():
             slots.append(f"{name}: {int(in_slot.sum())} points, up to "
                          f"{float(d[in_slot].max()) * 1000:.2f} um")
+            if a.show:
+                for k in np.nonzero(in_slot)[0][np.argsort(-d[in_slot])][:a.show]:
+                    print(f"  {name} {d[k] * 1000:.2f} um at ({q[k][0]:.5f}, {q[k][1]:.5f}, "
+                          f"{q[k][2]:.5f})")
         rest = np.where(in_slot, 0.0, d)
         worst[name] = float(rest.max())
         if worst[name] > tol:

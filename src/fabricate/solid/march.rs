@@ -76,7 +76,7 @@ struct Brick {
     inside: [u64; (P * P * P).div_ceil(64)],
     keys: Vec<u32>,
     positions: Vec<DVec3>,
-    /// Cells (local index `(i·B + j)·B + k`) where two veins that share no end come near each
+    /// Cells (local index `(i·B + j)·B + k`) where two veins that do not touch come near each
     /// other: a gap between them may be narrower than the grid (only when asked for).
     close: Vec<u16>,
 }
@@ -568,8 +568,8 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) 
     })
 }
 
-/// The brick's cells near the surface whose corners are nearest to two veins that share no
-/// end: a gap between them may be narrower than a cell (`adapt` looks closer).
+/// The brick's cells near the surface whose corners are nearest to two veins that do not
+/// touch: the gap between them may be narrower than a cell (`adapt` looks closer).
 fn close_cells(
     values: &[f64; P * P * P],
     which: &[u16; P * P * P],
@@ -579,6 +579,8 @@ fn close_cells(
 ) -> Vec<u16> {
     let reach = 3f64.sqrt() * h;
     let mut out = Vec::new();
+    // Pairs of pieces already told apart or not.
+    let mut seen: Vec<((u16, u16), bool)> = Vec::new();
     for i in 0..B {
         for j in 0..B {
             for k in 0..B {
@@ -595,11 +597,21 @@ fn close_cells(
                 if deep {
                     continue;
                 }
-                let apart = near.iter().enumerate().any(|(a, &p)| {
-                    near[a + 1..]
-                        .iter()
-                        .any(|&q| p != q && p != u16::MAX && q != u16::MAX && apart(prims, p, q))
-                });
+                let mut apart = false;
+                for (a, &p) in near.iter().enumerate() {
+                    for &q in &near[a + 1..] {
+                        if p == q || p == u16::MAX || q == u16::MAX {
+                            continue;
+                        }
+                        let key = (p.min(q), p.max(q));
+                        let known = seen.iter().find(|s| s.0 == key).map(|s| s.1);
+                        apart |= known.unwrap_or_else(|| {
+                            let v = prims[p as usize].apart(prims[q as usize]);
+                            seen.push((key, v));
+                            v
+                        });
+                    }
+                }
                 if apart {
                     out.push(((i * B + j) * B + k) as u16);
                 }
@@ -607,18 +619,6 @@ fn close_cells(
         }
     }
     out
-}
-
-/// Two veins that share no end (other pieces are never told apart).
-fn apart(prims: &[&Primitive], p: u16, q: u16) -> bool {
-    let (Some(Primitive::Cone(a)), Some(Primitive::Cone(b))) =
-        (prims.get(p as usize), prims.get(q as usize))
-    else {
-        return false;
-    };
-    let (a0, _, a1, _) = a.balls();
-    let (b0, _, b1, _) = b.balls();
-    a0 != b0 && a0 != b1 && a1 != b0 && a1 != b1
 }
 
 /// The most regula falsi steps to a vertex (most stop after two or three).

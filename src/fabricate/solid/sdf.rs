@@ -56,6 +56,15 @@ impl Primitive {
         DVec3::new(e(DVec3::X), e(DVec3::Y), e(DVec3::Z)).normalize_or_zero()
     }
 
+    /// Whether two pieces are veins that do not touch: a gap lies between them. Other pieces
+    /// are never told apart.
+    pub fn apart(&self, other: &Primitive) -> bool {
+        match (self, other) {
+            (Primitive::Cone(a), Primitive::Cone(b)) => a.gap(b) > 0.0,
+            _ => false,
+        }
+    }
+
     /// Axis-aligned box holding the piece.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match self {
@@ -113,6 +122,32 @@ impl RoundCone {
         }
     }
 
+    /// How far apart the two cones are: the least of |A(s) − B(t)| − rA(s) − rB(t) over the
+    /// balls each cone is swept from (centres and radii linear along its axis), so negative
+    /// when they overlap. That function is convex in (s, t); it is minimised one parameter at a
+    /// time, by golden sections.
+    pub fn gap(&self, other: &RoundCone) -> f64 {
+        let f = |s: f64, t: f64| {
+            let p = self.a.lerp(self.b, s);
+            let q = other.a.lerp(other.b, t);
+            p.distance(q)
+                - (self.ra + (self.rb - self.ra) * s)
+                - (other.ra + (other.rb - other.ra) * t)
+        };
+        let (mut s, mut t) = (0.5, 0.5);
+        let mut best = f(s, t);
+        for _ in 0..6 {
+            s = golden(|x| f(x, t));
+            t = golden(|x| f(s, x));
+            let now = f(s, t);
+            if now < 0.0 || best - now < 1e-12 {
+                return now;
+            }
+            best = now;
+        }
+        best
+    }
+
     /// The two balls: (centre a, radius a, centre b, radius b).
     pub fn balls(&self) -> (DVec3, f64, DVec3, f64) {
         (self.a, self.ra, self.b, self.rb)
@@ -164,6 +199,33 @@ impl RoundCone {
             t * self.sin + q * self.cos - self.ra
         }
     }
+}
+
+/// Where a convex function of one variable is least on [0, 1] (to about 1e-9).
+fn golden(f: impl Fn(f64) -> f64) -> f64 {
+    let k = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut lo, mut hi) = (0.0, 1.0);
+    let (mut x1, mut x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..44 {
+        if f1 <= f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - k * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + k * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    let m = 0.5 * (lo + hi);
+    // The ends, where the least may sit.
+    [0.0, m, 1.0]
+        .into_iter()
+        .min_by(|&a, &b| f(a).total_cmp(&f(b)))
+        .unwrap_or(m)
 }
 
 /// A capped cylinder from `base` along the unit `axis` for `height`.

@@ -83,6 +83,8 @@ pub(super) struct Adapt<'a, F: Field> {
     edges: HashMap<(Pt, Pt), Vec<u32>>,
     pub cells: HashSet<[usize; 3]>,
     work: Vec<u32>,
+    /// Pairs of pieces told apart (a gap between them) or not.
+    apart: HashMap<(u32, u32), bool>,
     /// Tetrahedra that still bridge a gap at the finest level or past the budget.
     pub left: usize,
 }
@@ -100,6 +102,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             edges: HashMap::new(),
             cells: HashSet::new(),
             work: Vec::new(),
+            apart: HashMap::new(),
             left: 0,
         }
     }
@@ -331,22 +334,80 @@ impl<'a, F: Field> Adapt<'a, F> {
         if common {
             return false;
         }
-        let cell = self.cell_of(v[0]);
         for (n, &i) in ins.iter().enumerate() {
             for &j in &ins[n + 1..] {
                 if s[i].pieces.iter().any(|p| s[j].pieces.contains(p)) {
                     continue;
                 }
-                if !self.joined(x[i], &s[i].pieces, x[j], &s[j].pieces) {
+                if self.joined(x[i], &s[i].pieces, x[j], &s[j].pieces) {
+                    continue;
+                }
+                if self.across_gap(x[i], x[j], self.cell_of(v[i])) {
                     return true;
                 }
             }
         }
-        if ins.len() > 2 {
-            let centre = ins.iter().map(|&i| x[i]).sum::<DVec3>() / ins.len() as f64;
-            return self.value(centre, cell) > 0.0;
+        false
+    }
+
+    /// Whether the segment from `a` to `b` (both inside) leaves the union between two pieces
+    /// that do not touch: across a gap. Where it leaves between pieces that touch, it crosses
+    /// the crease where they meet, which the simplifier's refinement follows (bisecting there
+    /// would not end). Each piece near the segment holds an interval of it (pieces are
+    /// convex); the holes between the intervals are where it is outside.
+    fn across_gap(&mut self, a: DVec3, b: DVec3, cell: [usize; 3]) -> bool {
+        let half = 0.5 * a.distance(b);
+        let centre = a.lerp(b, 0.5);
+        let mut spans: Vec<(f64, f64, u32)> = Vec::new();
+        for &i in self.field.near(cell) {
+            let prim = &self.prims[i as usize];
+            // 1-Lipschitz: a piece this far from the centre misses the segment.
+            if prim.eval(centre, self.band) > half {
+                continue;
+            }
+            let g = |t: f64| prim.eval(a.lerp(b, t), self.band);
+            let Some(least) = inside_point(&g) else {
+                continue;
+            };
+            let edge = |mut inn: f64, mut out: f64| {
+                if g(out) <= 0.0 {
+                    return out;
+                }
+                for _ in 0..30 {
+                    let mid = 0.5 * (inn + out);
+                    if g(mid) <= 0.0 {
+                        inn = mid;
+                    } else {
+                        out = mid;
+                    }
+                }
+                inn
+            };
+            spans.push((edge(least, 0.0), edge(least, 1.0), i));
+        }
+        spans.sort_by(|x, y| x.0.total_cmp(&y.0));
+        // Sweep: `reach` is how far the spans so far cover, `last` the piece that reaches it.
+        let (mut reach, mut last) = (0.0, None);
+        for &(t0, t1, i) in &spans {
+            if let Some(p) = last.filter(|_| t0 > reach) {
+                if self.apart(p, i) {
+                    return true;
+                }
+            }
+            if t1 > reach || last.is_none() {
+                (reach, last) = (t1.max(reach), Some(i));
+            }
         }
         false
+    }
+
+    fn apart(&mut self, p: u32, q: u32) -> bool {
+        let key = (p.min(q), p.max(q));
+        let prims = self.prims;
+        *self
+            .apart
+            .entry(key)
+            .or_insert_with(|| prims[p as usize].apart(&prims[q as usize]))
     }
 
     /// Whether the segment from `a` (in each of `pa`) to `b` (in each of `pb`) stays in the
@@ -372,6 +433,37 @@ impl<'a, F: Field> Adapt<'a, F> {
                 .any(|&q| self.prims[q as usize].eval(exit, self.band) <= 0.0)
         })
     }
+}
+
+/// A point of [0, 1] where `g` is not positive, searched by golden sections toward its least
+/// (`g` falls then rises along a line through a convex piece); `None` when it stays positive.
+fn inside_point(g: &impl Fn(f64) -> f64) -> Option<f64> {
+    let k = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut lo, mut hi) = (0.0, 1.0);
+    let (mut x1, mut x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
+    let (mut f1, mut f2) = (g(x1), g(x2));
+    for _ in 0..30 {
+        if f1 <= 0.0 {
+            return Some(x1);
+        }
+        if f2 <= 0.0 {
+            return Some(x2);
+        }
+        if f1 <= f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - k * (hi - lo);
+            f1 = g(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + k * (hi - lo);
+            f2 = g(x2);
+        }
+    }
+    [0.0, 0.5 * (lo + hi), 1.0]
+        .into_iter()
+        .find(|&t| g(t) <= 0.0)
 }
 
 /// A tetrahedron's six edges as corner pairs.
