@@ -63,6 +63,10 @@ const MAX_ENTRIES: usize = 30_000_000;
 const COINCIDENT: f64 = 0.01;
 /// Rounds of crease refinement.
 const REFINE_ROUNDS: usize = 8;
+/// Rounds of the last check (`touch_up`).
+const TOUCH_ROUNDS: usize = 6;
+/// The share of the tolerance the last check leaves for rounding vertices to 32-bit floats.
+const ROUNDING: f64 = 0.02;
 /// Simplification stops after this many sweeps, or when a sweep collapses fewer than
 /// `SETTLED` of the vertices.
 const MAX_SWEEPS: usize = 12;
@@ -341,6 +345,9 @@ pub struct Simplified {
     /// Grid cells split finer before simplifying, where veins come closer than the grid
     /// resolves (so the mesh does not bridge the gap between them).
     pub cells_split: usize,
+    /// Triangles the last check found not held within the tolerance and could not split
+    /// further (0 when every triangle is held whole).
+    pub unheld: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
 }
@@ -405,12 +412,21 @@ pub fn simplify(
         }
     }
     whole.finish(mesh);
+    let unheld = touch_up(mesh, field, tol);
+    if debug {
+        eprintln!(
+            "touched up: {} triangles, {unheld} not held, {:.2} s",
+            mesh.triangles.len(),
+            clock.elapsed().as_secs_f64()
+        );
+    }
     Simplified {
         tolerance_mm: tol,
         marched,
         refined,
         triangles: mesh.triangles.len(),
         sweeps,
+        unheld,
         ..Simplified::default()
     }
 }
@@ -482,51 +498,108 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
                 .map(|&(a, b)| on_surface(a, b))
                 .collect::<Vec<_>>(),
         );
-        split.sort_unstable_by_key(|&(a, b, _)| (a, b));
         if split.is_empty() {
             break;
         }
-        let first = mesh.positions.len();
-        let mut ends = vec![false; first];
-        let mut mid: HashMap<u64, u32, Quick> =
-            HashMap::with_capacity_and_hasher(split.len(), Quick);
-        // No new vertex on another (two midpoints may move onto one crease point).
-        let apart = COINCIDENT * tol;
-        let mut taken: HashMap<[i64; 3], Vec<DVec3>, Quick> = HashMap::with_hasher(Quick);
-        let cell_of = |p: DVec3| (p / apart).floor().as_i64vec3().to_array();
-        for (a, b, p) in split {
-            let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-            let c = cell_of(p);
-            let crowded = (-1..=1).any(|i| {
-                (-1..=1).any(|j| {
-                    (-1..=1).any(|k| {
-                        taken
-                            .get(&[c[0] + i, c[1] + j, c[2] + k])
-                            .is_some_and(|near| near.iter().any(|q| q.distance(p) < apart))
-                    })
-                })
-            });
-            if crowded || pa.distance(p) < apart || pb.distance(p) < apart {
-                continue;
-            }
-            taken.entry(c).or_default().push(p);
-            mid.insert(edge_key(a, b), mesh.positions.len() as u32);
-            mesh.positions.push(p);
-            ends[a as usize] = true;
-            ends[b as usize] = true;
-        }
-        let mut out = Vec::with_capacity(mesh.triangles.len() + 3 * mid.len());
-        for &t in &mesh.triangles {
-            if !t.iter().any(|&v| ends[v as usize]) {
-                out.push(t);
-                continue;
-            }
-            let m = [0, 1, 2].map(|k| mid.get(&edge_key(t[k], t[(k + 1) % 3])).copied());
-            out.extend(cut(t, m));
-        }
-        mesh.triangles = out;
-        fresh = Some(first);
+        fresh = Some(cut_edges(mesh, split, tol));
     }
+}
+
+/// The last check, of every triangle whole: its corners, midpoints and centre within `tol` of
+/// the surface, and `holds`. A triangle that is not (one marching left across a crease, where
+/// only midpoints and centres were looked at) has its longest edge and each edge whose
+/// midpoint is off split at the surface, for up to `TOUCH_ROUNDS` rounds. Returns how many
+/// triangles are still not held.
+fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
+    // Room for the rounding of vertices to 32-bit floats.
+    let limit = (1.0 - ROUNDING) * tol;
+    let step = 0.01 * tol;
+    for round in 0..=TOUCH_ROUNDS {
+        let positions = &mesh.positions;
+        let corners = |t: &[u32; 3]| t.map(|v| positions[v as usize]);
+        let bad: Vec<[u32; 3]> = mesh
+            .triangles
+            .par_iter()
+            .filter(|t| {
+                let p = corners(t);
+                let mids = [0, 1, 2].map(|i| 0.5 * (p[i] + p[(i + 1) % 3]));
+                let held = p.iter().chain(&mids).all(|&x| field.near(x, limit))
+                    && field.near((p[0] + p[1] + p[2]) / 3.0, limit)
+                    && field.holds(&p, p.map(|x| field.least(x)), limit);
+                !held
+            })
+            .copied()
+            .collect();
+        if bad.is_empty() || round == TOUCH_ROUNDS {
+            return bad.len();
+        }
+        let split: Vec<(u32, u32, DVec3)> = bad
+            .par_iter()
+            .flat_map_iter(|t| {
+                let p = corners(t);
+                let len = |k: usize| p[k].distance_squared(p[(k + 1) % 3]);
+                let longest = (0..3).max_by(|&i, &j| len(i).total_cmp(&len(j))).unwrap_or(0);
+                (0..3)
+                    .filter(move |&k| {
+                        k == longest || !field.near(0.5 * (p[k] + p[(k + 1) % 3]), limit)
+                    })
+                    .map(move |k| {
+                        let (a, b) = (t[k], t[(k + 1) % 3]);
+                        let m = field.project(0.5 * (p[k] + p[(k + 1) % 3]), step);
+                        (a.min(b), a.max(b), m)
+                    })
+            })
+            .collect();
+        cut_edges(mesh, split, tol);
+    }
+    0
+}
+
+/// Splits each edge `(a, b)` of `split` at its point (on the surface), unless that point is
+/// within `COINCIDENT · tol` of a vertex; returns the index of the first new vertex.
+fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) -> usize {
+    split.sort_unstable_by_key(|&(a, b, _)| (a, b));
+    split.dedup_by_key(|&mut (a, b, _)| (a, b));
+    let first = mesh.positions.len();
+    let mut ends = vec![false; first];
+    let mut mid: HashMap<u64, u32, Quick> =
+        HashMap::with_capacity_and_hasher(split.len(), Quick);
+    // No new vertex on another (two midpoints may move onto one crease point).
+    let apart = COINCIDENT * tol;
+    let mut taken: HashMap<[i64; 3], Vec<DVec3>, Quick> = HashMap::with_hasher(Quick);
+    let cell_of = |p: DVec3| (p / apart).floor().as_i64vec3().to_array();
+    for (a, b, p) in split {
+        let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+        let c = cell_of(p);
+        let crowded = (-1..=1).any(|i| {
+            (-1..=1).any(|j| {
+                (-1..=1).any(|k| {
+                    taken
+                        .get(&[c[0] + i, c[1] + j, c[2] + k])
+                        .is_some_and(|near| near.iter().any(|q| q.distance(p) < apart))
+                })
+            })
+        });
+        if crowded || pa.distance(p) < apart || pb.distance(p) < apart {
+            continue;
+        }
+        taken.entry(c).or_default().push(p);
+        mid.insert(edge_key(a, b), mesh.positions.len() as u32);
+        mesh.positions.push(p);
+        ends[a as usize] = true;
+        ends[b as usize] = true;
+    }
+    let mut out = Vec::with_capacity(mesh.triangles.len() + 3 * mid.len());
+    for &t in &mesh.triangles {
+        if !t.iter().any(|&v| ends[v as usize]) {
+            out.push(t);
+            continue;
+        }
+        let m = [0, 1, 2].map(|k| mid.get(&edge_key(t[k], t[(k + 1) % 3])).copied());
+        out.extend(cut(t, m));
+    }
+    mesh.triangles = out;
+    first
 }
 
 /// A quick hash for edge keys (the std hasher resists attacks this does not need).
