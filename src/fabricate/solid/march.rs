@@ -122,13 +122,14 @@ pub struct Marched {
     pub gaps_left: usize,
 }
 
-/// Meshes the union of `prims` on a grid of spacing `h`; with `gaps`, cells where a gap between
-/// veins may be narrower than the grid are split finer until no tetrahedron bridges it
-/// (`adapt`). `progress(done, total)` is called as bricks finish (from several threads).
+/// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance), cells where
+/// a gap between veins, or the narrow crotch between two that meet at a sharp angle, may be
+/// narrower than the grid are split finer until no tetrahedron bridges it by more than the
+/// tolerance allows (`adapt`). `progress(done, total)` is called as bricks finish (from several threads).
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,
-    gaps: bool,
+    gaps: Option<f64>,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(TriMesh, Marched), MarchError> {
     let band = 2.0 * h;
@@ -210,7 +211,7 @@ pub fn mesh_union(
                 .iter()
                 .map(|&p| &prims[p as usize])
                 .collect();
-            let b = evaluate(&grid, *key, &own, band, gaps);
+            let b = evaluate(&grid, *key, &own, band, gaps.is_some());
             tick();
             b
         })
@@ -231,14 +232,14 @@ pub fn mesh_union(
     // Where veins come close: bisected tetrahedra replace those cells' own.
     let mut marched = Marched::default();
     let mut fine: Option<(Vec<DVec3>, Vec<[u32; 3]>, HashSet<[usize; 3]>)> = None;
-    if gaps {
+    if let Some(tol) = gaps {
         let field = GridField {
             groups: &groups,
             members: &members,
             bricks: &bricks,
             keys: &keys,
         };
-        let mut refine = adapt::Adapt::new(&grid, prims, &field, band);
+        let mut refine = adapt::Adapt::new(&grid, prims, &field, band, tol);
         for b in &bricks {
             let base = unpack(b.key).map(|c| c * B);
             for &c in &b.close {
@@ -417,6 +418,13 @@ fn drop_unused(mesh: &mut TriMesh) {
     mesh.positions = positions;
 }
 
+/// Whether two pieces' outward directions at `x` are more than 120° apart: their surfaces
+/// face each other there, across a narrow crotch or gap.
+pub(super) fn facing(p: &Primitive, q: &Primitive, x: DVec3, band: f64) -> bool {
+    let step = 1e-3 * band;
+    p.gradient(x, band, step).dot(q.gradient(x, band, step)) < -0.5
+}
+
 /// Grid points within the box `a..b`, as an inclusive index range per axis (clamped).
 fn point_range(grid: &Grid, a: DVec3, b: DVec3) -> [(usize, usize); 3] {
     let lo = (a - grid.origin) / grid.h;
@@ -519,7 +527,7 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) 
         }
     }
     let close = if gaps {
-        close_cells(&values, &which, prims, h, band)
+        close_cells(&values, &which, prims, h, band, grid.at(base))
     } else {
         Vec::new()
     };
@@ -569,13 +577,15 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) 
 }
 
 /// The brick's cells near the surface whose corners are nearest to two veins that do not
-/// touch: the gap between them may be narrower than a cell (`adapt` looks closer).
+/// touch, or that face each other across the cell (a sharp crotch where they meet): the gap
+/// between them may be narrower than a cell (`adapt` looks closer).
 fn close_cells(
     values: &[f64; P * P * P],
     which: &[u16; P * P * P],
     prims: &[&Primitive],
     h: f64,
     band: f64,
+    origin: DVec3,
 ) -> Vec<u16> {
     let reach = 3f64.sqrt() * h;
     let mut out = Vec::new();
@@ -598,6 +608,8 @@ fn close_cells(
                     continue;
                 }
                 let mut apart = false;
+                let centre =
+                    origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * h;
                 for (a, &p) in near.iter().enumerate() {
                     for &q in &near[a + 1..] {
                         if p == q || p == u16::MAX || q == u16::MAX {
@@ -605,11 +617,13 @@ fn close_cells(
                         }
                         let key = (p.min(q), p.max(q));
                         let known = seen.iter().find(|s| s.0 == key).map(|s| s.1);
-                        apart |= known.unwrap_or_else(|| {
-                            let v = prims[p as usize].apart(prims[q as usize]);
+                        let (a, b) = (prims[p as usize], prims[q as usize]);
+                        let told = known.unwrap_or_else(|| {
+                            let v = a.apart(b);
                             seen.push((key, v));
                             v
                         });
+                        apart |= told || facing(a, b, centre, band);
                     }
                 }
                 if apart {
@@ -850,7 +864,7 @@ mod tests {
             1.0,
             1.0,
         ))];
-        let (mesh, _) = mesh_union(&ball, 0.05, false, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ball, 0.05, None, &|_, _| {}).unwrap();
         let topo = mesh.check_manifold();
         assert!(
             topo.is_manifold(),
@@ -878,7 +892,7 @@ mod tests {
                 Primitive::Cone(RoundCone::new(at(i), at((i + 1) % n), 0.3, 0.4))
             })
             .collect();
-        let (mesh, _) = mesh_union(&ring, 0.07, false, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ring, 0.07, None, &|_, _| {}).unwrap();
         let topo = mesh.check_manifold();
         assert!(topo.is_manifold());
         assert_eq!((topo.components, topo.genus), (1, Some(1)));

@@ -408,8 +408,7 @@ pub fn solid_of(
             cell: opts.cell,
         });
     }
-    let (mut mesh, marched) =
-        march::mesh_union(&prims, opts.cell, opts.tolerance.is_some(), progress)?;
+    let (mut mesh, marched) = march::mesh_union(&prims, opts.cell, opts.tolerance, progress)?;
     if mesh.triangles.is_empty() {
         let thickest = ends.iter().flatten().copied().fold(0.0, f64::max);
         return Err(SolidError::Vanished {

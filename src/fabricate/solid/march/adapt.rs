@@ -77,6 +77,8 @@ pub(super) struct Adapt<'a, F: Field> {
     prims: &'a [Primitive],
     field: &'a F,
     band: f64,
+    /// How far the mesh may stray from the surface, mm.
+    tol: f64,
     eps: f64,
     samples: HashMap<Pt, Sample>,
     pub tets: Vec<Tet>,
@@ -90,9 +92,10 @@ pub(super) struct Adapt<'a, F: Field> {
 }
 
 impl<'a, F: Field> Adapt<'a, F> {
-    pub fn new(grid: &'a Grid, prims: &'a [Primitive], field: &'a F, band: f64) -> Self {
+    pub fn new(grid: &'a Grid, prims: &'a [Primitive], field: &'a F, band: f64, tol: f64) -> Self {
         Adapt {
             grid,
+            tol,
             prims,
             field,
             band,
@@ -390,7 +393,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         let (mut reach, mut last) = (0.0, None);
         for &(t0, t1, i) in &spans {
             if let Some(p) = last.filter(|_| t0 > reach) {
-                if self.apart(p, i) {
+                if self.apart(p, i) || self.crotch(p, i, a.lerp(b, 0.5 * (reach + t0)), cell) {
                     return true;
                 }
             }
@@ -399,6 +402,24 @@ impl<'a, F: Field> Adapt<'a, F> {
             }
         }
         false
+    }
+
+    /// Whether the segment's hole at `m`, between pieces `p` and `q` that touch, crosses a
+    /// crotch too narrow to leave bridged: the two surfaces face each other (more than 120°
+    /// apart) and the hole is deep enough that the crotch below the bridge (about its depth
+    /// over the tangent of half the crotch's angle) is more than half the tolerance deep.
+    fn crotch(&self, p: u32, q: u32, m: DVec3, cell: [usize; 3]) -> bool {
+        let (pp, pq) = (&self.prims[p as usize], &self.prims[q as usize]);
+        let step = 1e-3 * self.band;
+        let cos = pp
+            .gradient(m, self.band, step)
+            .dot(pq.gradient(m, self.band, step));
+        if cos >= -0.5 {
+            return false;
+        }
+        // The crotch's opening angle is π less the angle between the outward directions.
+        let half = 0.5 * (std::f64::consts::PI - cos.clamp(-1.0, 1.0).acos());
+        self.value(m, cell) > 0.5 * self.tol * half.tan()
     }
 
     fn apart(&mut self, p: u32, q: u32) -> bool {
@@ -526,7 +547,7 @@ mod tests {
             h: 1.0,
             points: [10, 10, 10],
         };
-        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0);
+        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0, 0.25);
         adapt.bring([4, 4, 4]);
         let mut seed = 7u64;
         for _ in 0..400 {
