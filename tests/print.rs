@@ -176,6 +176,63 @@ fn simplifying_keeps_the_solid_closed_and_its_volume_with_far_fewer_triangles() 
 }
 
 #[test]
+fn simplifying_keeps_gaps_between_veins_open() -> TestResult {
+    // A hairpin whose arms are 5 to 60 µm apart and a vein 3 µm over both: marching on the
+    // 35 µm grid bridges the gaps (genus 2 where the network has no cycle); with --tolerance
+    // the cells there are split until nothing bridges them.
+    let dir = tempfile::tempdir()?;
+    let net = fixture("networks/near_miss.json");
+    let net = net.to_str().ok_or("path")?;
+    let made = |extra: &[&str],
+                name: &str|
+     -> Result<(TriMesh, serde_json::Value), Box<dyn std::error::Error>> {
+        let out = dir.path().join(format!("{name}.stl"));
+        let report = dir.path().join(format!("{name}.json"));
+        let mut args = vec![
+            "solid",
+            net,
+            "-o",
+            out.to_str().ok_or("path")?,
+            "--report",
+            report.to_str().ok_or("path")?,
+        ];
+        args.extend(extra);
+        run_ok(&args)?;
+        Ok((read_mesh(&out)?, json(&report)?))
+    };
+    let (marched, rm) = made(&[], "marched")?;
+    assert_eq!(
+        marched.check_manifold().genus,
+        Some(2),
+        "marching alone bridges"
+    );
+    assert!(
+        rm["warnings"].to_string().contains("touch"),
+        "{}",
+        rm["warnings"]
+    );
+    let (simple, rs) = made(&["--tolerance"], "simple")?;
+    let topo = simple.check_manifold();
+    assert!(topo.is_manifold() && topo.closed, "{:?}", topo.problems);
+    assert_eq!((topo.components, topo.genus), (1, Some(0)));
+    assert!(
+        rs["simplified"]["cells_split"]
+            .as_u64()
+            .ok_or("cells_split")?
+            > 0
+    );
+    assert_eq!(rs["simplified"]["gaps_left"], 0);
+    assert_eq!(rs["simplified"]["unheld"], 0);
+    assert_eq!(
+        rs["warnings"].as_array().map(Vec::len),
+        Some(0),
+        "{}",
+        rs["warnings"]
+    );
+    Ok(())
+}
+
+#[test]
 fn solid_refuses_what_it_cannot_build_and_writes_nothing() -> TestResult {
     let dir = tempfile::tempdir()?;
     let out = dir.path().join("x.stl");
