@@ -211,7 +211,7 @@ pub fn mesh_union(
                 .iter()
                 .map(|&p| &prims[p as usize])
                 .collect();
-            let b = evaluate(&grid, *key, &own, band, gaps.is_some());
+            let b = evaluate(&grid, *key, &own, band, gaps);
             tick();
             b
         })
@@ -443,7 +443,13 @@ fn point_range(grid: &Grid, a: DVec3, b: DVec3) -> [(usize, usize); 3] {
 
 /// Samples one brick; `None` when the surface does not pass through it (and, with `gaps`, no
 /// two veins come close in it).
-fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) -> Option<Brick> {
+fn evaluate(
+    grid: &Grid,
+    key: u64,
+    prims: &[&Primitive],
+    band: f64,
+    gaps: Option<f64>,
+) -> Option<Brick> {
     let bk = unpack(key);
     let base = bk.map(|b| b * B);
     let h = grid.h;
@@ -526,8 +532,8 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) 
             any_out = true;
         }
     }
-    let close = if gaps {
-        close_cells(&values, &which, prims, h, band, grid.at(base))
+    let close = if let Some(tol) = gaps {
+        close_cells(&values, &which, prims, (h, band, tol), grid.at(base))
     } else {
         Vec::new()
     };
@@ -576,15 +582,15 @@ fn evaluate(grid: &Grid, key: u64, prims: &[&Primitive], band: f64, gaps: bool) 
     })
 }
 
-/// The brick's cells near the surface whose corners are nearest to two veins that do not
-/// touch, or that face each other across the cell (a sharp crotch where they meet): the gap
-/// between them may be narrower than a cell (`adapt` looks closer).
+/// The brick's cells near the surface where the nearest piece changes from corner to corner
+/// and one of those nearest pieces and a piece reaching into the cell do not touch, or face
+/// each other across it (a sharp crotch where they meet): the gap between them may be
+/// narrower than a cell (`adapt` looks closer).
 fn close_cells(
     values: &[f64; P * P * P],
     which: &[u16; P * P * P],
     prims: &[&Primitive],
-    h: f64,
-    band: f64,
+    (h, band, tol): (f64, f64, f64),
     origin: DVec3,
 ) -> Vec<u16> {
     let reach = 3f64.sqrt() * h;
@@ -607,12 +613,33 @@ fn close_cells(
                 if deep {
                     continue;
                 }
-                let mut apart = false;
+                // Where the nearest piece changes, every piece that reaches into the cell is
+                // paired with those nearest pieces (a gap may open beside a third piece).
+                let mut firsts: Vec<u16> =
+                    near.iter().copied().filter(|&p| p != u16::MAX).collect();
+                firsts.sort_unstable();
+                firsts.dedup();
+                if firsts.len() < 2 {
+                    continue;
+                }
                 let centre =
                     origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * h;
-                for (a, &p) in near.iter().enumerate() {
-                    for &q in &near[a + 1..] {
-                        if p == q || p == u16::MAX || q == u16::MAX {
+                let mut exact = band;
+                let reaching: Vec<u16> = (0..prims.len().min(u16::MAX as usize) as u16)
+                    .filter(|&q| {
+                        let v = prims[q as usize].eval(centre, band);
+                        exact = exact.min(v);
+                        v < reach
+                    })
+                    .collect();
+                // The Kuhn split puts the centre on the cell's main diagonal: marching there
+                // interpolates its two ends.
+                let linear = 0.5 * (values[local(i, j, k)] + values[local(i + 1, j + 1, k + 1)]);
+                let mut apart =
+                    exact > 0.5 * tol && linear < 0.0 || exact < -0.5 * tol && linear > 0.0;
+                'pairs: for &p in firsts.iter().filter(|_| !apart) {
+                    for &q in &reaching {
+                        if p == q {
                             continue;
                         }
                         let key = (p.min(q), p.max(q));
@@ -623,7 +650,10 @@ fn close_cells(
                             seen.push((key, v));
                             v
                         });
-                        apart |= told || facing(a, b, centre, band);
+                        if told || facing(a, b, centre, band) {
+                            apart = true;
+                            break 'pairs;
+                        }
                     }
                 }
                 if apart {

@@ -65,8 +65,6 @@ const COINCIDENT: f64 = 0.01;
 const REFINE_ROUNDS: usize = 8;
 /// Rounds of the last check (`touch_up`).
 const TOUCH_ROUNDS: usize = 6;
-/// The share of the tolerance the last check leaves for rounding vertices to 32-bit floats.
-const ROUNDING: f64 = 0.02;
 /// Simplification stops after this many sweeps, or when a sweep collapses fewer than
 /// `SETTLED` of the vertices.
 const MAX_SWEEPS: usize = 12;
@@ -511,8 +509,12 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
 /// has its longest edge and each edge whose midpoint is off split at the surface, for up to
 /// `TOUCH_ROUNDS` rounds. Returns how many triangles are still off.
 fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
-    // Room for the rounding of vertices to 32-bit floats.
-    let limit = (1.0 - ROUNDING) * tol;
+    // Room for the rounding of vertices to 32-bit floats (two units in the last place).
+    let extent = mesh
+        .positions
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    let limit = tol - 2.0 * extent * f64::from(f32::EPSILON);
     let step = 0.01 * tol;
     for round in 0..=TOUCH_ROUNDS {
         let positions = &mesh.positions;
@@ -535,6 +537,19 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
             .copied()
             .collect();
         if bad.is_empty() || round == TOUCH_ROUNDS {
+            if std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some() {
+                for t in bad.iter().take(12) {
+                    let p = corners(t);
+                    let worst = (0..=4)
+                        .flat_map(|i| (0..=4 - i).map(move |j| (i, j)))
+                        .map(|(i, j)| {
+                            let k = 4 - i - j;
+                            field.eval((p[0] * i as f64 + p[1] * j as f64 + p[2] * k as f64) / 4.0)
+                        })
+                        .fold(f64::MIN, f64::max);
+                    eprintln!("not held: {p:?} worst {:.2} um", worst * 1000.0);
+                }
+            }
             return bad.len();
         }
         let split: Vec<(u32, u32, DVec3)> = bad

@@ -320,7 +320,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         let v = self.tets[id as usize].v;
         let s: Vec<Sample> = v.iter().map(|&p| self.sample(p).clone()).collect();
         let ins: Vec<usize> = (0..4).filter(|&i| s[i].inside).collect();
-        if ins.len() < 2 {
+        if ins.is_empty() {
             return false;
         }
         let x = v.map(|p| self.position(p));
@@ -328,6 +328,12 @@ impl<'a, F: Field> Adapt<'a, F> {
             .map(|(a, b)| x[a].distance(x[b]))
             .fold(0.0, f64::max);
         if ins.iter().any(|&i| s[i].f <= -longest) {
+            return false;
+        }
+        if self.misplaced(&v, &x) {
+            return true;
+        }
+        if ins.len() < 2 {
             return false;
         }
         let common = s[ins[0]]
@@ -351,6 +357,23 @@ impl<'a, F: Field> Adapt<'a, F> {
             }
         }
         false
+    }
+
+    /// Whether marching this tetrahedron puts a point more than half the tolerance on the
+    /// wrong side: at the midpoints of its edges and its centre, the sign of the values
+    /// interpolated from its corners against the exact value (a crotch between veins that
+    /// the chords span, or a vein's side they cut).
+    fn misplaced(&mut self, v: &[Pt; 4], x: &[DVec3; 4]) -> bool {
+        let f = v.map(|p| self.signed(p));
+        let cell = self.cell_of(v[0]);
+        let half = 0.5 * self.tol;
+        let wrong =
+            |exact: f64, linear: f64| exact > half && linear < 0.0 || exact < -half && linear > 0.0;
+        let centre = (x[0] + x[1] + x[2] + x[3]) / 4.0;
+        if wrong(self.value(centre, cell), (f[0] + f[1] + f[2] + f[3]) / 4.0) {
+            return true;
+        }
+        pairs().any(|(a, b)| wrong(self.value(0.5 * (x[a] + x[b]), cell), 0.5 * (f[a] + f[b])))
     }
 
     /// Whether the segment from `a` to `b` (both inside) leaves the union between two pieces
