@@ -231,7 +231,7 @@ pub fn mesh_union(
 
     // Where veins come close: bisected tetrahedra replace those cells' own.
     let mut marched = Marched::default();
-    let mut fine: Option<(Vec<DVec3>, Vec<[u32; 3]>, HashSet<[usize; 3]>)> = None;
+    let mut fine: Option<Split> = None;
     if let Some(tol) = gaps {
         let field = GridField {
             groups: &groups,
@@ -260,12 +260,17 @@ pub fn mesh_union(
             }
         }
         marched.cells_refined = cut.len();
-        fine = Some((positions, tris, cells));
+        fine = Some(Split {
+            positions,
+            triangles: tris,
+            cells,
+        });
     }
     let (explicit, explicit_bricks) = match &fine {
-        Some((_, _, cells)) => (
-            Some(cells),
-            cells
+        Some(split) => (
+            Some(&split.cells),
+            split
+                .cells
                 .iter()
                 .map(|c| pack(c.map(|x| x / B)))
                 .collect::<HashSet<u64>>(),
@@ -295,12 +300,20 @@ pub fn mesh_union(
         triangles: triangles_out,
         colors: None,
     };
-    if let Some((extra, tris, _)) = fine {
-        mesh.positions.extend(extra);
-        mesh.triangles.extend(tris);
+    if let Some(split) = fine {
+        mesh.positions.extend(split.positions);
+        mesh.triangles.extend(split.triangles);
         drop_unused(&mut mesh);
     }
     Ok((mesh, marched))
+}
+
+/// What the split cells make: their new vertices (numbered after the bricks'), their
+/// triangles, and the cells themselves (whose own triangles are left out).
+struct Split {
+    positions: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    cells: HashSet<[usize; 3]>,
 }
 
 /// The grid's pieces and signs, for `adapt`.
@@ -324,7 +337,7 @@ impl adapt::Field for GridField<'_> {
         // A point on a brick's lower face is also the top face of the brick below.
         for code in 0..8u8 {
             let o = corner(code);
-            if (0..3).any(|a| o[a] == 1 && (g[a] % B != 0 || g[a] < B)) {
+            if (0..3).any(|a| o[a] == 1 && (!g[a].is_multiple_of(B) || g[a] < B)) {
                 continue;
             }
             let b = [0, 1, 2].map(|a| g[a] / B - o[a]);

@@ -335,7 +335,8 @@ impl<'a> Field<'a> {
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Simplified {
     pub tolerance_mm: f64,
-    /// Triangles as marched, after refinement, and at the end.
+    /// Triangles as marched (with the cells split where veins come close), after refinement,
+    /// and at the end.
     pub marched: usize,
     pub refined: usize,
     pub triangles: usize,
