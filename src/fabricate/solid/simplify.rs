@@ -65,6 +65,8 @@ const COINCIDENT: f64 = 0.01;
 const REFINE_ROUNDS: usize = 8;
 /// Rounds of the last check (`touch_up`).
 const TOUCH_ROUNDS: usize = 6;
+/// The share of the tolerance sampled points of a triangle across a crease are held to.
+const SAMPLED: f64 = 0.95;
 /// Simplification stops after this many sweeps, or when a sweep collapses fewer than
 /// `SETTLED` of the vertices.
 const MAX_SWEEPS: usize = 12;
@@ -283,6 +285,39 @@ impl<'a> Field<'a> {
         QUARTERS
             .iter()
             .all(|w| self.near((p[0] * w[0] + p[1] * w[1] + p[2] * w[2]) / 4.0, tol))
+    }
+
+    /// Whether some point of triangle `p` is surely more than `limit` outside the surface
+    /// (outside, the value is the distance). A corner is looked at first; then, as in
+    /// `holds`, one convex piece within `limit` of all three corners holds the whole triangle;
+    /// else the points (i, j, k) / 8 are, held to `SAMPLED` of the limit (between them a
+    /// crease can rise a little higher).
+    fn off(&self, p: &[DVec3; 3], limit: f64) -> bool {
+        if p.iter().any(|&x| self.eval(x) > limit) {
+            return true;
+        }
+        let near = p.map(|x| self.least(x));
+        let tried = near.as_flattened();
+        for (k, &n) in tried.iter().enumerate() {
+            if tried[..k].contains(&n) {
+                continue;
+            }
+            let Some(piece) = self.prims.get(n as usize) else {
+                continue;
+            };
+            if !matches!(piece, Primitive::Prism(_))
+                && p.iter().all(|&v| piece.eval(v, self.reach) <= limit)
+            {
+                return false;
+            }
+        }
+        (0..=8).any(|i| {
+            (0..=8 - i).any(|j| {
+                let k = 8 - i - j;
+                let x = (p[0] * i as f64 + p[1] * j as f64 + p[2] * k as f64) / 8.0;
+                self.eval(x) > SAMPLED * limit
+            })
+        })
     }
 
     /// Whether `p` is within `tol` of the surface: outside the value is the distance; inside
@@ -504,9 +539,9 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
     }
 }
 
-/// The last check, of every triangle: at its points (i, j, k) / 4 (corners, quarter points of
-/// its sides, three inside), it must not be more than `tol` outside the surface. A triangle
-/// that is (one left across a crease, where refinement only looked at midpoints and centres)
+/// The last check, of every triangle: no point of it may be more than `tol` outside the surface
+/// (`Field::off`). A triangle that is (one left across a crease, where refinement only looked
+/// at midpoints and centres)
 /// has its longest edge and each edge whose midpoint is off split at the surface, for up to
 /// `TOUCH_ROUNDS` rounds. Returns how many triangles are still off.
 fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
@@ -523,34 +558,10 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
         let bad: Vec<[u32; 3]> = mesh
             .triangles
             .par_iter()
-            .filter(|t| {
-                let p = corners(t);
-                // Outside, the value is the distance: a point farther is a sure miss (inside,
-                // the simplifier's own checks hold the triangle).
-                (0..=4).any(|i| {
-                    (0..=4 - i).any(|j| {
-                        let k = 4 - i - j;
-                        let x = (p[0] * i as f64 + p[1] * j as f64 + p[2] * k as f64) / 4.0;
-                        field.eval(x) > limit
-                    })
-                })
-            })
+            .filter(|t| field.off(&corners(t), limit))
             .copied()
             .collect();
         if bad.is_empty() || round == TOUCH_ROUNDS {
-            if std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some() {
-                for t in bad.iter().take(12) {
-                    let p = corners(t);
-                    let worst = (0..=4)
-                        .flat_map(|i| (0..=4 - i).map(move |j| (i, j)))
-                        .map(|(i, j)| {
-                            let k = 4 - i - j;
-                            field.eval((p[0] * i as f64 + p[1] * j as f64 + p[2] * k as f64) / 4.0)
-                        })
-                        .fold(f64::MIN, f64::max);
-                    eprintln!("not held: {p:?} worst {:.2} um", worst * 1000.0);
-                }
-            }
             return bad.len();
         }
         let split: Vec<(u32, u32, DVec3)> = bad
