@@ -120,6 +120,9 @@ pub struct Marched {
     pub cells_refined: usize,
     /// Tetrahedra that still join two veins at the finest level (or past the budget).
     pub gaps_left: usize,
+    /// Tetrahedra at the finest level still spanning the end of a crotch (where two veins
+    /// meet at a sharp angle the crotch narrows to nothing) by more than half the tolerance.
+    pub crotch_ends: usize,
 }
 
 /// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance), cells where
@@ -250,6 +253,7 @@ pub fn mesh_union(
         refine.run()?;
         let (positions, tris) = fine_triangles(&mut refine, &bricks, &keys, &offsets, count)?;
         marched.gaps_left = refine.left;
+        marched.crotch_ends = refine.crotches;
         let cells = std::mem::take(&mut refine.cells);
         // Only cells something was cut in count as refined.
         let mut cut: HashSet<[usize; 3]> = HashSet::new();

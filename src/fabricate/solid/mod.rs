@@ -424,6 +424,7 @@ pub fn solid_of(
         let mut done = simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress);
         done.cells_split = marched.cells_refined;
         done.gaps_left = marched.gaps_left;
+        done.crotch_ends = marched.crotch_ends;
         done
     });
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
@@ -457,8 +458,8 @@ pub fn solid_of(
     }
     if let Some(s) = simplified.as_ref().filter(|s| s.gaps_left > 0) {
         warnings.push(format!(
-            "{} tetrahedra still join veins across a gap at the finest split (1/16 of the \
-             cell): there the mesh bridges a gap narrower than {:.2} µm",
+            "{} tetrahedra still join veins that do not touch at the finest split (1/16 of the \
+             cell): there the mesh bridges a gap narrower than about {:.2} µm",
             s.gaps_left,
             1000.0 * opts.cell / 16.0
         ));

@@ -384,6 +384,9 @@ pub struct Simplified {
     pub unheld: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
+    /// Tetrahedra at the finest split still spanning the very end of a sharp crotch (which
+    /// narrows to nothing where two veins meet) by more than half the tolerance.
+    pub crotch_ends: usize,
 }
 
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of

@@ -40,6 +40,15 @@ const LEVELS: u8 = 12;
 /// The most tetrahedra made; past it the gaps left are left bridged (and counted).
 const MAX_TETS: usize = 30_000_000;
 
+/// Why a tetrahedron is bisected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Bridge {
+    /// Its inside joins two veins that do not touch: marching would change the topology.
+    Gap,
+    /// A crotch or crease it spans is deeper than the tolerance allows.
+    Shape,
+}
+
 /// What a corner is: its value, its side, and the pieces holding it.
 #[derive(Clone)]
 struct Sample {
@@ -87,8 +96,12 @@ pub(super) struct Adapt<'a, F: Field> {
     work: Vec<u32>,
     /// Pairs of pieces told apart (a gap between them) or not.
     apart: HashMap<(u32, u32), bool>,
-    /// Tetrahedra that still bridge a gap at the finest level or past the budget.
+    /// Tetrahedra that still bridge a gap between veins that do not touch, at the finest level
+    /// or past the budget.
     pub left: usize,
+    /// Tetrahedra still too coarse there for a crotch's end or a crease (the crotch narrows
+    /// to nothing, so its very end is always left).
+    pub crotches: usize,
 }
 
 impl<'a, F: Field> Adapt<'a, F> {
@@ -107,6 +120,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             work: Vec::new(),
             apart: HashMap::new(),
             left: 0,
+            crotches: 0,
         }
     }
 
@@ -302,11 +316,17 @@ impl<'a, F: Field> Adapt<'a, F> {
     pub fn run(&mut self) -> Result<(), MarchError> {
         while let Some(id) = self.work.pop() {
             let t = self.tets[id as usize];
-            if !t.alive || !self.bridges(id) {
+            if !t.alive {
                 continue;
             }
+            let Some(why) = self.bridges(id) else {
+                continue;
+            };
             if t.level >= LEVELS || self.tets.len() > MAX_TETS {
-                self.left += 1;
+                match why {
+                    Bridge::Gap => self.left += 1,
+                    Bridge::Shape => self.crotches += 1,
+                }
                 continue;
             }
             self.refine(id, 0)?;
@@ -315,33 +335,33 @@ impl<'a, F: Field> Adapt<'a, F> {
     }
 
     /// Whether the inside of tetrahedron `id`, as marching makes it (one piece, the hull of its
-    /// inside corners and crossings), holds points outside the union.
-    fn bridges(&mut self, id: u32) -> bool {
+    /// inside corners and crossings), holds points outside the union that matter, and why.
+    fn bridges(&mut self, id: u32) -> Option<Bridge> {
         let v = self.tets[id as usize].v;
         let s: Vec<Sample> = v.iter().map(|&p| self.sample(p).clone()).collect();
         let ins: Vec<usize> = (0..4).filter(|&i| s[i].inside).collect();
         if ins.is_empty() {
-            return false;
+            return None;
         }
         let x = v.map(|p| self.position(p));
         let longest = pairs()
             .map(|(a, b)| x[a].distance(x[b]))
             .fold(0.0, f64::max);
         if ins.iter().any(|&i| s[i].f <= -longest) {
-            return false;
+            return None;
         }
         if self.misplaced(&v, &x) {
-            return true;
+            return Some(Bridge::Shape);
         }
         if ins.len() < 2 {
-            return false;
+            return None;
         }
         let common = s[ins[0]]
             .pieces
             .iter()
             .any(|p| ins.iter().all(|&i| s[i].pieces.contains(p)));
         if common {
-            return false;
+            return None;
         }
         for (n, &i) in ins.iter().enumerate() {
             for &j in &ins[n + 1..] {
@@ -351,12 +371,12 @@ impl<'a, F: Field> Adapt<'a, F> {
                 if self.joined(x[i], &s[i].pieces, x[j], &s[j].pieces) {
                     continue;
                 }
-                if self.across_gap(x[i], x[j], self.cell_of(v[i])) {
-                    return true;
+                if let Some(why) = self.across_gap(x[i], x[j], self.cell_of(v[i])) {
+                    return Some(why);
                 }
             }
         }
-        false
+        None
     }
 
     /// Whether marching this tetrahedron puts a point more than half the tolerance on the
@@ -381,7 +401,7 @@ impl<'a, F: Field> Adapt<'a, F> {
     /// the crease where they meet, which the simplifier's refinement follows (bisecting there
     /// would not end). Each piece near the segment holds an interval of it (pieces are
     /// convex); the holes between the intervals are where it is outside.
-    fn across_gap(&mut self, a: DVec3, b: DVec3, cell: [usize; 3]) -> bool {
+    fn across_gap(&mut self, a: DVec3, b: DVec3, cell: [usize; 3]) -> Option<Bridge> {
         let half = 0.5 * a.distance(b);
         let centre = a.lerp(b, 0.5);
         let mut spans: Vec<(f64, f64, u32)> = Vec::new();
@@ -416,15 +436,18 @@ impl<'a, F: Field> Adapt<'a, F> {
         let (mut reach, mut last) = (0.0, None);
         for &(t0, t1, i) in &spans {
             if let Some(p) = last.filter(|_| t0 > reach) {
-                if self.apart(p, i) || self.crotch(p, i, a.lerp(b, 0.5 * (reach + t0)), cell) {
-                    return true;
+                if self.apart(p, i) {
+                    return Some(Bridge::Gap);
+                }
+                if self.crotch(p, i, a.lerp(b, 0.5 * (reach + t0)), cell) {
+                    return Some(Bridge::Shape);
                 }
             }
             if t1 > reach || last.is_none() {
                 (reach, last) = (t1.max(reach), Some(i));
             }
         }
-        false
+        None
     }
 
     /// Whether the segment's hole at `m`, between pieces `p` and `q` that touch, crosses a
