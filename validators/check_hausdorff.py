@@ -16,7 +16,8 @@ z = 0 (as `solid` places it). Checks:
   above: where a straight line out of either of the two nearest hulls leaves the union
   (bisection), the end of steps along the union's gradient or out of the deepest hull (their
   total length), a point where the two nearest hulls' surfaces meet outside the others (a
-  crease, by Gauss-Newton), and for points still not placed, lines in 64 directions;
+  crease, by Gauss-Newton), and for points still not placed, lines in 64 directions, then
+  2048;
 - surface to mesh: random points on the exact surface (on each hull, outside the others),
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - both ways, a point beyond T in a gap between facing veins (outward directions more than
@@ -229,17 +230,21 @@ def distance_bound(p, hulls, tol):
         left = walk[out[walk] > tol]
         if len(left):
             out[left] = np.minimum(out[left], crease_distance(p[left], i1[left], i2[left], hulls))
-        # What is left: straight lines in many directions.
-        left = walk[out[walk] > tol]
-        if len(left):
-            k = np.arange(64) + 0.5
-            z = 1 - 2 * k / 64
+        # What is left: straight lines in many directions (64, then 2048 for the few still
+        # over: the way out of a thin crease between three hulls is narrow).
+        for count in (64, 2048):
+            left = walk[out[walk] > tol]
+            if not len(left):
+                break
+            k = np.arange(count) + 0.5
+            z = 1 - 2 * k / count
             phi = np.pi * (1 + 5 ** 0.5) * k
             dirs = np.stack([np.sqrt(1 - z * z) * np.cos(phi), np.sqrt(1 - z * z) * np.sin(phi), z], 1)
-            P = np.repeat(p[left], len(dirs), 0)
-            G = np.tile(dirs, (len(left), 1))
-            e = exit_along(P, G, np.full(len(P), 2 * tol), hulls).reshape(len(left), len(dirs))
-            out[left] = np.minimum(out[left], e.min(1))
+            for part in np.array_split(left, max(1, len(left) * count // 200000)):
+                P = np.repeat(p[part], len(dirs), 0)
+                G = np.tile(dirs, (len(part), 1))
+                e = exit_along(P, G, np.full(len(P), 2 * tol), hulls).reshape(len(part), len(dirs))
+                out[part] = np.minimum(out[part], e.min(1))
     return out
 
 
