@@ -247,7 +247,7 @@ pub fn mesh_union(
             let base = unpack(b.key).map(|c| c * B);
             for &c in &b.close {
                 let c = c as usize;
-                refine.bring([base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B]);
+                refine.look_at([base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B]);
             }
         }
         refine.run()?;

@@ -37,8 +37,9 @@ pub(super) type Pt = [i64; 3];
 /// few extra cuts that keeping neighbours matched can ask.
 pub(super) const SCALE: i64 = 64;
 const LEVELS: u8 = 12;
-/// The most tetrahedra made; past it the gaps left are left bridged (and counted).
-const MAX_TETS: usize = 30_000_000;
+/// The most tetrahedra made (about 300 bytes each with their edges and corners); past it no
+/// more cells are brought in and no more bisected, and what is left is counted.
+const MAX_TETS: usize = 6_000_000;
 
 /// Why a tetrahedron is bisected.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -220,8 +221,18 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
     }
 
+    /// Brings in cell `c` to be looked at, unless the budget is spent (then it is counted
+    /// as left).
+    pub fn look_at(&mut self, c: [usize; 3]) {
+        if self.tets.len() + 6 > MAX_TETS {
+            self.left += 1;
+            return;
+        }
+        self.bring(c);
+    }
+
     /// Brings in cell `c` as its six Kuhn tetrahedra.
-    pub fn bring(&mut self, c: [usize; 3]) {
+    fn bring(&mut self, c: [usize; 3]) {
         if (0..3).any(|a| c[a] + 1 >= self.grid.points[a]) || !self.cells.insert(c) {
             return;
         }
