@@ -177,6 +177,28 @@ fn simplifying_keeps_the_solid_closed_and_its_volume_with_far_fewer_triangles() 
     Ok(())
 }
 
+/// `lamina solid NET ARGS… -o DIR/NAME.stl --report DIR/NAME.json`: the mesh and the report.
+fn solid_of(
+    dir: &std::path::Path,
+    net: &str,
+    extra: &[&str],
+    name: &str,
+) -> Result<(TriMesh, serde_json::Value), Box<dyn std::error::Error>> {
+    let out = dir.join(format!("{name}.stl"));
+    let report = dir.join(format!("{name}.json"));
+    let mut args = vec![
+        "solid",
+        net,
+        "-o",
+        out.to_str().ok_or("path")?,
+        "--report",
+        report.to_str().ok_or("path")?,
+    ];
+    args.extend(extra);
+    run_ok(&args)?;
+    Ok((read_mesh(&out)?, json(&report)?))
+}
+
 #[test]
 fn simplifying_keeps_gaps_between_veins_open() -> TestResult {
     // A hairpin whose arms are 5 to 60 µm apart and a vein 3 µm over both: marching on the
@@ -185,24 +207,7 @@ fn simplifying_keeps_gaps_between_veins_open() -> TestResult {
     let dir = tempfile::tempdir()?;
     let net = fixture("networks/near_miss.json");
     let net = net.to_str().ok_or("path")?;
-    let made = |extra: &[&str],
-                name: &str|
-     -> Result<(TriMesh, serde_json::Value), Box<dyn std::error::Error>> {
-        let out = dir.path().join(format!("{name}.stl"));
-        let report = dir.path().join(format!("{name}.json"));
-        let mut args = vec![
-            "solid",
-            net,
-            "-o",
-            out.to_str().ok_or("path")?,
-            "--report",
-            report.to_str().ok_or("path")?,
-        ];
-        args.extend(extra);
-        run_ok(&args)?;
-        Ok((read_mesh(&out)?, json(&report)?))
-    };
-    let (marched, rm) = made(&[], "marched")?;
+    let (marched, rm) = solid_of(dir.path(), net, &[], "marched")?;
     assert_eq!(
         marched.check_manifold().genus,
         Some(2),
@@ -213,7 +218,7 @@ fn simplifying_keeps_gaps_between_veins_open() -> TestResult {
         "{}",
         rm["warnings"]
     );
-    let (simple, rs) = made(&["--tolerance"], "simple")?;
+    let (simple, rs) = solid_of(dir.path(), net, &["--tolerance"], "simple")?;
     let topo = simple.check_manifold();
     assert!(topo.is_manifold() && topo.closed, "{:?}", topo.problems);
     assert_eq!((topo.components, topo.genus), (1, Some(0)));

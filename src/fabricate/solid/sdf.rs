@@ -137,8 +137,8 @@ impl RoundCone {
         let (mut s, mut t) = (0.5, 0.5);
         let mut best = f(s, t);
         for _ in 0..6 {
-            s = golden(|x| f(x, t));
-            t = golden(|x| f(s, x));
+            s = golden(&|x| f(x, t), |_| false);
+            t = golden(&|x| f(s, x), |_| false);
             let now = f(s, t);
             if now < 0.0 || best - now < 1e-12 {
                 return now;
@@ -201,13 +201,21 @@ impl RoundCone {
     }
 }
 
-/// Where a convex function of one variable is least on [0, 1] (to about 1e-9).
-fn golden(f: impl Fn(f64) -> f64) -> f64 {
+/// Where a function of one variable that falls then rises (a convex one) is least on [0, 1],
+/// by golden sections (to about 1e-9), the ends included; the search ends early at a point
+/// whose value `enough` accepts.
+pub fn golden(f: &impl Fn(f64) -> f64, enough: impl Fn(f64) -> bool) -> f64 {
     let k = 0.5 * (5f64.sqrt() - 1.0);
     let (mut lo, mut hi) = (0.0, 1.0);
     let (mut x1, mut x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
     let (mut f1, mut f2) = (f(x1), f(x2));
     for _ in 0..44 {
+        if enough(f1) {
+            return x1;
+        }
+        if enough(f2) {
+            return x2;
+        }
         if f1 <= f2 {
             hi = x2;
             (x2, f2) = (x1, f1);
@@ -221,7 +229,6 @@ fn golden(f: impl Fn(f64) -> f64) -> f64 {
         }
     }
     let m = 0.5 * (lo + hi);
-    // The ends, where the least may sit.
     [0.0, m, 1.0]
         .into_iter()
         .min_by(|&a, &b| f(a).total_cmp(&f(b)))

@@ -249,26 +249,30 @@ impl<'a> Field<'a> {
         q
     }
 
+    /// Whether one convex piece among `near` (the two pieces least at each corner) is within
+    /// `tol` of all three corners of triangle `p`: a convex piece's distance is convex, and the
+    /// union's is at most each piece's, so then no point of the triangle is more than `tol`
+    /// outside.
+    fn one_holds(&self, p: &[DVec3; 3], near: [[u32; 2]; 3], tol: f64) -> bool {
+        let tried = near.as_flattened();
+        tried.iter().enumerate().any(|(k, &n)| {
+            !tried[..k].contains(&n)
+                && self.prims.get(n as usize).is_some_and(|piece| {
+                    !matches!(piece, Primitive::Prism(_))
+                        && p.iter().all(|&v| piece.eval(v, self.reach) <= tol)
+                })
+        })
+    }
+
     /// Whether the triangle `p`, whose corners and centre are within `tol` of the surface, is
     /// within it everywhere. A convex piece's distance is convex, and the union's is at most
     /// each piece's: one convex piece within `tol` of all three corners holds the whole
-    /// triangle within `tol` outside. Else (a triangle across a crease, or along a vein's
+    /// triangle within `tol` outside (`one_holds`). Else (a triangle across a crease, or along a vein's
     /// smooth joints) the triangle is sampled at the quarter points of its sides and inside.
     /// `near` are the two pieces least at each corner.
     fn holds(&self, p: &[DVec3; 3], near: [[u32; 2]; 3], tol: f64) -> bool {
-        let tried = near.as_flattened();
-        for (k, &n) in tried.iter().enumerate() {
-            if tried[..k].contains(&n) {
-                continue;
-            }
-            let Some(piece) = self.prims.get(n as usize) else {
-                continue;
-            };
-            if !matches!(piece, Primitive::Prism(_))
-                && p.iter().all(|&v| piece.eval(v, self.reach) <= tol)
-            {
-                return true;
-            }
+        if self.one_holds(p, near, tol) {
+            return true;
         }
         // The points (i, j, k) / 4, i + j + k = 4, but the corners and midpoints.
         const QUARTERS: [[f64; 3]; 9] = [
@@ -296,20 +300,8 @@ impl<'a> Field<'a> {
         if p.iter().any(|&x| self.eval(x) > limit) {
             return true;
         }
-        let near = p.map(|x| self.least(x));
-        let tried = near.as_flattened();
-        for (k, &n) in tried.iter().enumerate() {
-            if tried[..k].contains(&n) {
-                continue;
-            }
-            let Some(piece) = self.prims.get(n as usize) else {
-                continue;
-            };
-            if !matches!(piece, Primitive::Prism(_))
-                && p.iter().all(|&v| piece.eval(v, self.reach) <= limit)
-            {
-                return false;
-            }
+        if self.one_holds(p, p.map(|x| self.least(x)), limit) {
+            return false;
         }
         (0..=8).any(|i| {
             (0..=8 - i).any(|j| {

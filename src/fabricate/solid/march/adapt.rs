@@ -27,7 +27,7 @@ use std::collections::{HashMap, HashSet};
 use glam::DVec3;
 
 use super::{corner, Grid, MarchError, TETS};
-use crate::fabricate::solid::sdf::Primitive;
+use crate::fabricate::solid::sdf::{golden, Primitive};
 
 /// A point in fine units: `SCALE` per grid cell.
 pub(super) type Pt = [i64; 3];
@@ -426,21 +426,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             let Some(least) = inside_point(&g) else {
                 continue;
             };
-            let edge = |mut inn: f64, mut out: f64| {
-                if g(out) <= 0.0 {
-                    return out;
-                }
-                for _ in 0..30 {
-                    let mid = 0.5 * (inn + out);
-                    if g(mid) <= 0.0 {
-                        inn = mid;
-                    } else {
-                        out = mid;
-                    }
-                }
-                inn
-            };
-            spans.push((edge(least, 0.0), edge(least, 1.0), i));
+            spans.push((last_inside(&g, least, 0.0), last_inside(&g, least, 1.0), i));
         }
         spans.sort_by(|x, y| x.0.total_cmp(&y.0));
         // Sweep: `reach` is how far the spans so far cover, `last` the piece that reaches it.
@@ -494,19 +480,11 @@ impl<'a, F: Field> Adapt<'a, F> {
         pa.iter().any(|&p| {
             let first = &self.prims[p as usize];
             let g = |t: f64| first.eval(a.lerp(b, t), self.band);
-            if g(1.0) <= 0.0 {
+            let out = last_inside(&g, 0.0, 1.0);
+            if out == 1.0 {
                 return true;
             }
-            let (mut lo, mut hi) = (0.0, 1.0);
-            for _ in 0..30 {
-                let mid = 0.5 * (lo + hi);
-                if g(mid) <= 0.0 {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            let exit = a.lerp(b, lo);
+            let exit = a.lerp(b, out);
             pb.iter()
                 .any(|&q| self.prims[q as usize].eval(exit, self.band) <= 0.0)
         })
@@ -516,32 +494,25 @@ impl<'a, F: Field> Adapt<'a, F> {
 /// A point of [0, 1] where `g` is not positive, searched by golden sections toward its least
 /// (`g` falls then rises along a line through a convex piece); `None` when it stays positive.
 fn inside_point(g: &impl Fn(f64) -> f64) -> Option<f64> {
-    let k = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut lo, mut hi) = (0.0, 1.0);
-    let (mut x1, mut x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
-    let (mut f1, mut f2) = (g(x1), g(x2));
+    let t = golden(g, |v| v <= 0.0);
+    (g(t) <= 0.0).then_some(t)
+}
+
+/// The last point from `inn` (where `g` is not positive) toward `out` where it is still not
+/// positive, by bisection (`out` itself when `g` is not positive there).
+fn last_inside(g: &impl Fn(f64) -> f64, mut inn: f64, mut out: f64) -> f64 {
+    if g(out) <= 0.0 {
+        return out;
+    }
     for _ in 0..30 {
-        if f1 <= 0.0 {
-            return Some(x1);
-        }
-        if f2 <= 0.0 {
-            return Some(x2);
-        }
-        if f1 <= f2 {
-            hi = x2;
-            (x2, f2) = (x1, f1);
-            x1 = hi - k * (hi - lo);
-            f1 = g(x1);
+        let mid = 0.5 * (inn + out);
+        if g(mid) <= 0.0 {
+            inn = mid;
         } else {
-            lo = x1;
-            (x1, f1) = (x2, f2);
-            x2 = lo + k * (hi - lo);
-            f2 = g(x2);
+            out = mid;
         }
     }
-    [0.0, 0.5 * (lo + hi), 1.0]
-        .into_iter()
-        .find(|&t| g(t) <= 0.0)
+    inn
 }
 
 /// A tetrahedron's six edges as corner pairs.
