@@ -1,13 +1,19 @@
-//! Gaps narrower than the grid: tetrahedra bisected until the mesh no longer bridges them.
+//! Where the grid is too coarse for the tolerance: tetrahedra bisected until marching no
+//! longer misses by more than it allows.
 //!
 //! Two veins a few µm apart are both sampled inside at the corners of one tetrahedron, and
-//! marching joins them: the mesh closes a gap the exact union has. A tetrahedron bridges a gap
-//! when two of its inside corners lie in pieces that the segment between them leaves (it runs
-//! out of the one before it enters the other: each piece is convex, so this is exact along the
-//! segment). Such tetrahedra are bisected until none is left or the finest level is reached;
-//! where no two inside corners are apart, the tetrahedron's inside is covered by its pieces (two
-//! convex pieces that cover a tetrahedron's edges cover the tetrahedron; with three or more, the
-//! centre of the inside corners is checked too).
+//! marching joins them: the mesh closes a gap the exact union has. In a sharp crotch where two
+//! veins meet the chords span the crotch above its floor. A tetrahedron is bisected when
+//! - two of its inside corners lie in veins that do not touch and the segment between them
+//!   leaves the union between those two (each piece near the segment holds one interval of it,
+//!   pieces being convex, so the holes between the intervals are exact): a gap (`Bridge::Gap`);
+//! - the segment leaves the union between two veins that touch but face each other, deeper
+//!   than half the tolerance times the tangent of half the crotch's angle (`crotch`);
+//! - at an edge midpoint or its centre, the sign marching interpolates from the corners is
+//!   wrong by more than half the tolerance (`misplaced`).
+//!
+//! It is bisected until none of these holds or the finest level is reached (what is left there
+//! is counted: gaps apart from crotch ends, which never close).
 //!
 //! Bisection follows Maubach's rule on the Kuhn split: a tetrahedron is an ordered list of
 //! corners x0..x3 and a tag k; it is cut at the midpoint z of x0 and xk into (x0..xk−1, z,
@@ -20,7 +26,7 @@
 //! a face two tetrahedra share.
 //!
 //! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
-//! `eps / FINE` below zero.
+//! `eps / SCALE` below zero.
 
 use std::collections::{HashMap, HashSet};
 
