@@ -371,8 +371,8 @@ pub struct Simplified {
     /// Grid cells split finer before simplifying, where veins come closer than the grid
     /// resolves (so the mesh does not bridge the gap between them).
     pub cells_split: usize,
-    /// Triangles the last check found not held within the tolerance and could not split
-    /// further (0 when every triangle is held whole).
+    /// Triangles the last check still finds more than the tolerance outside the surface after
+    /// its rounds of splitting (0: none).
     pub unheld: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
