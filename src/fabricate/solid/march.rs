@@ -28,6 +28,8 @@ use crate::mesh::TriMesh;
 
 mod adapt;
 
+pub use adapt::FINEST;
+
 /// Cells per brick side.
 const B: usize = 8;
 /// Points per brick side.
@@ -76,8 +78,8 @@ struct Brick {
     inside: [u64; (P * P * P).div_ceil(64)],
     keys: Vec<u32>,
     positions: Vec<DVec3>,
-    /// Cells (local index `(i·B + j)·B + k`) where two veins that do not touch come near each
-    /// other: a gap between them may be narrower than the grid (only when asked for).
+    /// Cells (local index `(i·B + j)·B + k`) that `adapt` is to look at (only when asked for):
+    /// see `close_cells`.
     close: Vec<u16>,
 }
 
@@ -128,7 +130,8 @@ pub struct Marched {
 /// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance), cells where
 /// a gap between veins, or the narrow crotch between two that meet at a sharp angle, may be
 /// narrower than the grid are split finer until no tetrahedron bridges it by more than the
-/// tolerance allows (`adapt`). `progress(done, total)` is called as bricks finish (from several threads).
+/// tolerance allows (`adapt`). `progress(done, total)` is called as bricks finish (from
+/// several threads).
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,
@@ -385,7 +388,7 @@ fn fine_triangles<F: adapt::Field>(
             for (slot, &[i, j]) in ids.iter_mut().zip(&tri) {
                 let (p, q) = (t.v[i as usize], t.v[j as usize]);
                 *slot = if let Some((lo, dir)) = adapt::grid_edge(p, q) {
-                    grid_vertex(bricks, keys, offsets, lo, dir)?
+                    grid_vertex((bricks, keys, offsets), usize::MAX, lo, dir)?
                 } else {
                     let key = if p <= q { (p, q) } else { (q, p) };
                     match made.get(&key) {
@@ -435,11 +438,19 @@ fn drop_unused(mesh: &mut TriMesh) {
     mesh.positions = positions;
 }
 
-/// Whether two pieces' outward directions at `x` are more than 120° apart: their surfaces
-/// face each other there, across a narrow crotch or gap.
-pub(super) fn facing(p: &Primitive, q: &Primitive, x: DVec3, band: f64) -> bool {
+/// The cosine of the angle between two pieces' outward directions at `x`.
+fn outward_cos(p: &Primitive, q: &Primitive, x: DVec3, band: f64) -> f64 {
     let step = 1e-3 * band;
-    p.gradient(x, band, step).dot(q.gradient(x, band, step)) < -0.5
+    p.gradient(x, band, step).dot(q.gradient(x, band, step))
+}
+
+/// Outward directions more than 120° apart: the surfaces face each other, across a narrow
+/// crotch or gap.
+const FACING: f64 = -0.5;
+
+/// Whether two pieces face each other at `x` (`FACING`).
+fn facing(p: &Primitive, q: &Primitive, x: DVec3, band: f64) -> bool {
+    outward_cos(p, q, x, band) < FACING
 }
 
 /// Grid points within the box `a..b`, as an inclusive index range per axis (clamped).
@@ -486,9 +497,9 @@ fn evaluate(
     let last = grid.points.map(|n| n - 1);
     let mut values = [f64::INFINITY; P * P * P];
     // Which piece gave each value (its index in `prims`).
-    let mut which = [u16::MAX; P * P * P];
+    let mut which = [u32::MAX; P * P * P];
     for (n, prim) in prims.iter().enumerate() {
-        let n = n.min(u16::MAX as usize - 1) as u16;
+        let n = n as u32;
         let (a, b) = prim.bounds();
         let range = point_range(grid, a - DVec3::splat(band), b + DVec3::splat(band));
         let span = |axis: usize| {
@@ -600,12 +611,13 @@ fn evaluate(
 }
 
 /// The brick's cells near the surface where the nearest piece changes from corner to corner
-/// and one of those nearest pieces and a piece reaching into the cell do not touch, or face
-/// each other across it (a sharp crotch where they meet): the gap between them may be
-/// narrower than a cell (`adapt` looks closer).
+/// and either the centre is more than half the tolerance on the wrong side of what marching
+/// interpolates there, or one of those nearest pieces and a piece reaching into the cell do
+/// not touch or face each other across it (a gap or a sharp crotch, perhaps narrower than a
+/// cell): `adapt` looks closer.
 fn close_cells(
     values: &[f64; P * P * P],
-    which: &[u16; P * P * P],
+    which: &[u32; P * P * P],
     prims: &[&Primitive],
     (h, band, tol): (f64, f64, f64),
     origin: DVec3,
@@ -613,11 +625,11 @@ fn close_cells(
     let reach = 3f64.sqrt() * h;
     let mut out = Vec::new();
     // Pairs of pieces already told apart or not.
-    let mut seen: Vec<((u16, u16), bool)> = Vec::new();
+    let mut seen: Vec<((u32, u32), bool)> = Vec::new();
     for i in 0..B {
         for j in 0..B {
             for k in 0..B {
-                let mut near = [u16::MAX; 8];
+                let mut near = [u32::MAX; 8];
                 let mut deep = false;
                 for (c, slot) in near.iter_mut().enumerate() {
                     let d = corner(c as u8);
@@ -632,8 +644,8 @@ fn close_cells(
                 }
                 // Where the nearest piece changes, every piece that reaches into the cell is
                 // paired with those nearest pieces (a gap may open beside a third piece).
-                let mut firsts: Vec<u16> =
-                    near.iter().copied().filter(|&p| p != u16::MAX).collect();
+                let mut firsts: Vec<u32> =
+                    near.iter().copied().filter(|&p| p != u32::MAX).collect();
                 firsts.sort_unstable();
                 firsts.dedup();
                 if firsts.len() < 2 {
@@ -642,7 +654,7 @@ fn close_cells(
                 let centre =
                     origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * h;
                 let mut exact = band;
-                let reaching: Vec<u16> = (0..prims.len().min(u16::MAX as usize) as u16)
+                let reaching: Vec<u32> = (0..prims.len() as u32)
                     .filter(|&q| {
                         let v = prims[q as usize].eval(centre, band);
                         exact = exact.min(v);
@@ -718,21 +730,24 @@ fn crossing(a: DVec3, fa: f64, b: DVec3, fb: f64, f: &impl Fn(DVec3) -> f64, eps
 }
 
 /// The index of the vertex on the grid edge from point `g` along direction code `dir`: made by
-/// the brick that holds `g` as one of its own points.
+/// the brick that holds `g` as one of its own points (looked up unless it is brick `hint`).
 fn grid_vertex(
-    bricks: &[Brick],
-    keys: &[u64],
-    offsets: &[usize],
+    (bricks, keys, offsets): (&[Brick], &[u64], &[usize]),
+    hint: usize,
     g: [usize; 3],
     dir: u8,
 ) -> Result<u32, MarchError> {
     let nk = pack(g.map(|c| c / B));
-    let owner = keys.binary_search(&nk).map_err(|_| {
-        MarchError::Internal(format!(
-            "brick {:?} missing for a shared vertex",
-            unpack(nk)
-        ))
-    })?;
+    let owner = if bricks.get(hint).is_some_and(|b| b.key == nk) {
+        hint
+    } else {
+        keys.binary_search(&nk).map_err(|_| {
+            MarchError::Internal(format!(
+                "brick {:?} missing for a shared vertex",
+                unpack(nk)
+            ))
+        })?
+    };
     let lo = g.map(|c| c % B);
     let key = (local(lo[0], lo[1], lo[2]) * 8 + dir as usize) as u32;
     let at = bricks[owner].keys.binary_search(&key).map_err(|_| {
@@ -782,9 +797,8 @@ fn triangles(
                             let o = corner(tet[vi as usize]);
                             let g = [0, 1, 2].map(|a| cell[a] + o[a]);
                             *slot = grid_vertex(
-                                bricks,
-                                keys,
-                                offsets,
+                                (bricks, keys, offsets),
+                                i,
                                 g,
                                 tet[vi as usize] ^ tet[vj as usize],
                             )?;

@@ -465,11 +465,12 @@ pub fn solid_of(
     }
     if let Some(s) = simplified.as_ref().filter(|s| s.gaps_left > 0) {
         warnings.push(format!(
-            "{} places still join veins that do not touch (tetrahedra at the finest split, 1/16 \
+            "{} places still join veins that do not touch (tetrahedra at the finest split, 1/{} \
              of the cell, or cells past the splitting budget): there the mesh bridges a gap \
              narrower than about {:.2} µm or one not looked at",
             s.gaps_left,
-            1000.0 * opts.cell / 16.0
+            march::FINEST,
+            1000.0 * opts.cell / march::FINEST as f64
         ));
     }
     let genus = topo.genus.unwrap_or(0);

@@ -265,10 +265,9 @@ impl<'a> Field<'a> {
     }
 
     /// Whether the triangle `p`, whose corners and centre are within `tol` of the surface, is
-    /// within it everywhere. A convex piece's distance is convex, and the union's is at most
-    /// each piece's: one convex piece within `tol` of all three corners holds the whole
-    /// triangle within `tol` outside (`one_holds`). Else (a triangle across a crease, or along a vein's
-    /// smooth joints) the triangle is sampled at the quarter points of its sides and inside.
+    /// within it everywhere: held by one convex piece (`one_holds`), or else (a triangle
+    /// across a crease, or along a vein's smooth joints) sampled at the quarter points of its
+    /// sides and inside.
     /// `near` are the two pieces least at each corner.
     fn holds(&self, p: &[DVec3; 3], near: [[u32; 2]; 3], tol: f64) -> bool {
         if self.one_holds(p, near, tol) {

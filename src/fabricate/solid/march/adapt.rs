@@ -32,7 +32,7 @@ use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
 
-use super::{corner, Grid, MarchError, TETS};
+use super::{corner, outward_cos, Grid, MarchError, FACING, TETS};
 use crate::fabricate::solid::sdf::{golden, Primitive};
 
 /// A point in fine units: `SCALE` per grid cell.
@@ -43,6 +43,8 @@ pub(super) type Pt = [i64; 3];
 /// few extra cuts that keeping neighbours matched can ask.
 pub(super) const SCALE: i64 = 64;
 const LEVELS: u8 = 12;
+/// The finest split, as cells per grid cell along a side: `2^(LEVELS / 3)`.
+pub const FINEST: usize = 1 << (LEVELS / 3);
 /// The most tetrahedra made (about 300 bytes each with their edges and corners); past it no
 /// more cells are brought in and no more bisected, and what is left is counted.
 const MAX_TETS: usize = 6_000_000;
@@ -414,10 +416,11 @@ impl<'a, F: Field> Adapt<'a, F> {
     }
 
     /// Whether the segment from `a` to `b` (both inside) leaves the union between two pieces
-    /// that do not touch: across a gap. Where it leaves between pieces that touch, it crosses
-    /// the crease where they meet, which the simplifier's refinement follows (bisecting there
-    /// would not end). Each piece near the segment holds an interval of it (pieces are
-    /// convex); the holes between the intervals are where it is outside.
+    /// that do not touch (across a gap) or across a crotch too deep to leave (`crotch`).
+    /// Where it leaves between pieces that touch otherwise, it crosses a crease, which the
+    /// simplifier's refinement follows (bisecting there would not end). Each piece near the
+    /// segment holds an interval of it (pieces are convex); the holes between the intervals
+    /// are where it is outside.
     fn across_gap(&mut self, a: DVec3, b: DVec3, cell: [usize; 3]) -> Option<Bridge> {
         let half = 0.5 * a.distance(b);
         let centre = a.lerp(b, 0.5);
@@ -458,12 +461,13 @@ impl<'a, F: Field> Adapt<'a, F> {
     /// apart) and the hole is deep enough that the crotch below the bridge (about its depth
     /// over the tangent of half the crotch's angle) is more than half the tolerance deep.
     fn crotch(&self, p: u32, q: u32, m: DVec3, cell: [usize; 3]) -> bool {
-        let (pp, pq) = (&self.prims[p as usize], &self.prims[q as usize]);
-        let step = 1e-3 * self.band;
-        let cos = pp
-            .gradient(m, self.band, step)
-            .dot(pq.gradient(m, self.band, step));
-        if cos >= -0.5 {
+        let cos = outward_cos(
+            &self.prims[p as usize],
+            &self.prims[q as usize],
+            m,
+            self.band,
+        );
+        if cos >= FACING {
             return false;
         }
         // The crotch's opening angle is π less the angle between the outward directions.
