@@ -926,7 +926,10 @@ struct Done {
 }
 
 /// Counting sort of (key, item) pairs: (start, items), key k's items at start[k]..start[k + 1].
-fn group(n: usize, items: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<u32>, Vec<u32>) {
+pub(super) fn group(
+    n: usize,
+    items: impl Iterator<Item = (u32, u32)> + Clone,
+) -> (Vec<u32>, Vec<u32>) {
     let mut start = vec![0u32; n + 1];
     for (k, _) in items.clone() {
         start[k as usize + 1] += 1;

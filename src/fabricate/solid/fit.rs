@@ -1,0 +1,243 @@
+//! Fitting a marched mesh to the surface on average.
+//!
+//! Marching puts every vertex on the exact surface, so between vertices the mesh cuts chords:
+//! inside the surface where it is convex (a vein), outside where it is concave (a crotch). On a
+//! thin vein that is a steady loss: at the 35 µm pixel the demo's print leaf (veins of 80 µm
+//! and more) lost 0.3 % of each layer's area, and a slicer lit fewer pixels than the network's
+//! solid covers.
+//!
+//! Here each vertex moves once along its normal, so that the triangles around it lie on the
+//! surface on average. A triangle's mean signed distance to a surface that curves evenly across
+//! it (a quadratic) is ¾ of the distance at its centroid plus ¼ of the mean at its corners (the
+//! quadrature rule exact for quadratics); its corners are on the surface, so it is ¾ of the
+//! centroid's. Each vertex moves by minus the area-weighted mean of that over its triangles.
+//! The chords then cross the surface instead of lying under it: the mesh's volume and its
+//! sections' areas are the exact solid's to second order (the leaf's layers within 0.04 % on
+//! average, from 0.3 %), and its distance from the surface is about a third of a chord's
+//! sagitta either way instead of all of it inward.
+//!
+//! No vertex leaves the solid's exact box, so the mesh is exactly as tall as the solid and a
+//! slicer cuts it into as many layers. A move that would turn a triangle by more than 60° (a
+//! sliver, or two vertices whose normals differ a lot) is not made: that triangle's vertices
+//! stay on the surface.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::simplify::{group, Field};
+use crate::mesh::TriMesh;
+
+/// A triangle may turn by at most this angle's cosine.
+const MIN_TURN_COS: f64 = 0.5;
+
+/// What fitting did.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Fitted {
+    /// Vertices moved.
+    pub moved: usize,
+    /// Vertices left on the surface so that no triangle turns over.
+    pub held: usize,
+    /// The longest move, mm.
+    pub largest_move_mm: f64,
+}
+
+/// Moves the vertices of `mesh`, each on the surface of `field`, so that its triangles lie on
+/// that surface on average, none leaving `bounds` (see the module doc).
+pub fn fit(mesh: &mut TriMesh, field: &Field, bounds: (DVec3, DVec3)) -> Fitted {
+    let pos = &mesh.positions;
+    let tris = &mesh.triangles;
+    // Each triangle's mean signed distance to the surface: its corners are on it.
+    let mean: Vec<f32> = tris
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| pos[i as usize]);
+            (0.75 * field.eval((a + b + c) / 3.0)) as f32
+        })
+        .collect();
+    // Each vertex's triangles.
+    let around = group(
+        pos.len(),
+        tris.iter()
+            .enumerate()
+            .flat_map(|(k, t)| t.map(|i| (i, k as u32))),
+    );
+    let area = |k: u32| {
+        let [a, b, c] = tris[k as usize].map(|i| pos[i as usize]);
+        0.5 * (b - a).cross(c - a)
+    };
+    let step: Vec<DVec3> = (0..pos.len())
+        .into_par_iter()
+        .map(|v| {
+            let (mut m, mut w, mut normal) = (0.0, 0.0, DVec3::ZERO);
+            for &k in neighbours(&around, v as u32) {
+                let a = area(k);
+                m += a.length() * mean[k as usize] as f64;
+                w += a.length();
+                normal += a;
+            }
+            let len = normal.length();
+            let p = pos[v];
+            if w > 0.0 && len > 0.0 && (m / w).is_finite() {
+                // Nothing of the solid lies outside its exact box.
+                (p - (m / w) * normal / len).clamp(bounds.0, bounds.1) - p
+            } else {
+                DVec3::ZERO
+            }
+        })
+        .collect();
+    drop(mean);
+    let largest_move_mm = step.iter().map(|s| s.length()).fold(0.0, f64::max);
+    let (moved, held) = apply(mesh, &around, &step);
+    Fitted {
+        moved,
+        held,
+        largest_move_mm,
+    }
+}
+
+/// Vertex `v`'s triangles in `around`.
+fn neighbours(around: &(Vec<u32>, Vec<u32>), v: u32) -> &[u32] {
+    let (start, list) = around;
+    &list[start[v as usize] as usize..start[v as usize + 1] as usize]
+}
+
+/// Moves each vertex by its step unless that turns one of its triangles over (or by more than
+/// 60°): such triangles' vertices are held, until no triangle turns. `around` lists each
+/// vertex's triangles. Returns the vertices moved and held.
+fn apply(mesh: &mut TriMesh, around: &(Vec<u32>, Vec<u32>), step: &[DVec3]) -> (usize, usize) {
+    let pos = &mesh.positions;
+    let mut hold = vec![false; pos.len()];
+    // Triangles to look at: all, then those around the vertices just held.
+    let mut look: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+    while !look.is_empty() {
+        let at = |i: u32| {
+            let i = i as usize;
+            if hold[i] {
+                pos[i]
+            } else {
+                pos[i] + step[i]
+            }
+        };
+        let turned: Vec<u32> = look
+            .par_iter()
+            .copied()
+            .filter(|&k| {
+                let t = mesh.triangles[k as usize];
+                let [a, b, c] = t.map(|i| pos[i as usize]);
+                let before = (b - a).cross(c - a);
+                let [a, b, c] = t.map(at);
+                let after = (b - a).cross(c - a);
+                let lens = before.length() * after.length();
+                !(lens > 0.0 && before.dot(after) >= MIN_TURN_COS * lens)
+            })
+            .collect();
+        look.clear();
+        for k in turned {
+            for &i in &mesh.triangles[k as usize] {
+                if !std::mem::replace(&mut hold[i as usize], true) {
+                    look.extend_from_slice(neighbours(around, i));
+                }
+            }
+        }
+        look.sort_unstable();
+        look.dedup();
+    }
+    let mut moved = 0;
+    for (i, p) in mesh.positions.iter_mut().enumerate() {
+        if !hold[i] && step[i] != DVec3::ZERO {
+            *p += step[i];
+            moved += 1;
+        }
+    }
+    (moved, hold.iter().filter(|&&h| h).count())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fabricate::solid::march::mesh_union;
+    use crate::fabricate::solid::sdf::{Primitive, RoundCone};
+
+    /// A capsule of radius 1 and length 2 along x, meshed coarsely: (prims, exact volume).
+    fn capsule() -> (Vec<Primitive>, f64) {
+        let a = DVec3::new(-1.0, 0.0, 0.0);
+        let prims = vec![Primitive::Cone(RoundCone::new(a, -a, 1.0, 1.0))];
+        (prims, std::f64::consts::PI * (2.0 + 4.0 / 3.0))
+    }
+
+    #[test]
+    fn fitting_brings_a_coarse_capsule_to_its_volume_and_area_and_keeps_it_closed() {
+        let (prims, want) = capsule();
+        let cell = 0.2;
+        let (mut mesh, _) = mesh_union(&prims, cell, None, &|_, _| {}).unwrap();
+        let before = mesh.signed_volume();
+        let field = Field::new(&prims, 2.0 * cell);
+        let bounds = (DVec3::new(-2.0, -1.0, -1.0), DVec3::new(2.0, 1.0, 1.0));
+        let done = fit(&mut mesh, &field, bounds);
+        let after = mesh.signed_volume();
+        // Chords of a fifth of the radius cut about 1 % off; fitted, the mesh is off by far less.
+        assert!((want - before) / want > 0.005, "marched {before} vs {want}");
+        assert!(
+            ((after - want) / want).abs() < 0.1 * (want - before) / want,
+            "fitted {after}, marched {before}, exact {want}"
+        );
+        let topo = mesh.check_manifold();
+        assert!(topo.is_manifold() && topo.closed);
+        assert_eq!(topo.genus, Some(0));
+        assert!(done.moved > mesh.positions.len() / 2, "{done:?}");
+        // Within the exact box, and much closer to the surface both ways than a chord.
+        let bbox = mesh.bbox();
+        assert!(bbox.min.cmpge(bounds.0).all() && bbox.max.cmple(bounds.1).all());
+        let worst = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| {
+                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                [
+                    a,
+                    b,
+                    c,
+                    (a + b) / 2.0,
+                    (b + c) / 2.0,
+                    (c + a) / 2.0,
+                    (a + b + c) / 3.0,
+                ]
+            })
+            .map(|p| field.eval(p).abs())
+            .fold(0.0, f64::max);
+        // A chord of up to a cell's diagonal on radius 1 lies up to 3·0.04/8 = 0.015 inside.
+        assert!(worst < 0.012, "farthest point {worst}");
+    }
+
+    #[test]
+    fn a_move_that_would_turn_a_triangle_over_is_not_made() {
+        // Two triangles sharing an edge; moving vertex 3 across the shared edge flips the second.
+        let mut mesh = TriMesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::new(1.0, 1.0, 0.0)],
+            triangles: vec![[0, 1, 2], [1, 3, 2]],
+            colors: None,
+        };
+        let step = [
+            DVec3::ZERO,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            DVec3::new(-1.5, -1.5, 0.0),
+        ];
+        let around = group(
+            4,
+            [(0, 0), (1, 0), (2, 0), (1, 1), (3, 1), (2, 1)].into_iter(),
+        );
+        let (moved, held) = apply(&mut mesh, &around, &step);
+        assert_eq!((moved, held), (0, 3));
+        assert_eq!(mesh.positions[3], DVec3::new(1.0, 1.0, 0.0));
+        // A small move is made.
+        let step = [
+            DVec3::ZERO,
+            DVec3::ZERO,
+            DVec3::ZERO,
+            DVec3::new(0.1, 0.0, 0.0),
+        ];
+        assert_eq!(apply(&mut mesh, &around, &step), (1, 0));
+        assert_eq!(mesh.positions[3], DVec3::new(1.1, 1.0, 0.0));
+    }
+}
