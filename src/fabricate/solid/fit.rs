@@ -13,8 +13,11 @@
 //! centroid's. Each vertex moves by minus the area-weighted mean of that over its triangles.
 //! The chords then cross the surface instead of lying under it: the mesh's volume and its
 //! sections' areas are the exact solid's to second order (the leaf's layers within 0.04 % on
-//! average, from 0.3 %), and its distance from the surface is about a third of a chord's
-//! sagitta either way instead of all of it inward.
+//! average, from 0.3 %), and its farthest point from the surface is nearer, either way instead
+//! of inward (`validators/check_hausdorff.py`: a capsule of radius 1 at cell 0.2, 14.6 µm
+//! inward marched, 8.8 µm fitted, its volume −0.85 % and −0.06 %). Creases where veins meet,
+//! which marching rounds within a cell, stay about as they were (`small_loop.json` at cell 0.1:
+//! 33.5 µm marched, 28.0 µm fitted, both at creases).
 //!
 //! No vertex leaves the solid's exact box, so the mesh is exactly as tall as the solid and a
 //! slicer cuts it into as many layers. A move that would turn a triangle by more than 60° (a
