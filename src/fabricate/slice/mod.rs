@@ -10,11 +10,13 @@
 //! (largest y), column 0 its left edge, as PrusaSlicer draws them. The layers, in order, are
 //! where `islands` looks for regions that start in free resin.
 
+mod grey;
 pub mod islands;
 mod raster;
 pub mod shapes;
 pub mod supports;
 
+use std::ops::Range;
 use std::path::PathBuf;
 
 use crate::text::num;
@@ -24,6 +26,7 @@ use rayon::prelude::*;
 use crate::geom::mix64 as mix;
 use crate::mesh::TriMesh;
 
+pub use grey::encode_grey;
 pub use raster::Coverage;
 
 /// A masked-SLA printer: its display and its motion.
@@ -583,23 +586,39 @@ pub fn slice<E>(
 }
 
 /// Makes items `0..count` in parallel batches of a few per thread and hands each, in order, to
-/// `sink`: layers are made on every core while memory stays at a few dozen images.
+/// `sink`: layers are made on every core while memory stays at a few dozen images. The next
+/// batch is made while `sink` takes the last one, so a slow sink (islands, the archive) does
+/// not leave the cores idle.
 pub fn in_batches<T: Send, E>(
     count: usize,
     make: impl Fn(usize) -> T + Sync,
     mut sink: impl FnMut(usize, T) -> Result<(), E>,
 ) -> Result<(), E> {
     let batch = 4 * rayon::current_num_threads().max(1);
-    let mut next = 0;
-    while next < count {
-        let end = (next + batch).min(count);
-        let done: Vec<T> = (next..end).into_par_iter().map(&make).collect();
-        for (k, item) in done.into_iter().enumerate() {
-            sink(next + k, item)?;
+    let make = &make;
+    let run = |items: Range<usize>| -> Vec<T> { items.into_par_iter().map(make).collect() };
+    std::thread::scope(|scope| {
+        let mut start = 0;
+        let mut done = run(0..batch.min(count));
+        while !done.is_empty() {
+            let next = start + done.len();
+            let making = (next < count).then(|| {
+                let items = next..(next + batch).min(count);
+                scope.spawn(move || run(items))
+            });
+            for (k, item) in done.into_iter().enumerate() {
+                sink(start + k, item)?;
+            }
+            start = next;
+            done = match making {
+                Some(thread) => thread
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+                None => Vec::new(),
+            };
         }
-        next = end;
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 fn layer(
@@ -692,19 +711,39 @@ fn crossing(mesh: &TriMesh, a: u32, b: u32, z: f64) -> DVec2 {
     p.truncate().lerp(q.truncate(), t)
 }
 
-/// An 8-bit grey PNG, fast compression (the images are mostly black).
-pub fn encode_grey(image: &[u8], w: u32, h: u32) -> Vec<u8> {
-    let mut out = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut out, w, h);
-        enc.set_color(png::ColorType::Grayscale);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.set_compression(png::Compression::Balanced);
-        enc.set_filter(png::Filter::NoFilter);
-        let mut writer = enc.write_header().expect("PNG header into memory");
-        writer
-            .write_image_data(image)
-            .expect("PNG data into memory");
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batches_reach_the_sink_in_order_and_stop_at_its_first_error() {
+        for count in [0, 1, 7, 8, 9, 50] {
+            let mut seen = Vec::new();
+            in_batches(
+                count,
+                |i| i * i,
+                |i, item| {
+                    seen.push((i, item));
+                    Ok::<(), ()>(())
+                },
+            )
+            .expect("no error");
+            assert_eq!(seen, (0..count).map(|i| (i, i * i)).collect::<Vec<_>>());
+        }
+        let mut taken = 0;
+        let stopped = in_batches(
+            100,
+            |i| i,
+            |i, _| {
+                taken += 1;
+                if i == 20 {
+                    Err(i)
+                } else {
+                    Ok(())
+                }
+            },
+        );
+        assert_eq!(stopped, Err(20));
+        assert_eq!(taken, 21, "nothing after the error reaches the sink");
     }
-    out
 }

@@ -28,7 +28,7 @@ use std::ops::Range;
 use glam::{DVec2, DVec3};
 
 use super::{encode_grey, in_batches, Layer, Placement, Printer};
-use crate::fabricate::solid::sdf::Primitive;
+use crate::fabricate::solid::sdf::{Primitive, RoundCone};
 use crate::fabricate::solid::{placing_shift, Shapes};
 
 /// Pixels per tile side.
@@ -187,6 +187,17 @@ impl Placed {
         let (p, q) = (a.lerp(b, t0).truncate(), a.lerp(b, t1).truncate());
         Some((p.min(q) - DVec2::splat(r), p.max(q) + DVec2::splat(r)))
     }
+
+    /// Each round cone as copy `p` stands on the plate, so a point of the plate is measured
+    /// without being moved back into the shapes' frame (`None` for other pieces).
+    fn on_plate(&self, p: &Placement) -> Vec<Option<RoundCone>> {
+        let off = DVec3::from(p.offset);
+        let put = |v: DVec3| turn(v.truncate(), p.turned).extend(v.z) + off;
+        self.balls
+            .iter()
+            .map(|balls| balls.map(|(a, ra, b, rb)| RoundCone::new(put(a), put(b), ra, rb)))
+            .collect()
+    }
 }
 
 /// How many layers the placed solid needs.
@@ -204,10 +215,11 @@ pub fn slice<E>(
     mut sink: impl FnMut(Layer) -> Result<(), E>,
 ) -> Result<usize, E> {
     let layers = layer_count(model, printer);
+    let plate = Plate::new(model, placed);
     in_batches(
         layers,
         |i| {
-            let (image, area) = image(model, placed, printer, i);
+            let (image, area) = image(&plate, printer, i);
             Layer {
                 index: i,
                 png: encode_grey(&image, printer.pixels_x, printer.pixels_y),
@@ -229,8 +241,28 @@ struct Entry {
     piece: u32,
 }
 
+/// Copies of a placed solid on the plate, ready to be sliced.
+pub struct Plate<'a> {
+    model: &'a Placed,
+    placed: &'a [Placement],
+    /// Each copy's round cones where the copy stands (`Placed::on_plate`).
+    cones: Vec<Vec<Option<RoundCone>>>,
+}
+
+impl<'a> Plate<'a> {
+    pub fn new(model: &'a Placed, placed: &'a [Placement]) -> Plate<'a> {
+        let cones = placed.iter().map(|p| model.on_plate(p)).collect();
+        Plate {
+            model,
+            placed,
+            cones,
+        }
+    }
+}
+
 /// Layer `i`'s grey image and its area (Σ grey / 255 × pixel area, mm²).
-pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) -> (Vec<u8>, f64) {
+pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
+    let (model, placed, cones) = (plate.model, plate.placed, &plate.cones);
     let z = (i as f64 + 0.5) * printer.layer_mm;
     let px = printer.pixel_mm;
     let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
@@ -283,6 +315,9 @@ pub fn image(model: &Placed, placed: &[Placement], printer: &Printer, i: usize) 
         let (c1, r1) = ((c0 + TILE).min(w), (r0 + TILE).min(h));
         let at = |col: f64, row: f64| DVec3::new(col * px, (h as f64 - row) * px, z);
         let piece = |en: &Entry, q: DVec3, reach: f64| {
+            if let Some(cone) = &cones[en.copy as usize][en.piece as usize] {
+                return cone.eval(q);
+            }
             let p = &placed[en.copy as usize];
             let local = turn_back(
                 q.truncate() - DVec2::new(p.offset[0], p.offset[1]),

@@ -25,7 +25,7 @@
 use glam::{DVec2, DVec3};
 
 use super::islands::{Island, Islands};
-use super::shapes::{image, layer_count, Placed};
+use super::shapes::{image, layer_count, Placed, Plate};
 use super::{in_batches, Placement, Printer};
 use crate::fabricate::solid::sdf::{Cylinder, Primitive, RoundCone};
 
@@ -405,9 +405,10 @@ fn find_islands(
     let layers = layer_count(model, &grid);
     let mut finder = Islands::new(w, h, px, grid.layer_mm);
     let (mut list, mut area) = (Vec::new(), 0.0);
+    let plate = Plate::new(model, std::slice::from_ref(&place));
     in_batches(
         layers,
-        |i| image(model, std::slice::from_ref(&place), &grid, i),
+        |i| image(&plate, &grid, i),
         |i, (img, a)| {
             area += a;
             list.extend(finder.layer_owned(i, img));
