@@ -11,7 +11,8 @@ at least --min-pixels lit pixels (sum of grey / 255) in the mesh's image:
   at least --iou-mean on average over them;
 - the relative difference of their areas (sum of grey): at most --area-mean on average.
 Over all layers, the two volumes (sum of grey) agree within --volume-tol.
-Prints the worst layers. Exit 0 pass, 1 fail.
+Prints the worst layers, and the grey IoU (sum of the lesser grey over sum of the greater, which
+no threshold makes jump) for information. Exit 0 pass, 1 fail, 2 an input is not a zip.
 """
 import argparse
 import io
@@ -25,7 +26,11 @@ from PIL import Image
 
 def layer_images(path):
     """The archive and its layer PNGs at the top level, in layer order (NNNNN.png)."""
-    z = zipfile.ZipFile(path)
+    try:
+        z = zipfile.ZipFile(path)
+    except (OSError, zipfile.BadZipFile) as e:
+        print(f"{path}: not an SL1 archive ({e})", file=sys.stderr)
+        sys.exit(2)
     found = {}
     for name in z.namelist():
         m = re.fullmatch(r"[^/]*?(\d{5})\.png", name)
@@ -75,15 +80,18 @@ def main():
         ma, mb = ga >= 128, gb >= 128
         union = (ma | mb).sum()
         iou = (ma & mb).sum() / union if union else 1.0
-        rows.append((iou, abs(area_a - area_b) / area_b, i, int((ma ^ mb).sum()), int(union)))
+        soft = np.minimum(ga, gb).sum() / np.maximum(ga, gb).sum()
+        rows.append((iou, abs(area_a - area_b) / area_b, i, int((ma ^ mb).sum()), int(union), soft))
     if not rows:
         failures.append(f"no layer has {a.min_pixels:g} lit pixels")
     else:
         ious = np.array([r[0] for r in rows])
         areas = np.array([r[1] for r in rows])
-        for iou, _, i, flipped, union in sorted(rows)[:3]:
-            print(f"  layer {i}: IoU {iou:.5f} ({flipped} of {union} pixels differ)")
-        for iou, _, i, flipped, union in rows:
+        softs = np.array([r[5] for r in rows])
+        for iou, _, i, flipped, union, soft in sorted(rows)[:3]:
+            print(f"  layer {i}: IoU {iou:.5f} ({flipped} of {union} pixels differ), grey IoU {soft:.5f}")
+        print(f"  grey IoU: min {softs.min():.5f} (layer {rows[int(softs.argmin())][2]}), mean {softs.mean():.5f}")
+        for iou, _, i, flipped, union, _ in rows:
             if iou < a.iou_min:
                 failures.append(f"layer {i}: IoU {iou:.5f} below {a.iou_min} ({flipped} of {union} pixels differ)")
         if ious.mean() < a.iou_mean:

@@ -2,7 +2,8 @@
 lamina): each layer image against the true section of the veins, found by supersampling.
 
     check_print_sdf.py JOB.sl1 --report print.json --network NET.json
-                       [--every 3] [--supersample 8|16|32] [--iou 0.999] [--area-tol 0.0005]
+                       [--every 3 | --layers 857,864] [--supersample 8|16|32] [--iou 0.999]
+                       [--area-tol 0.0005] [--mesh MESH.sl1]
 
 The solid is rebuilt here from the network alone: each edge the convex hull of a ball at each
 end; at a node with a radius, its two thickest edges (ties by edge order) take the node's radius
@@ -14,6 +15,9 @@ the section (points within a pixel of the surface only; the rest are wholly in o
 - the grey image's IoU with the true coverage, sum(min) / sum(max), at least --iou;
 - the image's area (sum grey / 255 x pixel area) within --area-tol of the true area, on layers
   of at least 1 mm2, and in total over the checked layers.
+--mesh: another archive on the same pixels (`solid` then `slice`), reported beside JOB on each
+checked layer against the same true section (masks at half grey and grey IoU, area), to tell
+which of the two a disagreement between them comes from; it is not checked.
 Veins only (no --lamina or --base: their outlines are not rebuilt here). Exit 0 pass, 1 fail.
 """
 import argparse
@@ -53,6 +57,8 @@ def main():
     ap.add_argument("--report", required=True)
     ap.add_argument("--network", required=True)
     ap.add_argument("--every", type=int, default=3)
+    ap.add_argument("--layers", help="comma-separated layer numbers, instead of --every")
+    ap.add_argument("--mesh", help="an archive to report beside JOB against the same sections")
     ap.add_argument("--supersample", type=int, default=16)
     ap.add_argument("--iou", type=float, default=0.999)
     ap.add_argument("--area-tol", type=float, default=0.0005)
@@ -101,7 +107,24 @@ def main():
     sub_y = ((k * step) % N + 0.5) / N - 0.5
     failures, worst, tot_img, tot_true = [], (2.0, -1), 0.0, 0.0
     checked = 0
-    for i in range(0, len(names), a.every):
+    if a.layers:
+        try:
+            chosen = [int(x) for x in a.layers.split(",")]
+        except ValueError:
+            print(f"--layers {a.layers}: not a list of layer numbers")
+            return 2
+        if any(not 0 <= i < len(names) for i in chosen):
+            print(f"--layers {a.layers}: the archive has layers 0..{len(names) - 1}")
+            return 2
+    else:
+        chosen = range(0, len(names), a.every)
+    if a.mesh:
+        zm = zipfile.ZipFile(a.mesh)
+        mesh_names = sorted(n for n in zm.namelist() if n.endswith(".png") and not n.startswith("thumbnail"))
+        if len(mesh_names) != len(names):
+            print(f"{a.mesh}: {len(mesh_names)} layer images, {a.job} has {len(names)}")
+            return 1
+    for i in chosen:
         img = np.asarray(Image.open(io.BytesIO(z.read(names[i]))), dtype=np.float64) / 255.0
         zc = (i + 0.5) * lh
         truth = np.zeros((H, W))
@@ -129,6 +152,21 @@ def main():
                 cov[edge] = inside
             truth[r0:r1, c0:c1] = np.maximum(truth[r0:r1, c0:c1], cov)
         checked += 1
+        if a.mesh:
+            mesh = np.asarray(Image.open(io.BytesIO(zm.read(mesh_names[i]))), dtype=np.float64) / 255.0
+            if mesh.shape != truth.shape:
+                print(f"{a.mesh}: layer {i} is {mesh.shape}, the display {truth.shape}")
+                return 1
+
+            def against(im):
+                mi, mt = im >= 0.5, truth >= 0.5
+                union = max(int((mi | mt).sum()), 1)
+                grey = np.minimum(im, truth).sum() / max(np.maximum(im, truth).sum(), 1e-12)
+                off = 100 * (im.sum() - truth.sum()) / max(truth.sum(), 1e-12)
+                return (f"masks {(mi & mt).sum() / union:.5f} ({int((mi ^ mt).sum())} of {union} pixels), "
+                        f"grey {grey:.5f}, area {off:+.3f} %")
+
+            print(f"  layer {i} against the true section: {a.job}: {against(img)}; {a.mesh}: {against(mesh)}")
         ai, at = img.sum() * px * px, truth.sum() * px * px
         tot_img += ai
         tot_true += at

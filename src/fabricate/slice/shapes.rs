@@ -12,7 +12,9 @@
 //!
 //! # Anti-aliasing
 //! A pixel's grey is the area of it the section covers, as `slice` computes exactly for a
-//! mesh's contours. Pixels 0.75 pixel or more from the surface in 3D are wholly in or out.
+//! mesh's contours. A pixel whose centre is at least half its diagonal (√½ pixel) from the
+//! surface in 3D is wholly in or out: the section's edge, on the surface, is at least as far in
+//! the plane.
 //! Each of the others is cut into 4 × 4 sub-pixels, and in each the section's edge is taken as
 //! straight: the 3D distance d at the sub-pixel's centre and the in-plane gradient g of the
 //! distance (second-order differences of the neighbouring centres' values) give the edge's
@@ -23,6 +25,7 @@
 //! pixels by up to 6 % of their area, and left a pixel whose centre lies between a vein's axis
 //! and a neighbouring piece dark where it was wholly inside.
 
+use std::f64::consts::FRAC_1_SQRT_2;
 use std::ops::Range;
 
 use glam::{DVec2, DVec3};
@@ -298,7 +301,7 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
     entries.sort_unstable();
     let mut image = vec![0u8; w * h];
     let mut total = 0u64;
-    let reach_tile = TILE as f64 * px * std::f64::consts::FRAC_1_SQRT_2 + px;
+    let reach_tile = TILE as f64 * px * FRAC_1_SQRT_2 + px;
     let (mut values, mut near) = (Vec::new(), Vec::new());
     let mut s = 0;
     while s < entries.len() {
@@ -345,7 +348,7 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
         // Quarters of the tile (4 × 4 pixels) far from the surface are wholly dark or lit the
         // same way, without a look at each pixel: every pixel centre of a quarter lies within
         // 1.5·√2 pixels of the quarter's centre.
-        let reach_quarter = (1.5 * std::f64::consts::SQRT_2 + 0.75) * px;
+        let reach_quarter = (1.5 * std::f64::consts::SQRT_2 + FRAC_1_SQRT_2) * px;
         for (qr0, qc0) in [
             (r0, c0),
             (r0, c0 + HALF),
@@ -377,9 +380,9 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
                     values.clear();
                     values.extend(group.iter().map(|en| piece(en, q, px)));
                     let d = values.iter().copied().fold(f64::INFINITY, f64::min);
-                    let grey = if d >= 0.75 * px {
+                    let grey = if d >= FRAC_1_SQRT_2 * px {
                         0
-                    } else if d <= -0.75 * px {
+                    } else if d <= -FRAC_1_SQRT_2 * px {
                         255
                     } else {
                         // The sub-pixel centres lie within 0.375·√2 < 0.55 pixel of the pixel's:
