@@ -8,7 +8,9 @@
 //! crosses the layer's plane lists itself in the tiles its cross-section can reach (a round
 //! cone's from the stretch of its axis within its larger radius of the plane). A tile whose
 //! centre is farther from the surface than the tile's half-diagonal is wholly dark or wholly lit
-//! (the distance is 1-Lipschitz); the others are sampled pixel by pixel.
+//! (the distance is 1-Lipschitz); the others are sampled pixel by pixel. Round cones (the veins)
+//! are moved onto the plate once, where each copy stands, so a sample is measured where it is;
+//! other pieces get the sample moved back into their own frame.
 //!
 //! # Anti-aliasing
 //! A pixel's grey is the area of it the section covers, as `slice` computes exactly for a
