@@ -309,6 +309,41 @@ mod tests {
         }
     }
 
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig {
+            cases: 64,
+            ..proptest::prelude::ProptestConfig::default()
+        })]
+
+        /// Any mix of dark rows (alone, in short and long runs) and rows with a few lit pixels
+        /// of any grey, at any width.
+        #[test]
+        fn any_rows_come_back(
+            width in 1usize..700,
+            kinds in proptest::collection::vec((0u8..4, 0usize..700, 1u8..=255), 1..80),
+        ) {
+            let img: Vec<u8> = kinds
+                .iter()
+                .flat_map(|&(kind, at, grey)| {
+                    (0..width).map(move |c| match kind {
+                        0 | 1 => 0,
+                        2 => (c == at % width) as u8 * grey,
+                        _ => ((c * 7 + at) % 5 == 0) as u8 * grey,
+                    })
+                })
+                .collect();
+            let h = kinds.len();
+            let (back, bw, bh) = decoded(&encode_grey(&img, width as u32, h as u32));
+            proptest::prop_assert_eq!((bw as usize, bh as usize), (width, h));
+            proptest::prop_assert!(back == img);
+            let rows: Vec<u8> = img
+                .chunks_exact(width)
+                .flat_map(|row| std::iter::once(0).chain(row.iter().copied()))
+                .collect();
+            proptest::prop_assert!(inflated(&img, width, h) == rows);
+        }
+    }
+
     #[test]
     fn a_dark_display_is_a_few_kilobytes() {
         let img = vec![0u8; 1920 * 1080];
