@@ -18,7 +18,8 @@ the section (points within a pixel of the surface only; the rest are wholly in o
 --mesh: another archive on the same pixels (`solid` then `slice`), reported beside JOB on each
 checked layer against the same true section (masks at half grey and grey IoU, area), to tell
 which of the two a disagreement between them comes from; it is not checked.
-Veins only (no --lamina or --base: their outlines are not rebuilt here). Exit 0 pass, 1 fail.
+Veins only (no --lamina or --base: their outlines are not rebuilt here). Exit 0 pass, 1 fail,
+2 a bad --layers, --every or --mesh.
 """
 import argparse
 import io
@@ -116,10 +117,17 @@ def main():
         if any(not 0 <= i < len(names) for i in chosen):
             print(f"--layers {a.layers}: the archive has layers 0..{len(names) - 1}")
             return 2
+    elif a.every < 1:
+        print(f"--every {a.every}: must be 1 or more")
+        return 2
     else:
         chosen = range(0, len(names), a.every)
     if a.mesh:
-        zm = zipfile.ZipFile(a.mesh)
+        try:
+            zm = zipfile.ZipFile(a.mesh)
+        except (OSError, zipfile.BadZipFile) as e:
+            print(f"{a.mesh}: not an SL1 archive ({e})")
+            return 2
         mesh_names = sorted(n for n in zm.namelist() if n.endswith(".png") and not n.startswith("thumbnail"))
         if len(mesh_names) != len(names):
             print(f"{a.mesh}: {len(mesh_names)} layer images, {a.job} has {len(names)}")

@@ -4,7 +4,7 @@
 //! drawing the layer did. So each run of wholly dark rows is written as a deflate block of our
 //! own: a literal zero, then copies of 258 bytes from one byte back, two bits each (a block
 //! with dynamic codes that has only those symbols), as small as zlib makes such a run. The rows
-//! between go through zlib (level 6, as before), one sync-flushed piece each. The result is one
+//! between go through zlib (level 6), one sync-flushed piece each. The result is one
 //! ordinary zlib stream in one IDAT chunk: 8-bit grey, no filter, as any PNG reader expects.
 
 use zlib_rs::{Deflate, DeflateFlush};

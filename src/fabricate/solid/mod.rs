@@ -29,9 +29,9 @@
 //! at 256 segments, the small fixture network (radii 0.3–1 mm) at h = 0.1 mm is 0.015 % apart
 //! in volume, its symmetric difference 0.12 % (marched alone: 0.18 % and 0.28 %; at 64
 //! segments the polygons themselves are 0.29 % small). Creases between veins are rounded
-//! within one cell. The default cell is the printer's pixel (35 µm): finer than that cannot be printed. A
-//! vein thinner than about h may break into pieces or vanish. With `tolerance` the mesh is not
-//! fitted: the simplifier holds it within the tolerance of the surface instead.
+//! within one cell. The default cell is the printer's pixel (35 µm): finer than that cannot be
+//! printed. A vein thinner than about h may break into pieces or vanish. With `tolerance` the
+//! mesh is not fitted: the simplifier holds it within the tolerance of the surface instead.
 //!
 //! Two veins closer than a cell's diagonal can both be sampled inside at the corners of one
 //! tetrahedron: the marched mesh bridges the gap between them (the report's genus says so).
