@@ -100,10 +100,17 @@ fn config_ini(p: &Printer, job: &Job) -> String {
     )
 }
 
+/// `x` to six decimals, without trailing zeros.
+fn mm(x: f64) -> String {
+    let s = format!("{x:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// The printer and material settings readers look for, in PrusaSlicer's names.
 fn printer_ini(p: &Printer) -> String {
-    let w = p.pixels_x as f64 * p.pixel_mm;
-    let h = p.pixels_y as f64 * p.pixel_mm;
+    // To the nanometre, as PrusaSlicer writes them: 1080 × 0.035 is 37.8, not 37.800000000000004.
+    let w = mm(p.pixels_x as f64 * p.pixel_mm);
+    let h = mm(p.pixels_y as f64 * p.pixel_mm);
     let orientation = if p.pixels_x >= p.pixels_y {
         "landscape"
     } else {
@@ -140,4 +147,20 @@ fn printer_ini(p: &Printer) -> String {
         max = p.max_height_mm,
         name = p.name,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mm;
+
+    #[test]
+    fn display_sizes_are_written_as_people_write_them() {
+        assert_eq!(1080.0 * 0.035, 37.800000000000004);
+        assert_eq!(mm(1080.0 * 0.035), "37.8");
+        assert_eq!(mm(1920.0 * 0.035), "67.2");
+        assert_eq!(mm(2560.0 * 0.0473), "121.088");
+        assert_eq!(mm(100.0), "100");
+        assert_eq!(mm(0.0), "0");
+        assert_eq!(mm(0.0000004), "0");
+    }
 }
