@@ -19,9 +19,9 @@
 //! (`validators/check_hausdorff.py`: a capsule of radius 1 at cell 0.2, 14.6 µm inward
 //! marched, 8.8 µm fitted once, its volume −0.85 % and −0.06 %). A tilted capsule of radius
 //! 74 µm (the 12,700-node leaf's thinnest tip at 50 mm) at the 35 µm cell: −0.14 % of its
-//! volume after one pass, −0.08 % after two (a third gains −0.06 %). Creases where veins meet,
-//! which marching rounds within a cell, stay about as they were (`small_loop.json` at cell 0.1:
-//! 33.5 µm marched, 28.0 µm fitted, both at creases).
+//! volume after one pass, −0.08 % after two (a third would reach −0.06 %). Creases where veins
+//! meet, which marching rounds within a cell, stay about as they were (`small_loop.json` at cell
+//! 0.1: 33.5 µm marched, 28.0 µm fitted, both at creases).
 //!
 //! No vertex leaves the solid's exact box, so the mesh is exactly as tall as the solid and a
 //! slicer cuts it into as many layers. A move that would turn a triangle by more than 60° (a
