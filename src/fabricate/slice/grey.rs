@@ -171,8 +171,9 @@ impl Stream {
         one(self); // length 258 (285)
         one(self); // distance 1 (code 0)
         one(self); // distance 2 (code 1)
-                   // The bytes: a literal 0, then copies of 258 bytes from one byte back (length code
-                   // '0' and distance code '0', no extra bits), the rest as literals.
+
+        // The bytes: a literal 0, then copies of 258 bytes from one byte back (length code '0'
+        // and distance code '0', no extra bits), the rest as literals.
         self.code(0b10, 2);
         let copies = (n - 1) / LONGEST;
         self.zero_bits(2 * copies);

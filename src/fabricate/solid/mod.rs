@@ -25,10 +25,10 @@
 //! pixel; never out of the solid's exact box, never turning a triangle over), so the mesh lies
 //! on the surface on average and a slicer lights what `print` lights from the exact distance:
 //! on the demo's print leaf at 35 µm each layer's area within 0.04 % on average (0.34 %
-//! before), on the 12,700-node leaf 0.03 % (0.26 %). Against manifold3d's union of the same sphere hulls
-//! at 256 segments, the small fixture network (radii 0.3–1 mm) at h = 0.1 mm is 0.015 % apart
-//! in volume, its symmetric difference 0.12 % (marched alone: 0.18 % and 0.28 %; at 64
-//! segments the polygons themselves are 0.29 % small). Creases between veins are rounded
+//! before), on the 12,700-node leaf 0.03 % (0.26 %). Against manifold3d's union of the same
+//! sphere hulls at 256 segments, the small fixture network (radii 0.3–1 mm) at h = 0.1 mm is
+//! 0.015 % apart in volume, its symmetric difference 0.12 % (marched alone: 0.18 % and 0.28 %;
+//! at 64 segments the polygons themselves are 0.29 % small). Creases between veins are rounded
 //! within one cell. The default cell is the printer's pixel (35 µm): finer than that cannot be
 //! printed. A vein thinner than about h may break into pieces or vanish. With `tolerance` the
 //! mesh is not fitted: the simplifier holds it within the tolerance of the surface instead.
