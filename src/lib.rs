@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod network;
 pub mod rationalize;
 pub mod report;
+pub mod stage;
 pub mod text;
 pub mod view;
 

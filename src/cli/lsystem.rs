@@ -250,7 +250,7 @@ fn derive_only(args: &Args, s: &Setup) -> Result<()> {
     let bar = progress(&s.grammar, s.iterations);
     let mut counts = Counts::default();
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let mut word = std::io::BufWriter::with_capacity(1 << 16, super::say::Stdout);
+    let mut word = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
     let mut failed: Option<std::io::Error> = None;
     derive(&s.grammar, s.iterations, &mut rng, args.max_symbols, |c| {
         counts.feed(c);

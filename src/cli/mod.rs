@@ -153,7 +153,7 @@ pub fn dispatch(command: Command) -> anyhow::Result<bool> {
 }
 
 /// The message of an error as the binary prints it: the chain of causes, each once (library
-/// errors already quote their source), without control characters.
+/// errors already quote their source), options as flags, without control characters.
 pub fn error_message(e: &anyhow::Error) -> String {
     let mut msg = e.to_string();
     for cause in e.chain().skip(1) {
@@ -162,5 +162,72 @@ pub fn error_message(e: &anyhow::Error) -> String {
             msg = format!("{msg}: {c}");
         }
     }
-    lamina::text::printable(&msg).into_owned()
+    lamina::text::printable(&as_flags(&msg)).into_owned()
+}
+
+/// Library messages name an option as its field, `tolerance=`; the command line says
+/// `--tolerance`. Only names that are flags of some command are turned.
+pub fn as_flags(msg: &str) -> String {
+    use clap::CommandFactory;
+    use std::collections::HashMap;
+    use std::sync::OnceLock;
+    static FLAGS: OnceLock<HashMap<String, String>> = OnceLock::new();
+    let flags = FLAGS.get_or_init(|| {
+        let mut map = HashMap::new();
+        fn walk(cmd: &clap::Command, map: &mut HashMap<String, String>) {
+            for a in cmd.get_arguments() {
+                if let Some(long) = a.get_long() {
+                    map.insert(long.replace('-', "_"), long.to_string());
+                }
+            }
+            for sub in cmd.get_subcommands() {
+                walk(sub, map);
+            }
+        }
+        walk(&Cli::command(), &mut map);
+        map
+    });
+    let mut out = String::with_capacity(msg.len() + 8);
+    let bytes = msg.as_bytes();
+    let mut i = 0;
+    while i < msg.len() {
+        let word = |b: u8| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_';
+        let starts = bytes[i].is_ascii_lowercase() && (i == 0 || !word(bytes[i - 1]));
+        if starts {
+            let end = (i..msg.len())
+                .find(|&j| !word(bytes[j]))
+                .unwrap_or(msg.len());
+            if bytes.get(end) == Some(&b'=') {
+                if let Some(long) = flags.get(&msg[i..end]) {
+                    out.push_str("--");
+                    out.push_str(long);
+                    i = end + 1;
+                    continue;
+                }
+            }
+            out.push_str(&msg[i..end]);
+            i = end;
+            continue;
+        }
+        let ch = msg[i..].chars().next().expect("a character");
+        out.push(ch);
+        i += ch.len_utf8();
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn options_become_flags() {
+        assert_eq!(
+            super::as_flags("tolerance= must be positive; give tolerance_rules= or lead_in="),
+            "--tolerance must be positive; give --tolerance-rules or --lead-in"
+        );
+        // Not flags: left as they are.
+        assert_eq!(
+            super::as_flags("node=3 and x=1, a= b"),
+            "node=3 and x=1, a= b"
+        );
+    }
 }

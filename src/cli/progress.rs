@@ -1,60 +1,71 @@
-//! Progress bars of long commands: on stderr, hidden when it is not a terminal. The bar a
-//! thread made last is also kept where the Python package's progress callback can read it
-//! (each thread its own, so commands run from several Python threads at once do not mix).
+//! The command line's progress handle: one bar on stderr for the step a stage is in, hidden
+//! when stderr is not a terminal.
 
 use std::sync::Mutex;
-use std::thread::ThreadId;
 
-use indicatif::{ProgressBar, ProgressDrawTarget};
+use indicatif::{ProgressBar, ProgressStyle};
 
-type Active = (ThreadId, &'static str, ProgressBar);
+/// A progress bar on stderr that follows a stage's steps (`lamina::stage::Progress`).
+pub struct Bar {
+    bar: ProgressBar,
+    /// The current step's name, for the bar's template.
+    step: Mutex<&'static str>,
+}
 
-static ACTIVE: Mutex<Vec<Active>> = Mutex::new(Vec::new());
-
-/// A new bar for `stage` (a spinner without a length) on stderr, made the one `active` reports
-/// for this thread. When a command is captured (`say::capture`), nothing is drawn.
-pub fn bar(stage: &'static str, len: Option<u64>) -> ProgressBar {
-    let target = if super::say::capturing() {
-        ProgressDrawTarget::hidden()
-    } else {
-        ProgressDrawTarget::stderr()
-    };
-    let bar = ProgressBar::with_draw_target(len, target);
-    let me = std::thread::current().id();
-    if let Ok(mut active) = ACTIVE.lock() {
-        active.retain(|(t, ..)| *t != me);
-        active.push((me, stage, bar.clone()));
+impl Bar {
+    pub fn new() -> Self {
+        Bar {
+            bar: ProgressBar::hidden(),
+            step: Mutex::new(""),
+        }
     }
-    bar
 }
 
-/// Where a long command is: the last bar's stage, message, position and length.
-#[allow(dead_code)]
-pub struct Progress {
-    pub stage: &'static str,
-    pub message: String,
-    pub done: u64,
-    pub total: Option<u64>,
-}
-
-/// The last bar `thread` made, while it is not finished.
-#[allow(dead_code)]
-pub fn active(thread: ThreadId) -> Option<Progress> {
-    let active = ACTIVE.lock().ok()?;
-    let (_, stage, bar) = active.iter().find(|(t, ..)| *t == thread)?;
-    (!bar.is_finished()).then(|| Progress {
-        stage,
-        message: bar.message(),
-        done: bar.position(),
-        total: bar.length(),
-    })
-}
-
-/// Forgets this thread's last bar (a command starts or ends).
-#[allow(dead_code)]
-pub fn reset() {
-    let me = std::thread::current().id();
-    if let Ok(mut active) = ACTIVE.lock() {
-        active.retain(|(t, ..)| *t != me);
+impl Drop for Bar {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
     }
+}
+
+impl lamina::stage::Progress for Bar {
+    fn begin(&self, step: &'static str, total: Option<u64>) {
+        if let Ok(mut s) = self.step.lock() {
+            if *s == step && self.bar.length() == total {
+                return;
+            }
+            *s = step;
+        }
+        self.bar.finish_and_clear();
+        self.bar
+            .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        self.bar.reset();
+        self.bar.set_length(total.unwrap_or(0));
+        let template = match total {
+            Some(_) => format!("{step} {{bar:40}} {{pos}}/{{len}} {{msg}} {{elapsed}}"),
+            None => format!("{{spinner}} {step}, {{msg}} {{elapsed}}"),
+        };
+        if let Ok(style) = ProgressStyle::with_template(&template) {
+            self.bar.set_style(style);
+        }
+        if total.is_none() {
+            self.bar
+                .enable_steady_tick(std::time::Duration::from_millis(120));
+        } else {
+            self.bar.disable_steady_tick();
+        }
+    }
+
+    fn set(&self, done: u64) {
+        self.bar.set_position(done);
+    }
+
+    fn message(&self, text: &str) {
+        self.bar.set_message(text.to_string());
+    }
+}
+
+/// A bare bar for `stage` (a spinner without a length) on stderr, for commands that drive
+/// their own loops.
+pub fn bar(_stage: &'static str, len: Option<u64>) -> ProgressBar {
+    ProgressBar::with_draw_target(len, indicatif::ProgressDrawTarget::stderr())
 }

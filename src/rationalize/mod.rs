@@ -9,6 +9,7 @@ pub mod groups;
 pub mod panels;
 pub mod planarize;
 pub mod plates;
+pub mod reference;
 pub mod simplify;
 pub mod tolerance;
 pub mod welds;

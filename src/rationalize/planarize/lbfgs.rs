@@ -42,6 +42,8 @@ struct Problem<'a, 'b> {
     best: &'a RefCell<(f64, Vec<f64>)>,
     /// Evaluations left in this round: a line search that never settles is stopped here.
     left: &'a Cell<usize>,
+    /// The caller's stop: checked at every evaluation.
+    stop: &'a dyn Fn() -> bool,
 }
 
 impl CostFunction for Problem<'_, '_> {
@@ -50,7 +52,7 @@ impl CostFunction for Problem<'_, '_> {
 
     fn cost(&self, x: &Vec<f64>) -> Result<f64, Error> {
         let left = self.left.get();
-        if left == 0 {
+        if left == 0 || (self.stop)() {
             return Err(Error::msg("evaluation budget of the round spent"));
         }
         self.left.set(left - 1);
@@ -90,6 +92,7 @@ pub fn solve(
     budget: usize,
     tolerance: f64,
     max_dev: &dyn Fn(&[DVec3]) -> f64,
+    stop: &dyn Fn() -> bool,
 ) -> Run {
     let best = RefCell::new((obj.cost(&x0), x0.clone()));
     let left = Cell::new(0);
@@ -97,6 +100,7 @@ pub fn solve(
         obj,
         best: &best,
         left: &left,
+        stop,
     };
     let curve = Rc::new(RefCell::new(Vec::new()));
     let mut x = x0;
@@ -109,7 +113,7 @@ pub fn solve(
             history: Vec::new(),
         };
     }
-    while iterations < budget && failures <= RESTARTS {
+    while iterations < budget && failures <= RESTARTS && !stop() {
         let round = ROUND.min(budget - iterations) as u64;
         left.set(EVALS_PER_ITERATION * round as usize);
         let result = if failures % 2 == 0 {

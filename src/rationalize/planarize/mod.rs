@@ -180,7 +180,7 @@ pub enum PlanarizeError {
     ZeroLength(usize, u32),
     #[error("edge {0} refers to node {1}, which does not exist")]
     MissingNode(usize, u32),
-    #[error("node {0} has no reference direction (no stored normal): give --surface")]
+    #[error("node {0} has no reference direction (no stored normal): give surface=")]
     NoReference(u32),
     #[error("node {0} has a reference direction that is not a finite non-zero vector")]
     BadReference(u32),
@@ -190,11 +190,11 @@ pub enum PlanarizeError {
         height = crate::text::num(*.1)
     )]
     Height(u32, f64),
-    #[error("--alpha must be ≥ 0, got {0}")]
+    #[error("alpha= must be ≥ 0, got {0}")]
     Alpha(f64),
-    #[error("--tolerance must be a positive distance in mm, got {0}")]
+    #[error("tolerance= must be a positive distance in mm, got {0}")]
     Tolerance(f64),
-    #[error("--step must be in (0, 1], got {0}")]
+    #[error("step= must be in (0, 1], got {0}")]
     Step(f64),
     #[error("a fixed direction must be a finite non-zero vector, got {0}")]
     Direction(DVec3),
@@ -202,6 +202,8 @@ pub enum PlanarizeError {
     ConflictingNormals(u32),
     #[error("the sparse factorisation could not allocate its memory")]
     OutOfMemory,
+    #[error(transparent)]
+    Cancelled(#[from] crate::stage::Cancelled),
 }
 
 /// What planarize needs: positions, edges, reference directions d⁰ (unit), heights.
@@ -252,7 +254,7 @@ pub struct Solution {
 const ALPHA_FLOOR: f64 = 1e-10;
 
 pub fn planarize(input: &Input, opts: &PlanarizeOptions) -> Result<Solution, PlanarizeError> {
-    planarize_with(input, opts, &|_| {})
+    planarize_with(input, opts, &crate::stage::Quiet)
 }
 
 /// Where a solve stands after a round at one α.
@@ -263,12 +265,25 @@ pub struct Round {
     pub max_deviation: f64,
 }
 
-/// [`planarize`], telling `progress` after every round (each α tried).
+/// "120 iterations, α 1.0e-2: max deviation 0.0123 mm".
+impl std::fmt::Display for Round {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} iterations, α {:.1e}: max deviation {:.4} mm",
+            self.iterations, self.alpha, self.max_deviation
+        )
+    }
+}
+
+/// [`planarize`], telling `progress` after every round (each α tried) and stopping with
+/// [`PlanarizeError::Cancelled`] within an iteration of its asking.
 pub fn planarize_with(
     input: &Input,
     opts: &PlanarizeOptions,
-    progress: &dyn Fn(Round),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<Solution, PlanarizeError> {
+    let stop = || progress.cancelled();
     check(input, opts)?;
     let n = input.positions.len();
     let (frames, dims, edge_normal) = frames(input, opts)?;
@@ -329,7 +344,7 @@ pub fn planarize_with(
         };
         let used = match opts.method {
             Method::Lbfgs => {
-                let run = lbfgs::solve(&obj, x.clone(), budget, opts.tolerance, &max_dev);
+                let run = lbfgs::solve(&obj, x.clone(), budget, opts.tolerance, &max_dev, &stop);
                 x = run.x;
                 axes = obj.axes(&x);
                 history.extend(run.history);
@@ -345,13 +360,14 @@ pub fn planarize_with(
                     scale: &scale,
                     accelerate: !plain,
                 };
-                let run = projection::solve(&sweep, &mut axes, budget, opts.tolerance, &max_dev);
+                let run =
+                    projection::solve(&sweep, &mut axes, budget, opts.tolerance, &max_dev, &stop);
                 history.extend(run.history);
                 run.iterations
             }
             Method::Newton => {
                 let pattern = pattern.as_mut().expect("built for this method");
-                let run = newton::solve(&obj, pattern, x.clone(), budget);
+                let run = newton::solve(&obj, pattern, x.clone(), budget, &stop);
                 x = run.x;
                 axes = obj.axes(&x);
                 history.extend(run.history);
@@ -359,12 +375,16 @@ pub fn planarize_with(
             }
         };
         iterations += used;
+        crate::stage::checkpoint(progress)?;
         let dev = max_dev(&axes);
-        progress(Round {
-            iterations,
-            alpha,
-            max_deviation: dev,
-        });
+        progress.message(
+            &Round {
+                iterations,
+                alpha,
+                max_deviation: dev,
+            }
+            .to_string(),
+        );
         let floor = alpha <= opts.alpha * ALPHA_FLOOR || alpha == 0.0;
         if opts.method == Method::Newton {
             match newton_alpha(&mut schedule, alpha, dev, opts.tolerance, &axes) {

@@ -355,7 +355,13 @@ pub struct Run {
 
 /// Gauss-Newton from `x0` at the objective's α until the step is negligible or `budget`
 /// iterations are spent.
-pub fn solve(obj: &Objective, pattern: &mut Pattern, x0: Vec<f64>, budget: usize) -> Run {
+pub fn solve(
+    obj: &Objective,
+    pattern: &mut Pattern,
+    x0: Vec<f64>,
+    budget: usize,
+    stop: &dyn Fn() -> bool,
+) -> Run {
     let mut x = x0;
     let mut history = Vec::new();
     let mut iterations = 0;
@@ -369,7 +375,7 @@ pub fn solve(obj: &Objective, pattern: &mut Pattern, x0: Vec<f64>, budget: usize
     let mut cost = obj.cost(&x);
     let mut values = vec![0.0; pattern.system.structure.compute_nnz()];
     let mut last_step: Option<f64> = None;
-    while iterations < budget {
+    while iterations < budget && !stop() {
         iterations += 1;
         let lin: Vec<NodeLin> = obj.frames.par_iter().map(|f| linearise(f, &x)).collect();
         // Each row's Jacobian: coefficients on its two ends' coordinates, and its residual.

@@ -91,6 +91,7 @@ pub fn solve(
     budget: usize,
     tolerance: f64,
     max_dev: &dyn Fn(&[DVec3]) -> f64,
+    stop: &dyn Fn() -> bool,
 ) -> Run {
     let n = axes.len();
     let mut history = Vec::new();
@@ -102,7 +103,7 @@ pub fn solve(
     let mut next = vec![DVec3::ZERO; n];
     let mut g_next = vec![DVec3::ZERO; n];
     let mut iterations = 0;
-    while iterations < budget {
+    while iterations < budget && !stop() {
         iterations += 1;
         let f: Vec<DVec3> = g.iter().zip(axes.iter()).map(|(g, x)| *g - *x).collect();
         if let Some((g_prev, f_prev)) = last.take() {
