@@ -179,8 +179,8 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
     let axes = calyx_axes(dir.path())?;
     let out = dir.path().join("s.json");
     let cases: Vec<(Vec<&str>, &str)> = vec![
-        (vec!["--load", "self-weight"], "no support"),
-        (vec!["--support", "z<1"], "no load"),
+        (vec!["--load", "self-weight"], "--support is needed"),
+        (vec!["--support", "z<1"], "--load is needed"),
         (
             vec!["--support", "z<-5000", "--load", "self-weight"],
             "no node matches",

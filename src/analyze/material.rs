@@ -15,23 +15,24 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+/// A steel's figures (fields in the order sizing.json writes them).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
-    pub name: String,
     #[serde(rename = "E")]
     pub e: f64,
-    pub nu: f64,
-    pub fy: f64,
-    pub fu: f64,
+    pub beta_w: f64,
     pub density: f64,
+    pub fu: f64,
+    pub fy: f64,
     #[serde(rename = "gamma_M0")]
     pub gamma_m0: f64,
     #[serde(rename = "gamma_M1")]
     pub gamma_m1: f64,
     #[serde(rename = "gamma_M2")]
     pub gamma_m2: f64,
-    pub beta_w: f64,
+    pub name: String,
+    pub nu: f64,
 }
 
 #[derive(Debug, Error)]

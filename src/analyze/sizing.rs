@@ -175,10 +175,10 @@ pub struct SizingOptions {
 
 #[derive(Debug, Error)]
 pub enum SizingError {
-    #[error("no load: give at least one --load")]
+    #[error("load= is needed: give at least one")]
     NoLoad,
     #[error(
-        "the panels make {0} shell elements, more than {max}: give --shells fewer elements up each panel, or analyse the frame",
+        "the panels make {0} shell elements, more than {max}: give shells= fewer elements up each panel, or analyse the frame",
         max = shell::MAX_ELEMENTS
     )]
     TooManyShells(usize),
@@ -192,7 +192,7 @@ pub enum SizingError {
     BadNode(usize),
     #[error(transparent)]
     Frame(#[from] FrameError),
-    #[error("--group-by assembly: {0}")]
+    #[error("group_by= assembly: {0}")]
     Groups(#[from] GroupError),
 }
 

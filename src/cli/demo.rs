@@ -419,15 +419,15 @@ fn steel(out: &Path) -> Result<Entry> {
         sheet: None,
         // Illustrative prices per sheet: the cheapest mix per thickness is cut.
         stock: Some(vec![
-            super::nest::Stock {
+            lamina::stage::nest::Stock {
                 size: sheet,
                 cost: 240.0,
             },
-            super::nest::Stock {
+            lamina::stage::nest::Stock {
                 size: DVec2::new(2000.0, 1000.0),
                 cost: 115.0,
             },
-            super::nest::Stock {
+            lamina::stage::nest::Stock {
                 size: DVec2::new(1000.0, 1000.0),
                 cost: 62.0,
             },
@@ -452,7 +452,7 @@ fn steel(out: &Path) -> Result<Entry> {
     let seams = p.iter().filter(|q| q.bolted_to.is_some()).count() / 2;
     let mass: f64 = p
         .iter()
-        .map(|q| q.area() * q.thickness * super::nest::DENSITY * 1e-6)
+        .map(|q| q.area() * q.thickness * lamina::stage::nest::DENSITY * 1e-6)
         .sum();
     let sz = &sized.sizing;
     let (_, dmax) = sz.max_displacement();
@@ -490,10 +490,10 @@ fn steel(out: &Path) -> Result<Entry> {
             .filter(|(i, q)| q.bolted_to.is_some_and(|o| o > *i))
             .map(|(_, q)| q.holes.len())
             .sum::<usize>(),
-        plates.weld.nodes,
-        plates.weld.nodes - plates.weld.uneven.len() - plates.weld.cores,
-        plates.weld.cores,
-        plates.weld.smallest_angle,
+        plates.welds.summary.nodes,
+        plates.welds.summary.even_nodes,
+        plates.welds.summary.cores,
+        plates.welds.summary.smallest_dihedral_deg,
         nest.sheets.len()
     );
     let per: Vec<String> = nest

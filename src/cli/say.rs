@@ -10,7 +10,11 @@ pub fn out(args: Arguments) {
     let _ = std::io::stdout().lock().write_fmt(args);
 }
 
-/// Writes one line to stderr.
+/// Writes one line to stderr, options the library names (`material=`) as flags.
 pub fn note(args: Arguments) {
-    let _ = writeln!(std::io::stderr().lock(), "{args}");
+    let _ = writeln!(
+        std::io::stderr().lock(),
+        "{}",
+        super::as_flags(&args.to_string())
+    );
 }

@@ -4,19 +4,18 @@
 use std::io::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::Args as ClapArgs;
-use glam::DVec3;
 use serde_json::json;
 
 use lamina::analyze::ccx::write_deck;
-use lamina::analyze::frame::{local_frame, Support};
-use lamina::analyze::material::Material;
 use lamina::analyze::report::sizing_html;
-use lamina::analyze::sizing::{size, DeflectionLimit, GroupBy, LoadSpec, Sizing, SizingOptions};
 use lamina::files::write_atomic;
 use lamina::rationalize::axes::read_axes;
 use lamina::rationalize::planarize::Selector;
+use lamina::stage::size::{self, DeflectionLimit, GroupBy, Material, Support};
+
+use super::progress::Bar;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -33,7 +32,7 @@ pub struct Args {
     pub gauges: Vec<f64>,
     /// Supported nodes: a selector (`all`, `node=N`, `x|y|z` `<` `<=` `>` `>=` value) and
     /// `:fixed` (default) or `:pinned`; repeatable
-    #[arg(long, value_parser = parse_support)]
+    #[arg(long, value_parser = size::support)]
     pub support: Vec<(Selector, Support)>,
     /// A load: `self-weight[:FACTOR]`, `point:NODES:FX,FY,FZ` (N on each selected node),
     /// `wind:KPA:DX,DY,DZ` (pressure on the panels across the direction); repeatable, each a
@@ -47,7 +46,7 @@ pub struct Args {
     /// Members sized together: each `member`, each `chain` (runs through nodes with two
     /// members), or each `assembly` group of `--groups K` (the groups `plates --groups K`
     /// makes; the seam members between two groups together)
-    #[arg(long, default_value = "member", value_parser = parse_group_by)]
+    #[arg(long, default_value = "member", value_parser = size::group_by)]
     pub group_by: GroupBy,
     /// Assembly groups for `--group-by assembly`, as `plates --groups`
     #[arg(long)]
@@ -77,27 +76,6 @@ pub struct Args {
     pub json: bool,
 }
 
-fn parse_support(s: &str) -> Result<(Selector, Support), String> {
-    let (sel, kind) = match s.rsplit_once(':') {
-        Some((a, "fixed")) => (a, Support::Fixed),
-        Some((a, "pinned")) => (a, Support::Pinned),
-        Some((_, k)) if !k.contains(['<', '>', '=']) => {
-            return Err(format!("`{s}`: `{k}` is not fixed or pinned"))
-        }
-        _ => (s, Support::Fixed),
-    };
-    Ok((Selector::parse(sel)?, kind))
-}
-
-fn parse_group_by(s: &str) -> Result<GroupBy, String> {
-    match s {
-        "member" => Ok(GroupBy::Member),
-        "chain" => Ok(GroupBy::Chain),
-        "assembly" => Ok(GroupBy::Assembly(0)),
-        _ => Err(format!("`{s}`: give member, chain or assembly")),
-    }
-}
-
 /// The input's file name: outputs stay the same bytes wherever the input sits.
 fn source_name(path: &std::path::Path) -> String {
     path.file_name().map_or_else(
@@ -106,92 +84,37 @@ fn source_name(path: &std::path::Path) -> String {
     )
 }
 
-pub struct Outcome {
-    pub sizing: Sizing,
-    pub ok: bool,
-}
-
-pub fn execute(args: &Args) -> Result<Outcome> {
-    let material_name = args.material.as_deref().unwrap_or("1.4404");
-    let material = Material::get(material_name)?;
-    if args.material.is_none() {
-        errln!(
-            "lamina: material 1.4404 (stainless 316L, f_y {} MPa), the default: give --material for another",
-            material.fy
-        );
-    }
-    if args.gauges.is_empty()
-        || args
-            .gauges
-            .iter()
-            .any(|g| !(g.is_finite() && *g > 0.0 && *g <= 200.0))
-        || args.gauges.windows(2).any(|w| w[0] >= w[1])
-    {
-        bail!("--gauges must be thicknesses from 0 to 200 mm in ascending order");
-    }
-    if !(args.throat > 0.0 && args.throat <= 2.0) {
-        bail!(
-            "--throat must be more than 0 and at most 2, got {}",
-            lamina::text::num(args.throat)
-        );
-    }
-    if !(1..=200).contains(&args.max_rounds) {
-        bail!(
-            "--max-rounds must be from 1 to 200, got {}",
-            args.max_rounds
-        );
-    }
-    if let Some(n) = args.shells {
-        if !(2..=32).contains(&n) || n % 2 == 1 {
-            bail!("--shells must be an even number of elements from 2 to 32, got {n}");
-        }
-    }
-    if args.support.is_empty() {
-        bail!("no support: give --support SELECTOR[:fixed|pinned], e.g. --support 'z<1'");
-    }
-    if args.load.is_empty() {
-        bail!("no load: give --load self-weight, --load point:NODES:FX,FY,FZ or --load wind:KPA:DX,DY,DZ");
-    }
-    let loads = args
-        .load
-        .iter()
-        .map(|s| {
-            LoadSpec::parse(s)
-                .map(|l| (s.clone(), l))
-                .map_err(|e| anyhow::anyhow!("--load {e}"))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let axes = read_axes(&args.input)?;
-    let opts = SizingOptions {
+/// Reads the axes, sizes, writes sizing.json and what else is asked for.
+pub fn execute(args: &Args) -> Result<size::Sized> {
+    let material = args.material.as_deref().map(Material::get).transpose()?;
+    let opts = size::Options {
         material,
         gauges: args.gauges.clone(),
-        supports: args.support.clone(),
-        loads,
+        support: args.support.clone(),
+        load: args.load.clone(),
         deflection_limit: args.deflection_limit,
-        group_by: match (args.group_by, args.groups) {
-            (GroupBy::Assembly(_), Some(k)) if k >= 1 => GroupBy::Assembly(k),
-            (GroupBy::Assembly(_), _) => {
-                bail!("--group-by assembly needs --groups K (at least 1), the count `plates --groups` is given")
-            }
-            (by, None) => by,
-            (_, Some(_)) => bail!("--groups applies only with --group-by assembly"),
-        },
+        group_by: args.group_by,
+        groups: args.groups,
         smooth: args.smooth,
-        throat_factor: args.throat,
+        throat: args.throat,
         max_rounds: args.max_rounds,
         shells: args.shells,
+        name: source_name(&args.input),
     };
-    let sizing = size(&axes, &opts).with_context(|| format!("{}", args.input.display()))?;
-    let (max_u, max_w) = (sizing.max_utilisation(), sizing.max_weld_utilisation());
-    let (_, max_d) = sizing.max_displacement();
-    let deflection_ok = sizing.deflection_limit.is_none_or(|l| max_d <= l);
-    let ok = max_u <= 1.0 && max_w <= 1.0 && deflection_ok;
-
-    let doc = sizing_json(&sizing, &opts, args)?;
-    let text = serde_json::to_string_pretty(&doc)? + "\n";
-    write_atomic(&args.output, |w| w.write_all(text.as_bytes()))?;
+    let axes = read_axes(&args.input)?;
+    let sized = size::run(&axes, &opts, &Bar::new()).map_err(|e| match e {
+        size::Error::Sizing(e) => anyhow::anyhow!("{}: {e}", args.input.display()),
+        e => anyhow::Error::new(e),
+    })?;
+    for n in &sized.notes {
+        errln!("lamina: {n}");
+    }
+    let sizing = &sized.sizing;
+    write_atomic(&args.output, |w| {
+        w.write_all(sized.report.json().as_bytes())
+    })?;
     if let Some(path) = &args.html {
-        let html = sizing_html(&sizing, &opts.material, &source_name(&args.input));
+        let html = sizing_html(sizing, &sized.report.material, &source_name(&args.input));
         write_atomic(path, |w| w.write_all(html.as_bytes()))?;
     }
     if let Some(path) = &args.export_ccx {
@@ -205,115 +128,11 @@ pub fn execute(args: &Args) -> Result<Outcome> {
             &sizing.model,
             sizing.cases.last().expect("a case"),
             &title,
-            opts.material.nu,
+            sized.report.material.nu,
             path,
         )?;
     }
-    Ok(Outcome { sizing, ok })
-}
-
-fn v3(v: DVec3) -> [f64; 3] {
-    v.to_array()
-}
-
-fn sizing_json(s: &Sizing, opts: &SizingOptions, args: &Args) -> Result<serde_json::Value> {
-    let total = s.total();
-    let (max_u, max_w) = (s.max_utilisation(), s.max_weld_utilisation());
-    let (dnode, dmax) = s.max_displacement();
-    let edges: Vec<serde_json::Value> = s
-        .model
-        .members
-        .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let (x, y, z, l) = local_frame(&s.model, m);
-            let c = &s.checks[k];
-            json!({
-                "a": m.a,
-                "b": m.b,
-                "gauge": s.gauges[k],
-                "utilisation": c.utilisation,
-                "check": c.check,
-                "load": s.cases[c.case].name,
-                "depth": m.section.depth,
-                "length": l,
-                "axes": {"x": v3(x), "y": v3(y), "z": v3(z)},
-                "end_forces": total.end_forces[k],
-            })
-        })
-        .collect();
-    let nodes: Vec<serde_json::Value> = s
-        .model
-        .nodes
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let d = total.displacements[i];
-            let weld = s.welds[i].as_ref();
-            json!({
-                "position": v3(*p),
-                "displacement": [d[0], d[1], d[2]],
-                "rotation": [d[3], d[4], d[5]],
-                "weld_utilisation": weld.map(|w| w.utilisation),
-                "weld_load": weld.map(|w| s.cases[w.case].name.clone()),
-                "throat": s.throats[i],
-            })
-        })
-        .collect();
-    let reactions: Vec<serde_json::Value> = total
-        .reactions
-        .iter()
-        .map(|(node, r)| {
-            json!({"node": node, "force": [r[0], r[1], r[2]], "moment": [r[3], r[4], r[5]]})
-        })
-        .collect();
-    Ok(json!({
-        "format": lamina::analyze::sizing::FORMAT,
-        "version": lamina::analyze::sizing::VERSION,
-        "source": source_name(&args.input),
-        "units": {"length": "mm", "force": "N", "moment": "N·mm", "stress": "MPa", "mass": "kg"},
-        "material": opts.material,
-        "gauges": opts.gauges,
-        "group_by": match opts.group_by {
-            GroupBy::Member => json!("member"),
-            GroupBy::Chain => json!("chain"),
-            GroupBy::Assembly(k) => json!({"assembly": k}),
-        },
-        "smooth": opts.smooth,
-        "analysis": match opts.shells {
-            None => json!("frame"),
-            Some(n) => json!({"shells": n}),
-        },
-        "supports": args.support.iter().map(|(sel, k)| format!("{sel}: {k:?}")).collect::<Vec<_>>(),
-        "cases": s.cases.iter().map(|c| c.name.clone()).collect::<Vec<_>>(),
-        "definitions": {
-            "model": match opts.shells {
-                None => "a node at mid-height of each node axis (the panels' centroid line), a member per edge with a solid rectangle: depth the panel height across the member (local y, in the panel plane), thickness the gauge (local z, the panel normal); rigid joints; linear elastic, Timoshenko beams".to_string(),
-                Some(n) => format!("the panels as flat shells (four-node: incompatible-mode membrane, MITC4 bending), {n} elements up each panel and square along it, the gauge as thickness, welded along the node axes they share; a node's displacement is its axis' mid-height point's, a member's end forces the resultant its panel takes along that end's axis, about the mid-height point; fixed supports hold the whole axis, pinned ones its mid-height point"),
-            },
-            "utilisation": lamina::analyze::report::UTILISATION,
-            "weld_utilisation": lamina::analyze::report::WELD_UTILISATION,
-            "end_forces": "under the sum of the loads, in the member's local axes: forces and moments the joints apply to its ends, [a: Fx Fy Fz Mx My Mz, b: ...]",
-            "displacement": lamina::analyze::report::DISPLACEMENT,
-            "reactions": "under the sum of the loads: force and moment each support applies",
-        },
-        "rounds": s.rounds,
-        "converged": s.converged,
-        "deflection_rounds": s.deflection_rounds,
-        "edges": edges,
-        "nodes": nodes,
-        "reactions": reactions,
-        "totals": {
-            "mass_kg": s.mass_kg,
-            "max_displacement": dmax,
-            "max_displacement_node": dnode,
-            "deflection_limit": s.deflection_limit,
-            "span": s.span,
-            "max_utilisation": max_u,
-            "max_weld_utilisation": max_w,
-            "residual": total.residual,
-        },
-    }))
+    Ok(sized)
 }
 
 pub fn run(args: Args) -> Result<bool> {

@@ -4,13 +4,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use glam::DVec3;
 
 use super::input::{load, Loaded, ReadArgs};
 use lamina::files::{extension, write_atomic};
-use lamina::report::planarity::Metric;
-use lamina::view::pack::{self, PlateExtras};
-use lamina::view::{flat, page, Scene};
+use lamina::view::scene::{scene, what, Input};
+use lamina::view::{page, Scene};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -29,21 +27,6 @@ pub struct Args {
     pub read: ReadArgs,
 }
 
-/// What a file turned out to be.
-enum Input {
-    Network(Box<lamina::Network>),
-    Mesh(lamina::TriMesh),
-    Axes(Box<lamina::rationalize::axes::Axes>, Option<f64>),
-    Plates(
-        Vec<lamina::fabricate::plates_file::PlateRecord>,
-        Vec<lamina::fabricate::plates_file::CoreRecord>,
-    ),
-    Welds(f64, f64, Vec<lamina::fabricate::plates_file::WeldNode>),
-    Sizing(Vec<lamina::analyze::sizing::CheckEdge>),
-    Nest,
-    Print,
-}
-
 /// The `"format"` a lamina JSON file declares at its top level, if any.
 fn json_format(path: &Path) -> Result<Option<String>> {
     let bytes = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
@@ -57,7 +40,7 @@ fn json_format(path: &Path) -> Result<Option<String>> {
 fn read(path: &Path, args: &ReadArgs) -> Result<Input> {
     let ext = extension(path);
     if ext == "sl1" {
-        return Ok(Input::Print);
+        return Ok(Input::Print(path.to_path_buf()));
     }
     if ext == "json" {
         match json_format(path)?.as_deref() {
@@ -77,7 +60,7 @@ fn read(path: &Path, args: &ReadArgs) -> Result<Input> {
             Some("lamina-sizing") => {
                 return Ok(Input::Sizing(lamina::analyze::sizing::read_checks(path)?))
             }
-            Some("lamina-nest") => return Ok(Input::Nest),
+            Some("lamina-nest") => return Ok(Input::Nest(path.to_path_buf())),
             _ => {}
         }
     }
@@ -132,114 +115,6 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// One line on what the page shows.
-fn what(scene: &Scene) -> String {
-    let mut parts: Vec<String> = scene
-        .layers
-        .iter()
-        .map(|l| format!("{} {}", l.objects.len(), l.name))
-        .collect();
-    if !scene.sheets.is_empty() {
-        parts.push(format!("{} sheets", scene.sheets.len()));
-    }
-    if let Some(p) = &scene.print {
-        parts.push(format!(
-            "{} print layers, {} islands",
-            p.images.len(),
-            p.islands.len() + p.more_islands
-        ));
-    }
-    parts.join(", ")
-}
-
-/// The scene of the inputs together: plates take the welds, sizing and axes given beside
-/// them; axes alone are shown as panels.
-fn scene(inputs: &[(PathBuf, Input)], title: Option<String>) -> Result<Scene> {
-    let names: Vec<String> = inputs.iter().map(|(p, _)| file_name(p)).collect();
-    let mut scene = Scene {
-        title: title.unwrap_or_else(|| format!("lamina: {}", names.join(", "))),
-        ..Scene::default()
-    };
-    let mut points: Vec<DVec3> = Vec::new();
-    for (_, input) in inputs {
-        match input {
-            Input::Network(n) => points.extend(n.nodes.iter().map(|n| n.p)),
-            Input::Mesh(m) => points.extend(m.positions.iter().copied()),
-            Input::Axes(a, _) => points.extend(a.positions.iter().copied()),
-            Input::Plates(p, _) => points.extend(
-                p.iter()
-                    .map(|p| DVec3::new(p.matrix[0][3], p.matrix[1][3], p.matrix[2][3])),
-            ),
-            _ => {}
-        }
-    }
-    let origin = pack::middle(points);
-    scene.origin = origin.to_array();
-    let find = |f: &dyn Fn(&Input) -> bool| inputs.iter().find(|(_, i)| f(i));
-    let has_plates = find(&|i| matches!(i, Input::Plates(..))).is_some();
-    for (path, input) in inputs {
-        match input {
-            Input::Network(n) => scene.layers.extend(pack::network(n, origin)?),
-            Input::Mesh(m) => {
-                scene.layers.push(pack::mesh(m, &file_name(path), origin)?);
-            }
-            Input::Axes(a, tolerance) => {
-                if has_plates {
-                    // The panels would hide the plates standing in them.
-                    scene.notes.push(format!(
-                        "{}: its panels are not drawn beside the plates that stand in them",
-                        file_name(path)
-                    ));
-                    continue;
-                }
-                let t = tolerance.unwrap_or_else(|| {
-                    scene.notes.push(format!(
-                        "{}: no tolerance in its summary; panels held to 0.01 mm",
-                        file_name(path)
-                    ));
-                    0.01
-                });
-                let (quads, rows) = pack::axes_rows(a, t);
-                scene
-                    .layers
-                    .push(pack::panels(&quads, &rows, Metric::Corner, origin)?);
-                scene.layers.push(pack::node_axes(a, origin)?);
-            }
-            Input::Plates(p, c) => {
-                let welds = find(&|i| matches!(i, Input::Welds(..))).and_then(|(_, i)| match i {
-                    Input::Welds(g, t, n) => Some((*g, *t, n.as_slice())),
-                    _ => None,
-                });
-                let checks = find(&|i| matches!(i, Input::Sizing(..))).and_then(|(_, i)| match i {
-                    Input::Sizing(c) => Some(c.as_slice()),
-                    _ => None,
-                });
-                let extras = PlateExtras { welds, checks };
-                let (layers, notes) = pack::plates(p, c, extras, origin)?;
-                scene.layers.extend(layers);
-                scene.notes.extend(notes);
-            }
-            Input::Welds(..) | Input::Sizing(_) if !has_plates => scene.notes.push(format!(
-                "{}: shown with plates.json only; give it too",
-                file_name(path)
-            )),
-            Input::Welds(..) | Input::Sizing(_) => {}
-            Input::Nest => {
-                let (sheets, notes) = flat::sheets(path)?;
-                scene.sheets.extend(sheets);
-                scene.notes.extend(notes);
-            }
-            Input::Print => {
-                if scene.print.is_some() {
-                    bail!("{}: one SL1 archive per page", path.display());
-                }
-                scene.print = Some(flat::print(path)?);
-            }
-        }
-    }
-    Ok(scene)
-}
-
 /// Reads the files, adds the weld report beside a plates file when it was not given, and makes
 /// the scene.
 fn scene_with(files: &[&Path], args: &ReadArgs, title: Option<String>) -> Result<Scene> {
@@ -261,7 +136,11 @@ fn scene_with(files: &[&Path], args: &ReadArgs, title: Option<String>) -> Result
             inputs.push((w, input));
         }
     }
-    let mut scene = scene(&inputs, title)?;
+    let named: Vec<(String, Input)> = inputs
+        .into_iter()
+        .map(|(p, i)| (file_name(&p), i))
+        .collect();
+    let mut scene = scene(&named, title)?;
     scene.notes.splice(0..0, notes);
     Ok(scene)
 }

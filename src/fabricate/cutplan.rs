@@ -23,21 +23,22 @@ use crate::files::{read_nonempty, utf8_text, ReadError};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpeedRow {
-    /// mm.
-    pub thickness: f64,
     /// Cutting speed, mm/min.
     pub cut_mm_per_min: f64,
-    /// Per contour, s.
-    pub pierce_s: f64,
     /// Marking speed, mm/min.
     pub etch_mm_per_min: f64,
+    /// Per contour, s.
+    pub pierce_s: f64,
+    /// mm.
+    pub thickness: f64,
 }
 
+/// Fields in the order nest.json writes them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpeedTable {
-    pub material: String,
     pub laser: Vec<SpeedRow>,
+    pub material: String,
     pub plasma: Vec<SpeedRow>,
 }
 

@@ -158,9 +158,9 @@ pub const MAX_SHEET_MM: f64 = 1e5;
 pub enum NestError {
     #[error("the sheet must be a positive size of at most {MAX_SHEET_MM} mm a side, got {} × {} mm", num(*.0), num(*.1))]
     Sheet(f64, f64),
-    #[error("--margin must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
+    #[error("margin= must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
     Margin(f64),
-    #[error("--spacing must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
+    #[error("spacing= must be from 0 to {MAX_SHEET_MM} mm, got {}", num(*.0))]
     Spacing(f64),
     #[error("a margin of {0} mm leaves nothing of the sheet")]
     NoRoom(f64),
@@ -177,6 +177,8 @@ pub enum NestError {
     TooLarge(Vec<(usize, DVec2)>),
     #[error("part {0}: jagua-rs refused its shape: {1}")]
     Engine(usize, String),
+    #[error(transparent)]
+    Cancelled(#[from] crate::stage::Cancelled),
 }
 
 pub trait Nester {
@@ -304,23 +306,41 @@ fn cheapest(
     }
 }
 
-/// Told the number of parts just placed (every try places all of them).
-pub type Progress = Arc<dyn Fn(usize) + Send + Sync>;
-
 /// Sampled bottom-left fill with sliding on jagua-rs's collision engine (see the module doc).
-#[derive(Clone)]
-pub struct BottomLeft {
+#[derive(Clone, Copy)]
+pub struct BottomLeft<'a> {
     /// Starts dropped from the top edge per rotation; half as many come in from the right edge
     /// and half as many at random free points.
     pub drops: usize,
-    pub progress: Option<Progress>,
+    /// Told the parts placed (every try places all of them: `set` counts them over all tries
+    /// and stock sizes), and asked between parts whether to stop.
+    pub progress: &'a dyn crate::stage::Progress,
+    /// Parts placed so far, for `progress`.
+    placed: &'a std::sync::atomic::AtomicU64,
 }
 
-impl Default for BottomLeft {
+static NONE_PLACED: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+impl Default for BottomLeft<'_> {
     fn default() -> Self {
         BottomLeft {
             drops: 6,
-            progress: None,
+            progress: &crate::stage::Quiet,
+            placed: &NONE_PLACED,
+        }
+    }
+}
+
+impl<'a> BottomLeft<'a> {
+    /// The nester, telling `progress` of the parts placed (counted in `placed`).
+    pub fn with_progress(
+        progress: &'a dyn crate::stage::Progress,
+        placed: &'a std::sync::atomic::AtomicU64,
+    ) -> Self {
+        BottomLeft {
+            progress,
+            placed,
+            ..Default::default()
         }
     }
 }
@@ -857,7 +877,7 @@ fn pair(
     (waste < PAIR_WASTE).then_some((members, hull))
 }
 
-impl BottomLeft {
+impl BottomLeft<'_> {
     fn items(&self, hulls: &[Vec<DVec2>], opts: &NestOptions) -> Vec<(Vec<Member>, Vec<DVec2>)> {
         let single = |i: usize| {
             (
@@ -929,9 +949,12 @@ impl BottomLeft {
         let mut at = vec![(0, 0, DVec2::ZERO); items.len()];
         for (n, &i) in order.iter().enumerate() {
             let item = &items[i];
-            if let Some(tick) = &self.progress {
-                tick(item.members.len());
-            }
+            crate::stage::checkpoint(self.progress)?;
+            let done = self.placed.fetch_add(
+                item.members.len() as u64,
+                std::sync::atomic::Ordering::Relaxed,
+            );
+            self.progress.set(done + item.members.len() as u64);
             let grown_area = item.grown_area;
             let dims = {
                 let s = item.shapes[0].size;
@@ -1052,7 +1075,7 @@ impl BottomLeft {
     }
 }
 
-impl Nester for BottomLeft {
+impl Nester for BottomLeft<'_> {
     fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError> {
         check(opts)?;
         let container = Container::new(opts);

@@ -5,7 +5,7 @@ use std::collections::HashSet;
 use std::path::Path;
 
 use glam::DVec2;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::files::{check_format, read_nonempty, utf8_text, ReadError};
 
@@ -36,26 +36,27 @@ pub struct PlateRecord {
     pub edge: Option<u32>,
 }
 
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// The bolts through a seam's plies. Fields in the file's order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BoltRecord {
-    pub size: String,
     pub d: f64,
-    pub hole_diameter: f64,
     pub grip: f64,
+    pub hole_diameter: f64,
     pub length: f64,
+    pub size: String,
 }
 
-/// A node core: a tube cut from tube stock, not a sheet part.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// A node core: a tube cut from tube stock, not a sheet part. Fields in the file's order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CoreRecord {
-    pub id: String,
-    pub node: u32,
+    pub axis: [f64; 3],
+    pub base: [f64; 3],
     pub group: u32,
+    pub id: String,
+    pub length: f64,
+    pub node: u32,
     pub outer_diameter: f64,
     pub wall: f64,
-    pub base: [f64; 3],
-    pub axis: [f64; 3],
-    pub length: f64,
 }
 
 impl PlateRecord {
@@ -78,37 +79,102 @@ impl PlateRecord {
     }
 }
 
-#[derive(Deserialize)]
+/// One end of a plate in plates.json. Fields in the file's order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct End {
-    node: u32,
-    #[allow(dead_code)]
-    setback: f64,
-    welded_to: Vec<String>,
+pub struct EndDoc {
+    /// The node core it welds to there.
     #[serde(default)]
-    core: Option<String>,
+    pub core: Option<String>,
+    pub node: u32,
+    /// Cut back from the node's axis, mm.
+    pub setback: f64,
+    /// The plates welded to it there.
+    pub welded_to: Vec<String>,
 }
 
-#[derive(Deserialize)]
-struct Record {
-    id: String,
+/// One plate as plates.json writes it (the fields earlier versions lack default). Fields in
+/// the file's order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PlateDoc {
     #[serde(default)]
-    edge: Option<u32>,
-    group: u32,
-    thickness: f64,
-    ends: [End; 2],
-    bolted_to: Option<String>,
+    pub area_mm2: f64,
     #[serde(default)]
-    bolt: Option<BoltRecord>,
+    pub bolt: Option<BoltRecord>,
+    pub bolted_to: Option<String>,
     #[serde(default)]
-    holes: Vec<[f64; 2]>,
-    matrix: [[f64; 4]; 4],
-    outline: Vec<[f64; 2]>,
+    pub edge: Option<u32>,
+    pub ends: [EndDoc; 2],
+    #[serde(default)]
+    pub flattening_mm: f64,
+    /// Assembly group, from 1.
+    pub group: u32,
+    #[serde(default)]
+    pub holes: Vec<[f64; 2]>,
+    pub id: String,
+    /// Rows of the 4 × 4 placement (plate frame → world).
+    pub matrix: [[f64; 4]; 4],
+    #[serde(default)]
+    pub nodes: [u32; 2],
+    /// In the plate's own frame, mm.
+    pub outline: Vec<[f64; 2]>,
+    pub thickness: f64,
+}
+
+/// plates.json: the plates, the node cores and the rules they were made by.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlatesDoc {
+    pub gauges: Vec<f64>,
+    pub weld_gap: f64,
+    pub weld_gap_tolerance: f64,
+    pub hole_segments: usize,
+    pub core_segments: usize,
+    pub cores: Vec<CoreRecord>,
+    pub plates: Vec<PlateDoc>,
+}
+
+impl PlatesDoc {
+    /// The file's text: the header, the cores on one line, one plate a line.
+    pub fn text(&self) -> String {
+        use std::fmt::Write as _;
+        fn json<T: Serialize + ?Sized>(v: &T) -> String {
+            serde_json::to_string(v).expect("plain data serialises")
+        }
+        let mut w = String::new();
+        let _ = writeln!(w, "{{");
+        let _ = writeln!(w, "  \"format\": \"{FORMAT}\",");
+        let _ = writeln!(w, "  \"version\": {VERSION},");
+        let _ = writeln!(w, "  \"units\": \"mm\",");
+        let _ = writeln!(w, "  \"gauges\": {},", json(&self.gauges));
+        let _ = writeln!(w, "  \"weld_gap\": {},", json(&self.weld_gap));
+        let _ = writeln!(
+            w,
+            "  \"weld_gap_tolerance\": {},",
+            json(&self.weld_gap_tolerance)
+        );
+        let _ = writeln!(w, "  \"hole_segments\": {},", self.hole_segments);
+        let _ = writeln!(w, "  \"core_segments\": {},", self.core_segments);
+        let _ = writeln!(w, "  \"cores\": {},", json(&self.cores));
+        let _ = writeln!(w, "  \"plates\": [");
+        for (k, p) in self.plates.iter().enumerate() {
+            let sep = if k + 1 < self.plates.len() { "," } else { "" };
+            let _ = writeln!(w, "    {}{sep}", json(p));
+        }
+        let _ = writeln!(w, "  ]");
+        let _ = writeln!(w, "}}");
+        w
+    }
+
+    /// The records nesting, the BOM and the assembly take (checked as the file reader checks
+    /// them; `path` names the document in errors).
+    pub fn records(&self, path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+        records(self.plates.clone(), self.cores.clone(), path)
+    }
 }
 
 #[derive(Deserialize)]
 struct File {
-    plates: Vec<Record>,
+    plates: Vec<PlateDoc>,
     #[serde(default)]
     cores: Vec<CoreRecord>,
 }
@@ -129,12 +195,21 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
         .or_else(|e| check_format(path, &text, FORMAT, 1, what).map_err(|_| e))?;
     let file: File =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
-    if file.plates.is_empty() {
+    records(file.plates, file.cores, path)
+}
+
+/// Plate records from the file's plates, every value checked.
+fn records(
+    plates: Vec<PlateDoc>,
+    cores: Vec<CoreRecord>,
+    path: &Path,
+) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+    if plates.is_empty() {
         return Err(ReadError::file(path, "holds no plates"));
     }
     let mut seen = HashSet::new();
-    let mut out = Vec::with_capacity(file.plates.len());
-    for (k, r) in file.plates.into_iter().enumerate() {
+    let mut out = Vec::with_capacity(plates.len());
+    for (k, r) in plates.into_iter().enumerate() {
         let bad = |msg: &str| ReadError::record(path, format!("plate {k} ({})", r.id), msg);
         if r.id.is_empty() || !seen.insert(r.id.clone()) {
             return Err(bad("its id is empty or used before"));
@@ -210,7 +285,7 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
         }
         out.push(rec);
     }
-    for (k, c) in file.cores.iter().enumerate() {
+    for (k, c) in cores.iter().enumerate() {
         let ok = !c.id.is_empty()
             && c.outer_diameter > 0.0
             && c.outer_diameter <= MAX_THICKNESS
@@ -228,7 +303,7 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
             ));
         }
     }
-    Ok((out, file.cores))
+    Ok((out, cores))
 }
 
 pub const WELDS_FORMAT: &str = "lamina-welds";

@@ -28,7 +28,7 @@ const PASSES: usize = 50;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum GroupError {
-    #[error("--groups must be at least 1, got 0")]
+    #[error("groups= must be at least 1, got 0")]
     Zero,
     #[error("{0} groups asked for, but the network has only {1} nodes with edges")]
     TooMany(usize, usize),

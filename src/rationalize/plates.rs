@@ -148,7 +148,7 @@ pub enum PlateError {
     PerEdge(usize, usize),
     #[error("gauges must be positive and ascending: {0:?}")]
     Gauges(Vec<f64>),
-    #[error("--thickness must be a positive number of mm, got {0}")]
+    #[error("thickness= must be a positive number of mm, got {0}")]
     Thickness(f64),
     #[error("a thickness override must be a positive number of mm, got {0}")]
     Override(f64),
@@ -156,9 +156,9 @@ pub enum PlateError {
     OverrideEdge(usize, usize),
     #[error("thickness override {0} (counting from 1) matches no edge")]
     OverrideUnused(usize),
-    #[error("--weld-gap must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
+    #[error("weld_gap= must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGap(f64),
-    #[error("--weld-gap-tolerance must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
+    #[error("weld_gap_tolerance= must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGapTolerance(f64),
     #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with --gauges")]
     OffGauge {
@@ -453,7 +453,7 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     };
     if let Thickness::Constant(t) = opts.thickness {
         if !on_list(t) {
-            return Err(off("--thickness", t));
+            return Err(off("thickness=", t));
         }
     }
     if let Thickness::PerEdge(list) = &opts.thickness {

@@ -16,19 +16,22 @@
 //! the command line shows it as `--tolerance`, Python as `tolerance=`.
 //!
 //! ```
-//! use lamina::stage::{planarize, plates, nest};
+//! use lamina::stage::{nest, planarize, plates, Quiet};
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! # let net = lamina::stage::example_network();
-//! let solved = planarize::run(&net, &planarize::Options::default(), &lamina::stage::Quiet)?;
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/calyx_veins.json"))?;
+//! let solved = planarize::run(&net, None, &planarize::Options::default(), &Quiet)?;
 //! let made = plates::run(&solved.axes, &plates::Options { thickness: Some(3.0), ..Default::default() })?;
-//! let cut = nest::run(&made.records(), &made.core_records(), &nest::Options::default(), &lamina::stage::Quiet)?;
-//! assert_eq!(cut.placements.len(), made.set.plates.len());
+//! let cut = nest::run(made.records(), made.core_records(), &nest::Options::default(), &Quiet)?;
+//! assert_eq!(cut.places.len(), made.set.plates.len());
 //! # Ok(()) }
 //! ```
 
 pub mod audit;
+pub mod nest;
 pub mod planarize;
+pub mod plates;
 pub mod progress;
+pub mod size;
 
 pub use progress::{checkpoint, Cancelled, Progress, Quiet};
 

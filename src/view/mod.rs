@@ -17,6 +17,7 @@
 
 pub mod flat;
 pub mod pack;
+pub mod scene;
 
 use base64::Engine as _;
 use glam::DVec3;

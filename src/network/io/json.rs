@@ -68,7 +68,17 @@ struct EdgeRecord {
 
 pub fn read(path: &Path) -> Result<Imported, ReadError> {
     let bytes = read_nonempty(path)?;
-    let file: FileRecord = serde_json::from_slice(&bytes).map_err(|e| {
+    parse(&bytes, path)
+}
+
+/// A network from lamina JSON text in memory (errors name it "network").
+pub fn from_str(text: &str) -> Result<Network, ReadError> {
+    parse(text.as_bytes(), Path::new("network")).map(|imported| imported.network)
+}
+
+/// The network of a file's bytes; `path` names it in errors.
+fn parse(bytes: &[u8], path: &Path) -> Result<Imported, ReadError> {
+    let file: FileRecord = serde_json::from_slice(bytes).map_err(|e| {
         let hint = if e.is_data() {
             " (expected a lamina-network JSON file: format, version, nodes, edges)"
         } else {

@@ -10,7 +10,7 @@ mod dxf_entities;
 pub use dxf_entities::{default_max_points, MAX_POINTS as MAX_DXF_POINTS};
 mod dxf_split;
 pub(crate) mod dxf_write;
-mod json;
+pub mod json;
 mod obj;
 mod png;
 mod svg;

@@ -1,0 +1,938 @@
+//! `nest`: plates on stock sheets, one sheet family per thickness (and group, if asked), each
+//! part drawn as it is cut (pierce point, holes, tag upright, leads, micro-joints), with
+//! remnants and machine time; nest.json as a typed document. The writers (sheet DXFs,
+//! bom.csv, assembly.scad, sheets.svg) are separate calls.
+//!
+//! ```
+//! use lamina::stage::{nest, planarize, plates, Quiet};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/calyx_veins.json"))?;
+//! let solved = planarize::run(&net, None, &planarize::Options::default(), &Quiet)?;
+//! let made = plates::run(&solved.axes, &plates::Options::default())?;
+//! let opts = nest::Options { tries: Some(1), ..Default::default() };
+//! let cut = nest::run(made.records(), made.core_records(), &opts, &Quiet)?;
+//! assert_eq!(cut.places.len(), made.set.plates.len());
+//! assert!(cut.doc.placements.iter().all(|p| p.sheet.starts_with("sheet-")));
+//! # Ok(()) }
+//! ```
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+
+use crate::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
+use crate::fabricate::cutplan::{remnants, times, SpeedError, SpeedTable};
+use crate::fabricate::cutsheet::{place_joints, write_cut_dxf, Drawn, Hole};
+use crate::fabricate::nest::{
+    grown_hull, nest_families, BottomLeft, NestError, NestOptions, SLACK,
+};
+pub use crate::fabricate::nest::{Place, Rotations, Stock};
+use crate::fabricate::plates_file::{CoreRecord, PlateRecord};
+use crate::fabricate::preview::{sheets_svg, SheetView};
+use crate::fabricate::tags::part_marks;
+use crate::files::WriteError;
+use crate::stage::{OptionError, Progress};
+
+/// Stainless steel, g/cm³.
+pub const DENSITY: f64 = 7.9;
+
+/// The most seeded tries: each is a whole nesting of every part.
+pub const MAX_TRIES: usize = 1000;
+
+/// How to nest. `Default` is the command's defaults.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Stock sheets to choose from per thickness, each with its cost; the cheapest mix is
+    /// cut. Default: one 3000 × 1500 mm sheet at no cost.
+    pub stock: Vec<Stock>,
+    /// Kept clear along every sheet edge, mm. Default 10.
+    pub margin: f64,
+    /// Least distance between parts (kerf plus clearance), mm. Default 5.
+    pub spacing: f64,
+    /// Allowed rotations. Default 0, 90, 180, 270.
+    pub rotations: Rotations,
+    /// Each assembly group on sheets of its own. Default false.
+    pub keep_groups: bool,
+    /// Seeded tries, the best kept. Default: 8 up to 250 plates, fewer above, 1 from 2,000.
+    pub tries: Option<usize>,
+    /// Default 1.
+    pub seed: u64,
+    /// Do not pair congruent quads turned 180°. Default false.
+    pub no_pairs: bool,
+    /// Free rectangles at least this big (either way round) are remnants, mm. Default 300 ×
+    /// 300.
+    pub remnant_min: DVec2,
+    /// Lead-in and lead-out lines this long in the scrap, mm (at most half the spacing).
+    /// Default: none.
+    pub lead_in: Option<f64>,
+    /// Uncut bridges (1 to 8) on the outer contour of parts smaller than
+    /// `micro_joint_below`. Default: none.
+    pub micro_joints: Option<usize>,
+    /// Parts whose bounding box's longer side is under this get micro-joints, mm. Default
+    /// 200.
+    pub micro_joint_below: f64,
+    /// Width of a micro-joint along the contour, mm. Default 0.5.
+    pub micro_joint_width: f64,
+    /// Cutting, pierce and marking speeds by thickness. Default: typical stainless figures.
+    pub speeds: Option<SpeedTable>,
+    /// Where the speeds came from, for errors. Default "the built-in speed table".
+    pub speeds_name: String,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            stock: vec![Stock {
+                size: DVec2::new(3000.0, 1500.0),
+                cost: 0.0,
+            }],
+            margin: 10.0,
+            spacing: 5.0,
+            rotations: Rotations::Listed(vec![0.0, 90.0, 180.0, 270.0]),
+            keep_groups: false,
+            tries: None,
+            seed: 1,
+            no_pairs: false,
+            remnant_min: DVec2::new(300.0, 300.0),
+            lead_in: None,
+            micro_joints: None,
+            micro_joint_below: 200.0,
+            micro_joint_width: 0.5,
+            speeds: None,
+            speeds_name: "the built-in speed table".into(),
+        }
+    }
+}
+
+/// `WIDTHxHEIGHT` in mm.
+pub fn parse_sheet(s: &str) -> Result<DVec2, String> {
+    let (w, h) = s
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("`{s}`: give the size as WIDTHxHEIGHT in mm, like 3000x1500"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| format!("`{s}`: `{t}` is not a positive size in mm"))
+    };
+    Ok(DVec2::new(num(w)?, num(h)?))
+}
+
+/// `WIDTHxHEIGHT:COST`.
+pub fn parse_stock(s: &str) -> Result<Stock, String> {
+    let (size, cost) = s.split_once(':').ok_or_else(|| {
+        format!("`{s}`: give a stock sheet as WIDTHxHEIGHT:COST, like 3000x1500:120")
+    })?;
+    let cost: f64 = cost
+        .trim()
+        .parse()
+        .ok()
+        .filter(|c: &f64| c.is_finite() && *c >= 0.0 && *c <= 1e12)
+        .ok_or_else(|| format!("`{s}`: `{cost}` is not a cost from 0 to 1e12"))?;
+    Ok(Stock {
+        size: parse_sheet(size)?,
+        cost,
+    })
+}
+
+/// Angles in degrees, comma-separated, or `any`.
+pub fn parse_rotations(s: &str) -> Result<Rotations, String> {
+    if s.trim().eq_ignore_ascii_case("any") {
+        return Ok(Rotations::Any);
+    }
+    s.split(',')
+        .map(|t| {
+            t.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("`{t}` is not an angle in degrees (or give `any`)"))
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Rotations::Listed)
+}
+
+/// One sheet of the result.
+#[derive(Clone, Debug)]
+pub struct SheetInfo {
+    pub file: String,
+    pub thickness: f64,
+    /// Set with `keep_groups`.
+    pub group: Option<u32>,
+    pub stock: Stock,
+    pub parts: Vec<usize>,
+    pub area: f64,
+    pub remnants: Vec<[DVec2; 2]>,
+    pub cut_mm: f64,
+    pub pierces: usize,
+    pub etch_mm: f64,
+    pub lead_mm: f64,
+    pub joints: usize,
+    /// Seconds: laser, plasma.
+    pub time_s: (f64, f64),
+}
+
+/// Micro-joints as asked for.
+#[derive(Clone, Copy, Debug)]
+pub struct Joints {
+    pub per_part: usize,
+    pub below: f64,
+    pub width: f64,
+}
+
+impl Joints {
+    /// Whether a plate (its outline in its own frame) is small enough to get joints.
+    pub fn applies(&self, outline: &[DVec2]) -> bool {
+        size(outline).max_element() < self.below
+    }
+
+    /// Kept from corners, the pierce point and each other, mm.
+    pub fn clear(&self) -> f64 {
+        (2.0 * self.width).max(2.0)
+    }
+}
+
+/// The nest: every plate's place and drawing, the sheets, and nest.json.
+#[derive(Clone, Debug)]
+pub struct Nested {
+    pub plates: Vec<PlateRecord>,
+    pub cores: Vec<CoreRecord>,
+    /// One per plate, in plate order.
+    pub places: Vec<Place>,
+    /// Each plate as cut on its sheet, in plate order.
+    pub drawn: Vec<Drawn>,
+    pub sheets: Vec<SheetInfo>,
+    pub joints: Option<Joints>,
+    /// nest.json.
+    pub doc: NestDoc,
+    /// The spacing parts keep, mm (for the assembly's clip polygons).
+    pub spacing: f64,
+}
+
+impl Nested {
+    /// Part area over stock area, all sheets together.
+    pub fn utilisation(&self) -> f64 {
+        let used: f64 = self.sheets.iter().map(|s| s.area).sum();
+        let stock: f64 = self
+            .sheets
+            .iter()
+            .map(|s| s.stock.size.x * s.stock.size.y)
+            .sum();
+        used / stock
+    }
+
+    /// Micro-joints per plate (fewer than asked where its sides are too short).
+    pub fn joint_counts(&self) -> Vec<usize> {
+        self.drawn.iter().map(|d| d.joints.len()).collect()
+    }
+}
+
+/// Why no nest was made.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    #[error(
+        "{count} plate(s) fit no {sheet_w} × {sheet_h} mm sheet ({usable_w:.0} × {usable_h:.0} mm inside the margin) at any allowed rotation: {names}"
+    )]
+    TooLarge {
+        count: usize,
+        sheet_w: f64,
+        sheet_h: f64,
+        usable_w: f64,
+        usable_h: f64,
+        names: String,
+    },
+    #[error("plate {id}: {source}")]
+    Plate { id: String, source: NestError },
+    #[error(transparent)]
+    Nest(NestError),
+    #[error("{table}: the time estimate for {sheet}: {source}")]
+    Speeds {
+        table: String,
+        sheet: String,
+        source: SpeedError,
+    },
+}
+
+impl Error {
+    /// Whether the caller stopped the nest.
+    pub fn is_cancelled(&self) -> bool {
+        matches!(self, Error::Nest(NestError::Cancelled(_)))
+    }
+}
+
+fn thickness_name(t: f64) -> String {
+    let s = format!("{t:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+impl Options {
+    fn check(&self, plates: usize) -> Result<(NestOptions, Option<Joints>), OptionError> {
+        if self.stock.is_empty() {
+            return Err(OptionError::new(
+                "stock",
+                "is empty: give one sheet size or more",
+            ));
+        }
+        if let Some(l) = self.lead_in {
+            if !(l > 0.0 && l <= 0.5 * self.spacing) {
+                return Err(OptionError::new(
+                    "lead_in",
+                    format!(
+                        "must be more than 0 and at most half the spacing ({} mm), so that it stays in the scrap between parts; got {}",
+                        0.5 * self.spacing,
+                        crate::text::num(l)
+                    ),
+                ));
+            }
+        }
+        super::positive("micro_joint_below", self.micro_joint_below, 1e6, "mm")?;
+        super::positive("micro_joint_width", self.micro_joint_width, 10.0, "mm")?;
+        let joints = match self.micro_joints {
+            None => None,
+            Some(n @ 1..=8) => Some(Joints {
+                per_part: n,
+                below: self.micro_joint_below,
+                width: self.micro_joint_width,
+            }),
+            Some(n) => {
+                return Err(OptionError::new(
+                    "micro_joints",
+                    format!("must be from 1 to 8, got {n}"),
+                ))
+            }
+        };
+        let opts = NestOptions {
+            sheet: self.stock[0].size,
+            margin: self.margin,
+            spacing: self.spacing,
+            rotations: self.rotations.clone(),
+            tries: self.tries.unwrap_or_else(|| NestOptions::tries_for(plates)),
+            seed: self.seed,
+            pair: !self.no_pairs,
+        };
+        if !(1..=MAX_TRIES).contains(&opts.tries) {
+            return Err(OptionError::new(
+                "tries",
+                format!("must be from 1 to {MAX_TRIES}, got {}", opts.tries),
+            ));
+        }
+        Ok((opts, joints))
+    }
+}
+
+/// Nests `plates` (as plates.json holds them; `cores` are tubes, not nested, but listed).
+/// `progress` counts the parts placed over all tries and stock sizes and can stop the nest
+/// between parts.
+pub fn run(
+    plates: Vec<PlateRecord>,
+    cores: Vec<CoreRecord>,
+    opts: &Options,
+    progress: &dyn Progress,
+) -> Result<Nested, Error> {
+    let (nest_opts, joints) = opts.check(plates.len())?;
+    let speeds = opts.speeds.clone().unwrap_or_default();
+    let stock = &opts.stock;
+    // Families: thickness (as its bits: positive floats order as their bits do), then group.
+    let keys: Vec<(u64, u32)> = plates
+        .iter()
+        .map(|p| {
+            (
+                p.thickness.to_bits(),
+                if opts.keep_groups { p.group } else { 0 },
+            )
+        })
+        .collect();
+    progress.begin(
+        "nesting",
+        Some(plates.len() as u64 * nest_opts.tries as u64 * stock.len() as u64),
+    );
+    let placed = std::sync::atomic::AtomicU64::new(0);
+    let nester = BottomLeft::with_progress(progress, &placed);
+    let outlines: Vec<Vec<DVec2>> = plates.iter().map(|p| p.outline.clone()).collect();
+    let (nesting, sheet_keys) = nest_families(&nester, &outlines, &keys, stock, &nest_opts)
+        .map_err(|e| named(e, &plates, stock, opts.margin))?;
+    let places = nesting.places;
+    let mut sheets: Vec<SheetInfo> = sheet_keys
+        .iter()
+        .enumerate()
+        .map(|(k, &((bits, group), st))| {
+            let t = f64::from_bits(bits);
+            SheetInfo {
+                file: format!("sheet-{:02}-{}mm.dxf", k + 1, thickness_name(t)),
+                thickness: t,
+                group: opts.keep_groups.then_some(group),
+                stock: st,
+                parts: Vec::new(),
+                area: 0.0,
+                remnants: Vec::new(),
+                cut_mm: 0.0,
+                pierces: 0,
+                etch_mm: 0.0,
+                lead_mm: 0.0,
+                joints: 0,
+                time_s: (0.0, 0.0),
+            }
+        })
+        .collect();
+    for (i, place) in places.iter().enumerate() {
+        sheets[place.sheet].parts.push(i);
+        sheets[place.sheet].area += plates[i].area();
+    }
+    let drawn: Vec<Drawn> = plates
+        .iter()
+        .zip(&places)
+        .map(|(p, place)| on_sheet(p, place, opts.lead_in, joints))
+        .collect();
+    // Remnants and machine time.
+    for sheet in &mut sheets {
+        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &drawn[i]).collect();
+        let hulls: Vec<Vec<DVec2>> = parts.iter().map(|d| d.outline.clone()).collect();
+        sheet.remnants = remnants(sheet.stock.size, &hulls, opts.spacing, opts.remnant_min);
+        sheet.cut_mm = parts.iter().map(|d| d.cut_length()).sum();
+        sheet.pierces = parts.iter().map(|d| d.pierces()).sum();
+        sheet.joints = parts.iter().map(|d| d.joints.len()).sum();
+        sheet.etch_mm = parts.iter().map(|d| d.etch_length()).sum();
+        sheet.lead_mm = parts
+            .iter()
+            .flat_map(|d| d.leads.iter())
+            .map(|[a, b]| a.distance(*b))
+            .sum();
+        sheet.time_s = times(
+            &speeds,
+            sheet.thickness,
+            sheet.cut_mm + sheet.lead_mm,
+            sheet.pierces,
+            sheet.etch_mm,
+        )
+        .map_err(|source| Error::Speeds {
+            table: opts.speeds_name.clone(),
+            sheet: sheet.file.clone(),
+            source,
+        })?;
+    }
+    let mut out = Nested {
+        plates,
+        cores,
+        places,
+        drawn,
+        sheets,
+        joints,
+        doc: NestDoc::default(),
+        spacing: opts.spacing,
+    };
+    out.doc = nest_doc(&out, &nest_opts, &speeds);
+    Ok(out)
+}
+
+/// A plate as cut on its sheet: the outline counter-clockwise from its pierce point (the middle
+/// of its longest side), holes, marks upright on the sheet, and leads and micro-joints when
+/// asked for.
+fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>, joints: Option<Joints>) -> Drawn {
+    let mut outline: Vec<DVec2> = p.outline.iter().map(|q| place.apply(*q)).collect();
+    let n = outline.len();
+    let longest = (0..n)
+        .max_by(|&a, &b| {
+            let la = outline[a].distance(outline[(a + 1) % n]);
+            let lb = outline[b].distance(outline[(b + 1) % n]);
+            la.total_cmp(&lb).then(b.cmp(&a))
+        })
+        .expect("an outline has points");
+    let (a, b) = (outline[longest], outline[(longest + 1) % n]);
+    let pierce = 0.5 * (a + b);
+    outline.rotate_left((longest + 1) % n);
+    outline.insert(0, pierce);
+    let r = 0.5 * p.hole_diameter();
+    let holes: Vec<Hole> = p
+        .holes
+        .iter()
+        .map(|c| Hole {
+            centre: place.apply(*c),
+            diameter: p.hole_diameter(),
+        })
+        .collect();
+    let keep: Vec<(DVec2, f64)> = p.holes.iter().map(|c| (*c, r)).collect();
+    let nodes = [p.ends[0].0, p.ends[1].0];
+    let marks = part_marks(&p.id, &p.outline, &keep, nodes, &|q| place.apply(q));
+    let mut leads = Vec::new();
+    if let Some(l) = lead {
+        // Holes: from inside the hole to its pierce point (+x), and back in.
+        for h in &holes {
+            let rr = 0.5 * h.diameter;
+            let len = l.min(0.8 * rr);
+            let start = h.centre + DVec2::X * rr;
+            leads.push([start - DVec2::X * len, start]);
+            leads.push([start, start - DVec2::new(len, len).normalize() * len]);
+        }
+        // The outline: square in from the scrap, out at 45° ahead.
+        let along = (b - a).normalize();
+        let out = DVec2::new(along.y, -along.x);
+        leads.push([pierce + out * l, pierce]);
+        leads.push([pierce, pierce + (out + along).normalize() * l]);
+    }
+    let joints = match joints {
+        Some(j) if j.applies(&p.outline) => place_joints(&outline, j.per_part, j.width, j.clear()),
+        _ => Vec::new(),
+    };
+    Drawn {
+        outline,
+        holes,
+        etch: marks.etch,
+        leads,
+        joints,
+    }
+}
+
+/// Nester errors with plate ids instead of indices.
+fn named(e: NestError, plates: &[PlateRecord], stock: &[Stock], margin: f64) -> Error {
+    match e {
+        NestError::TooLarge(list) => {
+            let biggest = stock
+                .iter()
+                .map(|s| s.size)
+                .max_by(|a, b| (a.x * a.y).total_cmp(&(b.x * b.y)))
+                .unwrap_or(DVec2::ZERO);
+            let usable = biggest - DVec2::splat(2.0 * margin);
+            let names: Vec<String> = list
+                .iter()
+                .take(8)
+                .map(|(i, s)| format!("{} ({:.1} × {:.1} mm)", plates[*i].id, s.x, s.y))
+                .collect();
+            Error::TooLarge {
+                count: list.len(),
+                sheet_w: biggest.x,
+                sheet_h: biggest.y,
+                usable_w: usable.x,
+                usable_h: usable.y,
+                names: names.join(", ") + if list.len() > 8 { ", …" } else { "" },
+            }
+        }
+        NestError::Degenerate(i) | NestError::NotFinite(i) | NestError::Engine(i, _) => {
+            Error::Plate {
+                id: plates[i].id.clone(),
+                source: e,
+            }
+        }
+        NestError::Margin(_) | NestError::Spacing(_) => Error::Nest(e),
+        e => Error::Nest(e),
+    }
+}
+
+/// Size of an outline in its own frame: along x, along y.
+fn size(p: &[DVec2]) -> DVec2 {
+    let lo = p.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
+    let hi = p.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
+    hi - lo
+}
+
+/// nest.json: the rules, every sheet with its parts, remnants and times, totals per thickness
+/// and overall, and every plate's placement. Fields in the file's order.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct NestDoc {
+    pub definitions: BTreeMap<&'static str, &'static str>,
+    pub families: Vec<Family>,
+    pub format: &'static str,
+    pub margin: f64,
+    pub micro_joints: Option<JointsDoc>,
+    pub not_nested: Vec<NotNested>,
+    pub pairs: bool,
+    pub placements: Vec<Placement>,
+    pub plates: usize,
+    pub rotations: serde_json::Value,
+    pub seed: u64,
+    pub sheets: Vec<SheetDoc>,
+    pub spacing: f64,
+    pub speed_table: SpeedTable,
+    pub total: Total,
+    pub tries: usize,
+    pub units: &'static str,
+    pub version: u32,
+}
+
+/// The sheets of one thickness together.
+#[derive(Clone, Debug, Serialize)]
+pub struct Family {
+    pub cost: f64,
+    pub part_area_mm2: f64,
+    pub sheets: usize,
+    pub thickness: f64,
+    pub utilisation: f64,
+}
+
+/// Micro-joints as nest.json states them.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointsDoc {
+    pub below_mm: f64,
+    pub clear_mm: f64,
+    pub per_part: usize,
+    pub width_mm: f64,
+}
+
+/// A node core: tube stock, not nested.
+#[derive(Clone, Debug, Serialize)]
+pub struct NotNested {
+    pub id: String,
+    pub kind: &'static str,
+    pub length: f64,
+    pub outer_diameter: f64,
+    pub wall: f64,
+}
+
+/// Where a plate lies.
+#[derive(Clone, Debug, Serialize)]
+pub struct Placement {
+    pub bbox_min: [f64; 2],
+    pub id: String,
+    pub micro_joints: usize,
+    pub offset: [f64; 2],
+    pub rotation_deg: f64,
+    pub sheet: String,
+}
+
+/// Laser and plasma seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Seconds {
+    pub laser: f64,
+    pub plasma: f64,
+}
+
+/// One sheet.
+#[derive(Clone, Debug, Serialize)]
+pub struct SheetDoc {
+    pub cost: f64,
+    pub cut_mm: f64,
+    pub etch_mm: f64,
+    pub file: String,
+    pub group: Option<u32>,
+    pub micro_joints: usize,
+    pub part_area_mm2: f64,
+    pub parts: Vec<String>,
+    pub pierces: usize,
+    pub remnants: Vec<[[f64; 2]; 2]>,
+    pub size: [f64; 2],
+    pub thickness: f64,
+    pub time_s: Seconds,
+    pub utilisation: f64,
+}
+
+/// Every sheet together.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Total {
+    pub cost: f64,
+    pub cut_mm: f64,
+    pub etch_mm: f64,
+    pub part_area_mm2: f64,
+    pub pierces: usize,
+    pub sheets: usize,
+    pub time_s: Seconds,
+    pub utilisation: f64,
+}
+
+fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
+    // Per thickness (positive thicknesses order as their bits do).
+    let mut families: BTreeMap<u64, (usize, f64, f64, f64)> = BTreeMap::new();
+    for s in &out.sheets {
+        let f = families.entry(s.thickness.to_bits()).or_default();
+        f.0 += 1;
+        f.1 += s.area;
+        f.2 += s.stock.size.x * s.stock.size.y;
+        f.3 += s.stock.cost;
+    }
+    let placed = |i: usize| {
+        let lo = out.plates[i]
+            .outline
+            .iter()
+            .map(|q| out.places[i].apply(*q))
+            .fold(DVec2::INFINITY, |m, q| m.min(q));
+        [lo.x, lo.y]
+    };
+    NestDoc {
+        definitions: [
+            ("bbox_min", "lower-left corner of the part's bounding box on the sheet"),
+            ("cut_mm", "outer and inner contours less micro-joints (and lead lines when asked for)"),
+            ("micro_joints", "uncut bridges on the outer contour (gaps between its open pieces on CUT_OUTER, drawn across on JOINT), on parts whose bounding box's longer side is under below_mm"),
+            ("offset", "sheet point = R(rotation_deg) · plate point + offset, the plate point in the plate's own frame (plates.json)"),
+            ("pierces", "one per contour, and one after each micro-joint"),
+            ("remnants", "free rectangles [lower-left, upper-right] at least remnant_min, the spacing clear of every part"),
+            ("time_s", "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed (speed_table)"),
+        ]
+        .into_iter()
+        .collect(),
+        families: families
+            .iter()
+            .map(|(t, f)| Family {
+                cost: f.3,
+                part_area_mm2: f.1,
+                sheets: f.0,
+                thickness: f64::from_bits(*t),
+                utilisation: f.1 / f.2,
+            })
+            .collect(),
+        format: "lamina-nest",
+        margin: opts.margin,
+        micro_joints: out.joints.map(|j| JointsDoc {
+            below_mm: j.below,
+            clear_mm: j.clear(),
+            per_part: j.per_part,
+            width_mm: j.width,
+        }),
+        not_nested: out
+            .cores
+            .iter()
+            .map(|c| NotNested {
+                id: c.id.clone(),
+                kind: "tube",
+                length: c.length,
+                outer_diameter: c.outer_diameter,
+                wall: c.wall,
+            })
+            .collect(),
+        pairs: opts.pair,
+        placements: out
+            .plates
+            .iter()
+            .zip(&out.places)
+            .enumerate()
+            .map(|(i, (p, pl))| Placement {
+                bbox_min: placed(i),
+                id: p.id.clone(),
+                micro_joints: out.drawn[i].joints.len(),
+                offset: [pl.offset.x, pl.offset.y],
+                rotation_deg: pl.angle,
+                sheet: out.sheets[pl.sheet].file.clone(),
+            })
+            .collect(),
+        plates: out.plates.len(),
+        rotations: match &opts.rotations {
+            Rotations::Any => serde_json::json!("any"),
+            Rotations::Listed(r) => serde_json::json!(r),
+        },
+        seed: opts.seed,
+        sheets: out
+            .sheets
+            .iter()
+            .map(|s| SheetDoc {
+                cost: s.stock.cost,
+                cut_mm: s.cut_mm + s.lead_mm,
+                etch_mm: s.etch_mm,
+                file: s.file.clone(),
+                group: s.group,
+                micro_joints: s.joints,
+                part_area_mm2: s.area,
+                parts: s.parts.iter().map(|&i| out.plates[i].id.clone()).collect(),
+                pierces: s.pierces,
+                remnants: s
+                    .remnants
+                    .iter()
+                    .map(|[a, b]| [[a.x, a.y], [b.x, b.y]])
+                    .collect(),
+                size: [s.stock.size.x, s.stock.size.y],
+                thickness: s.thickness,
+                time_s: Seconds {
+                    laser: s.time_s.0,
+                    plasma: s.time_s.1,
+                },
+                utilisation: s.area / (s.stock.size.x * s.stock.size.y),
+            })
+            .collect(),
+        spacing: opts.spacing,
+        speed_table: speeds.clone(),
+        total: Total {
+            cost: out.sheets.iter().map(|s| s.stock.cost).sum(),
+            cut_mm: out.sheets.iter().map(|s| s.cut_mm + s.lead_mm).sum(),
+            etch_mm: out.sheets.iter().map(|s| s.etch_mm).sum(),
+            part_area_mm2: out.sheets.iter().map(|s| s.area).sum(),
+            pierces: out.sheets.iter().map(|s| s.pierces).sum(),
+            sheets: out.sheets.len(),
+            time_s: Seconds {
+                laser: out.sheets.iter().map(|s| s.time_s.0).sum(),
+                plasma: out.sheets.iter().map(|s| s.time_s.1).sum(),
+            },
+            utilisation: out.utilisation(),
+        },
+        tries: opts.tries,
+        units: "mm",
+        version: 2,
+    }
+}
+
+impl NestDoc {
+    /// nest.json's text.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("reports serialise") + "\n"
+    }
+}
+
+/// bom.csv: a row per plate (kind `plate`), per bolted seam (kind `bolts`) and per node core
+/// (kind `tube`). A plate's position is the lower-left corner of its bounding box on the
+/// sheet (`bbox_x_mm`, `bbox_y_mm`), its rotation the turn from its own frame.
+pub fn bom_csv(out: &Nested) -> String {
+    let mut w = String::from(
+        "kind,id,group,thickness_mm,length_mm,width_mm,area_mm2,mass_kg,sheet,bbox_x_mm,bbox_y_mm,rotation_deg,holes,bolted_to,bolts,welded_at_a,welded_at_b\n",
+    );
+    for (i, (p, place)) in out.plates.iter().zip(&out.places).enumerate() {
+        let s = size(&p.outline);
+        let mass = p.area() * p.thickness * DENSITY * 1e-6;
+        let ends: Vec<String> = p
+            .ends
+            .iter()
+            .zip(&p.end_cores)
+            .map(|((node, with), core)| match core {
+                Some(c) => format!("\"node {node}: core {c}\""),
+                None => format!("\"node {}: {}\"", node, with.join(" ")),
+            })
+            .collect();
+        let lo = out.drawn[i]
+            .outline
+            .iter()
+            .fold(DVec2::INFINITY, |m, q| m.min(*q));
+        let bolts = p
+            .bolt
+            .as_ref()
+            .map(|b| format!("{} x {}x{}", p.holes.len(), b.size, b.length))
+            .unwrap_or_default();
+        let _ = writeln!(
+            w,
+            "plate,\"{}\",{},{},{:.2},{:.2},{:.1},{:.4},\"{}\",{:.3},{:.3},{},{},\"{}\",\"{}\",{},{}",
+            p.id,
+            p.group,
+            p.thickness,
+            s.x,
+            s.y,
+            p.area(),
+            mass,
+            out.sheets[place.sheet].file,
+            lo.x,
+            lo.y,
+            place.angle,
+            p.holes.len(),
+            p.bolted_to.as_deref().unwrap_or(""),
+            bolts,
+            ends[0],
+            ends[1]
+        );
+    }
+    // One row per seam: the bolts to order for it.
+    for p in &out.plates {
+        let (Some(b), Some(other)) = (&p.bolt, &p.bolted_to) else {
+            continue;
+        };
+        if other.as_str() < p.id.as_str() {
+            continue;
+        }
+        let _ = writeln!(
+            w,
+            "bolts,\"{}+{}\",{},{},,,,,,,,,{},,\"{} x {}x{} with 2 washers and a nut, grip {} mm\",,",
+            p.id, other, p.group, b.grip, p.holes.len(), p.holes.len(), b.size, b.length, b.grip
+        );
+    }
+    for c in &out.cores {
+        let area = std::f64::consts::PI * (c.outer_diameter - c.wall) * c.wall;
+        let _ = writeln!(
+            w,
+            "tube,\"{}\",{},{},{:.2},{},{:.1},{:.4},,,,,,,\"tube {} x {} at node {}\",,",
+            c.id,
+            c.group,
+            c.wall,
+            c.length,
+            c.outer_diameter,
+            area,
+            area * c.length * DENSITY * 1e-6,
+            c.outer_diameter,
+            c.wall,
+            c.node
+        );
+    }
+    w
+}
+
+/// Each sheet's cut DXF into `dir` (named as `SheetInfo::file`).
+pub fn write_sheets(out: &Nested, dir: &Path) -> Result<(), WriteError> {
+    for sheet in &out.sheets {
+        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &out.drawn[i]).collect();
+        write_cut_dxf(
+            &parts,
+            Some(sheet.stock.size),
+            &sheet.remnants,
+            &dir.join(&sheet.file),
+        )?;
+    }
+    Ok(())
+}
+
+/// assembly.scad: every part cut out of its sheet's DXF by a clip polygon around it, placed
+/// in the structure (not for micro-jointed sheets: OpenSCAD's DXF import drops their open
+/// outer contours).
+pub fn write_assembly(out: &Nested, path: &Path) -> Result<(), WriteError> {
+    let clip_d = 0.5 * out.spacing + SLACK;
+    let scad: Vec<SheetPart> = out
+        .plates
+        .iter()
+        .zip(&out.places)
+        .zip(&out.drawn)
+        .map(|((p, place), d)| SheetPart {
+            id: &p.id,
+            dxf: &out.sheets[place.sheet].file,
+            thickness: p.thickness,
+            matrix: p.matrix,
+            angle: place.angle,
+            offset: place.offset,
+            clip: grown_hull(&d.outline, clip_d),
+        })
+        .collect();
+    let scad_cores: Vec<ScadCore> = out
+        .cores
+        .iter()
+        .map(|c| ScadCore {
+            id: &c.id,
+            outer: c.outer_diameter,
+            inner: c.outer_diameter - 2.0 * c.wall,
+            length: c.length,
+            matrix: axis_frame(DVec3::from_array(c.base), DVec3::from_array(c.axis)),
+        })
+        .collect();
+    write_scad_from_sheets(&scad, &scad_cores, path)
+}
+
+/// sheets.svg: every sheet with its parts by group and its remnants, 1000 px wide.
+pub fn svg(out: &Nested) -> String {
+    let views: Vec<SheetView> = out
+        .sheets
+        .iter()
+        .map(|s| SheetView {
+            title: format!(
+                "{}: {} mm, {} × {} mm, {} parts, {:.1} % used",
+                s.file,
+                thickness_name(s.thickness),
+                s.stock.size.x,
+                s.stock.size.y,
+                s.parts.len(),
+                100.0 * s.area / (s.stock.size.x * s.stock.size.y)
+            ),
+            size: s.stock.size,
+            remnants: s.remnants.clone(),
+            parts: s
+                .parts
+                .iter()
+                .map(|&i| {
+                    (
+                        out.drawn[i].outline.as_slice(),
+                        out.plates[i].id.as_str(),
+                        out.plates[i].group,
+                    )
+                })
+                .collect(),
+        })
+        .collect();
+    sheets_svg(&views, 1000.0)
+}
+
+/// A thickness as sheet file names and summaries write it (`1.5`, `3`).
+pub fn thickness_label(t: f64) -> String {
+    thickness_name(t)
+}

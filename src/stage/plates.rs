@@ -1,0 +1,733 @@
+//! `plates`: one flat steel plate per edge in its panel plane, cut back at the nodes for even
+//! weld gaps, seams between assembly groups as bolted pairs, node cores where gaps cannot be
+//! evened; with plates.json and the weld report as typed documents. The writers (part DXFs,
+//! assembly STL/OBJ/SCAD, welds.json and its page) are separate calls.
+//!
+//! ```
+//! use lamina::stage::{planarize, plates, Quiet};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/calyx_veins.json"))?;
+//! let solved = planarize::run(&net, None, &planarize::Options::default(), &Quiet)?;
+//! let core = plates::CoreSize { diameter: 60.3, wall: 4.0 };
+//! let opts = plates::Options { groups: 7, node_core: Some(core), ..Default::default() };
+//! let made = plates::run(&solved.axes, &opts)?;
+//! // Every node's gaps are even, or it has a tube the plates weld to.
+//! assert!(made.welds.summary.nodes_needing_a_core.is_empty());
+//! let mesh = plates::assembly(&made.set);
+//! assert!(mesh.triangles.len() > made.set.plates.len() * 8);
+//! # Ok(()) }
+//! ```
+
+use std::io::Write as _;
+use std::path::Path;
+
+use glam::{DVec2, DVec3};
+use serde::Serialize;
+
+use crate::fabricate::assembly::{axis_frame, write_scad, ScadBolt, ScadCore, ScadPart};
+use crate::fabricate::cutsheet::{write_cut_dxf, Drawn, Hole};
+use crate::fabricate::plates_file::{
+    BoltRecord, CoreRecord, EndDoc, PlateDoc, PlateRecord, PlatesDoc, WeldNode, WeldPair,
+};
+use crate::fabricate::tags::part_marks;
+use crate::files::{write_atomic, ReadError, WriteError};
+use crate::rationalize::axes::Axes;
+pub use crate::rationalize::bolts::BoltSize;
+use crate::rationalize::plates::{
+    plates, Core, Plate, PlateError, PlateOptions, PlateSet, Thickness, HOLE_SEGMENTS,
+};
+pub use crate::rationalize::plates::{CoreSize, EdgeSelector};
+use crate::stage::OptionError;
+use crate::TriMesh;
+
+/// How the plates are made. `Default` is the command's defaults (which need radii on the
+/// edges, or `thickness`, `sizing` or `edge_thickness`).
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Sheet thicknesses available, mm, ascending. Default 1.5, 2, 3, 4, 5, 6 (or the
+    /// sizing's list).
+    pub gauges: Option<Vec<f64>>,
+    /// Every plate this thick, mm. Default: from the vein radii.
+    pub thickness: Option<f64>,
+    /// Gauges from a sizing of these axes. Default: none.
+    pub sizing: Option<Gauges>,
+    /// Thickness for some edges over the rule; a later match wins.
+    pub edge_thickness: Vec<(EdgeSelector, f64)>,
+    /// Root gap between plates meeting at a node, mm. Default 1.
+    pub weld_gap: f64,
+    /// How far a root gap may be from `weld_gap`, mm. Default 0.5.
+    pub weld_gap_tolerance: f64,
+    /// A tube at nodes whose gaps setbacks cannot even. Default: such nodes are reported.
+    pub node_core: Option<CoreSize>,
+    /// Plates meeting at less than this dihedral angle, degrees, make the result not ok.
+    /// Default: none.
+    pub min_weld_angle: Option<f64>,
+    /// Assembly groups; seams between them become bolted pairs. Default 1.
+    pub groups: usize,
+    /// Bolts through the seam plates. Default: by the grip.
+    pub bolt: Option<BoltSize>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            gauges: None,
+            thickness: None,
+            sizing: None,
+            edge_thickness: Vec::new(),
+            weld_gap: 1.0,
+            weld_gap_tolerance: 0.5,
+            node_core: None,
+            min_weld_angle: None,
+            groups: 1,
+            bolt: None,
+        }
+    }
+}
+
+/// A sizing's gauges: one per edge, and the list they were chosen from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gauges {
+    pub per_edge: Vec<f64>,
+    pub list: Vec<f64>,
+}
+
+impl Gauges {
+    /// The gauges of a sizing (`stage::size`).
+    pub fn of(report: &super::size::Report) -> Gauges {
+        Gauges {
+            per_edge: report.edges.iter().map(|e| e.gauge).collect(),
+            list: report.gauges.clone(),
+        }
+    }
+}
+
+/// Why no plates were made.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    #[error(
+        "no vein radii to take thicknesses from: give sizing= (from size), thickness= or edge_thickness="
+    )]
+    NoThickness,
+    #[error(transparent)]
+    Plates(#[from] PlateError),
+}
+
+/// The plates made: the set, the documents the command writes, and the weld summary.
+#[derive(Clone, Debug)]
+pub struct Plated {
+    pub set: PlateSet,
+    pub options: PlateOptions,
+    /// plates.json.
+    pub file: PlatesDoc,
+    /// welds.json.
+    pub welds: Welds,
+    /// Per plate: the part as its DXF draws it (in its own frame), and its tag's height (None
+    /// when the part is too small for a tag).
+    pub parts: Vec<(Drawn, Option<f64>)>,
+    /// No pair of plates meets below `min_weld_angle`.
+    pub ok: bool,
+}
+
+impl Plated {
+    /// The plates as `nest` takes them (what plates.json reads back as).
+    pub fn records(&self) -> Vec<PlateRecord> {
+        self.file
+            .records(Path::new("plates"))
+            .expect("plates made here are valid records")
+            .0
+    }
+
+    /// The node cores as records.
+    pub fn core_records(&self) -> Vec<CoreRecord> {
+        self.file.cores.clone()
+    }
+}
+
+/// Makes the plates of `axes`.
+pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
+    if let Some(a) = opts.min_weld_angle {
+        if !(0.0..=180.0).contains(&a) {
+            return Err(OptionError::new(
+                "min_weld_angle",
+                format!("must be from 0 to 180 degrees, got {}", crate::text::num(a)),
+            )
+            .into());
+        }
+    }
+    let thickness = match (opts.thickness, &opts.sizing) {
+        (Some(_), Some(_)) => {
+            return Err(OptionError::new("thickness", "and sizing= exclude each other").into())
+        }
+        (Some(t), None) => Thickness::Constant(t),
+        (None, Some(g)) => Thickness::PerEdge(g.per_edge.clone()),
+        (None, None) => {
+            if axes.edge_radii.iter().all(|r| *r <= 0.0) && opts.edge_thickness.is_empty() {
+                return Err(Error::NoThickness);
+            }
+            Thickness::FromRadius
+        }
+    };
+    let gauges = match (&opts.gauges, &opts.sizing) {
+        (Some(g), _) => g.clone(),
+        (None, Some(g)) => g.list.clone(),
+        (None, None) => vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
+    };
+    let options = PlateOptions {
+        gauges,
+        thickness,
+        overrides: opts.edge_thickness.clone(),
+        weld_gap: opts.weld_gap,
+        weld_gap_tolerance: opts.weld_gap_tolerance,
+        groups: opts.groups,
+        bolt: opts.bolt,
+        node_core: opts.node_core,
+    };
+    let set = plates(axes, &options)?;
+    let file = plates_doc(&set, &options);
+    let welds = welds(&set, &options, opts.min_weld_angle);
+    let ok = opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0;
+    let parts = set.plates.iter().map(drawn).collect();
+    Ok(Plated {
+        set,
+        options,
+        file,
+        welds,
+        parts,
+        ok,
+    })
+}
+
+/// A part as its DXF draws it, in the plate's own frame, and its tag's height.
+fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
+    let r = 0.5 * p.hole_diameter();
+    let holes: Vec<(DVec2, f64)> = p.holes.iter().map(|c| (*c, r)).collect();
+    let marks = part_marks(&p.id, &p.outline, &holes, p.nodes, &|q| q);
+    let part = Drawn {
+        outline: p.outline.clone(),
+        holes: p
+            .holes
+            .iter()
+            .map(|c| Hole {
+                centre: *c,
+                diameter: p.hole_diameter(),
+            })
+            .collect(),
+        etch: marks.etch,
+        leads: Vec::new(),
+        joints: Vec::new(),
+    };
+    (part, marks.tag_height)
+}
+
+fn plates_doc(set: &PlateSet, opts: &PlateOptions) -> PlatesDoc {
+    let plates = &set.plates;
+    let cores = set
+        .cores
+        .iter()
+        .map(|c| CoreRecord {
+            axis: c.axis.to_array(),
+            base: c.base.to_array(),
+            group: c.group + 1,
+            id: c.id.clone(),
+            length: c.length,
+            node: c.node,
+            outer_diameter: c.size.diameter,
+            wall: c.size.wall,
+        })
+        .collect();
+    let docs = plates
+        .iter()
+        .map(|p| PlateDoc {
+            area_mm2: p.area(),
+            bolt: p.bolt.map(|b| BoltRecord {
+                d: b.size.d,
+                grip: b.grip,
+                hole_diameter: b.size.hole,
+                length: b.length,
+                size: b.size.name.to_string(),
+            }),
+            bolted_to: p.bolted_to.map(|j| plates[j].id.clone()),
+            edge: Some(p.edge as u32),
+            ends: [0, 1].map(|e| EndDoc {
+                core: p.core[e].map(|c| set.cores[c].id.clone()),
+                node: p.nodes[e],
+                setback: p.setback[e],
+                welded_to: p.partners[e]
+                    .iter()
+                    .map(|&j| plates[j].id.clone())
+                    .collect(),
+            }),
+            flattening_mm: p.flattening,
+            group: p.group + 1,
+            holes: p.holes.iter().map(|q| [q.x, q.y]).collect(),
+            id: p.id.clone(),
+            matrix: p.placement.matrix(),
+            nodes: p.nodes,
+            outline: p.outline.iter().map(|q| [q.x, q.y]).collect(),
+            thickness: p.thickness,
+        })
+        .collect();
+    PlatesDoc {
+        gauges: opts.gauges.clone(),
+        weld_gap: opts.weld_gap,
+        weld_gap_tolerance: opts.weld_gap_tolerance,
+        hole_segments: HOLE_SEGMENTS,
+        core_segments: CORE_SEGMENTS,
+        cores,
+        plates: docs,
+    }
+}
+
+/// welds.json: per node its plates, the pairs side by side with their root gaps and dihedral
+/// angles, whether the gaps are even, and its core. Fields in the file's order.
+#[derive(Clone, Debug, Serialize)]
+pub struct Welds {
+    pub definitions: WeldDefinitions,
+    pub format: &'static str,
+    pub min_weld_angle: Option<f64>,
+    pub nodes: Vec<WeldNodeDoc>,
+    pub summary: WeldSummary,
+    pub units: &'static str,
+    pub version: u32,
+    pub weld_gap: f64,
+    pub weld_gap_tolerance: f64,
+}
+
+/// What welds.json's figures mean.
+#[derive(Clone, Debug, Serialize)]
+pub struct WeldDefinitions {
+    pub access: &'static str,
+    pub dihedral_deg: &'static str,
+    pub root_gap_mm: &'static str,
+}
+
+/// One node's welds.
+#[derive(Clone, Debug, Serialize)]
+pub struct WeldNodeDoc {
+    pub core: Option<WeldCore>,
+    pub edges: Vec<usize>,
+    pub node: u32,
+    pub pairs: Vec<WeldPairDoc>,
+    pub plates: Vec<String>,
+    pub setbacks_mm: Vec<f64>,
+    /// `even`, `needs a node core` or `core`.
+    pub status: &'static str,
+}
+
+/// A node's core as the weld report gives it.
+#[derive(Clone, Debug, Serialize)]
+pub struct WeldCore {
+    pub id: String,
+    pub length: f64,
+    pub outer_diameter: f64,
+    pub root_gap_mm: Vec<f64>,
+    pub wall: f64,
+}
+
+/// Two plates side by side at a node.
+#[derive(Clone, Debug, Serialize)]
+pub struct WeldPairDoc {
+    pub access: &'static str,
+    pub dihedral_deg: f64,
+    pub edges: [usize; 2],
+    pub gap_within_tolerance: bool,
+    pub plates: [String; 2],
+    pub root_gap_mm: f64,
+}
+
+/// The weld report's totals.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct WeldSummary {
+    pub cores: usize,
+    pub even_nodes: usize,
+    pub nodes: usize,
+    pub nodes_needing_a_core: Vec<u32>,
+    pub pairs: usize,
+    pub pairs_120_135: usize,
+    pub pairs_60_120: usize,
+    pub pairs_below_60: usize,
+    pub pairs_below_min_weld_angle: usize,
+    pub pairs_over_135: usize,
+    pub smallest_dihedral_deg: f64,
+}
+
+/// Weld access by the dihedral angle, degrees: below 60° no prequalified fillet weld; 60–120°
+/// prequalified (EN 1993-1-8 §4.3.2.1); 120–135° AWS D1.1 only; above, the plates meet end to
+/// end (a butt weld).
+fn weld_class(angle: f64) -> (usize, &'static str) {
+    if angle < 60.0 {
+        (0, "below 60°: no prequalified fillet weld")
+    } else if angle <= 120.0 {
+        (1, "60–120°: fillet (EN 1993-1-8)")
+    } else if angle <= 135.0 {
+        (2, "120–135°: fillet (AWS D1.1 only)")
+    } else {
+        (3, "over 135°: butt")
+    }
+}
+
+fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
+    let ids = |k: usize| -> String {
+        let v: Vec<&str> = set.by_edge[k]
+            .iter()
+            .map(|&i| set.plates[i].id.as_str())
+            .collect();
+        v.join("+")
+    };
+    let mut sum = WeldSummary {
+        smallest_dihedral_deg: f64::INFINITY,
+        ..Default::default()
+    };
+    let mut nodes = Vec::with_capacity(set.welds.len());
+    for w in &set.welds {
+        sum.nodes += 1;
+        if w.core.is_some() {
+            sum.cores += 1;
+        } else if !w.even {
+            sum.nodes_needing_a_core.push(w.node);
+        }
+        let status = match (w.core, w.even) {
+            (Some(_), _) => "core",
+            (None, true) => "even",
+            (None, false) => "needs a node core",
+        };
+        let mut pairs = Vec::new();
+        for p in &w.pairs {
+            sum.pairs += 1;
+            let (class, name) = weld_class(p.angle_deg);
+            *[
+                &mut sum.pairs_below_60,
+                &mut sum.pairs_60_120,
+                &mut sum.pairs_120_135,
+                &mut sum.pairs_over_135,
+            ][class] += 1;
+            sum.smallest_dihedral_deg = sum.smallest_dihedral_deg.min(p.angle_deg);
+            if min_angle.is_some_and(|a| p.angle_deg < a) {
+                sum.pairs_below_min_weld_angle += 1;
+            }
+            pairs.push(WeldPairDoc {
+                access: name,
+                dihedral_deg: p.angle_deg,
+                edges: p.edges,
+                gap_within_tolerance: (p.gap - opts.weld_gap).abs()
+                    <= opts.weld_gap_tolerance + 1e-9,
+                plates: [ids(p.edges[0]), ids(p.edges[1])],
+                root_gap_mm: p.gap,
+            });
+        }
+        let core = w.core.map(|c| {
+            let c = &set.cores[c];
+            WeldCore {
+                id: c.id.clone(),
+                length: c.length,
+                outer_diameter: c.size.diameter,
+                root_gap_mm: w
+                    .setbacks
+                    .iter()
+                    .map(|s| s - 0.5 * c.size.diameter)
+                    .collect(),
+                wall: c.size.wall,
+            }
+        });
+        nodes.push(WeldNodeDoc {
+            core,
+            edges: w.edges.clone(),
+            node: w.node,
+            pairs,
+            plates: w.edges.iter().map(|&k| ids(k)).collect(),
+            setbacks_mm: w.setbacks.clone(),
+            status,
+        });
+    }
+    if sum.pairs == 0 {
+        sum.smallest_dihedral_deg = 0.0;
+    }
+    sum.even_nodes = sum.nodes - sum.nodes_needing_a_core.len() - sum.cores;
+    Welds {
+        definitions: WeldDefinitions {
+            access: "below 60°: no prequalified fillet weld; 60–120°: fillet (EN 1993-1-8 §4.3.2.1); 120–135°: fillet under AWS D1.1 only; over 135°: the plates meet end to end (butt weld)",
+            dihedral_deg: "angle between the two plates about the node axis on the side where they are neighbours (the wedge a fillet weld fills)",
+            root_gap_mm: "distance between the two plates (a bolted seam as its stack of two plies) in the plane perpendicular to the node axis: the weld's root opening along the line where they meet",
+        },
+        format: crate::fabricate::plates_file::WELDS_FORMAT,
+        min_weld_angle: min_angle,
+        nodes,
+        summary: sum,
+        units: "mm",
+        version: crate::fabricate::plates_file::WELDS_VERSION,
+        weld_gap: opts.weld_gap,
+        weld_gap_tolerance: opts.weld_gap_tolerance,
+    }
+}
+
+impl Welds {
+    /// welds.json's text.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("reports serialise") + "\n"
+    }
+
+    /// The nodes as the viewer takes them (what welds.json reads back as).
+    pub fn nodes(&self) -> Vec<WeldNode> {
+        self.nodes
+            .iter()
+            .map(|n| WeldNode {
+                node: n.node,
+                status: n.status.to_string(),
+                plates: n.plates.clone(),
+                pairs: n
+                    .pairs
+                    .iter()
+                    .map(|p| WeldPair {
+                        plates: p.plates.clone(),
+                        dihedral_deg: p.dihedral_deg,
+                        root_gap_mm: p.root_gap_mm,
+                        gap_within_tolerance: p.gap_within_tolerance,
+                        access: p.access.to_string(),
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
+/// Sides of the polygon standing for a core's circles in meshes.
+pub const CORE_SEGMENTS: usize = 48;
+
+/// Every plate as a closed prism (holes through it) and every core as a closed tube, in one
+/// mesh (disjoint shells).
+pub fn assembly(set: &PlateSet) -> TriMesh {
+    let mut mesh = TriMesh::default();
+    let mut add = |(v, t): (Vec<DVec3>, Vec<[u32; 3]>)| {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(v);
+        mesh.triangles
+            .extend(t.iter().map(|tri| tri.map(|i| i + base)));
+    };
+    for p in &set.plates {
+        add(p.prism());
+    }
+    for c in &set.cores {
+        add(tube(c));
+    }
+    mesh
+}
+
+/// A core as a closed tube: outer and inner `CORE_SEGMENTS`-gons from its base along its axis.
+fn tube(c: &Core) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let m = axis_frame(c.base, c.axis);
+    let (x, y) = (
+        DVec3::new(m[0][0], m[1][0], m[2][0]),
+        DVec3::new(m[0][1], m[1][1], m[2][1]),
+    );
+    let n = CORE_SEGMENTS as u32;
+    let (ro, ri) = (0.5 * c.size.diameter, 0.5 * c.size.diameter - c.size.wall);
+    let mut v = Vec::with_capacity(4 * CORE_SEGMENTS);
+    // Rings: outer bottom, outer top, inner bottom, inner top.
+    for (r, h) in [(ro, 0.0), (ro, c.length), (ri, 0.0), (ri, c.length)] {
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            v.push(c.base + (x * a.cos() + y * a.sin()) * r + c.axis * h);
+        }
+    }
+    let ring = |r: u32, k: u32| r * n + k % n;
+    let mut t = Vec::new();
+    let quad = |t: &mut Vec<[u32; 3]>, a: u32, b: u32, c: u32, d: u32| {
+        t.push([a, b, c]);
+        t.push([a, c, d]);
+    };
+    for k in 0..n {
+        // Outer wall faces out, inner wall in, bottom down, top up.
+        quad(
+            &mut t,
+            ring(0, k),
+            ring(0, k + 1),
+            ring(1, k + 1),
+            ring(1, k),
+        );
+        quad(
+            &mut t,
+            ring(2, k + 1),
+            ring(2, k),
+            ring(3, k),
+            ring(3, k + 1),
+        );
+        quad(
+            &mut t,
+            ring(0, k + 1),
+            ring(0, k),
+            ring(2, k),
+            ring(2, k + 1),
+        );
+        quad(
+            &mut t,
+            ring(1, k),
+            ring(1, k + 1),
+            ring(3, k + 1),
+            ring(3, k),
+        );
+    }
+    (v, t)
+}
+
+/// Every plate and core as its own closed object `o ID` (the plies of a seam touch face to
+/// face, so in the STL they share a face; here they stay apart).
+pub fn write_assembly_obj(set: &PlateSet, path: &Path) -> Result<(), WriteError> {
+    write_atomic(path, |w| {
+        writeln!(
+            w,
+            "# lamina plates: one closed prism per plate, one tube per node core, units mm"
+        )?;
+        let mut base = 1;
+        let shapes = set
+            .plates
+            .iter()
+            .map(|p| (p.id.as_str(), p.prism()))
+            .chain(set.cores.iter().map(|c| (c.id.as_str(), tube(c))));
+        for (id, (v, t)) in shapes {
+            writeln!(w, "o {id}")?;
+            for q in &v {
+                writeln!(w, "v {:?} {:?} {:?}", q.x, q.y, q.z)?;
+            }
+            for tri in &t {
+                writeln!(w, "f {} {} {}", tri[0] + base, tri[1] + base, tri[2] + base)?;
+            }
+            base += v.len() as u32;
+        }
+        Ok(())
+    })
+}
+
+/// One DXF per plate in `dir/parts/` (CUT_OUTER, CUT_INNER, ETCH, in the plate's own frame)
+/// and `dir/assembly.scad` placing them, with the cores and the bolts.
+pub fn write_parts(made: &Plated, dir: &Path) -> Result<(), WriteError> {
+    let parts = dir.join("parts");
+    std::fs::create_dir_all(&parts).map_err(|source| WriteError::Io {
+        path: parts.clone(),
+        source,
+    })?;
+    let set = &made.set;
+    let mut names = Vec::with_capacity(set.plates.len());
+    for (p, (part, _)) in set.plates.iter().zip(&made.parts) {
+        let name = format!("parts/{}.dxf", p.id);
+        write_cut_dxf(&[part], None, &[], &dir.join(&name))?;
+        names.push(name);
+    }
+    let scad: Vec<ScadPart> = set
+        .plates
+        .iter()
+        .zip(&names)
+        .map(|(p, name)| ScadPart {
+            id: &p.id,
+            dxf: name,
+            thickness: p.thickness,
+            matrix: p.placement.matrix(),
+        })
+        .collect();
+    let cores: Vec<ScadCore> = set
+        .cores
+        .iter()
+        .map(|c| ScadCore {
+            id: &c.id,
+            outer: c.size.diameter,
+            inner: c.size.diameter - 2.0 * c.size.wall,
+            length: c.length,
+            matrix: axis_frame(c.base, c.axis),
+        })
+        .collect();
+    write_scad(&scad, &cores, &scad_bolts(set), &dir.join("assembly.scad"))
+}
+
+/// Every bolt once (from the ply on the −z side of each seam), as a shank through both plies.
+fn scad_bolts(set: &PlateSet) -> Vec<ScadBolt> {
+    let mut out = Vec::new();
+    for (i, p) in set.plates.iter().enumerate() {
+        let (Some(b), Some(other)) = (p.bolt, p.bolted_to) else {
+            continue;
+        };
+        if other < i {
+            continue;
+        }
+        // The first ply lies on the stack's −z side: the bolt starts at its outer face.
+        for c in &p.holes {
+            let bottom = p.placement.world(*c, -0.5 * p.thickness);
+            out.push(ScadBolt {
+                name: b.size.name,
+                d: b.size.d,
+                length: b.length,
+                grip: b.grip,
+                matrix: axis_frame(bottom, p.placement.z),
+            });
+        }
+    }
+    out
+}
+
+/// welds.html: the summary, the definitions, the viewer (`viewer`: an embedded scene of the
+/// plates and their welds, see `view::embed`) and every pair in a table.
+pub fn welds_html(made: &Plated, viewer: &str, with_sizing: bool) -> String {
+    let w = &made.welds;
+    let s = &w.summary;
+    let mut rows = String::new();
+    for n in &w.nodes {
+        for p in &n.pairs {
+            let class = weld_class(p.dihedral_deg).0;
+            rows.push_str(&format!(
+                "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{} / {}</td><td>{:.3}</td><td>{:.2}</td><td>{}</td></tr>\n",
+                if !p.gap_within_tolerance && n.core.is_none() { "bad" } else if class == 0 { "warn" } else { "" },
+                n.node,
+                n.status,
+                p.plates[0],
+                p.plates[1],
+                p.root_gap_mm,
+                p.dihedral_deg,
+                p.access
+            ));
+        }
+    }
+    let viewer = format!(
+        "<h2>Look around</h2>\n<p>Plates coloured by group, gauge{} (the menu beside them); each pair of plates side by side at a node is a dot between their edges there (mid-height of the seam), coloured by its access class or root gap. Hover or click for figures; find a plate by its tag or a pair as W, its node and its number (W12-2).</p>\n{viewer}",
+        if with_sizing { " or utilisation" } else { "" },
+    );
+    format!(
+        "<!doctype html><meta charset=\"utf-8\"><title>lamina weld report</title>\n\
+<style>body{{font:14px system-ui,sans-serif;margin:2em}}table{{border-collapse:collapse}}\
+td,th{{border:1px solid #ccc;padding:2px 8px;text-align:left}}tr.bad{{background:#fdd}}\
+tr.warn{{background:#ffe9c6}}</style>\n\
+<h1>Welds at the nodes</h1>\n\
+<p>{} nodes, {} pairs of plates side by side. Root gap target {} ± {} mm: {} nodes even, {} need a node core{}. \
+Smallest dihedral angle {:.2}°: {} pairs below 60°, {} at 60–120°, {} at 120–135°, {} over 135°.</p>\n\
+<dl><dt>Root gap</dt><dd>the distance between the two plates (a bolted seam counts as its two plies together) \
+in the plane perpendicular to the node axis: the weld's root opening along the line where they meet, mm.</dd>\
+<dt>Dihedral angle</dt><dd>the angle between the two plates about the node axis on the side where they are \
+neighbours: the wedge a fillet weld fills. Below 60° there is no prequalified fillet weld; 60–120° is \
+prequalified by EN 1993-1-8 §4.3.2.1; AWS D1.1 allows up to 135°; above that the plates meet end to end \
+(a butt weld).</dd></dl>\n\
+{viewer}\n\
+<h2>Pairs</h2>\n\
+<table><tr><th>node</th><th>status</th><th>plates</th><th>root gap, mm</th><th>dihedral, °</th><th>access</th></tr>\n{rows}</table>\n",
+        s.nodes,
+        s.pairs,
+        w.weld_gap,
+        w.weld_gap_tolerance,
+        s.even_nodes,
+        s.nodes_needing_a_core.len(),
+        if s.cores > 0 {
+            format!(", {} have one", s.cores)
+        } else {
+            String::new()
+        },
+        s.smallest_dihedral_deg,
+        s.pairs_below_60,
+        s.pairs_60_120,
+        s.pairs_120_135,
+        s.pairs_over_135,
+    )
+}
+
+/// plates.json read back from its text in memory (for a caller that holds the document).
+pub fn records_of(doc: &PlatesDoc) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+    doc.records(Path::new("plates"))
+}

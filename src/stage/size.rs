@@ -1,0 +1,457 @@
+//! `size`: a linear frame (or shell) analysis of the plate network and the gauges it needs,
+//! with the sizing file's contents as a typed report.
+//!
+//! ```
+//! use lamina::stage::{planarize, size, Quiet};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/calyx_veins.json"))?;
+//! let solved = planarize::run(&net, None, &planarize::Options::default(), &Quiet)?;
+//! let opts = size::Options {
+//!     support: vec![size::support("z<1")?],
+//!     load: vec!["self-weight".into()],
+//!     ..Default::default()
+//! };
+//! let sized = size::run(&solved.axes, &opts, &Quiet)?;
+//! assert!(sized.report.totals.max_utilisation <= 1.0);
+//! # Ok(()) }
+//! ```
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::analyze::frame::local_frame;
+pub use crate::analyze::frame::Support;
+pub use crate::analyze::material::Material;
+use crate::analyze::sizing::{size, LoadSpec, Sizing, SizingError, SizingOptions};
+pub use crate::analyze::sizing::{DeflectionLimit, GroupBy};
+use crate::rationalize::axes::Axes;
+use crate::rationalize::planarize::Selector;
+use crate::stage::{checkpoint, Cancelled, OptionError, Progress};
+
+/// What to analyse and how. `Default` is the command's defaults; give at least one support
+/// and one load.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The steel. Default: 1.4404 (stainless 316L), with a note saying so.
+    pub material: Option<Material>,
+    /// Sheet thicknesses to choose from, mm, ascending. Default 1.5, 2, 3, 4, 5, 6, 8, 10.
+    pub gauges: Vec<f64>,
+    /// Supported nodes and how they are held.
+    pub support: Vec<(Selector, Support)>,
+    /// Loads, each a case (their sum another): `self-weight[:FACTOR]`,
+    /// `point:NODES:FX,FY,FZ` (N), `wind:KPA:DX,DY,DZ`.
+    pub load: Vec<String>,
+    /// Largest displacement under the sum of the loads. Default: none.
+    pub deflection_limit: Option<DeflectionLimit>,
+    /// Members sized together. Default: each member.
+    pub group_by: GroupBy,
+    /// Assembly groups for `GroupBy::Assembly`, as `plates`' groups.
+    pub groups: Option<usize>,
+    /// Neighbouring members within one gauge step. Default false.
+    pub smooth: bool,
+    /// Fillet weld throat over the thinner plate. Default 0.7.
+    pub throat: f64,
+    /// Rounds of analysis and gauge choice at most. Default 20.
+    pub max_rounds: usize,
+    /// Analyse the panels as shells, this many elements up each (even, 2 to 32). Default:
+    /// the frame.
+    pub shells: Option<usize>,
+    /// The axes' name in the report. Default "axes.json".
+    pub name: String,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            material: None,
+            gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0],
+            support: Vec::new(),
+            load: Vec::new(),
+            deflection_limit: None,
+            group_by: GroupBy::Member,
+            groups: None,
+            smooth: false,
+            throat: 0.7,
+            max_rounds: 20,
+            shells: None,
+            name: "axes.json".into(),
+        }
+    }
+}
+
+/// A support as the command line writes it: `SELECTOR[:fixed|:pinned]` (fixed by default).
+pub fn support(s: &str) -> Result<(Selector, Support), String> {
+    let (sel, kind) = match s.rsplit_once(':') {
+        Some((a, "fixed")) => (a, Support::Fixed),
+        Some((a, "pinned")) => (a, Support::Pinned),
+        Some((_, k)) if !k.contains(['<', '>', '=']) => {
+            return Err(format!("`{s}`: `{k}` is not fixed or pinned"))
+        }
+        _ => (s, Support::Fixed),
+    };
+    Ok((Selector::parse(sel)?, kind))
+}
+
+/// `member`, `chain` or `assembly` (its count from `groups`).
+pub fn group_by(s: &str) -> Result<GroupBy, String> {
+    match s {
+        "member" => Ok(GroupBy::Member),
+        "chain" => Ok(GroupBy::Chain),
+        "assembly" => Ok(GroupBy::Assembly(0)),
+        _ => Err(format!("`{s}`: give member, chain or assembly")),
+    }
+}
+
+/// The sizing: the analysis, whether everything holds, and the sizing file's contents.
+#[derive(Clone, Debug)]
+pub struct Sized {
+    pub sizing: Sizing,
+    /// Utilisation and weld utilisation at most 1, and the deflection limit held.
+    pub ok: bool,
+    pub report: Report,
+    /// Defaults taken that change the result (the material), one line each.
+    pub notes: Vec<String>,
+}
+
+/// Why no sizing was made.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Option(#[from] OptionError),
+    #[error(transparent)]
+    Sizing(#[from] SizingError),
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
+}
+
+impl Options {
+    /// The analysis's options, every option checked.
+    fn sizing(&self) -> Result<SizingOptions, OptionError> {
+        if self.gauges.is_empty()
+            || self
+                .gauges
+                .iter()
+                .any(|g| !(g.is_finite() && *g > 0.0 && *g <= 200.0))
+            || self.gauges.windows(2).any(|w| w[0] >= w[1])
+        {
+            return Err(OptionError::new(
+                "gauges",
+                "must be thicknesses from 0 to 200 mm in ascending order",
+            ));
+        }
+        super::positive("throat", self.throat, 2.0, "")?;
+        if !(1..=200).contains(&self.max_rounds) {
+            return Err(OptionError::new(
+                "max_rounds",
+                format!("must be from 1 to 200, got {}", self.max_rounds),
+            ));
+        }
+        if let Some(n) = self.shells {
+            if !(2..=32).contains(&n) || n % 2 == 1 {
+                return Err(OptionError::new(
+                    "shells",
+                    format!("must be an even number of elements from 2 to 32, got {n}"),
+                ));
+            }
+        }
+        if self.support.is_empty() {
+            return Err(OptionError::new(
+                "support",
+                "is needed: give a selector and fixed or pinned, e.g. support= 'z<1'",
+            ));
+        }
+        if self.load.is_empty() {
+            return Err(OptionError::new(
+                "load",
+                "is needed: self-weight, point:NODES:FX,FY,FZ or wind:KPA:DX,DY,DZ",
+            ));
+        }
+        let loads = self
+            .load
+            .iter()
+            .map(|s| {
+                LoadSpec::parse(s)
+                    .map(|l| (s.clone(), l))
+                    .map_err(|e| OptionError::new("load", e))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(SizingOptions {
+            material: match &self.material {
+                Some(m) => m.clone(),
+                None => Material::get("1.4404").expect("a built-in material"),
+            },
+            gauges: self.gauges.clone(),
+            supports: self.support.clone(),
+            loads,
+            deflection_limit: self.deflection_limit,
+            group_by: match (self.group_by, self.groups) {
+                (GroupBy::Assembly(_), Some(k)) if k >= 1 => GroupBy::Assembly(k),
+                (GroupBy::Assembly(k), None) if k >= 1 => GroupBy::Assembly(k),
+                (GroupBy::Assembly(_), _) => {
+                    return Err(OptionError::new(
+                        "group_by",
+                        "assembly needs groups= K (at least 1), the count plates' groups= is given",
+                    ))
+                }
+                (by, None) => by,
+                (_, Some(_)) => {
+                    return Err(OptionError::new(
+                        "groups",
+                        "applies only with group_by= assembly",
+                    ))
+                }
+            },
+            smooth: self.smooth,
+            throat_factor: self.throat,
+            max_rounds: self.max_rounds,
+            shells: self.shells,
+        })
+    }
+}
+
+/// Sizes the plate network of `axes`. `progress` may stop it before the analysis starts (one
+/// analysis runs to its end: the rounds are not yet interruptible inside).
+pub fn run(axes: &Axes, opts: &Options, progress: &dyn Progress) -> Result<Sized, Error> {
+    let sizing_opts = opts.sizing()?;
+    let mut notes = Vec::new();
+    if opts.material.is_none() {
+        notes.push(format!(
+            "material 1.4404 (stainless 316L, f_y {} MPa), the default: give material= for another",
+            sizing_opts.material.fy
+        ));
+    }
+    progress.begin("sizing", None);
+    checkpoint(progress)?;
+    let sizing = size(axes, &sizing_opts)?;
+    checkpoint(progress)?;
+    let (max_u, max_w) = (sizing.max_utilisation(), sizing.max_weld_utilisation());
+    let (_, max_d) = sizing.max_displacement();
+    let deflection_ok = sizing.deflection_limit.is_none_or(|l| max_d <= l);
+    let ok = max_u <= 1.0 && max_w <= 1.0 && deflection_ok;
+    let report = report(&sizing, &sizing_opts, opts);
+    Ok(Sized {
+        sizing,
+        ok,
+        report,
+        notes,
+    })
+}
+
+/// The sizing file (`lamina-sizing`): every member's gauge and check, every node's
+/// displacement and weld, the reactions and the totals. Fields in the file's order.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub analysis: serde_json::Value,
+    pub cases: Vec<String>,
+    pub converged: bool,
+    pub definitions: Definitions,
+    pub deflection_rounds: usize,
+    pub edges: Vec<EdgeRow>,
+    pub format: &'static str,
+    pub gauges: Vec<f64>,
+    pub group_by: serde_json::Value,
+    pub material: Material,
+    pub nodes: Vec<NodeRow>,
+    pub reactions: Vec<Reaction>,
+    pub rounds: usize,
+    pub smooth: bool,
+    pub source: String,
+    pub supports: Vec<String>,
+    pub totals: Totals,
+    pub units: BTreeMap<&'static str, &'static str>,
+    pub version: u32,
+}
+
+/// What the figures mean.
+#[derive(Clone, Debug, Serialize)]
+pub struct Definitions {
+    pub displacement: &'static str,
+    pub end_forces: &'static str,
+    pub model: String,
+    pub reactions: &'static str,
+    pub utilisation: &'static str,
+    pub weld_utilisation: &'static str,
+}
+
+/// One member.
+#[derive(Clone, Debug, Serialize)]
+pub struct EdgeRow {
+    pub a: usize,
+    pub axes: LocalAxes,
+    pub b: usize,
+    pub check: &'static str,
+    pub depth: f64,
+    pub end_forces: [f64; 12],
+    pub gauge: f64,
+    pub length: f64,
+    pub load: String,
+    pub utilisation: f64,
+}
+
+/// A member's local axes.
+#[derive(Clone, Debug, Serialize)]
+pub struct LocalAxes {
+    pub x: [f64; 3],
+    pub y: [f64; 3],
+    pub z: [f64; 3],
+}
+
+/// One node.
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeRow {
+    pub displacement: [f64; 3],
+    pub position: [f64; 3],
+    pub rotation: [f64; 3],
+    pub throat: f64,
+    pub weld_load: Option<String>,
+    pub weld_utilisation: Option<f64>,
+}
+
+/// A support's reaction under the sum of the loads.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reaction {
+    pub force: [f64; 3],
+    pub moment: [f64; 3],
+    pub node: usize,
+}
+
+/// The whole structure's figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct Totals {
+    pub deflection_limit: Option<f64>,
+    pub mass_kg: f64,
+    pub max_displacement: f64,
+    pub max_displacement_node: usize,
+    pub max_utilisation: f64,
+    pub max_weld_utilisation: f64,
+    pub residual: f64,
+    pub span: f64,
+}
+
+fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
+    use crate::analyze::report as words;
+    let total = s.total();
+    let (dnode, dmax) = s.max_displacement();
+    let v3 = |v: DVec3| v.to_array();
+    let edges = s
+        .model
+        .members
+        .iter()
+        .enumerate()
+        .map(|(k, m)| {
+            let (x, y, z, l) = local_frame(&s.model, m);
+            let c = &s.checks[k];
+            EdgeRow {
+                a: m.a,
+                axes: LocalAxes {
+                    x: v3(x),
+                    y: v3(y),
+                    z: v3(z),
+                },
+                b: m.b,
+                check: c.check,
+                depth: m.section.depth,
+                end_forces: total.end_forces[k],
+                gauge: s.gauges[k],
+                length: l,
+                load: s.cases[c.case].name.clone(),
+                utilisation: c.utilisation,
+            }
+        })
+        .collect();
+    let nodes = s
+        .model
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let d = total.displacements[i];
+            let weld = s.welds[i].as_ref();
+            NodeRow {
+                displacement: [d[0], d[1], d[2]],
+                position: v3(*p),
+                rotation: [d[3], d[4], d[5]],
+                throat: s.throats[i],
+                weld_load: weld.map(|w| s.cases[w.case].name.clone()),
+                weld_utilisation: weld.map(|w| w.utilisation),
+            }
+        })
+        .collect();
+    let reactions = total
+        .reactions
+        .iter()
+        .map(|(node, r)| Reaction {
+            force: [r[0], r[1], r[2]],
+            moment: [r[3], r[4], r[5]],
+            node: *node,
+        })
+        .collect();
+    Report {
+        analysis: match sizing.shells {
+            None => serde_json::json!("frame"),
+            Some(n) => serde_json::json!({ "shells": n }),
+        },
+        cases: s.cases.iter().map(|c| c.name.clone()).collect(),
+        converged: s.converged,
+        definitions: Definitions {
+            displacement: words::DISPLACEMENT,
+            end_forces: "under the sum of the loads, in the member's local axes: forces and moments the joints apply to its ends, [a: Fx Fy Fz Mx My Mz, b: ...]",
+            model: match sizing.shells {
+                None => "a node at mid-height of each node axis (the panels' centroid line), a member per edge with a solid rectangle: depth the panel height across the member (local y, in the panel plane), thickness the gauge (local z, the panel normal); rigid joints; linear elastic, Timoshenko beams".to_string(),
+                Some(n) => format!("the panels as flat shells (four-node: incompatible-mode membrane, MITC4 bending), {n} elements up each panel and square along it, the gauge as thickness, welded along the node axes they share; a node's displacement is its axis' mid-height point's, a member's end forces the resultant its panel takes along that end's axis, about the mid-height point; fixed supports hold the whole axis, pinned ones its mid-height point"),
+            },
+            reactions: "under the sum of the loads: force and moment each support applies",
+            utilisation: words::UTILISATION,
+            weld_utilisation: words::WELD_UTILISATION,
+        },
+        deflection_rounds: s.deflection_rounds,
+        edges,
+        format: crate::analyze::sizing::FORMAT,
+        gauges: sizing.gauges.clone(),
+        group_by: match sizing.group_by {
+            GroupBy::Member => serde_json::json!("member"),
+            GroupBy::Chain => serde_json::json!("chain"),
+            GroupBy::Assembly(k) => serde_json::json!({ "assembly": k }),
+        },
+        material: sizing.material.clone(),
+        nodes,
+        reactions,
+        rounds: s.rounds,
+        smooth: sizing.smooth,
+        source: opts.name.clone(),
+        supports: sizing
+            .supports
+            .iter()
+            .map(|(sel, k)| format!("{sel}: {k:?}"))
+            .collect(),
+        totals: Totals {
+            deflection_limit: s.deflection_limit,
+            mass_kg: s.mass_kg,
+            max_displacement: dmax,
+            max_displacement_node: dnode,
+            max_utilisation: s.max_utilisation(),
+            max_weld_utilisation: s.max_weld_utilisation(),
+            residual: total.residual,
+            span: s.span,
+        },
+        units: [
+            ("force", "N"),
+            ("length", "mm"),
+            ("mass", "kg"),
+            ("moment", "N·mm"),
+            ("stress", "MPa"),
+        ]
+        .into_iter()
+        .collect(),
+        version: crate::analyze::sizing::VERSION,
+    }
+}
+
+impl Report {
+    /// The sizing file's text (pretty JSON, one final newline).
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("reports serialise") + "\n"
+    }
+}
