@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use glam::{DVec2, DVec3};
 use serde_json::{json, Value};
 
-use super::surface::{read_surface, strokes};
+use super::surface::read_surface;
 use super::venation::write_json;
 use lamina::geom::upright;
 use lamina::grow::facade::{fit, FacadeOptions, Fit};
@@ -18,6 +18,7 @@ use lamina::grow::outline_file::read_polygon;
 use lamina::grow::project::{project, ProjectOptions};
 use lamina::grow::report::Quality;
 use lamina::grow::tree::Tree;
+use lamina::mesh::io::network_strokes as strokes;
 use lamina::mesh::io::write_png_with_strokes;
 use lamina::mesh::TriMesh;
 use lamina::network::io::{write_network, RenderOptions};

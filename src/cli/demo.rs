@@ -566,7 +566,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     // The torus's growth is also kept every 10 steps, for a strip of five moments up to the end.
     let mut moments: Vec<Vec<Stroke3>> = Vec::new();
     let mut keep = |f: &Frame<DVec3>| {
-        moments.push(super::surface::frame_strokes(
+        moments.push(lamina::grow::frames::surface_strokes(
             f,
             opts.murray,
             opts.tip_radius,
@@ -575,6 +575,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     let observer = (stem == "torus").then_some(Observer {
         every: 10,
         call: &mut keep,
+        stop: &|| false,
     });
     let veins = grow_on_surface(&mesh, &[], &opts, observer)
         .with_context(|| format!("venation on {}", mesh_path.display()))?;
@@ -587,7 +588,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
             .collect::<Result<Vec<_>, _>>()
             .map_err(anyhow::Error::msg)?;
         let strip = format!("on-surfaces/{stem}-growth.png");
-        let bytes = super::surface::strip(&pngs)?;
+        let bytes = lamina::grow::frames::strip(&pngs).map_err(anyhow::Error::msg)?;
         write_atomic(&out.join(&strip), |w| std::io::Write::write_all(w, &bytes))?;
         growth_link =
             format!(" The growth in five moments (`--frames`): <a href=\"{strip}\">strip</a>.");

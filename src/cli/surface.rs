@@ -9,21 +9,17 @@ use glam::DVec3;
 use serde_json::json;
 
 use super::input::{weld_mesh, ReadArgs};
-use super::venation::{frames_dir, save_frame, write_json, Args, ModeArg};
+use super::progress::Bar;
+use super::venation::{frames_dir, save_frame, write_json, Args};
 use lamina::files::extension;
-use lamina::grow::surface::{self, grow_on_surface, Channel, Root, SurfaceOptions};
-use lamina::grow::venation::{Frame, Mode, Observer};
-use lamina::grow::{frames, murray};
-use lamina::mesh::io::{
-    read_mesh, render_png_bytes_with, write_png_with_strokes, Stroke3, BACKGROUND, VEIN,
-};
+use lamina::grow::frames::surface_strokes;
+use lamina::grow::surface::Root;
+use lamina::grow::venation::Frame;
+use lamina::mesh::io::{network_strokes, read_mesh, render_png_bytes_with, write_png_with_strokes};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::{Network, Weld};
+use lamina::stage::venation::{self, Frames};
 use lamina::TriMesh;
-use tiny_skia::{Pixmap, PixmapPaint, Transform};
-
-/// Sources placed on a surface when neither --sources nor --birth is given.
-pub const DEFAULT_SOURCES: usize = 3000;
 
 /// `V` a vertex, `tT` a triangle, `X,Y,Z` a point.
 pub fn parse_root(s: &str) -> Result<Root> {
@@ -120,61 +116,47 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
         .iter()
         .map(|r| parse_root(r))
         .collect::<Result<_>>()?;
-    let density = args.density_channel.map(Channel::from);
-    if density.is_none() && (args.birth_min.is_some() || args.birth_max.is_some()) {
-        bail!("--birth-min and --birth-max need --density-channel on a surface");
-    }
-    if args.sources.is_some() && args.birth.is_some() {
-        bail!("--sources and --birth both set the source spacing on a surface: give one");
-    }
-    let mode = match args.mode {
-        ModeArg::Open => Mode::Open,
-        ModeArg::Closed => Mode::Closed,
+    let opts = super::venation::options(args)?;
+    let within = || format!("--surface {}", path.display());
+    let grown = match frames_dir(args)? {
+        None => {
+            venation::on_surface(&mesh, &roots, &opts, None, &Bar::new()).with_context(within)?
+        }
+        Some(frames) => {
+            // The mesh fixes the view, so the frames line up.
+            let dir = frames.path;
+            let resolved = venation::surface_options(&mesh, &opts).with_context(within)?;
+            let (murray, tip) = (resolved.murray, resolved.tip_radius);
+            let mut failure: Option<anyhow::Error> = None;
+            let mut write = |f: &Frame<DVec3>| {
+                if failure.is_none() {
+                    let strokes = surface_strokes(f, murray, tip);
+                    let png = render_png_bytes_with(&mesh, &strokes, args.frame_size);
+                    failure = save_frame(dir, f.step, png).err();
+                }
+            };
+            let grown = venation::on_surface(
+                &mesh,
+                &roots,
+                &opts,
+                Some(Frames {
+                    every: args.every,
+                    call: &mut write,
+                }),
+                &Bar::new(),
+            )
+            .with_context(within)?;
+            if let Some(e) = failure {
+                return Err(e);
+            }
+            frames.keep();
+            grown
+        }
     };
-    let mut opts = SurfaceOptions::for_mesh(
-        &mesh,
-        mode,
-        args.sources.unwrap_or(DEFAULT_SOURCES),
-        density,
-    );
-    if let Some(b) = args.birth_min.or(args.birth) {
-        opts.birth_min = b;
+    for n in &grown.notes {
+        errln!("lamina: --surface {}: {n}", path.display());
     }
-    opts.birth_max = match (args.birth_max, density) {
-        (Some(b), _) => b,
-        (None, Some(_)) => 2.0 * opts.birth_min,
-        (None, None) => opts.birth_min,
-    };
-    let g = &mut opts.growth;
-    g.step = args
-        .step
-        .unwrap_or_else(|| surface::default_step(&mesh, opts.birth_min));
-    g.kill = args.kill.unwrap_or(1.5 * g.step);
-    g.max_iterations = args.max_iterations;
-    g.sources_per_step = args.sources_per_step.unwrap_or(0);
-    g.join_distance = args.join_distance;
-    g.join_angle = args.join_angle;
-    g.min_joint_angle = args.min_joint_angle;
-    g.min_member = args.min_member;
-    opts.tip_radius = args.tip_radius.unwrap_or(g.step / 7.5);
-    opts.reach = args.reach;
-    opts.edge_tolerance = args.edge_tolerance;
-    opts.murray = args.murray;
-    opts.seed = args.seed;
-    let veins = grow_with_frames(args, &mesh, &roots, &opts)
-        .with_context(|| format!("--surface {}", path.display()))?;
-    let u = veins.quality.unrooted;
-    if u.bodies_without_root > 0 {
-        errln!(
-            "lamina: --surface {}: {} of its {} bodies have no root, so growth cannot reach \
-             them: {} sources there left out (give a --root on each body to grow on it)",
-            path.display(),
-            u.bodies_without_root,
-            u.bodies,
-            u.sources_left_out
-        );
-    }
-    let mut net = veins.network;
+    let mut net = grown.veins.network;
     net.meta
         .parameters
         .insert("surface".into(), json!(path.display().to_string()));
@@ -186,134 +168,28 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
         args.png.as_deref(),
         args.size,
     )?;
-    let g = &veins.growth;
-    let summary = json!({
-        "output": args.output,
-        "surface": path,
-        "nodes": net.nodes.len(),
-        "edges": net.edges.len(),
-        "iterations": g.iterations,
-        "stop": g.stop,
-        "sources_placed": g.sources_placed,
-        "sources_left": g.sources_left,
-        "loop_edges": g.joins.len(),
-        "step": opts.growth.step,
-        "kill": opts.growth.kill,
-        "birth_min": opts.birth_min,
-        "birth_max": opts.birth_max,
-        "quality": veins.quality,
-    });
-    if let Some(report) = &args.report {
-        write_json(report, &summary)?;
+    let mut report = grown.report;
+    report.output = Some(args.output.display().to_string());
+    report.surface = Some(path.display().to_string());
+    if let Some(path) = &args.report {
+        write_json(path, &report)?;
     }
     if args.json {
-        outln!("{summary}");
+        outln!("{}", serde_json::to_string(&report)?);
     } else {
         outln!(
             "wrote {}: {} steps, D = {:.4} mm, kill {:.4} mm, {} sources",
             args.output.display(),
-            g.iterations,
-            opts.growth.step,
-            opts.growth.kill,
-            g.sources_placed
+            report.iterations,
+            report.step,
+            report.kill,
+            report.sources_placed
         );
-        for line in veins.quality.lines() {
+        for line in report.quality.lines() {
             outln!("  {line}");
         }
     }
     Ok(())
-}
-
-/// Grows on the surface, writing a render of the growth so far every `--every` steps (and after
-/// the last) when `--frames` is given: the veins with the Murray widths of the tree of that
-/// moment, loop edges at the tip radius, live sources as blue dots. The mesh fixes the view,
-/// so the frames line up.
-fn grow_with_frames(
-    args: &Args,
-    mesh: &TriMesh,
-    roots: &[Root],
-    opts: &SurfaceOptions,
-) -> Result<surface::SurfaceVeins> {
-    let Some(frames) = frames_dir(args)? else {
-        return Ok(grow_on_surface(mesh, roots, opts, None)?);
-    };
-    let dir = frames.path;
-    let mut failure: Option<anyhow::Error> = None;
-    let mut write = |f: &Frame<DVec3>| {
-        if failure.is_none() {
-            let strokes = frame_strokes(f, opts.murray, opts.tip_radius);
-            let png = render_png_bytes_with(mesh, &strokes, args.frame_size);
-            failure = save_frame(dir, f.step, png).err();
-        }
-    };
-    let veins = grow_on_surface(
-        mesh,
-        roots,
-        opts,
-        Some(Observer {
-            every: args.every,
-            call: &mut write,
-        }),
-    )?;
-    match failure {
-        Some(e) => Err(e),
-        None => {
-            frames.keep();
-            Ok(veins)
-        }
-    }
-}
-
-/// A growth frame as strokes: live sources first (dots), then the veins over them.
-pub fn frame_strokes(f: &Frame<DVec3>, exponent: f64, tip: f64) -> Vec<Stroke3> {
-    let radius = murray::radii(f.parent, exponent, tip);
-    let dots = f.sources.iter().map(|&s| Stroke3 {
-        a: s,
-        b: s,
-        radius: tip,
-        color: frames::SOURCE,
-    });
-    let tree = f.parent.iter().enumerate().filter_map(|(c, p)| {
-        p.map(|p| Stroke3 {
-            a: f.positions[p as usize],
-            b: f.positions[c],
-            radius: radius[c],
-            color: VEIN,
-        })
-    });
-    let joins = f.joins.iter().map(|&[a, b]| Stroke3 {
-        a: f.positions[a as usize],
-        b: f.positions[b as usize],
-        radius: tip,
-        color: VEIN,
-    });
-    dots.chain(tree).chain(joins).collect()
-}
-
-/// PNG images side by side on one row, top aligned, on the renders' background.
-pub fn strip(pngs: &[Vec<u8>]) -> Result<Vec<u8>> {
-    let images = pngs
-        .iter()
-        .map(|p| Pixmap::decode_png(p).context("a frame that does not decode"))
-        .collect::<Result<Vec<_>>>()?;
-    let width = images.iter().map(Pixmap::width).sum::<u32>();
-    let height = images.iter().map(Pixmap::height).max().unwrap_or(0);
-    let mut row = Pixmap::new(width, height).context("a strip of no pixels")?;
-    let [r, g, b] = BACKGROUND;
-    row.fill(tiny_skia::Color::from_rgba8(r, g, b, 0xff));
-    let mut x = 0;
-    for image in &images {
-        row.draw_pixmap(
-            x as i32,
-            0,
-            image.as_ref(),
-            &PixmapPaint::default(),
-            Transform::identity(),
-            None,
-        );
-        x += image.width();
-    }
-    row.encode_png().context("encoding the strip")
 }
 
 /// The network to `output` (a .png output is the render on the surface), plus the extra
@@ -329,23 +205,10 @@ pub fn write_outputs(
     let render = RenderOptions { size };
     for path in [Some(output), svg, png].into_iter().flatten() {
         if extension(path) == "png" {
-            write_png_with_strokes(mesh, &strokes(net), path, size)?;
+            write_png_with_strokes(mesh, &network_strokes(net), path, size)?;
         } else {
             write_network(net, path, &render)?;
         }
     }
     Ok(())
-}
-
-/// The network's edges as strokes for a render on its surface.
-pub fn strokes(net: &Network) -> Vec<Stroke3> {
-    net.edges
-        .iter()
-        .map(|e| Stroke3 {
-            a: net.nodes[e.a as usize].p,
-            b: net.nodes[e.b as usize].p,
-            radius: e.radius,
-            color: VEIN,
-        })
-        .collect()
 }

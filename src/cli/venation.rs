@@ -11,13 +11,16 @@ use serde_json::json;
 use lamina::files::write_atomic;
 use lamina::grow::density::DensityMap;
 use lamina::grow::frames::{render_frame, View};
-use lamina::grow::leaf::{grow_leaf, Leaf, LeafOptions, Placement};
+use lamina::grow::leaf::Leaf;
 use lamina::grow::outline::{Outline, Shape};
 use lamina::grow::outline_file::read_outline;
 use lamina::grow::surface::Channel;
-use lamina::grow::venation::{BladeGrowth, Frame, Mode, Observer, VenationOptions};
+use lamina::grow::venation::Frame;
 use lamina::mesh::io::check_render_size;
 use lamina::network::io::{write_network, RenderOptions};
+use lamina::stage::venation::{self, BladeGrowth, Frames, Grown, Mode, Placement};
+
+use super::progress::Bar;
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum ShapeArg {
@@ -242,98 +245,62 @@ fn parse_point(s: &str) -> Result<DVec2, String> {
     Ok(DVec2::new(num(x)?, num(y)?))
 }
 
-/// Everything a run needs, checked.
-struct Setup {
-    outline: Outline,
-    roots: Vec<DVec2>,
-    opts: LeafOptions,
-}
-
-fn setup(args: &Args) -> Result<Setup> {
-    if args.density.is_none() && (args.birth_min.is_some() || args.birth_max.is_some()) {
-        bail!("--birth-min and --birth-max need --density");
-    }
-    let outline = match &args.outline {
-        Some(path) => read_outline(path)?,
-        None => Outline::shape(args.shape.into()),
-    };
-    let roots = if args.root.is_empty() {
-        vec![outline.default_root()]
+/// The stage's options from the flags (the density map read).
+pub fn options(args: &Args) -> Result<venation::Options> {
+    let root = if args.surface.is_some() {
+        Vec::new()
     } else {
         args.root
             .iter()
             .map(|r| parse_point(r).map_err(|e| anyhow::anyhow!("--root: {e}")))
             .collect::<Result<_>>()?
     };
-    let step = args.step.unwrap_or(0.75);
-    let density = args.density.as_deref().map(DensityMap::read).transpose()?;
-    let sweeping = !args.sweep_r.is_empty();
-    let blade = match args.blade {
-        Some(BladeArg::None) => BladeGrowth::None,
-        Some(BladeArg::Uniform) => BladeGrowth::Uniform,
-        Some(BladeArg::Marginal) => BladeGrowth::Marginal,
-        None if sweeping || args.r.is_some() => BladeGrowth::Marginal,
-        None => BladeGrowth::None,
-    };
-    if (sweeping || args.r.is_some()) && blade == BladeGrowth::None {
-        bail!("--r and --sweep-r need a growing blade: --blade uniform or marginal");
-    }
-    let growth = VenationOptions {
+    Ok(venation::Options {
         mode: match args.mode {
             ModeArg::Open => Mode::Open,
             ModeArg::Closed => Mode::Closed,
         },
-        step,
-        kill: args.kill.unwrap_or(1.1),
-        max_iterations: args.max_iterations,
-        blade,
+        root,
+        step: args.step,
+        kill: args.kill,
+        birth: args.birth,
+        density: args.density.as_deref().map(DensityMap::read).transpose()?,
+        birth_min: args.birth_min,
+        birth_max: args.birth_max,
+        sources: args.sources,
+        placement: args.placement.map(|p| match p {
+            PlacementArg::Poisson => Placement::Poisson,
+            PlacementArg::Random => Placement::Random,
+        }),
+        sources_per_step: args.sources_per_step,
+        blade: args.blade.map(|b| match b {
+            BladeArg::None => BladeGrowth::None,
+            BladeArg::Uniform => BladeGrowth::Uniform,
+            BladeArg::Marginal => BladeGrowth::Marginal,
+        }),
         initial_scale: args.initial_scale,
         blade_rate: args.blade_rate,
-        sources_per_step: args.sources_per_step.unwrap_or(match blade {
-            BladeGrowth::None => 0,
-            _ => 20,
-        }),
+        r: args.r,
         join_distance: args.join_distance,
         join_angle: args.join_angle,
         min_joint_angle: args.min_joint_angle,
         min_member: args.min_member,
-    };
-    let mut opts = LeafOptions {
-        growth,
-        birth: args.birth.unwrap_or(1.5),
-        birth_min: args.birth_min,
-        birth_max: args.birth_max,
-        density,
-        sources: args.sources,
-        placement: match args.placement {
-            None | Some(PlacementArg::Poisson) => Placement::Poisson,
-            Some(PlacementArg::Random) => Placement::Random,
-        },
         murray: args.murray,
-        tip_radius: args.tip_radius.unwrap_or(0.1),
+        tip_radius: args.tip_radius,
+        max_iterations: args.max_iterations,
         seed: args.seed,
-    };
-    if let Some(r) = args.r {
-        opts.growth.blade_rate = blade_rate_for(r, step, &outline, roots[0])?;
-    }
-    Ok(Setup {
-        outline,
-        roots,
-        opts,
+        density_channel: args.density_channel.map(Channel::from),
+        reach: args.reach,
+        edge_tolerance: args.edge_tolerance,
     })
 }
 
-/// The blade rate that makes Peele's r = D / (speed of the farthest margin point).
-fn blade_rate_for(r: f64, step: f64, outline: &Outline, root: DVec2) -> Result<f64> {
-    if !(r.is_finite() && r > 0.0) {
-        bail!("--r must be a positive ratio, got {r}");
-    }
-    let reach = outline
-        .points()
-        .iter()
-        .map(|p| p.distance(root))
-        .fold(0.0, f64::max);
-    Ok(step / (r * reach))
+/// The blade: the outline file's, or the built-in shape.
+fn blade(args: &Args) -> Result<Outline> {
+    Ok(match &args.outline {
+        Some(path) => read_outline(path)?,
+        None => Outline::shape(args.shape.into()),
+    })
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -341,24 +308,25 @@ pub fn run(args: Args) -> Result<()> {
         return super::surface::venation(&args, mesh);
     }
     args.surface_weld.only_with("--surface")?;
-    let s = setup(&args)?;
+    let opts = options(&args)?;
+    let outline = blade(&args)?;
     if !args.sweep_r.is_empty() {
-        return sweep(&args, s);
+        return sweep(&args, &outline, &opts);
     }
-    let leaf = grow_with_frames(&args, &s)?;
+    let mut grown = grow_with_frames(&args, &outline, &opts)?;
     let render = RenderOptions { size: args.size };
-    write_network(&leaf.network, &args.output, &render)?;
+    write_network(&grown.leaf.network, &args.output, &render)?;
     for extra in [&args.svg, &args.png].into_iter().flatten() {
-        write_network(&leaf.network, extra, &render)?;
+        write_network(&grown.leaf.network, extra, &render)?;
     }
-    let summary = summary(&args.output, &leaf);
+    grown.report.output = Some(args.output.display().to_string());
     if let Some(path) = &args.report {
-        write_json(path, &summary)?;
+        write_json(path, &grown.report)?;
     }
     if args.json {
-        outln!("{summary}");
+        outln!("{}", serde_json::to_string(&grown.report)?);
     } else {
-        print_summary(&args.output, &leaf);
+        print_summary(&args.output, &grown.leaf);
     }
     Ok(())
 }
@@ -417,54 +385,40 @@ pub fn save_frame(dir: &Path, step: usize, png: Result<Vec<u8>, String>) -> Resu
     Ok(())
 }
 
-fn grow_with_frames(args: &Args, s: &Setup) -> Result<Leaf> {
+fn grow_with_frames(args: &Args, outline: &Outline, opts: &venation::Options) -> Result<Grown> {
     let Some(frames) = frames_dir(args)? else {
-        return Ok(grow_leaf(&s.outline, &s.roots, &s.opts, None)?);
+        return Ok(venation::run(outline, opts, None, &Bar::new())?);
     };
     let dir = frames.path;
-    let (lo, hi) = s.outline.bounds();
+    let (lo, hi) = outline.bounds();
     let view = View {
         lo,
         hi,
         size: args.frame_size,
     };
+    let murray = opts.murray;
+    let tip = opts.tip_radius.unwrap_or(0.1);
     let mut failure: Option<anyhow::Error> = None;
     let mut write = |f: &Frame| {
         if failure.is_none() {
-            let png = render_frame(f, &view, s.opts.murray, s.opts.tip_radius);
+            let png = render_frame(f, &view, murray, tip);
             failure = save_frame(dir, f.step, png).err();
         }
     };
-    let leaf = grow_leaf(
-        &s.outline,
-        &s.roots,
-        &s.opts,
-        Some(Observer {
+    let grown = venation::run(
+        outline,
+        opts,
+        Some(Frames {
             every: args.every,
             call: &mut write,
         }),
+        &Bar::new(),
     )?;
     if let Some(e) = failure {
         return Err(e);
     }
     frames.keep();
-    Ok(leaf)
-}
-
-fn summary(output: &Path, leaf: &Leaf) -> serde_json::Value {
-    let g = &leaf.growth;
-    json!({
-        "output": output,
-        "nodes": leaf.network.nodes.len(),
-        "edges": leaf.network.edges.len(),
-        "iterations": g.iterations,
-        "stop": g.stop,
-        "sources_placed": g.sources_placed,
-        "sources_left": g.sources_left,
-        "loop_edges": g.joins.len(),
-        "root_radius": leaf.network.nodes.first().map(|n| n.radius),
-        "quality": leaf.quality,
-    })
+    Ok(grown)
 }
 
 fn print_summary(output: &Path, leaf: &Leaf) {
@@ -485,35 +439,30 @@ fn print_summary(output: &Path, leaf: &Leaf) {
     }
 }
 
-pub(super) fn write_json(path: &Path, value: &serde_json::Value) -> Result<()> {
-    let text = json_text(value)?;
+pub(super) fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
+    let text = venation::json_text(value);
     write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     Ok(())
 }
 
-/// A report's text as `write_json` writes it: pretty, with a final line break.
-pub fn json_text(value: &serde_json::Value) -> Result<String> {
-    Ok(serde_json::to_string_pretty(value)? + "\n")
-}
-
 /// Peele Fig. 1: one leaf per r, side by side.
-fn sweep(args: &Args, s: Setup) -> Result<()> {
+fn sweep(args: &Args, outline: &Outline, opts: &venation::Options) -> Result<()> {
     let dir = &args.output;
     std::fs::create_dir_all(dir)
         .with_context(|| format!("-o {}: cannot create the folder", dir.display()))?;
     let render = RenderOptions { size: args.size };
+    let leaves = venation::sweep(outline, opts, &args.sweep_r, &Bar::new())?;
     let mut rows = Vec::new();
-    let mut leaves = Vec::new();
-    for &r in &args.sweep_r {
-        let mut opts = s.opts.clone();
-        opts.growth.blade_rate = blade_rate_for(r, opts.growth.step, &s.outline, s.roots[0])?;
-        let leaf = grow_leaf(&s.outline, &s.roots, &opts, None)?;
+    for swept in &leaves {
+        let (r, leaf) = (swept.r, &swept.grown.leaf);
         let name = format!("r-{r}");
         write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;
         write_network(&leaf.network, &dir.join(format!("{name}.png")), &render)?;
-        let mut row = summary(&dir.join(format!("{name}.json")), &leaf);
+        let mut report = swept.grown.report.clone();
+        report.output = Some(dir.join(format!("{name}.json")).display().to_string());
+        let mut row = serde_json::to_value(&report)?;
         row["r"] = json!(r);
-        row["blade_rate"] = json!(opts.growth.blade_rate);
+        row["blade_rate"] = json!(swept.blade_rate);
         if !args.json {
             outln!(
                 "r = {r}: {} nodes, {} thick edges (radius > half the root's), {} loops",
@@ -523,11 +472,10 @@ fn sweep(args: &Args, s: Setup) -> Result<()> {
             );
         }
         rows.push(row);
-        leaves.push((r, leaf));
     }
     let table = json!({ "sweep": "peele-r", "leaves": rows });
     write_json(&dir.join("sweep.json"), &table)?;
-    let svg = contact_sheet(&leaves);
+    let svg = venation::contact_sheet(&leaves);
     write_atomic(&dir.join("sweep.svg"), |w| {
         std::io::Write::write_all(w, svg.as_bytes())
     })?;
@@ -537,49 +485,4 @@ fn sweep(args: &Args, s: Setup) -> Result<()> {
         outln!("wrote {}/sweep.json and sweep.svg", dir.display());
     }
     Ok(())
-}
-
-/// The leaves of a sweep side by side in one SVG, each with its r.
-fn contact_sheet(leaves: &[(f64, Leaf)]) -> String {
-    let mut body = String::new();
-    let mut x = 0.0;
-    let mut height: f64 = 0.0;
-    for (r, leaf) in leaves {
-        let b = leaf.network.bbox();
-        let (w, h) = (b.max.x - b.min.x, b.max.y - b.min.y);
-        body.push_str(&format!(
-            "<g transform=\"translate({:.3} {:.3}) scale(1 -1)\">",
-            x - b.min.x,
-            b.max.y + 12.0
-        ));
-        for e in &leaf.network.edges {
-            let (p, q) = (
-                leaf.network.nodes[e.a as usize].p,
-                leaf.network.nodes[e.b as usize].p,
-            );
-            body.push_str(&format!(
-                "<line x1=\"{:.3}\" y1=\"{:.3}\" x2=\"{:.3}\" y2=\"{:.3}\" stroke-width=\"{:.3}\"/>",
-                p.x,
-                p.y,
-                q.x,
-                q.y,
-                2.0 * e.radius
-            ));
-        }
-        body.push_str("</g>");
-        body.push_str(&format!(
-            "<text x=\"{:.3}\" y=\"8\" font-family=\"sans-serif\" font-size=\"6\">r = {r}</text>",
-            x
-        ));
-        x += w + 10.0;
-        height = height.max(h + 14.0);
-    }
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"-5 0 {:.3} {:.3}\" \
-         width=\"{:.0}mm\" height=\"{:.0}mm\">\n<g stroke=\"#1d3b2a\" stroke-linecap=\"round\">{body}</g>\n</svg>\n",
-        x + 5.0,
-        height,
-        x + 5.0,
-        height
-    )
 }

@@ -51,11 +51,11 @@ impl Default for BifurcationOptions {
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum BifurcationError {
-    #[error("--depth {0} is more than {MAX_DEPTH} (2^(depth+1) − 1 branches)")]
+    #[error("depth= {0} is more than {MAX_DEPTH} (2^(depth+1) − 1 branches)")]
     TooDeep(u32),
     #[error("--{0} must be a positive number, got {1}")]
     NotPositive(&'static str, f64),
-    #[error("--angle must lie in 0..180 degrees, got {0}..{1}")]
+    #[error("angle= must lie in 0..180 degrees, got {0}..{1}")]
     Angle(f64, f64),
 }
 

@@ -12,12 +12,12 @@ use glam::DVec2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum DensityError {
-    #[error("--density {path}: cannot read the file: {source}")]
+    #[error("density= {path}: cannot read the file: {source}")]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("--density {path}: not a PNG image lamina can read: {msg}")]
+    #[error("density= {path}: not a PNG image lamina can read: {msg}")]
     Decode { path: PathBuf, msg: String },
 }
 
@@ -169,6 +169,6 @@ mod tests {
     fn bad_images_are_errors() {
         assert!(DensityMap::from_png(b"not a png").is_err());
         let e = DensityMap::read(Path::new("/no/such/map.png")).expect_err("missing");
-        assert!(e.to_string().contains("--density /no/such/map.png"));
+        assert!(e.to_string().contains("density= /no/such/map.png"));
     }
 }

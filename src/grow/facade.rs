@@ -93,14 +93,14 @@ pub struct FacadeReport {
 pub enum FacadeError {
     #[error("the tree is not flat (node {0} is off the XY plane): a façade takes a 2D tree")]
     NotFlat(usize),
-    #[error("--fit cover: from its root the tree never reaches the boundary's {0} side")]
+    #[error("fit= cover: from its root the tree never reaches the boundary's {0} side")]
     CannotCover(&'static str),
     #[error(
-        "--fit contain: the tree reaches {0} of its root, where the root touches the \
-         boundary; place the root with --root-at"
+        "fit= contain: the tree reaches {0} of its root, where the root touches the \
+         boundary; place the root with root_at="
     )]
     CannotContain(&'static str),
-    #[error("--fit: the scale must be a positive number, got {0}")]
+    #[error("fit=: the scale must be a positive number, got {0}")]
     Scale(f64),
     #[error("no member of the tree reaches inside the boundary")]
     Empty,

@@ -142,3 +142,63 @@ pub fn render_frame(
     }
     pm.encode_png().map_err(|e| e.to_string())
 }
+
+/// A growth frame on a surface as strokes: live sources first (dots), then the veins over them
+/// (Murray widths of the tree of that moment, loop edges at the tip radius).
+pub fn surface_strokes(
+    f: &Frame<glam::DVec3>,
+    exponent: f64,
+    tip: f64,
+) -> Vec<crate::mesh::io::Stroke3> {
+    use crate::mesh::io::{Stroke3, VEIN};
+    let radius = super::murray::radii(f.parent, exponent, tip);
+    let dots = f.sources.iter().map(|&s| Stroke3 {
+        a: s,
+        b: s,
+        radius: tip,
+        color: SOURCE,
+    });
+    let tree = f.parent.iter().enumerate().filter_map(|(c, p)| {
+        p.map(|p| Stroke3 {
+            a: f.positions[p as usize],
+            b: f.positions[c],
+            radius: radius[c],
+            color: VEIN,
+        })
+    });
+    let joins = f.joins.iter().map(|&[a, b]| Stroke3 {
+        a: f.positions[a as usize],
+        b: f.positions[b as usize],
+        radius: tip,
+        color: VEIN,
+    });
+    dots.chain(tree).chain(joins).collect()
+}
+
+/// PNG images side by side on one row, top aligned, on the renders' background.
+pub fn strip(pngs: &[Vec<u8>]) -> Result<Vec<u8>, String> {
+    use tiny_skia::PixmapPaint;
+    let images = pngs
+        .iter()
+        .map(|p| Pixmap::decode_png(p).map_err(|e| format!("a frame that does not decode: {e}")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let width = images.iter().map(Pixmap::width).sum::<u32>();
+    let height = images.iter().map(Pixmap::height).max().unwrap_or(0);
+    let mut row = Pixmap::new(width, height).ok_or("a strip of no pixels")?;
+    let [r, g, b] = crate::mesh::io::BACKGROUND;
+    row.fill(Color::from_rgba8(r, g, b, 0xff));
+    let mut x = 0;
+    for image in &images {
+        row.draw_pixmap(
+            x as i32,
+            0,
+            image.as_ref(),
+            &PixmapPaint::default(),
+            Transform::identity(),
+            None,
+        );
+        x += image.width();
+    }
+    row.encode_png()
+        .map_err(|e| format!("encoding the strip: {e}"))
+}

@@ -379,17 +379,17 @@ impl Default for VeinOptions {
 pub enum VeinError {
     #[error("the surface has no triangles")]
     NoTriangles,
-    #[error("--root {0}: the mesh has {1} vertices")]
+    #[error("root= {0}: the mesh has {1} vertices")]
     Root(u32, usize),
-    #[error("--source {0}: the mesh has {1} vertices")]
+    #[error("source= {0}: the mesh has {1} vertices")]
     Source(u32, usize),
-    #[error("--source {0}: no mesh edge path leads from the root (vertex {1}) to it")]
+    #[error("source= {0}: no mesh edge path leads from the root (vertex {1}) to it")]
     Unreachable(u32, u32),
-    #[error("no sources apart from the root: give --source V or --sources N")]
+    #[error("no sources apart from the root: give source= V or sources= N")]
     NoSources,
-    #[error("--tip-radius must be a positive distance in mm, got {0}")]
+    #[error("tip_radius= must be a positive distance in mm, got {0}")]
     TipRadius(f64),
-    #[error("--murray must be positive, got {0}")]
+    #[error("murray= must be positive, got {0}")]
     Murray(f64),
 }
 

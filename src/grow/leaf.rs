@@ -71,11 +71,11 @@ impl Default for LeafOptions {
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum LeafError {
-    #[error("--birth must be a positive distance in mm, got {0}")]
+    #[error("birth= must be a positive distance in mm, got {0}")]
     Birth(f64),
-    #[error("--birth-min and --birth-max must be positive with min ≤ max, got {0} and {1}")]
+    #[error("birth_min= and birth_max= must be positive with min ≤ max, got {0} and {1}")]
     BirthRange(f64, f64),
-    #[error("--sources must be at least 1, got {0}")]
+    #[error("sources= must be at least 1, got {0}")]
     Sources(usize),
     #[error(
         "{what} would place about {count} sources, more than {MAX_SOURCES}: use a larger \
@@ -88,17 +88,18 @@ pub enum LeafError {
         max = super::poisson::MAX_GRID_CELLS
     )]
     TooFineForBlade { spacing: f64, cells: u64 },
-    #[error("--placement random needs --sources N")]
+    #[error("placement= random needs sources= N")]
     RandomNeedsCount,
-    #[error("--murray must be a finite exponent ≥ 1, got {0}")]
+    #[error("murray= must be a finite exponent ≥ 1, got {0}")]
     Murray(f64),
-    #[error("--tip-radius must be a positive distance in mm, got {0}")]
+    #[error("tip_radius= must be a positive distance in mm, got {0}")]
     TipRadius(f64),
     #[error(transparent)]
     Growth(#[from] VenationError),
 }
 
 /// A grown leaf.
+#[derive(Clone, Debug)]
 pub struct Leaf {
     pub network: Network,
     pub growth: Growth,
@@ -150,9 +151,9 @@ impl LeafOptions {
         if count > MAX_SOURCES as f64 {
             return Err(LeafError::TooManySources {
                 what: match self.sources {
-                    Some(_) => "--sources".into(),
-                    None if self.density.is_some() => format!("--birth-min {min}"),
-                    None => format!("--birth {min}"),
+                    Some(_) => "sources=".into(),
+                    None if self.density.is_some() => format!("birth_min= {min}"),
+                    None => format!("birth= {min}"),
                 },
                 count: count as u64,
             });

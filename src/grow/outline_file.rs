@@ -45,7 +45,7 @@ pub enum OutlineFileError {
 
 /// Reads the blade outline in `path`, by its extension.
 pub fn read_outline(path: &Path) -> Result<Outline, OutlineFileError> {
-    read_polygon(path, "--outline")
+    read_polygon(path, "outline=")
 }
 
 /// Reads a closed polygon (the largest loop) from `path`; `option` names it in errors.

@@ -42,14 +42,14 @@ pub struct ProjectReport {
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ProjectError {
-    #[error("--direction must be a non-zero vector, got {0}")]
+    #[error("direction= must be a non-zero vector, got {0}")]
     Direction(DVec3),
-    #[error("--onto: the mesh has no triangles")]
+    #[error("onto=: the mesh has no triangles")]
     EmptyMesh,
-    #[error("--sag must be a positive distance in mm, got {0}")]
+    #[error("sag= must be a positive distance in mm, got {0}")]
     Sag(f64),
     #[error(
-        "--onto: {count} node(s) miss the surface along the direction, the first at \
+        "onto=: {count} node(s) miss the surface along the direction, the first at \
          ({x:.3}, {y:.3}, {z:.3}): the surface must lie behind the whole structure"
     )]
     Miss {

@@ -179,28 +179,28 @@ pub enum SurfaceError {
     NoTriangles,
     #[error("the surface has no area")]
     NoArea,
-    #[error("--root {0}: the mesh has {1} vertices")]
+    #[error("root= {0}: the mesh has {1} vertices")]
     RootVertex(u32, usize),
-    #[error("--root {0}: vertex {0} is on no triangle")]
+    #[error("root= {0}: vertex {0} is on no triangle")]
     LooseVertex(u32),
-    #[error("--root t{0}: the mesh has {1} triangles")]
+    #[error("root= t{0}: the mesh has {1} triangles")]
     RootTriangle(u32, usize),
-    #[error("--root: the point {0} is not finite")]
+    #[error("root=: the point {0} is not finite")]
     RootPoint(DVec3),
-    #[error("--density-channel: the surface has no vertex colours")]
+    #[error("density_channel=: the surface has no vertex colours")]
     NoColours,
-    #[error("--birth-min {min} and --birth-max {max} must be positive with min <= max")]
+    #[error("birth_min= {min} and birth_max= {max} must be positive with min <= max")]
     Birth { min: f64, max: f64 },
     #[error(
-        "--step {step} mm is not below the mean edge length of the mesh ({edge:.4} mm): steps \
+        "step= {step} mm is not below the mean edge length of the mesh ({edge:.4} mm): steps \
          that long leave the surface (Gokmen §3.3)"
     )]
     StepTooLong { step: f64, edge: f64 },
-    #[error("--reach must be a positive distance in mm, got {0}")]
+    #[error("reach= must be a positive distance in mm, got {0}")]
     Reach(f64),
-    #[error("--edge-tolerance must be a positive distance in mm, got {0}")]
+    #[error("edge_tolerance= must be a positive distance in mm, got {0}")]
     EdgeTolerance(f64),
-    #[error("venation on a surface has no blade growth (--blade, --r)")]
+    #[error("venation on a surface has no blade growth (blade=, r=)")]
     BladeGrowth,
     #[error(
         "a birth distance of {birth} mm would place about {count} sources on this surface \
@@ -406,6 +406,7 @@ impl SurfaceQuality {
     }
 }
 
+#[derive(Clone, Debug)]
 pub struct SurfaceVeins {
     pub network: Network,
     pub growth: Growth<DVec3>,

@@ -143,38 +143,40 @@ const DART_TRIES: usize = 30;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum VenationError {
-    #[error("--sources-per-step {0}: at most {MAX_SOURCES_PER_STEP}")]
+    #[error("sources_per_step= {0}: at most {MAX_SOURCES_PER_STEP}")]
     SourcesPerStep(usize),
-    #[error("--step must be a positive distance in mm, got {0}")]
+    #[error("step= must be a positive distance in mm, got {0}")]
     Step(f64),
-    #[error("--kill must be a positive distance in mm, got {0}")]
+    #[error("kill= must be a positive distance in mm, got {0}")]
     Kill(f64),
-    #[error("--join-distance must be a positive distance in mm, got {0}")]
+    #[error("join_distance= must be a positive distance in mm, got {0}")]
     JoinDistance(f64),
-    #[error("--join-angle must be between 0 and 180 degrees, got {0}")]
+    #[error("join_angle= must be between 0 and 180 degrees, got {0}")]
     JoinAngle(f64),
-    #[error("--min-joint-angle must be between 0 and 90 degrees (exclusive), got {0}")]
+    #[error("min_joint_angle= must be between 0 and 90 degrees (exclusive), got {0}")]
     MinJointAngle(f64),
-    #[error("--min-member must be a distance in mm, 0 or more, got {0}")]
+    #[error("min_member= must be a distance in mm, 0 or more, got {0}")]
     MinMember(f64),
-    #[error("--initial-scale must be in (0, 1], got {0}")]
+    #[error("initial_scale= must be in (0, 1], got {0}")]
     InitialScale(f64),
-    #[error("--blade-rate must be a positive fraction per step, got {0}")]
+    #[error("blade_rate= must be a positive fraction per step, got {0}")]
     BladeRate(f64),
     #[error(
-        "--kill {kill} mm is not below the birth distance (at most {birth} mm): darts thrown at \
+        "kill= {kill} mm is not below the birth distance (at most {birth} mm): darts thrown at \
          the birth distance from the veins would be inside the kill distance, so nothing could \
          grow"
     )]
     KillNotBelowBirth { kill: f64, birth: f64 },
     #[error(
-        "--kill {0} mm removes every source from the root(s) at the first step: nothing can grow"
+        "kill= {0} mm removes every source from the root(s) at the first step: nothing can grow"
     )]
     KillsEverything(f64),
-    #[error("--root {0} ({1}, {2}) is not inside the blade outline")]
+    #[error("root= {0} ({1}, {2}) is not inside the blade outline")]
     RootOutside(usize, f64, f64),
     #[error("no root given")]
     NoRoot,
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// A grown venation.
@@ -243,10 +245,24 @@ pub struct Frame<'a, V = DVec2> {
     pub blade: Option<&'a Outline>,
 }
 
-/// Called every `every` steps (and after the last) with the current state.
+/// Called every `every` steps (and after the last) with the current state; `stop`, asked
+/// every step, ends the growth with `VenationError::Cancelled`.
 pub struct Observer<'a, V = DVec2> {
     pub every: usize,
     pub call: &'a mut dyn FnMut(&Frame<V>),
+    pub stop: &'a dyn Fn() -> bool,
+}
+
+impl<'a, V> Observer<'a, V> {
+    /// An observer that shows nothing and only asks `stop` (what a caller that may cancel
+    /// passes when it wants no frames).
+    pub fn stop_only(stop: &'a dyn Fn() -> bool, call: &'a mut dyn FnMut(&Frame<V>)) -> Self {
+        Observer {
+            every: usize::MAX,
+            call,
+            stop,
+        }
+    }
 }
 
 /// The blade at step 0: the outline scaled about the first root, or the outline itself.
@@ -335,7 +351,9 @@ pub fn grow_in<D: Domain>(
             g.kill_near(r);
         }
     }
-    g.run(rng, observer);
+    if !g.run(rng, observer) {
+        return Err(VenationError::Cancelled);
+    }
     Ok(g.finish())
 }
 
@@ -591,12 +609,16 @@ impl<D: Domain> Grower<D> {
         }
     }
 
-    fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer<D::V>>) {
+    /// Grows until a stop; false when the observer asked to stop.
+    fn run(&mut self, rng: &mut impl Rng, mut observer: Option<Observer<D::V>>) -> bool {
         let mut pull = vec![D::V::ZERO; self.positions.len()];
         // Per pulled node: the squared distance and direction of its closest source.
         let mut nearest = vec![(f64::INFINITY, D::V::ZERO); self.positions.len()];
         let mut pulled: Vec<u32> = Vec::new();
         loop {
+            if observer.as_ref().is_some_and(|o| (o.stop)()) {
+                return false;
+            }
             if self.step >= self.opts.max_iterations {
                 self.stop = Stop::IterationCap;
                 break;
@@ -720,6 +742,7 @@ impl<D: Domain> Grower<D> {
         if let Some(o) = observer.as_mut() {
             self.show(o);
         }
+        true
     }
 
     /// Whether node `v` at `from` may grow a child at `at`: no node within the crowding

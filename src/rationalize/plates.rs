@@ -160,7 +160,7 @@ pub enum PlateError {
     WeldGap(f64),
     #[error("weld_gap_tolerance= must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGapTolerance(f64),
-    #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with --gauges")]
+    #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with gauges=")]
     OffGauge {
         what: &'static str,
         t: f64,

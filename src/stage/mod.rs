@@ -32,6 +32,7 @@ pub mod planarize;
 pub mod plates;
 pub mod progress;
 pub mod size;
+pub mod venation;
 
 pub use progress::{checkpoint, Cancelled, Progress, Quiet};
 

@@ -252,14 +252,14 @@ fn side_by_side(
         .map(|n| match mesh {
             Some(m) => lamina::mesh::io::render_png_bytes_with(
                 m,
-                &crate::cli::surface::strokes(n),
+                &lamina::mesh::io::network_strokes(n),
                 size / 2,
             )
             .map_err(anyhow::Error::msg),
             None => render_png_bytes(n, size / 2).map_err(anyhow::Error::msg),
         })
         .collect::<Result<Vec<_>>>()?;
-    let bytes = crate::cli::surface::strip(&pngs)?;
+    let bytes = lamina::grow::frames::strip(&pngs).map_err(anyhow::Error::msg)?;
     write_atomic(&out.join(rel), |w| std::io::Write::write_all(w, &bytes))?;
     Ok(rel.to_string())
 }

@@ -115,20 +115,20 @@ pub struct Base {
 #[derive(Debug, thiserror::Error)]
 pub enum SolidError {
     #[error(
-        "--tolerance {tolerance} mm is more than ten cells ({cell} mm): the mesh would lose the \
-         veins' shape; use a smaller --tolerance or a larger --cell"
+        "tolerance= {tolerance} mm is more than ten cells ({cell} mm): the mesh would lose the \
+         veins' shape; use a smaller tolerance= or a larger cell="
     )]
     ToleranceTooLarge { tolerance: f64, cell: f64 },
     #[error(
-        "at --cell {} mm no grid point falls inside the veins (the thickest is {thickest:.4} \
-         mm in radius): the solid vanishes; use a --cell below the vein radius, or a larger --fit",
+        "at cell= {} mm no grid point falls inside the veins (the thickest is {thickest:.4} \
+         mm in radius): the solid vanishes; use a cell= below the vein radius, or a larger fit=",
         crate::text::num(*.cell)
     )]
     Vanished { thickest: f64, cell: f64 },
     #[error(
-        "at --cell {cell} mm the shapes' surface ({area:.0} mm²) would take about \
-         {triangles:.2e} triangles, more than {MAX_TRIANGLES:e}: use a larger --cell or a \
-         smaller --fit (or is a node far from the others?)"
+        "at cell= {cell} mm the shapes' surface ({area:.0} mm²) would take about \
+         {triangles:.2e} triangles, more than {MAX_TRIANGLES:e}: use a larger cell= or a \
+         smaller fit= (or is a node far from the others?)"
     )]
     TooManyTriangles {
         triangles: f64,
@@ -146,25 +146,25 @@ pub enum SolidError {
     #[error("node {0}: position is not finite")]
     NotFinite(usize),
     #[error(
-        "edge {0} has no radius (nor have its nodes); give one with --radius, or use a network \
+        "edge {0} has no radius (nor have its nodes); give one with radius=, or use a network \
          with widths (venation and veins write Murray widths)"
     )]
     NoRadius(usize),
     #[error("{what} must be a positive number of mm, got {value}")]
     NotPositive { what: &'static str, value: f64 },
     #[error(
-        "--lamina needs the blade outline, which venation stores in meta.parameters.outline; \
+        "lamina= needs the blade outline, which venation stores in meta.parameters.outline; \
          this network has {0}"
     )]
     NoOutline(String),
-    #[error("--lamina needs a flat network (all nodes at one z); node {node} is at z = {z}")]
+    #[error("lamina= needs a flat network (all nodes at one z); node {node} is at z = {z}")]
     NotFlat { node: usize, z: f64 },
     #[error(transparent)]
     March(#[from] MarchError),
     #[error("the mesh is not a closed 2-manifold ({0}); this is a bug, please report it")]
     NotManifold(String),
     #[error(
-        "vertices {0} and {1} fall on the same point in 32-bit floats; use a larger --cell or \
+        "vertices {0} and {1} fall on the same point in 32-bit floats; use a larger cell= or \
          a smaller model"
     )]
     Coincident(u32, u32),
@@ -250,14 +250,14 @@ impl Shapes {
 
 /// Checks the network and the options and builds the pieces of its solid.
 pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> {
-    positive("--cell", opts.cell)?;
+    positive("cell=", opts.cell)?;
     for (what, v) in [
-        ("--lamina", opts.lamina),
-        ("--fit", opts.fit),
-        ("--radius", opts.radius),
-        ("--tolerance", opts.tolerance),
-        ("--base diameter", opts.base.map(|b| b.diameter)),
-        ("--base height", opts.base.map(|b| b.height)),
+        ("lamina=", opts.lamina),
+        ("fit=", opts.fit),
+        ("radius=", opts.radius),
+        ("tolerance=", opts.tolerance),
+        ("base= diameter", opts.base.map(|b| b.diameter)),
+        ("base= height", opts.base.map(|b| b.height)),
     ] {
         if let Some(v) = v {
             positive(what, v)?;
@@ -478,7 +478,7 @@ pub fn solid_of(
     if min_radius < opts.cell {
         warnings.push(format!(
             "the thinnest vein (radius {min_radius:.4} mm) is thinner than the cell \
-             ({:.4} mm): it may break up; use a smaller --cell or a larger --fit",
+             ({:.4} mm): it may break up; use a smaller cell= or a larger fit=",
             opts.cell
         ));
     }
@@ -762,7 +762,7 @@ mod tests {
         };
         assert!(matches!(
             solid(&bar_at(0.0), &opts, &|_, _| {}).unwrap_err(),
-            SolidError::NotPositive { what: "--cell", .. }
+            SolidError::NotPositive { what: "cell=", .. }
         ));
         let mut far = bar_at(0.0);
         far.edges.push(Edge::new(0, 7));

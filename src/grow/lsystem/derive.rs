@@ -17,7 +17,7 @@ use super::grammar::Grammar;
 pub enum DeriveError {
     #[error(
         "{iterations} iterations would derive at least {at_least} symbols, more than \
-         --max-symbols {limit}: use fewer iterations or raise the limit"
+         max_symbols= {limit}: use fewer iterations or raise the limit"
     )]
     TooLong {
         iterations: u32,

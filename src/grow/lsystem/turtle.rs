@@ -67,7 +67,7 @@ impl Default for TurtleOptions {
 pub enum TurtleError {
     #[error("--{0} must be a positive number, got {1}")]
     NotPositive(&'static str, f64),
-    #[error("--angle must lie in 0..360 degrees, got {0}..{1}")]
+    #[error("angle= must lie in 0..360 degrees, got {0}..{1}")]
     Angle(f64, f64),
 }
 

@@ -13,7 +13,8 @@ use super::TriMesh;
 use crate::files::{extension, ReadError, WriteError};
 
 pub use png::{
-    check_render_size, render_png_bytes, render_png_bytes_with, Stroke3, BACKGROUND, VEIN,
+    check_render_size, network_strokes, render_png_bytes, render_png_bytes_with, Stroke3,
+    BACKGROUND, VEIN,
 };
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -203,3 +203,16 @@ fn fill_capsule(
         }
     }
 }
+
+/// A network's edges as strokes at their radii, for a render on its surface.
+pub fn network_strokes(net: &crate::Network) -> Vec<Stroke3> {
+    net.edges
+        .iter()
+        .map(|e| Stroke3 {
+            a: net.nodes[e.a as usize].p,
+            b: net.nodes[e.b as usize].p,
+            radius: e.radius,
+            color: VEIN,
+        })
+        .collect()
+}

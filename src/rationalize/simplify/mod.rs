@@ -82,7 +82,7 @@ pub enum SimplifyError {
     #[error("{0} must be a finite number, 0 or more, not {1}")]
     Negative(&'static str, f64),
     #[error(
-        "--min-angle must be below 90 degrees (no three members can all meet at more), not {0}"
+        "min_angle= must be below 90 degrees (no three members can all meet at more), not {0}"
     )]
     AngleTooLarge(f64),
     #[error("{0} must be at most 1e6 mm (1 km), not {1:e}")]
@@ -103,21 +103,21 @@ impl Options {
     pub fn check(&self) -> Result<(), SimplifyError> {
         let d = self.max_deviation;
         if !(d.is_finite() && d > 0.0) {
-            return Err(SimplifyError::NotPositive("--max-deviation", d));
+            return Err(SimplifyError::NotPositive("max_deviation=", d));
         }
         for (name, v) in [
-            ("--min-length", self.min_length),
-            ("--merge-distance", self.merge_distance),
-            ("--min-angle", self.min_angle),
+            ("min_length=", self.min_length),
+            ("merge_distance=", self.merge_distance),
+            ("min_angle=", self.min_angle),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(SimplifyError::Negative(name, v));
             }
         }
         for (name, v) in [
-            ("--max-deviation", d),
-            ("--min-length", self.min_length),
-            ("--merge-distance", self.merge_distance),
+            ("max_deviation=", d),
+            ("min_length=", self.min_length),
+            ("merge_distance=", self.merge_distance),
         ] {
             if v > MAX_DISTANCE {
                 return Err(SimplifyError::TooLarge(name, v));
