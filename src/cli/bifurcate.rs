@@ -3,11 +3,9 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use serde_json::json;
 
-use super::branching::{check_outputs, finish, print, FacadeArgs, Made, OutputArgs, WidthArgs};
-use lamina::grow::bifurcation::{bifurcate, BifurcationOptions};
-use lamina::grow::tree::Span;
+use super::branching::{check_outputs, print, write, FacadeArgs, OutputArgs, WidthArgs};
+use lamina::stage::bifurcate::{self, Span};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -48,10 +46,11 @@ pub fn run(args: Args) -> Result<()> {
     print(&report, &args.out)
 }
 
-/// Grows, fits and writes; returns the report.
+/// Grows, shapes and writes; returns the report.
 pub fn execute(args: &Args) -> Result<serde_json::Value> {
     check_outputs(&args.out)?;
-    let opts = BifurcationOptions {
+    let shape = args.facade.shape(&args.widths)?;
+    let opts = bifurcate::Options {
         depth: args.depth,
         length: args.length,
         angle: args.angle,
@@ -59,25 +58,14 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
         radius: args.radius,
         radius_scale: args.radius_scale,
         roll: args.roll,
-    };
-    let tree = bifurcate(&opts, args.seed)?;
-    let report = json!({
-        "depth": opts.depth,
-        "branches": tree.network.edges.len(),
-    });
-    let made = Made {
-        tree,
-        generator: "bifurcation",
-        parameters: vec![
-            ("depth", json!(opts.depth)),
-            ("length", json!(opts.length)),
-            ("angle_deg", json!([opts.angle.min, opts.angle.max])),
-            ("scale", json!([opts.scale.min, opts.scale.max])),
-            ("roll_deg", json!(opts.roll)),
-        ],
         seed: args.seed,
-        report,
-        default_tip: opts.radius / 8.0,
+        shape,
     };
-    finish(made, &args.widths, &args.facade, &args.out)
+    let drawn = bifurcate::run(&opts)?;
+    write(
+        &drawn.network,
+        &drawn.report,
+        opts.shape.onto.as_ref(),
+        &args.out,
+    )
 }

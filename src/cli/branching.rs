@@ -7,22 +7,18 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
 use glam::{DVec2, DVec3};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use super::surface::read_surface;
 use super::venation::write_json;
-use lamina::geom::upright;
-use lamina::grow::facade::{fit, FacadeOptions, Fit};
 use lamina::grow::outline::Outline;
 use lamina::grow::outline_file::read_polygon;
-use lamina::grow::project::{project, ProjectOptions};
-use lamina::grow::report::Quality;
-use lamina::grow::tree::Tree;
 use lamina::mesh::io::network_strokes as strokes;
 use lamina::mesh::io::write_png_with_strokes;
 use lamina::mesh::TriMesh;
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::Network;
+use lamina::stage::branching::{rect, Fit, Shape};
 
 #[derive(ClapArgs)]
 pub struct WidthArgs {
@@ -118,17 +114,7 @@ pub fn parse_numbers(option: &str, text: &str, n: usize) -> Result<Vec<f64>> {
 pub fn read_boundary(spec: &str) -> Result<Outline> {
     if let Some(rest) = spec.strip_prefix("rect:") {
         let wh = parse_numbers("--boundary rect:", rest, 2)?;
-        let (w, h) = (wh[0], wh[1]);
-        if !(w > 0.0 && h > 0.0) {
-            bail!("--boundary {spec}: width and height must be positive");
-        }
-        let p = DVec2::new;
-        return Ok(Outline::new(vec![
-            p(-w / 2.0, 0.0),
-            p(w / 2.0, 0.0),
-            p(w / 2.0, h),
-            p(-w / 2.0, h),
-        ])?);
+        return Ok(rect(wh[0], wh[1])?);
     }
     match read_polygon(Path::new(spec), "--boundary") {
         Ok(o) => Ok(o),
@@ -151,124 +137,53 @@ impl FacadeArgs {
             },
         })
     }
+
+    /// The stage's shape options from the flags (the boundary and the surface read).
+    pub fn shape(&self, widths: &WidthArgs) -> Result<Shape> {
+        if self.onto.is_none() {
+            self.onto_weld.only_with("--onto")?;
+        }
+        let onto = match &self.onto {
+            Some(mesh_path) => Some(
+                read_surface(mesh_path, &self.onto_weld)
+                    .map_err(|e| anyhow::anyhow!("{e}"))
+                    .with_context(|| format!("--onto {}", mesh_path.display()))?,
+            ),
+            None => None,
+        };
+        Ok(Shape {
+            murray: widths.murray,
+            tip_radius: widths.tip_radius,
+            boundary: self.boundary.as_deref().map(read_boundary).transpose()?,
+            root_at: self
+                .root_at
+                .as_deref()
+                .map(|t| parse_numbers("--root-at", t, 2).map(|v| DVec2::new(v[0], v[1])))
+                .transpose()?,
+            fit: Some(self.fit_rule()?),
+            no_frame: self.no_frame,
+            frame_radius: self.frame_radius,
+            upright: self.upright,
+            onto,
+            direction: self
+                .direction
+                .as_deref()
+                .map(|t| parse_numbers("--direction", t, 3).map(|v| DVec3::new(v[0], v[1], v[2])))
+                .transpose()?,
+            sag: self.sag,
+        })
+    }
 }
 
-/// What a generator hands over: the tree, its name and parameters, and its own report.
-pub struct Made {
-    pub tree: Tree,
-    pub generator: &'static str,
-    pub parameters: Vec<(&'static str, Value)>,
-    pub seed: u64,
-    pub report: Value,
-    /// Radius the tip takes under --murray when no --tip-radius is given.
-    pub default_tip: f64,
-}
-
-/// Widths, façade, upright, projection; writes every output and returns the report.
-pub fn finish(
-    mut made: Made,
-    widths: &WidthArgs,
-    facade: &FacadeArgs,
+/// Writes the network and the report where asked.
+pub fn write(
+    net: &Network,
+    report: &impl serde::Serialize,
+    onto: Option<&TriMesh>,
     out: &OutputArgs,
 ) -> Result<Value> {
-    if let Some(n) = widths.murray {
-        let tip = widths.tip_radius.unwrap_or(made.default_tip);
-        if !(n.is_finite() && n > 0.0) {
-            bail!("--murray {n}: the exponent must be a positive number");
-        }
-        if !(tip.is_finite() && tip > 0.0) {
-            bail!("--tip-radius {tip}: must be a positive distance in mm");
-        }
-        made.tree.murray(n, tip);
-    }
-    let mut report = serde_json::Map::new();
-    report.insert(made.generator.into(), made.report);
-    let flat = {
-        let size = made.tree.network.bbox().diagonal();
-        made.tree
-            .network
-            .nodes
-            .iter()
-            .all(|n| n.p.z.abs() <= 1e-9 * size)
-    };
-    let mut net = match &facade.boundary {
-        Some(spec) => {
-            let boundary = read_boundary(spec)?;
-            let opts = FacadeOptions {
-                root_at: facade
-                    .root_at
-                    .as_deref()
-                    .map(|t| parse_numbers("--root-at", t, 2).map(|v| DVec2::new(v[0], v[1])))
-                    .transpose()?,
-                fit: facade.fit_rule()?,
-                frame: !facade.no_frame,
-                frame_radius: facade.frame_radius,
-            };
-            let (net, rep) = fit(&made.tree.network, 0, &boundary, &opts)?;
-            report.insert("facade".into(), serde_json::to_value(rep)?);
-            net
-        }
-        None => made.tree.network,
-    };
-    if flat {
-        // Crossings and joints in the plane, before standing up or projecting.
-        report.insert(
-            "quality".into(),
-            serde_json::to_value(Quality::of(&net, 1))?,
-        );
-    }
-    if facade.upright {
-        for n in &mut net.nodes {
-            n.p = upright(n.p);
-            n.normal = n.normal.map(upright);
-        }
-    }
-    let mut surface = None;
-    if facade.onto.is_none() {
-        facade.onto_weld.only_with("--onto")?;
-    }
-    if let Some(mesh_path) = &facade.onto {
-        let mesh = read_surface(mesh_path, &facade.onto_weld)
-            .map_err(|e| anyhow::anyhow!("{e}"))
-            .with_context(|| format!("--onto {}", mesh_path.display()))?;
-        let direction = match &facade.direction {
-            Some(t) => {
-                let v = parse_numbers("--direction", t, 3)?;
-                DVec3::new(v[0], v[1], v[2])
-            }
-            None if facade.upright => DVec3::Y,
-            None => DVec3::Z,
-        };
-        let (projected, rep) = project(
-            &net,
-            &mesh,
-            &ProjectOptions {
-                direction,
-                sag: facade.sag,
-            },
-        )?;
-        report.insert("projection".into(), serde_json::to_value(rep)?);
-        net = projected;
-        surface = Some(mesh);
-    }
-    net.meta.generator = Some(made.generator.into());
-    net.meta.seed = Some(made.seed);
-    for (k, v) in made.parameters {
-        net.meta.parameters.insert(k.into(), v);
-    }
-    let lengths = net.lengths();
-    report.insert(
-        "network".into(),
-        json!({
-            "nodes": net.nodes.len(),
-            "edges": net.edges.len(),
-            "total_length_mm": lengths.map_or(0.0, |l| l.total),
-            "longest_member_mm": lengths.map_or(0.0, |l| l.max),
-            "bbox_mm": net.bbox().size().to_array(),
-        }),
-    );
-    write_all(&net, surface.as_ref(), out)?;
-    let report = Value::Object(report);
+    write_all(net, onto, out)?;
+    let report = serde_json::to_value(report)?;
     if let Some(path) = &out.report {
         write_json(path, &report)?;
     }

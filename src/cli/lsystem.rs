@@ -6,16 +6,12 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressStyle};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use serde_json::json;
 
-use super::branching::{check_outputs, finish, print, FacadeArgs, Made, OutputArgs, WidthArgs};
-use lamina::grow::lsystem::{
-    derive, parse_rule, read_grammar_file, word_length, Angle, Counts, Grammar, Turtle,
-    TurtleOptions, DEFAULT_MAX_SYMBOLS,
-};
+use super::branching::{check_outputs, print, write, FacadeArgs, OutputArgs, WidthArgs};
+use super::progress::Bar;
+use lamina::grow::lsystem::{read_grammar_file, Angle, DEFAULT_MAX_SYMBOLS};
+use lamina::stage::lsystem;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -74,108 +70,33 @@ pub struct Args {
     pub out: OutputArgs,
 }
 
-/// The most rewriting steps: the derivation's cost grows with them even for a word that does
-/// not (`F -> F`), and no drawn L-system needs more.
-pub const MAX_ITERATIONS: u32 = 1000;
-/// The largest `--max-symbols`: ten times the default's budget of time is the most a drawing
-/// should take.
-pub const MAX_MAX_SYMBOLS: u64 = 1_000_000_000;
-
-/// The grammar and settings from the file and the command line.
-struct Setup {
-    grammar: Grammar,
-    iterations: u32,
-    turtle: TurtleOptions,
-}
-
-fn setup(args: &Args) -> Result<Setup> {
-    let file = args
-        .grammar
-        .as_deref()
-        .map(read_grammar_file)
-        .transpose()?
-        .unwrap_or_default();
-    let rules = if args.rules.is_empty() {
-        file.rules.into_iter().map(|(r, _)| r).collect()
-    } else {
-        args.rules
-            .iter()
-            .enumerate()
-            .map(|(k, r)| parse_rule(r, &format!("--rule {}", k + 1)))
-            .collect::<Result<Vec<_>, _>>()?
-    };
-    let axiom = args.axiom.clone().or(file.axiom).unwrap_or_default();
-    // Errors in what came from the grammar file name the file.
-    let from_file = |what: &str| match &args.grammar {
-        Some(path) => format!("{}: {what}", path.display()),
-        None => format!("--{what}"),
-    };
-    let grammar = Grammar::new(&axiom, rules).map_err(|e| {
-        let source = if args.grammar.is_some() && (args.rules.is_empty() || args.axiom.is_none()) {
-            from_file("grammar")
-        } else {
-            "--axiom/--rule".to_string()
-        };
-        anyhow::anyhow!("{source}: {e}")
-    })?;
-    let Some(iterations) = args.iterations.or(file.iterations) else {
-        bail!("give --iterations (or an `iterations:` line in the grammar file)");
-    };
-    if iterations > MAX_ITERATIONS {
-        let source = if args.iterations.is_some() {
-            "--iterations".to_string()
-        } else {
-            from_file("iterations")
-        };
-        bail!("{source}: {iterations} iterations, more than {MAX_ITERATIONS} (each costs time even when the word does not grow)");
-    }
-    if args.max_symbols > MAX_MAX_SYMBOLS {
-        bail!(
-            "--max-symbols {}: at most {MAX_MAX_SYMBOLS}",
-            args.max_symbols
-        );
-    }
-    let angle = match (args.angle, &file.angle) {
-        (Some(a), _) => a,
-        (None, Some(text)) => text.parse().map_err(|e: String| {
-            anyhow::anyhow!(
-                "{}: angle {e}",
-                args.grammar.as_deref().unwrap_or("".as_ref()).display()
-            )
-        })?,
-        (None, None) => Angle::fixed(22.0),
-    };
-    let turtle = TurtleOptions {
-        step: args.step.or(file.step).unwrap_or(500.0),
-        angle,
+/// The stage's options from the flags (the grammar file and the surface read).
+fn options(args: &Args) -> Result<lsystem::Options> {
+    Ok(lsystem::Options {
+        axiom: args.axiom.clone(),
+        rule: args.rules.clone(),
+        grammar: args.grammar.as_deref().map(read_grammar_file).transpose()?,
+        grammar_name: args
+            .grammar
+            .as_ref()
+            .map_or_else(|| "grammar".into(), |p| p.display().to_string()),
+        iterations: args.iterations,
+        angle: args.angle,
+        step: args.step,
         length_scale: args.length_scale,
-        simplify: !args.no_simplify,
+        no_simplify: args.no_simplify,
         radius: args.radius,
         radius_scale: args.radius_scale,
         decay: args.decay,
-    };
-    turtle.check()?;
-    Ok(Setup {
-        grammar,
-        iterations,
-        turtle,
+        seed: args.seed,
+        max_symbols: args.max_symbols,
+        shape: if args.derive_only {
+            Default::default()
+        } else {
+            args.facade.shape(&args.widths)?
+        },
     })
 }
-
-/// A bar over the symbols derived, for derivations long enough to wait for.
-fn progress(grammar: &Grammar, iterations: u32) -> ProgressBar {
-    let (_, most) = word_length(grammar, iterations);
-    let bar = super::progress::bar("deriving", Some(most.min(u64::MAX as u128) as u64));
-    if let Ok(style) =
-        ProgressStyle::with_template("deriving {bar:40} {human_pos}/{human_len} symbols {elapsed}")
-    {
-        bar.set_style(style);
-    }
-    bar
-}
-
-/// Every 2^20 symbols the bar moves.
-const TICK: u64 = 1 << 20;
 
 pub fn run(args: Args) -> Result<()> {
     if args.derive_only {
@@ -183,87 +104,39 @@ pub fn run(args: Args) -> Result<()> {
         if o.output.is_some() || o.svg.is_some() || o.png.is_some() || o.report.is_some() {
             bail!("--derive-only draws nothing: leave out -o, --svg, --png and --report");
         }
-        return derive_only(&args, &setup(&args)?);
+        return derive_only(&args, &options(&args)?);
     }
     let report = execute(&args)?;
     print(&report, &args.out)
 }
 
-/// Derives, draws and writes; returns the report.
+/// Derives, draws, shapes and writes; returns the report.
 pub fn execute(args: &Args) -> Result<serde_json::Value> {
-    let s = setup(args)?;
     check_outputs(&args.out)?;
-    let bar = progress(&s.grammar, s.iterations);
-    let mut turtle = Turtle::new(&s.turtle, args.seed);
-    let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let mut n = 0u64;
-    derive(&s.grammar, s.iterations, &mut rng, args.max_symbols, |c| {
-        turtle.feed(c);
-        n += 1;
-        if n.is_multiple_of(TICK) {
-            bar.set_position(n);
-        }
-    })?;
-    bar.finish_and_clear();
-    let (tree, stats) = turtle.finish();
-    if tree.network.edges.is_empty() {
-        bail!(
-            "the derived word draws nothing (no F in {} symbols)",
-            stats.counts.symbols
-        );
-    }
-    let rules: Vec<String> = s
-        .grammar
-        .rules()
-        .iter()
-        .map(|r| {
-            format!(
-                "{} ({}) -> {}",
-                r.predecessor as char,
-                r.weight,
-                String::from_utf8_lossy(&r.successor)
-            )
-        })
-        .collect();
-    let t = &s.turtle;
-    let default_tip = t.radius / 8.0;
-    let made = Made {
-        tree,
-        generator: "lsystem",
-        parameters: vec![
-            ("axiom", json!(String::from_utf8_lossy(s.grammar.axiom()))),
-            ("rules", json!(rules)),
-            ("iterations", json!(s.iterations)),
-            ("angle_deg", json!([t.angle.min, t.angle.max])),
-            ("step", json!(t.step)),
-            ("length_scale", json!(t.length_scale)),
-            ("simplify", json!(t.simplify)),
-        ],
-        seed: args.seed,
-        report: serde_json::to_value(&stats)?,
-        default_tip,
-    };
-    finish(made, &args.widths, &args.facade, &args.out)
+    let opts = options(args)?;
+    let drawn = lsystem::run(&opts, &Bar::new())?;
+    write(
+        &drawn.network,
+        &drawn.report,
+        opts.shape.onto.as_ref(),
+        &args.out,
+    )
 }
 
-fn derive_only(args: &Args, s: &Setup) -> Result<()> {
-    let bar = progress(&s.grammar, s.iterations);
-    let mut counts = Counts::default();
-    let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
+fn derive_only(args: &Args, opts: &lsystem::Options) -> Result<()> {
     let mut word = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
     let mut failed: Option<std::io::Error> = None;
-    derive(&s.grammar, s.iterations, &mut rng, args.max_symbols, |c| {
-        counts.feed(c);
-        if args.string && failed.is_none() {
-            if let Err(e) = word.write_all(&[c]) {
-                failed = Some(e);
+    let counts = lsystem::derive_only(
+        opts,
+        |c| {
+            if args.string && failed.is_none() {
+                if let Err(e) = word.write_all(&[c]) {
+                    failed = Some(e);
+                }
             }
-        }
-        if counts.symbols.is_multiple_of(TICK) {
-            bar.set_position(counts.symbols);
-        }
-    })?;
-    bar.finish_and_clear();
+        },
+        &Bar::new(),
+    )?;
     if args.string && failed.is_none() {
         failed = word.write_all(b"\n").and_then(|_| word.flush()).err();
     }

@@ -3,14 +3,15 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::Args as ClapArgs;
 use serde_json::json;
 
+use super::progress::Bar;
 use super::surface::{read_surface, write_outputs};
 use super::venation::{write_json, ChannelArg};
-use lamina::grow::geodesic::{self, grow_veins, Incremental, MeshGraph, VeinOptions};
-use lamina::grow::surface::{self, Channel};
+use lamina::grow::surface::Channel;
+use lamina::stage::veins;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -65,68 +66,25 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Sources sampled when none are given.
-pub const DEFAULT_SOURCES: usize = 300;
-
-/// The most points `--smooth` adds per mesh edge of a vein.
-pub const MAX_SMOOTH: usize = 64;
-
 pub fn run(args: Args) -> Result<()> {
-    if args.smooth > MAX_SMOOTH {
-        bail!(
-            "--smooth {}: at most {MAX_SMOOTH} points per span",
-            args.smooth
-        );
-    }
     let mesh = read_surface(&args.surface, &args.weld)?;
-    let ctx = || format!("--surface {}", args.surface.display());
-    let graph = MeshGraph::new(&mesh);
-    let root = match args.root {
-        Some(r) => r,
-        None => surface::lowest_vertex(&mesh).with_context(ctx)?,
-    };
-    if root as usize >= mesh.positions.len() {
-        bail!(
-            "--root {root}: {} has {} vertices",
-            args.surface.display(),
-            mesh.positions.len()
-        );
-    }
-    let (sources, skipped) = if args.source.is_empty() {
-        let density = args.density_channel.map(Channel::from);
-        let want = args.sources.unwrap_or(DEFAULT_SOURCES);
-        if want == 0 {
-            bail!("--sources must be at least 1");
-        }
-        // Sources are vertices: more than the mesh has only repeats them, at a cost.
-        if want > mesh.positions.len() {
-            bail!(
-                "--sources {want}: {} has only {} vertices to be sources",
-                args.surface.display(),
-                mesh.positions.len()
-            );
-        }
-        let sampled = geodesic::sample_sources(&mesh, &graph, root, want, density, args.seed)
-            .with_context(ctx)?;
-        (sampled.vertices, sampled.skipped)
-    } else {
-        (args.source.clone(), 0)
-    };
-    let tree =
-        grow_veins(&graph, &mesh.positions, root, &sources, &mut Incremental).with_context(ctx)?;
-    let tip = args
-        .tip_radius
-        .unwrap_or_else(|| 0.08 * surface::mean_edge_length(&mesh));
-    let opts = VeinOptions {
-        tip_radius: tip,
+    let opts = veins::Options {
+        source: args.source.clone(),
+        sources: args.sources,
+        density_channel: args.density_channel.map(Channel::from),
+        root: args.root,
+        tip_radius: args.tip_radius,
         murray: args.murray,
         smooth: args.smooth,
+        seed: args.seed,
     };
-    let mut net = geodesic::to_network(&mesh, &tree, &opts)?;
+    let grown = veins::run(&mesh, &opts, &Bar::new()).map_err(|e| match e {
+        veins::Error::Option(o) => anyhow::Error::new(o),
+        e => anyhow::anyhow!("--surface {}: {e}", args.surface.display()),
+    })?;
+    let mut net = grown.network;
     let p = &mut net.meta.parameters;
     p.insert("surface".into(), json!(args.surface.display().to_string()));
-    p.insert("root".into(), root.into());
-    net.meta.seed = Some(args.seed);
     write_outputs(
         &net,
         &mesh,
@@ -135,33 +93,24 @@ pub fn run(args: Args) -> Result<()> {
         args.png.as_deref(),
         args.size,
     )?;
-    let summary = json!({
-        "output": args.output,
-        "surface": args.surface,
-        "root": root,
-        "sources": tree.sources.len(),
-        "sources_unreachable_skipped": skipped,
-        "iterations": tree.iterations,
-        "tree_vertices": tree.order.len(),
-        "relabelled": tree.relabelled,
-        "nodes": net.nodes.len(),
-        "edges": net.edges.len(),
-        "root_radius": net.nodes.first().map(|n| n.radius),
-    });
+    let mut r = grown.report;
+    r.output = Some(args.output.display().to_string());
+    r.surface = Some(args.surface.display().to_string());
     if let Some(path) = &args.report {
-        write_json(path, &summary)?;
+        write_json(path, &r)?;
     }
     if args.json {
-        outln!("{summary}");
+        outln!("{}", serde_json::to_string(&r)?);
     } else {
+        let skipped = r.sources_unreachable_skipped;
         outln!(
             "wrote {}: a tree of {} vertices reaching {} sources in {} iterations ({} labels \
              updated){}",
             args.output.display(),
-            tree.order.len(),
-            tree.sources.len(),
-            tree.iterations,
-            tree.relabelled,
+            r.tree_vertices,
+            r.sources,
+            r.iterations,
+            r.relabelled,
             if skipped > 0 {
                 format!("; {skipped} sampled sources skipped: no path from the root")
             } else {

@@ -27,11 +27,15 @@
 //! ```
 
 pub mod audit;
+pub mod bifurcate;
+pub mod branching;
+pub mod lsystem;
 pub mod nest;
 pub mod planarize;
 pub mod plates;
 pub mod progress;
 pub mod size;
+pub mod veins;
 pub mod venation;
 
 pub use progress::{checkpoint, Cancelled, Progress, Quiet};

@@ -24,6 +24,8 @@ pub enum DeriveError {
         at_least: u128,
         limit: u64,
     },
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// Fewest and most symbols the n-th word can have (equal for a deterministic grammar),
@@ -63,7 +65,23 @@ pub fn derive(
     iterations: u32,
     rng: &mut ChaCha8Rng,
     limit: u64,
+    emit: impl FnMut(u8),
+) -> Result<u64, DeriveError> {
+    derive_until(grammar, iterations, rng, limit, emit, &|| false)
+}
+
+/// Symbols emitted between two questions to `stop`.
+const STOP_EVERY: u64 = 1 << 16;
+
+/// [`derive`], asking `stop` every 65,536 symbols and ending with `DeriveError::Cancelled`
+/// when it says so.
+pub fn derive_until(
+    grammar: &Grammar,
+    iterations: u32,
+    rng: &mut ChaCha8Rng,
+    limit: u64,
     mut emit: impl FnMut(u8),
+    stop: &dyn Fn() -> bool,
 ) -> Result<u64, DeriveError> {
     let (shortest, _) = word_length(grammar, iterations);
     let too_long = |at_least: u128| DeriveError::TooLong {
@@ -95,6 +113,9 @@ pub fn derive(
         let Some(p) = production else {
             emit(symbol);
             count += 1;
+            if count.is_multiple_of(STOP_EVERY) && stop() {
+                return Err(DeriveError::Cancelled);
+            }
             if stochastic && count > limit {
                 return Err(too_long(count as u128));
             }
@@ -110,7 +131,11 @@ pub fn derive(
             for &c in successor {
                 emit(c);
             }
+            let before = count;
             count += successor.len() as u64;
+            if before / STOP_EVERY != count / STOP_EVERY && stop() {
+                return Err(DeriveError::Cancelled);
+            }
             if stochastic && count > limit {
                 return Err(too_long(count as u128));
             }

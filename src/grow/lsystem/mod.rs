@@ -10,7 +10,7 @@ mod derive;
 mod grammar;
 mod turtle;
 
-pub use derive::{derive, word_length, DeriveError};
+pub use derive::{derive, derive_until, word_length, DeriveError};
 pub use grammar::{
     parse_rule, parse_text, read_grammar_file, Grammar, GrammarError, GrammarFile, Rule,
 };
