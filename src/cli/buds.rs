@@ -5,15 +5,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressStyle};
-use serde_json::json;
 
+use super::progress::Bar;
 use super::venation::FramesDir;
-use lamina::grow::buds::{
-    read_program, skin, Form, Growth, GrowthOptions, SkinOptions, SkinReport,
-};
+use lamina::grow::buds::read_program;
 use lamina::mesh::io::write_mesh;
 use lamina::mesh::TriMesh;
+use lamina::stage::buds;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -90,63 +88,40 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
             bail!("-o {}: the form is written as .stl or .obj", o.display());
         }
     }
-    if !(1e-3..=1e4).contains(&args.cell_mm) {
-        bail!(
-            "--cell-mm {} must be a length from 0.001 to 10000 mm",
-            lamina::text::num(args.cell_mm)
-        );
-    }
     if args.every == 0 {
         bail!("--every 0: give at least 1 cell between frames");
     }
     lamina::mesh::io::check_render_size(args.size).map_err(|m| anyhow::anyhow!("--size: {m}"))?;
     let program = read_program(&args.program)?;
-    let options = GrowthOptions {
-        max_cells: args.cells,
+    let opts = buds::Options {
+        cells: args.cells,
+        seed: args.seed,
+        cell_mm: args.cell_mm,
         clearance: args.clearance,
-        ..GrowthOptions::default()
+        no_textures: args.no_textures,
+        program_name: args.program.display().to_string(),
     };
-    let in_program =
-        |e: lamina::grow::buds::BudError| anyhow::anyhow!("{}: {e}", args.program.display());
-    let mut growth = Growth::new(&program, options, args.seed).map_err(in_program)?;
-    // Made once everything is checked; removed again if the run fails before its outputs.
+    // Made once the flags are checked; removed again if the run fails before its outputs.
     let frames_dir = args.frames.as_deref().map(FramesDir::create).transpose()?;
-    let bar = progress(args.cells as u64);
-    let mut next_frame = 0;
-    let mut frames = 0;
-    loop {
-        if let Some(dir) = &frames_dir {
-            if growth.cells() >= next_frame {
-                frames += 1;
-                write_frame(&growth, dir.path, frames, args.size.min(1024))?;
-                next_frame = growth.cells() + args.every;
-            }
-        }
-        bar.set_position(growth.cells() as u64);
-        if !growth.round().map_err(in_program)? {
-            break;
-        }
+    let size = args.size.min(1024);
+    let mut k = 0;
+    let mut write_frame = |mesh: &TriMesh| {
+        k += 1;
+        let dir = frames_dir
+            .as_ref()
+            .map(|d| d.path)
+            .unwrap_or(Path::new("."));
+        write_mesh(mesh, &dir.join(format!("frame-{k:05}.png")), size).map_err(|e| e.to_string())
+    };
+    let frames = frames_dir.is_some().then_some(buds::Frames {
+        every: args.every,
+        call: &mut write_frame,
+    });
+    let grown = buds::run(&program, &opts, frames, &Bar::new())?;
+    for o in [&args.output, &args.obj, &args.png].into_iter().flatten() {
+        write_mesh(&grown.mesh, o, args.size)?;
     }
-    bar.finish_and_clear();
-    let form = growth.finish();
-    let (mesh, skin_report) = skin(
-        &form,
-        &SkinOptions {
-            cell_mm: args.cell_mm,
-            textures: !args.no_textures,
-        },
-    );
-    let topology = mesh.check_manifold();
-    if let Some(o) = &args.output {
-        write_mesh(&mesh, o, args.size)?;
-    }
-    if let Some(o) = &args.obj {
-        write_mesh(&mesh, o, args.size)?;
-    }
-    if let Some(o) = &args.png {
-        write_mesh(&mesh, o, args.size)?;
-    }
-    let report = report(args, &form, &skin_report, &mesh, &topology, frames);
+    let report = serde_json::to_value(&grown.report)?;
     if let Some(path) = &args.report {
         lamina::files::write_atomic(path, |w| {
             serde_json::to_writer_pretty(&mut *w, &report)?;
@@ -157,33 +132,6 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
         dir.keep();
     }
     Ok(report)
-}
-
-fn report(
-    args: &Args,
-    form: &Form,
-    skin: &SkinReport,
-    mesh: &TriMesh,
-    topology: &lamina::mesh::Topology,
-    frames: usize,
-) -> serde_json::Value {
-    json!({
-        "program": args.program.display().to_string(),
-        "seed": args.seed,
-        "growth": form.report,
-        "mesh": {
-            "vertices": mesh.positions.len(),
-            "triangles": mesh.triangles.len(),
-            "closed": topology.closed,
-            "genus": topology.genus,
-            "components": topology.components,
-            "volume_mm3": topology.volume,
-            "area_mm2": topology.area,
-            "problems": topology.problems.len(),
-        },
-        "skin": skin,
-        "frames": frames,
-    })
 }
 
 fn print_summary(r: &serde_json::Value) {
@@ -211,24 +159,4 @@ fn print_summary(r: &serde_json::Value) {
         "mesh: {} triangles, closed {}, genus {}, volume {} mm³; {} textured cells ({} reduced), {} self-intersections",
         m["triangles"], m["closed"], m["genus"], m["volume_mm3"], s["textured_cells"], s["reduced_cells"], s["self_intersections"]
     );
-}
-
-fn progress(total: u64) -> ProgressBar {
-    let bar = super::progress::bar("growing", Some(total));
-    if let Ok(style) = ProgressStyle::with_template("growing {bar:40} {pos}/{len} cells {elapsed}")
-    {
-        bar.set_style(style);
-    }
-    bar
-}
-
-fn write_frame(growth: &Growth, dir: &Path, k: usize, size: u32) -> Result<()> {
-    let mesh = TriMesh {
-        positions: growth.positions().to_vec(),
-        triangles: growth.graph().faces(),
-        colors: Some(growth.colours().to_vec()),
-    };
-    let path = dir.join(format!("frame-{k:05}.png"));
-    write_mesh(&mesh, &path, size)?;
-    Ok(())
 }

@@ -4,12 +4,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use serde_json::{json, Value};
+use serde_json::Value;
 
-use super::input::{load, Loaded, MeshNotes, ReadArgs};
-use lamina::network::arrangement::defects;
-use lamina::network::io::Imported;
-use lamina::TriMesh;
+use super::input::{load, Loaded, ReadArgs};
+use lamina::stage::info;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -33,93 +31,19 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
+/// The summary `--json` prints.
 pub fn summary(path: &Path, loaded: &Loaded) -> Value {
-    match loaded {
-        Loaded::Network(imp) => network_summary(path, imp),
-        Loaded::Mesh(mesh, notes) => mesh_summary(path, mesh, notes),
-    }
-}
-
-fn bbox_json(b: &lamina::geom::Aabb) -> Value {
-    if b.is_empty() {
-        return Value::Null;
-    }
-    json!({ "min": b.min.to_array(), "max": b.max.to_array(), "size": b.size().to_array(),
-            "diagonal": b.diagonal() })
-}
-
-pub fn network_summary(path: &Path, imp: &Imported) -> Value {
-    let net = &imp.network;
-    let v = net.validate();
-    let problems: Vec<Value> = v
-        .problems
-        .iter()
-        .map(|p| {
-            let mut o = serde_json::to_value(p).unwrap_or(Value::Null);
-            if let Value::Object(m) = &mut o {
-                m.insert("message".into(), p.to_string().into());
-            }
-            o
-        })
-        .collect();
-    // A flat drawing that is not noded: crossings and T-junctions are problems too.
-    let defects = defects(net, imp.point_tolerance());
-    let problems: Vec<Value> = problems
-        .into_iter()
-        .chain(defects.iter().map(|d| {
-            let mut o = serde_json::to_value(d).unwrap_or(Value::Null);
-            if let Value::Object(m) = &mut o {
-                m.insert("message".into(), d.to_string().into());
-            }
-            o
-        }))
-        .collect();
-    let lengths = net
-        .lengths()
-        .map(|l| json!({ "total": l.total, "min": l.min, "max": l.max, "mean": l.mean }));
-    json!({
-        "file": path.display().to_string(),
-        "kind": "network",
-        "nodes": net.nodes.len(),
-        "edges": net.edges.len(),
-        "units": net.meta.units,
-        "generator": net.meta.generator,
-        "bbox": bbox_json(&net.bbox()),
-        "degree_histogram": v.degree_histogram,
-        "components": v.components,
-        "cycles": v.cycles,
-        "lengths": lengths,
-        "problems": problems,
-        "import": {
-            "weld": imp.weld,
-            "skipped": imp.skipped,
-            "source_units": imp.units,
-            "inserts": imp.inserts,
-            "split_crossings": imp.split,
-        },
-    })
-}
-
-pub fn mesh_summary(path: &Path, mesh: &TriMesh, notes: &MeshNotes) -> Value {
-    let t = mesh.check_manifold();
-    let problems: Vec<String> = t.problems.iter().map(|p| p.to_string()).collect();
-    json!({
-        "file": path.display().to_string(),
-        "kind": "mesh",
-        "vertices": mesh.positions.len(),
-        "triangles": mesh.triangles.len(),
-        "vertex_colors": mesh.colors.is_some(),
-        "bbox": bbox_json(&mesh.bbox()),
-        "topology": {
-            "vertices": t.vertices, "edges": t.edges, "faces": t.faces,
-            "euler": t.euler, "components": t.components,
-            "boundary_edges": t.boundary_edges, "boundary_loops": t.boundary_loops,
-            "closed": t.closed, "genus": t.genus, "area": t.area, "volume": t.volume,
-            "signed_volume": t.signed_volume,
-        },
-        "problems": problems,
-        "import": { "bodies": notes.bodies, "weld": notes.weld },
-    })
+    let file = path.display().to_string();
+    let value = match loaded {
+        Loaded::Network(imp) => serde_json::to_value(info::network(
+            &file,
+            &imp.network,
+            Some(imp),
+            imp.point_tolerance(),
+        )),
+        Loaded::Mesh(mesh, notes) => serde_json::to_value(info::mesh(&file, mesh, notes.clone())),
+    };
+    value.expect("summaries serialise")
 }
 
 /// The summary as a few readable lines.

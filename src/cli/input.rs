@@ -6,7 +6,6 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 
-use glam::DVec3;
 use lamina::files::extension;
 use lamina::mesh::io::{read_mesh, stl_bodies};
 use lamina::mesh::MeshWeld;
@@ -15,8 +14,7 @@ use lamina::network::io::units::LengthUnit;
 use lamina::network::io::{read_network, Imported, ReadOptions, MAX_DXF_POINTS};
 use lamina::network::Weld;
 
-use lamina::mesh::closest::SurfaceIndex;
-use lamina::{Network, TriMesh};
+use lamina::TriMesh;
 
 /// How OBJ and DXF input is read: units, curves, and which points become shared nodes.
 #[derive(Args, Clone, Debug)]
@@ -220,13 +218,7 @@ pub enum Loaded {
 }
 
 /// What reading a mesh found or did besides the triangles.
-#[derive(Clone, Debug, Default)]
-pub struct MeshNotes {
-    /// `solid` blocks of an ASCII STL.
-    pub bodies: Option<usize>,
-    /// Set when `--weld`/`--weld-rel` joined near corners.
-    pub weld: Option<MeshWeld>,
-}
+pub use lamina::stage::info::MeshImport as MeshNotes;
 
 /// Reads a network or a mesh; `quiet` leaves the notes on units and skipped records to the
 /// caller (`info` prints them in its summary).
@@ -297,87 +289,4 @@ fn obj_has_faces(path: &Path) -> Result<bool> {
         lines |= line.starts_with(b"l ") || line.starts_with(b"l\t");
     }
     Ok(faces && !lines)
-}
-
-/// Each node's reference direction (its surface normal): the guide surface's normal at the
-/// closest point (turned to agree with a stored normal), else the stored normal, else, for a
-/// flat network, the normal of its plane (+Z side, or toward +Y/+X when vertical).
-pub fn reference_normals(net: &Network, surface: Option<&Path>) -> Result<Vec<DVec3>> {
-    if let Some(path) = surface {
-        let mesh = read_mesh(path)?;
-        let index = SurfaceIndex::new(&mesh);
-        return net
-            .nodes
-            .iter()
-            .map(|n| {
-                let c = index
-                    .closest(n.p)
-                    .with_context(|| format!("--surface {}: has no triangles", path.display()))?;
-                let d = index.normal(&c);
-                Ok(match n.normal {
-                    Some(stored) if stored.dot(d) < 0.0 => -d,
-                    _ => d,
-                })
-            })
-            .collect();
-    }
-    if let Some(stored) = net
-        .nodes
-        .iter()
-        .map(|n| n.normal)
-        .collect::<Option<Vec<_>>>()
-    {
-        return Ok(stored);
-    }
-    let missing = net
-        .nodes
-        .iter()
-        .position(|n| n.normal.is_none())
-        .unwrap_or(0);
-    let plane = flat_normal(net).with_context(|| {
-        format!("node {missing} has no stored normal and the network is not flat: give --surface")
-    })?;
-    Ok(net
-        .nodes
-        .iter()
-        .map(|n| n.normal.unwrap_or(plane))
-        .collect())
-}
-
-/// The normal of the plane all nodes lie in (to 1e-9 of the bounding box's diagonal), if any.
-fn flat_normal(net: &Network) -> Option<DVec3> {
-    let p: Vec<DVec3> = net.nodes.iter().map(|n| n.p).collect();
-    let first = *p.first()?;
-    let far = *p.iter().max_by(|a, b| {
-        a.distance_squared(first)
-            .total_cmp(&b.distance_squared(first))
-    })?;
-    let axis = (far - first).try_normalize()?;
-    let off = |q: &DVec3| (*q - first) - axis * (*q - first).dot(axis);
-    let third = p
-        .iter()
-        .max_by(|a, b| off(a).length_squared().total_cmp(&off(b).length_squared()))?;
-    let diag = net.bbox().diagonal().max(f64::MIN_POSITIVE);
-    let normal = match axis.cross(off(third)).try_normalize() {
-        Some(n) if off(third).length() > 1e-9 * diag => n,
-        // All on one line: any plane through it; prefer the one facing +Z.
-        _ => {
-            let n = axis.cross(DVec3::Z).cross(axis);
-            n.try_normalize().unwrap_or(DVec3::Z)
-        }
-    };
-    if p.iter()
-        .any(|q| (*q - first).dot(normal).abs() > 1e-9 * diag)
-    {
-        return None;
-    }
-    let up = [DVec3::Z, DVec3::Y, DVec3::X]
-        .into_iter()
-        .find(|a| normal.dot(*a).abs() > 1e-9)
-        .unwrap_or(DVec3::Z);
-    Some(if normal.dot(up) < 0.0 {
-        -normal
-    } else {
-        normal
-    })
 }

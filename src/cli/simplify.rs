@@ -9,7 +9,7 @@ use clap::Args as ClapArgs;
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_mesh;
 use lamina::network::io::{write_network, NetworkFormat, RenderOptions};
-use lamina::rationalize::simplify::{simplify, Figures, Options, Report, Simplified};
+use lamina::stage::simplify::{self, Figures, Report, Simplified};
 
 use super::input::ReadArgs;
 
@@ -62,45 +62,30 @@ pub fn execute(args: &Args) -> Result<(Simplified, Vec<String>)> {
         );
     }
     let imported = args.weld.network(&args.input)?;
-    let net = &imported.network;
-    let mut notes = Vec::new();
-    let max_deviation = match args.max_deviation {
-        Some(d) => d,
-        None => {
-            let mean = net.lengths().map_or(1.0, |l| l.mean);
-            notes.push(format!(
-                "--max-deviation not given: {mean:.4} mm, the input's mean edge length"
-            ));
-            mean
-        }
-    };
-    let opts = Options {
-        max_deviation,
+    let opts = simplify::Options {
+        max_deviation: args.max_deviation,
         min_length: args.min_length,
         merge_distance: args.merge_distance,
         min_angle: args.min_angle,
         prune_order: args.prune_order,
     };
-    opts.check()?;
     let surface = args.surface.as_ref().map(|p| read_mesh(p)).transpose()?;
-    if let Some(mesh) = &surface {
-        if mesh.triangles.is_empty() {
-            bail!(
-                "--surface {}: has no triangles",
-                args.surface
-                    .as_ref()
-                    .map_or_else(String::new, |p| p.display().to_string())
-            );
-        }
-    }
-    let done = simplify(net, surface.as_ref(), &opts)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.input.display()))?;
-    write_network(&done.network, &args.output, &RenderOptions::default())?;
+    let done = simplify::run(&imported.network, surface.as_ref(), &opts).map_err(|e| match e {
+        simplify::Error::EmptySurface => anyhow::anyhow!(
+            "--surface {}: has no triangles",
+            args.surface
+                .as_ref()
+                .map_or_else(String::new, |p| p.display().to_string())
+        ),
+        e => anyhow::anyhow!("{}: {e}", args.input.display()),
+    })?;
+    let out = done.simplified;
+    write_network(&out.network, &args.output, &RenderOptions::default())?;
     if let Some(path) = &args.report {
-        let text = serde_json::to_string_pretty(&done.report)? + "\n";
+        let text = serde_json::to_string_pretty(&out.report)? + "\n";
         write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
     }
-    Ok((done, notes))
+    Ok((out, done.notes))
 }
 
 pub fn run(args: Args) -> Result<bool> {

@@ -5,22 +5,16 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use indicatif::ProgressStyle;
-use serde_json::json;
 
+use super::progress::Bar;
 use super::venation::write_json;
-use lamina::fabricate::archive::{Job, Sl1Writer};
-use lamina::fabricate::estimate::{estimate, Estimate, Resin};
-use lamina::fabricate::sl1::MAX_LISTED;
-use lamina::fabricate::slice::islands::Islands;
-use lamina::fabricate::slice::shapes::{self, Placed};
-use lamina::fabricate::slice::{
-    self, arrange, layer_count, Layer, Model, Placement, Printer, SliceError,
-};
+use lamina::fabricate::estimate::Estimate;
 use lamina::files::write_atomic;
 use lamina::mesh::io::read_triangles;
 use lamina::network::io::units::LengthUnit;
-use lamina::TriMesh;
+use lamina::stage::slice::{
+    self, Archive, JobOptions, Model, OnLayer, Printer, PrinterOptions, Sliced,
+};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -102,29 +96,25 @@ pub struct JobArgs {
     pub json: bool,
 }
 
-/// The factor every model is scaled by: `--units` to mm, then `--scale`.
-fn model_scale(args: &Args) -> Result<f64> {
-    let unit = match &args.units {
-        None => 1.0,
-        Some(name) => LengthUnit::parse(name)
-            .with_context(|| {
+/// The unit `--units` names.
+fn units(args: &Args) -> Result<Option<LengthUnit>> {
+    args.units
+        .as_deref()
+        .map(|name| {
+            LengthUnit::parse(name).with_context(|| {
                 format!(
                     "--units: `{}` is not a unit lamina knows ({})",
                     name.escape_debug(),
                     LengthUnit::NAMES
                 )
-            })?
-            .mm(),
-    };
-    let scale = args.scale.unwrap_or(1.0);
-    if !(scale.is_finite() && (1e-6..=1e6).contains(&scale)) {
-        bail!("--scale must be a factor from 1e-6 to 1e6, got {scale}");
-    }
-    Ok(unit * scale)
+            })
+        })
+        .transpose()
 }
 
+/// The printer: the built-in DMP-SL or a profile file, with the flags over it.
 pub fn printer(args: &JobArgs) -> Result<Printer> {
-    let mut p = if args.printer == "dmp-sl" {
+    let base = if args.printer == "dmp-sl" {
         Printer::default()
     } else {
         let path = Path::new(&args.printer);
@@ -137,200 +127,145 @@ pub fn printer(args: &JobArgs) -> Result<Printer> {
         serde_json::from_str::<Printer>(&text)
             .with_context(|| format!("{}: not a printer profile", path.display()))?
     };
-    if let Some(v) = args.layer {
-        p.layer_mm = v;
-    }
-    if let Some(v) = args.pixel {
-        p.pixel_mm = v;
-    }
-    if let Some(r) = &args.resolution {
-        let parsed = r
-            .split_once(['x', 'X'])
-            .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)));
-        let Some((w, h)) = parsed else {
-            bail!("--resolution {r}: expected WIDTHxHEIGHT in pixels, e.g. 1920x1080");
-        };
-        (p.pixels_x, p.pixels_y) = (w, h);
-    }
-    if let Some(v) = args.exposure {
-        p.exposure_s = v;
-    }
-    if let Some(v) = args.bottom_exposure {
-        p.bottom_exposure_s = v;
-    }
-    if let Some(v) = args.bottom_layers {
-        p.bottom_layers = v;
-    }
-    if let Some(v) = args.lift {
-        p.lift_mm = v;
-    }
-    if let Some(v) = args.lift_speed {
-        p.lift_speed_mm_min = v;
-        p.retract_speed_mm_min = v;
-    }
-    p.check().map_err(|e| {
-        let given = |flag: &str| anyhow::anyhow!("{flag}: {e}");
-        match (&e, &args) {
-            (
-                SliceError::Printer {
-                    field: "layer_mm", ..
-                },
-                a,
-            ) if a.layer.is_some() => given("--layer"),
-            (
-                SliceError::Printer {
-                    field: "pixel_mm", ..
-                },
-                a,
-            ) if a.pixel.is_some() => given("--pixel"),
-            (
-                SliceError::Printer {
-                    field: "pixels_x", ..
-                },
-                a,
-            ) if a.resolution.is_some() => given("--resolution"),
-            (
-                SliceError::Printer {
-                    field: "exposure_s",
-                    ..
-                },
-                a,
-            ) if a.exposure.is_some() => given("--exposure"),
-            (
-                SliceError::Printer {
-                    field: "bottom_exposure_s",
-                    ..
-                },
-                a,
-            ) if a.bottom_exposure.is_some() => given("--bottom-exposure"),
-            (
-                SliceError::Printer {
-                    field: "bottom_layers",
-                    ..
-                },
-                a,
-            ) if a.bottom_layers.is_some() => given("--bottom-layers"),
-            (
-                SliceError::Printer {
-                    field: "lift_mm", ..
-                },
-                a,
-            ) if a.lift.is_some() => given("--lift"),
-            (SliceError::Printer { field: f, .. }, a)
-                if a.lift_speed.is_some() && f.ends_with("speed_mm_min") =>
-            {
-                given("--lift-speed")
-            }
-            _ if args.printer == "dmp-sl" => given("--printer dmp-sl"),
-            _ => given(&args.printer),
+    let resolution = match &args.resolution {
+        None => None,
+        Some(r) => {
+            let parsed = r
+                .split_once(['x', 'X'])
+                .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)));
+            let Some(wh) = parsed else {
+                bail!("--resolution {r}: expected WIDTHxHEIGHT in pixels, e.g. 1920x1080");
+            };
+            Some(wh)
         }
-    })?;
-    Ok(p)
+    };
+    let overrides = PrinterOptions {
+        layer: args.layer,
+        pixel: args.pixel,
+        resolution,
+        exposure: args.exposure,
+        bottom_exposure: args.bottom_exposure,
+        bottom_layers: args.bottom_layers,
+        lift: args.lift,
+        lift_speed: args.lift_speed,
+    };
+    let profile = if args.printer == "dmp-sl" {
+        "dmp-sl".to_string()
+    } else {
+        args.printer.clone()
+    };
+    Ok(overrides.apply(base, &profile)?)
 }
 
 impl JobArgs {
-    /// The printer, with every job flag checked.
-    pub fn checked_printer(&self) -> Result<Printer> {
-        let printer = printer(self)?;
-        for (what, v) in [
-            ("--resin-cost", self.resin_cost),
-            ("--density", self.density),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                bail!("{what} must be a number ≥ 0, got {v}");
-            }
-        }
-        if let Some(v) = self.speed {
-            if !(v.is_finite() && v > 0.0) {
-                bail!("--speed must be a positive number of mm/h, got {v}");
-            }
-        }
-        if self.copies == 0 {
-            bail!("--copies must be at least 1");
-        }
-        if !(self.gap.is_finite() && self.gap >= 0.0) {
-            bail!("--gap must be a number of mm ≥ 0, got {}", self.gap);
-        }
-        Ok(printer)
-    }
-
-    pub fn spec<'a>(&'a self, output: &'a Path) -> Spec<'a> {
-        Spec {
-            output,
-            layers_dir: self.layers_dir.as_deref(),
-            resin: Resin {
-                cost_per_litre: self.resin_cost,
-                density: self.density,
-            },
-            speed: self.speed,
-            material: &self.material,
+    /// The job's options, every flag checked; the archive named by `output`'s stem.
+    pub fn options(&self, output: &Path) -> Result<JobOptions> {
+        let opts = JobOptions {
+            printer: printer(self)?,
             copies: self.copies,
-        }
+            gap: self.gap,
+            resin_cost: self.resin_cost,
+            density: self.density,
+            speed: self.speed,
+            material: self.material.clone(),
+            name: output
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .filter(|s| !s.is_empty())
+                .unwrap_or("lamina")
+                .to_string(),
+        };
+        opts.check()?;
+        Ok(opts)
     }
 
     /// Writes print.json where asked and says what the job is.
-    pub fn finish(
-        &self,
-        report: &serde_json::Value,
-        e: &Estimate,
-        printer: &Printer,
-        output: &Path,
-    ) -> Result<()> {
-        if let Some(path) = &self.report {
-            write_json(path, report)?;
+    pub fn finish(&self, sliced: &Sliced, printer: &Printer, output: &Path) -> Result<()> {
+        for n in &sliced.notes {
+            errln!("lamina: {n}");
         }
-        tell(report, e, printer, output, self.json)
+        let mut report = sliced.report.clone();
+        report.archive = output.display().to_string();
+        if let Some(path) = &self.report {
+            write_json(path, &report)?;
+        }
+        tell(&report, &sliced.estimate, printer, output, self.json)
     }
+}
+
+/// Runs `job` into the archive at `output` (and the layers into `layers_dir`, named by the
+/// job's `name`): an error leaves neither.
+pub fn write_job<E: Into<anyhow::Error>>(
+    output: &Path,
+    layers_dir: Option<&Path>,
+    name: &str,
+    job: impl FnOnce(&mut dyn Archive, Option<OnLayer>) -> Result<Sliced, E>,
+) -> Result<Sliced> {
+    let staging = layers_dir.map(Staging::new).transpose()?;
+    let mut save = |index: usize, png: &[u8], _: &[u8]| -> std::io::Result<()> {
+        match &staging {
+            Some(s) => std::fs::write(s.tmp.join(format!("{name}{index:05}.png")), png),
+            None => Ok(()),
+        }
+    };
+    let mut result = None;
+    let written = write_atomic(output, |w| {
+        let on_layer: Option<OnLayer> = staging.is_some().then_some(&mut save);
+        match job(w, on_layer) {
+            Ok(s) => {
+                result = Some(Ok(s));
+                Ok(())
+            }
+            Err(e) => {
+                result = Some(Err(e.into()));
+                Err(std::io::Error::other("the job stopped"))
+            }
+        }
+    });
+    let sliced = match result {
+        Some(r) => r?,
+        None => {
+            written?;
+            bail!("internal: the job did not run");
+        }
+    };
+    written?;
+    if let Some(s) = staging {
+        s.commit()?;
+    }
+    Ok(sliced)
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let meshes = args
+    let models = args
         .models
         .iter()
-        .map(|path| Ok((path.clone(), read_triangles(path)?)))
+        .map(|path| {
+            Ok(Model {
+                path: path.clone(),
+                mesh: read_triangles(path)?,
+            })
+        })
         .collect::<Result<Vec<_>>>()?;
-    let (report, e, printer) = slice_models(&args, meshes)?;
-    args.job.finish(&report, &e, &printer, &args.output)
-}
-
-/// Slices the models (each named by its path, read from it or handed over by the Python
-/// package; in the units `--units` gives, before `--scale`) and writes the archive (and the
-/// layers folder). Returns print.json, the estimate and the printer.
-pub fn slice_models(
-    args: &Args,
-    meshes: Vec<(PathBuf, TriMesh)>,
-) -> Result<(serde_json::Value, Estimate, Printer)> {
-    let job = &args.job;
-    let printer = job.checked_printer()?;
-    let scale = model_scale(args)?;
-    let mut models = Vec::with_capacity(meshes.len());
-    for (path, mut mesh) in meshes {
-        if scale != 1.0 {
-            for p in &mut mesh.positions {
-                *p *= scale;
-            }
-        }
-        let height = mesh.bbox().size().z;
-        if height < 10.0 * printer.layer_mm {
-            errln!(
-                "lamina: {}: only {:.1} layers tall ({height:.4} mm at {} mm layers): is it in \
-                 metres? give --units or --scale",
-                path.display(),
-                height / printer.layer_mm,
-                printer.layer_mm
-            );
-        }
-        models.push(Model { path, mesh });
-    }
-    let placed = arrange(&models, &printer, job.copies, job.gap, args.keep_position)?;
-    let spec = job.spec(&args.output);
-    let (report, e, _) = slice_job(Source::Meshes(&models), &placed, &printer, &spec, &[])?;
-    Ok((report, e, printer))
+    let job = args.job.options(&args.output)?;
+    let opts = slice::Options {
+        job,
+        keep_position: args.keep_position,
+        units: units(&args)?,
+        scale: args.scale,
+    };
+    let sliced = write_job(
+        &args.output,
+        args.job.layers_dir.as_deref(),
+        &opts.job.name,
+        |archive, on_layer| slice::run(&models, &opts, archive, on_layer, &Bar::new()),
+    )?;
+    args.job.finish(&sliced, &opts.job.printer, &args.output)
 }
 
 /// Says what a sliced job is: the summary (or print.json with `json`) on stdout, and its islands.
 pub fn tell(
-    report: &serde_json::Value,
+    report: &slice::Report,
     e: &Estimate,
     printer: &Printer,
     output: &Path,
@@ -339,15 +274,15 @@ pub fn tell(
     if json {
         outln!("{}", serde_json::to_string_pretty(report)?);
     } else {
-        let placed = report["placements"].as_array().map_or(0, |p| p.len());
         outln!(
-            "wrote {}: {} layers of {} mm ({:.2} mm), {placed} model(s) on the plate",
+            "wrote {}: {} layers of {} mm ({:.2} mm), {} model(s) on the plate",
             output.display(),
             e.layers,
             printer.layer_mm,
             e.height_mm,
+            report.placements.len()
         );
-        let mesh = match report["mesh_volume_ml"].as_f64() {
+        let mesh = match report.mesh_volume_ml {
             Some(v) => format!(" (mesh {v:.4} mL)"),
             None => String::new(),
         };
@@ -361,16 +296,13 @@ pub fn tell(
         );
     }
     // Islands are said even with --json (on stderr then): a print fails at each.
-    let count = report["island_count"].as_u64().unwrap_or(0);
-    let line = match report["islands"].get(0) {
+    let count = report.island_count;
+    let line = match report.islands.first() {
         None => "no islands: every region of every layer stands on the one below".to_string(),
         Some(i) => format!(
             "{count} islands (regions cured in free resin, touching nothing in the layer below): \
              the first at layer {} ({:.2}, {:.2}) mm, {:.3} mm²; see \"islands\" in the report",
-            i["layer"],
-            i["x_mm"].as_f64().unwrap_or(0.0),
-            i["y_mm"].as_f64().unwrap_or(0.0),
-            i["area_mm2"].as_f64().unwrap_or(0.0)
+            i.layer, i.x_mm, i.y_mm, i.area_mm2
         ),
     };
     if json {
@@ -379,165 +311,6 @@ pub fn tell(
         outln!("  {line}");
     }
     Ok(())
-}
-
-/// What a job slices: closed meshes, or a solid's shapes sampled directly (`lamina print`).
-#[derive(Clone, Copy)]
-pub enum Source<'a> {
-    Meshes(&'a [Model]),
-    Shapes { model: &'a Placed, path: &'a Path },
-}
-
-/// Raw images of chosen layers: (index, row-major grey bytes).
-pub type Kept = Vec<(usize, Vec<u8>)>;
-
-/// Where and how to write a sliced job.
-pub struct Spec<'a> {
-    pub output: &'a Path,
-    pub layers_dir: Option<&'a Path>,
-    pub resin: Resin,
-    pub speed: Option<f64>,
-    pub material: &'a str,
-    pub copies: usize,
-}
-
-/// Slices placed models into the SL1 archive (and the layers folder), and returns print.json,
-/// the estimate, and the raw images of the layers listed in `keep`.
-pub fn slice_job(
-    source: Source,
-    placed: &[Placement],
-    printer: &Printer,
-    spec: &Spec,
-    keep: &[usize],
-) -> Result<(serde_json::Value, Estimate, Kept)> {
-    let name = spec
-        .output
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .filter(|s| !s.is_empty())
-        .unwrap_or("lamina")
-        .to_string();
-    let layers_total = match source {
-        Source::Meshes(models) => layer_count(models, printer),
-        Source::Shapes { model, .. } => shapes::layer_count(model, printer),
-    };
-    let bar = super::progress::bar("slicing", Some(layers_total as u64));
-    bar.set_style(ProgressStyle::with_template(
-        "slicing {bar:40} {pos}/{len} layers {elapsed}",
-    )?);
-    let staging = match spec.layers_dir {
-        Some(dir) => Some(Staging::new(dir)?),
-        None => None,
-    };
-    let mut areas = Vec::with_capacity(layers_total);
-    let mut exact = Vec::with_capacity(layers_total);
-    let mut finder = Islands::new(
-        printer.pixels_x as usize,
-        printer.pixels_y as usize,
-        printer.pixel_mm,
-        printer.layer_mm,
-    );
-    let (mut islands, mut island_count) = (Vec::new(), 0usize);
-    let mut kept = Vec::new();
-    let mut est = None;
-    write_atomic(spec.output, |w| {
-        let mut sl1 = Sl1Writer::new(w, &name);
-        let mut on_layer = |layer: Layer| {
-            sl1.layer(layer.index, &layer.png)?;
-            if let Some(s) = &staging {
-                std::fs::write(
-                    s.tmp.join(format!("{name}{:05}.png", layer.index)),
-                    &layer.png,
-                )?;
-            }
-            areas.push(layer.area_mm2);
-            exact.push(layer.exact_area_mm2);
-            if keep.contains(&layer.index) {
-                kept.push((layer.index, layer.image.clone()));
-            }
-            for i in finder.layer_owned(layer.index, layer.image) {
-                island_count += 1;
-                if islands.len() < MAX_LISTED {
-                    islands.push(i);
-                }
-            }
-            bar.inc(1);
-            Ok::<(), std::io::Error>(())
-        };
-        match source {
-            Source::Meshes(models) => slice::slice(models, placed, printer, &mut on_layer)?,
-            Source::Shapes { model, .. } => shapes::slice(model, placed, printer, &mut on_layer)?,
-        };
-        let e = est.insert(estimate(printer, &spec.resin, &areas, spec.speed));
-        sl1.finish(
-            printer,
-            &Job {
-                name: &name,
-                layers: areas.len(),
-                print_seconds: printer.build_seconds(areas.len()),
-                used_ml: e.volume_ml,
-                material: spec.material,
-            },
-        )?;
-        Ok(())
-    })?;
-    bar.finish_and_clear();
-    if let Some(s) = staging {
-        s.commit()?;
-    }
-    let e = est.ok_or_else(|| anyhow::anyhow!("internal: slicing finished without an estimate"))?;
-    // Per model once; every copy has the same volume and height.
-    let (paths, volumes, heights): (Vec<&Path>, Option<Vec<f64>>, Vec<f64>) = match source {
-        Source::Meshes(models) => (
-            models.iter().map(|m| m.path.as_path()).collect(),
-            Some(models.iter().map(|m| m.mesh.signed_volume()).collect()),
-            models.iter().map(|m| m.mesh.bbox().size().z).collect(),
-        ),
-        Source::Shapes { model, path } => {
-            let (lo, hi) = model.bounds();
-            (vec![path], None, vec![hi.z - lo.z])
-        }
-    };
-    let mesh_volume: Option<f64> =
-        volumes.map(|v| placed.iter().map(|p| v[p.model]).sum::<f64>() / 1000.0);
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in placed {
-        let h = heights[p.model];
-        lo = [lo[0].min(p.min[0]), lo[1].min(p.min[1]), 0.0];
-        hi = [hi[0].max(p.max[0]), hi[1].max(p.max[1]), hi[2].max(h)];
-    }
-    // The contours' volume, when the layers were cut from meshes.
-    let exact_ml = exact
-        .iter()
-        .copied()
-        .sum::<Option<f64>>()
-        .map(|a| a * printer.layer_mm / 1000.0);
-    let report = json!({
-        "archive": spec.output,
-        "printer": printer,
-        "models": paths,
-        "copies": spec.copies,
-        "placements": placed,
-        "layers": e.layers,
-        "layer_mm": printer.layer_mm,
-        "height_mm": e.height_mm,
-        "volume_ml": e.volume_ml,
-        "contour_volume_ml": exact_ml,
-        "mesh_volume_ml": mesh_volume,
-        "resin_cost": e.resin_cost,
-        "resin_cost_per_litre": spec.resin.cost_per_litre,
-        "density_g_ml": spec.resin.density,
-        "mass_g": e.mass_g,
-        "build_time_h": e.build_time_h,
-        "build_time_from": e.build_time_from,
-        "model_build_time_h": e.model_time_h,
-        "bbox_min": lo,
-        "bbox_max": hi,
-        "layer_area_mm2": areas,
-        "island_count": island_count,
-        "islands": islands,
-    });
-    Ok((report, e, kept))
 }
 
 /// A layers folder written beside its final place and renamed into it at the end, so an error

@@ -5,18 +5,12 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
-use indicatif::ProgressStyle;
 
 use super::input::ReadArgs;
+use super::progress::Bar;
 use super::venation::write_json;
-use lamina::fabricate::slice::shapes::Placed;
-use lamina::fabricate::slice::supports::{plan, SupportOptions, SupportReport};
-use lamina::fabricate::slice::Printer;
-use lamina::fabricate::solid::{
-    shapes, solid_of, Base, Shapes, SolidOptions, SolidReport, DEFAULT_CELL,
-};
 use lamina::mesh::io::write_mesh;
-use lamina::{Network, TriMesh};
+use lamina::stage::solid::{self, Base, Shape, SupportOptions, DEFAULT_CELL};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -68,16 +62,15 @@ pub struct ShapeArgs {
 }
 
 impl ShapeArgs {
-    /// The solid's options at grid cell `cell`.
-    pub fn options(&self, cell: f64) -> Result<SolidOptions> {
-        Ok(SolidOptions {
-            cell,
+    /// The stage's shape options, with the supports asked for.
+    pub fn shape(&self, supports: Option<SupportOptions>) -> Result<Shape> {
+        Ok(Shape {
             lamina: self.lamina,
             base: self.base.as_deref().map(parse_base).transpose()?,
             fit: self.fit,
             upright: self.upright,
             radius: self.radius,
-            tolerance: None,
+            supports,
         })
     }
 }
@@ -104,13 +97,8 @@ pub struct SupportArgs {
 }
 
 impl SupportArgs {
-    /// Adds supports to `shapes` when asked, and says what they are.
-    pub fn add(
-        &self,
-        shapes: &mut Shapes,
-        upright: bool,
-        printer: &Printer,
-    ) -> Result<Option<SupportReport>> {
+    /// The supports asked for, if any.
+    pub fn options(&self) -> Result<Option<SupportOptions>> {
         if !self.supports {
             return Ok(None);
         }
@@ -127,50 +115,13 @@ impl SupportArgs {
                     self.support_base
                 )
             })?;
-        let opts = SupportOptions {
+        Ok(Some(SupportOptions {
             tip: self.support_tip,
             pillar: self.support_pillar,
             base: base[0],
             base_height: base[1],
             join: self.support_join,
-        };
-        let bar = super::progress::bar("supports", None);
-        bar.set_style(ProgressStyle::with_template(
-            "supports: slicing {bar:40} {pos}/{len} layers {elapsed}",
-        )?);
-        let model = Placed::new(shapes.clone(), upright);
-        let made = plan(&model, printer, &opts, &|done, total| {
-            bar.set_length(total);
-            bar.set_position(done);
-        })?;
-        bar.finish_and_clear();
-        shapes.added += made.prims.len();
-        shapes.prims.extend(made.prims);
-        // Placed where they were planned, so the print's pixels are the planned ones.
-        shapes.frame = Some(model.shift());
-        let r = made.report;
-        errln!(
-            "lamina: supports: {} island(s) held by {} tip(s); {} pillar(s) on the plate, {} on \
-             the model, {} join(s); {:.4} mL of supports for {:.4} mL of model",
-            r.islands,
-            r.tips,
-            r.to_plate,
-            r.to_model,
-            r.joins,
-            r.support_ml,
-            r.model_ml
-        );
-        if let Some(i) = &r.first_left {
-            errln!(
-                "lamina: warning: {} island(s) left with supports, the first at layer {} \
-                 ({:.2}, {:.2}) mm",
-                r.islands_left,
-                i.layer,
-                i.x_mm,
-                i.y_mm
-            );
-        }
-        Ok(Some(r))
+        }))
     }
 }
 
@@ -189,54 +140,23 @@ pub fn parse_base(text: &str) -> Result<Base> {
     }
 }
 
-/// A solid made, in memory: the mesh, its report and the value `--report` writes (the report
-/// with the supports' figures).
-pub struct Made {
-    pub mesh: TriMesh,
-    pub report: SolidReport,
-    pub value: serde_json::Value,
-}
-
-/// Meshes `net` (read from `args.network`, or handed over by the Python package) as the flags
-/// say; writes nothing.
-pub fn solve(args: &Args, net: &Network) -> Result<Made> {
-    let mut opts = args.shape.options(args.cell)?;
-    opts.tolerance = args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell));
-    let bar = super::progress::bar("meshing", None);
-    bar.set_style(ProgressStyle::with_template(
-        "meshing {bar:40} {pos}/{len} bricks {elapsed}",
-    )?);
-    let within = || format!("{}", args.network.display());
-    let mut pieces = shapes(net, &opts).with_context(within)?;
-    let supports = args
-        .supports
-        .add(&mut pieces, opts.upright, &Printer::default())
-        .with_context(within)?;
-    let made = solid_of(net, &opts, pieces, &|done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    })
-    .with_context(within)?;
-    bar.finish_and_clear();
-    let mut value = serde_json::to_value(&made.report)?;
-    if let Some(s) = &supports {
-        value["supports"] = serde_json::to_value(s)?;
-    }
-    Ok(Made {
-        mesh: made.mesh,
-        report: made.report,
-        value,
-    })
-}
-
 pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
-    let made = solve(&args, &net)?;
-    write_mesh(&made.mesh, &args.output, 1024)?;
-    let r = &made.report;
-    if let Some(path) = &args.report {
-        write_json(path, &made.value)?;
+    let opts = solid::Options {
+        cell: args.cell,
+        tolerance: args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell)),
+        shape: args.shape.shape(args.supports.options()?)?,
+    };
+    let made = solid::run(&net, &opts, &Bar::new())
+        .with_context(|| format!("{}", args.network.display()))?;
+    for n in &made.notes {
+        errln!("lamina: {n}");
     }
+    write_mesh(&made.mesh, &args.output, 1024)?;
+    if let Some(path) = &args.report {
+        write_json(path, &made.report)?;
+    }
+    let r = &made.report.solid;
     if args.json {
         outln!("{}", serde_json::to_string_pretty(r)?);
     } else {
@@ -277,7 +197,7 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
-    for w in &r.warnings {
+    for w in &made.warnings {
         errln!("lamina: warning: {w}");
     }
     Ok(())

@@ -29,12 +29,19 @@
 pub mod audit;
 pub mod bifurcate;
 pub mod branching;
+pub mod buds;
+pub mod cells;
+pub mod info;
 pub mod lsystem;
 pub mod nest;
 pub mod planarize;
 pub mod plates;
+pub mod print;
 pub mod progress;
+pub mod simplify;
 pub mod size;
+pub mod slice;
+pub mod solid;
 pub mod veins;
 pub mod venation;
 

@@ -7,7 +7,9 @@
 //! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/surfaces/torus.obj");
 //! let mesh = lamina::mesh::io::read_mesh(std::path::Path::new(path))?;
 //! let grown = veins::run(&mesh, &veins::Options { sources: Some(50), ..Default::default() }, &Quiet)?;
-//! assert_eq!(grown.report.sources, 50 - grown.report.sources_unreachable_skipped);
+//! // About 50 sources, Poisson-disk on the torus, each reached along mesh edges.
+//! assert!((40..=60).contains(&grown.report.sources));
+//! assert!(grown.report.tree_vertices > grown.report.sources);
 //! # Ok(()) }
 //! ```
 

@@ -7,9 +7,8 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::Entry;
-use crate::cli::slice::{slice_job, Source, Spec};
+use crate::cli::slice::write_job;
 use crate::cli::venation::write_json;
-use lamina::fabricate::estimate::Resin;
 use lamina::fabricate::slice::{arrange, encode_grey, layer_count, Model, Printer};
 use lamina::fabricate::solid::{solid, Base, SolidOptions};
 use lamina::files::write_atomic;
@@ -17,6 +16,8 @@ use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::mesh::io::write_mesh;
 use lamina::network::io::{write_network, RenderOptions};
+use lamina::stage::slice::{slice_job, JobOptions, OnLayer, Source};
+use lamina::stage::Quiet;
 
 /// Leaves printed at once, as in Peele §4.2.
 const COPIES: usize = 5;
@@ -51,7 +52,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
         radius: None,
         tolerance: None,
     };
-    let made = solid(&leaf.network, &solid_opts, &|_, _| {})?;
+    let made = solid(&leaf.network, &solid_opts, &Quiet)?;
     write_mesh(&made.mesh, &dir.join("leaf.stl"), size)?;
     write_mesh(&made.mesh, &dir.join("leaf.png"), size)?;
     write_json(
@@ -67,15 +68,43 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     let placed = arrange(&models, &printer, COPIES, 2.0, false)?;
     let layers = layer_count(&models, &printer);
     let keep: Vec<usize> = (1..=6).map(|k| k * layers / 7).collect();
-    let spec = Spec {
-        output: &dir.join("leaf.sl1"),
-        layers_dir: Some(&dir.join("layers")),
-        resin: Resin::default(),
-        speed: None,
-        material: "MakerJuice G+",
+    let job = JobOptions {
+        printer: printer.clone(),
         copies: COPIES,
+        material: "MakerJuice G+".into(),
+        name: "leaf".into(),
+        ..Default::default()
     };
-    let (report, e, kept) = slice_job(Source::Meshes(&models), &placed, &printer, &spec, &keep)?;
+    let mut kept = Vec::new();
+    let output = dir.join("leaf.sl1");
+    let sliced = write_job(
+        &output,
+        Some(&dir.join("layers")),
+        "leaf",
+        |archive, mut on_layer| {
+            let mut each = |index: usize, png: &[u8], image: &[u8]| {
+                if keep.contains(&index) {
+                    kept.push((index, image.to_vec()));
+                }
+                match on_layer {
+                    Some(ref mut f) => f(index, png, image),
+                    None => Ok(()),
+                }
+            };
+            let each: OnLayer = &mut each;
+            slice_job(
+                Source::Meshes(&models),
+                &placed,
+                &job,
+                archive,
+                Some(each),
+                &Quiet,
+            )
+        },
+    )?;
+    let mut report = sliced.report;
+    report.archive = output.display().to_string();
+    let e = sliced.estimate;
     write_json(&dir.join("print.json"), &report)?;
 
     // The strip: each kept layer cropped to the first leaf's footprint, side by side.
@@ -147,11 +176,11 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
             e.mass_g,
             e.build_time_h,
             e.build_time_from,
-            match report["islands"].get(0) {
+            match report.islands.first() {
                 None => "no islands".to_string(),
                 Some(i) => format!(
                     "{} islands (regions that start in free resin; supports would hold them), the first at layer {}",
-                    report["island_count"], i["layer"]
+                    report.island_count, i.layer
                 ),
             }
         ),

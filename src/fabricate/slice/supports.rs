@@ -64,6 +64,8 @@ pub enum SupportError {
          printer's pixel"
     )]
     TooWide(usize, usize),
+    #[error(transparent)]
+    Cancelled(#[from] crate::stage::Cancelled),
 }
 
 /// What was built.
@@ -158,7 +160,7 @@ pub fn plan(
     model: &Placed,
     printer: &Printer,
     opts: &SupportOptions,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<Supports, SupportError> {
     opts.check()?;
     let islands = find_islands(model, printer, DVec2::ZERO, progress)?;
@@ -377,7 +379,7 @@ fn find_islands(
     model: &Placed,
     printer: &Printer,
     phase: DVec2,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<Found, SupportError> {
     let (lo, hi) = model.bounds();
     let px = printer.pixel_mm;
@@ -406,17 +408,18 @@ fn find_islands(
     let mut finder = Islands::new(w, h, px, grid.layer_mm);
     let (mut list, mut area) = (Vec::new(), 0.0);
     let plate = Plate::new(model, std::slice::from_ref(&place));
+    progress.begin("supports: slicing", Some(layers as u64));
     in_batches(
         layers,
         |i| image(&plate, &grid, i),
         |i, (img, a)| {
+            crate::stage::checkpoint(progress)?;
             area += a;
             list.extend(finder.layer_owned(i, img));
-            progress(i as u64 + 1, layers as u64);
-            Ok::<(), std::convert::Infallible>(())
+            progress.set(i as u64 + 1);
+            Ok::<(), crate::stage::Cancelled>(())
         },
-    )
-    .unwrap_or_else(|never| match never {});
+    )?;
     Ok(Found {
         list,
         offset,

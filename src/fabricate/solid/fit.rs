@@ -204,7 +204,7 @@ mod tests {
     fn fitting_brings_a_coarse_capsule_to_its_volume_and_area_and_keeps_it_closed() {
         let (prims, want) = capsule();
         let cell = 0.2;
-        let (mut mesh, _) = mesh_union(&prims, cell, None, &|_, _| {}).unwrap();
+        let (mut mesh, _) = mesh_union(&prims, cell, None, &crate::stage::Quiet).unwrap();
         let before = mesh.signed_volume();
         let field = Field::new(&prims, 2.0 * cell);
         let bounds = (DVec3::new(-2.0, -1.0, -1.0), DVec3::new(2.0, 1.0, 1.0));
@@ -255,7 +255,7 @@ mod tests {
         let bounds = (a.min(b) - r, a.max(b) + r);
         let field = Field::new(&prims, cell);
         let off = |passes| {
-            let (mut mesh, _) = mesh_union(&prims, cell, None, &|_, _| {}).unwrap();
+            let (mut mesh, _) = mesh_union(&prims, cell, None, &crate::stage::Quiet).unwrap();
             fit_passes(&mut mesh, &field, bounds, passes);
             let topo = mesh.check_manifold();
             assert!(topo.is_manifold() && topo.closed);

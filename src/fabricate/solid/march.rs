@@ -52,6 +52,8 @@ pub enum MarchError {
     TooManyBricks(u128),
     #[error("internal meshing error: {0}")]
     Internal(String),
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// The sampling grid: point (i, j, k) is at `origin + h·(i, j, k)`.
@@ -130,13 +132,13 @@ pub struct Marched {
 /// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance), cells where
 /// a gap between veins, or the narrow crotch between two that meet at a sharp angle, may be
 /// narrower than the grid are split finer until no tetrahedron bridges it by more than the
-/// tolerance allows (`adapt`). `progress(done, total)` is called as bricks finish (from
-/// several threads).
+/// tolerance allows (`adapt`). `progress` counts bricks as they finish (from several threads)
+/// and stops the meshing with `MarchError::Cancelled` when asked: the bricks left are skipped.
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,
     gaps: Option<f64>,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<(TriMesh, Marched), MarchError> {
     let band = 2.0 * h;
     let mut lo = DVec3::splat(f64::INFINITY);
@@ -203,16 +205,28 @@ pub fn mesh_union(
     drop(pairs);
 
     let total = 2 * groups.len() as u64;
+    progress.begin("meshing", Some(total));
     let done = AtomicU64::new(0);
+    let stopped = std::sync::atomic::AtomicBool::new(false);
+    // Whether to skip the rest: asked once per brick.
+    let stop = || {
+        if !stopped.load(Ordering::Relaxed) && progress.cancelled() {
+            stopped.store(true, Ordering::Relaxed);
+        }
+        stopped.load(Ordering::Relaxed)
+    };
     let tick = || {
         let d = done.fetch_add(1, Ordering::Relaxed) + 1;
         if d.is_multiple_of(256) || d == total {
-            progress(d, total);
+            progress.set(d);
         }
     };
     let bricks: Vec<Brick> = groups
         .par_iter()
         .filter_map(|(key, range)| {
+            if stop() {
+                return None;
+            }
             let own: Vec<&Primitive> = members[range.clone()]
                 .iter()
                 .map(|&p| &prims[p as usize])
@@ -222,6 +236,9 @@ pub fn mesh_union(
             b
         })
         .collect();
+    if stopped.load(Ordering::Relaxed) {
+        return Err(MarchError::Cancelled);
+    }
     done.store(groups.len() as u64, Ordering::Relaxed);
 
     let mut offsets = Vec::with_capacity(bricks.len() + 1);
@@ -287,6 +304,9 @@ pub fn mesh_union(
     let parts: Vec<Result<Vec<[u32; 3]>, MarchError>> = (0..bricks.len())
         .into_par_iter()
         .map(|i| {
+            if stop() {
+                return Ok(Vec::new());
+            }
             let skip = explicit.filter(|_| explicit_bricks.contains(&bricks[i].key));
             let t = triangles(&bricks, &keys, &offsets, i, skip);
             tick();
@@ -297,7 +317,10 @@ pub fn mesh_union(
     for p in parts {
         triangles_out.extend(p?);
     }
-    progress(total, total);
+    if stopped.load(Ordering::Relaxed) {
+        return Err(MarchError::Cancelled);
+    }
+    progress.set(total);
     let mut positions = Vec::with_capacity(count);
     for b in bricks {
         positions.extend(b.positions);
@@ -925,7 +948,7 @@ mod tests {
             1.0,
             1.0,
         ))];
-        let (mesh, _) = mesh_union(&ball, 0.05, None, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ball, 0.05, None, &crate::stage::Quiet).unwrap();
         let topo = mesh.check_manifold();
         assert!(
             topo.is_manifold(),
@@ -953,7 +976,7 @@ mod tests {
                 Primitive::Cone(RoundCone::new(at(i), at((i + 1) % n), 0.3, 0.4))
             })
             .collect();
-        let (mesh, _) = mesh_union(&ring, 0.07, None, &|_, _| {}).unwrap();
+        let (mesh, _) = mesh_union(&ring, 0.07, None, &crate::stage::Quiet).unwrap();
         let topo = mesh.check_manifold();
         assert!(topo.is_manifold());
         assert_eq!((topo.components, topo.genus), (1, Some(1)));

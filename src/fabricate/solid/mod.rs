@@ -388,11 +388,11 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
     })
 }
 
-/// Builds the solid. `progress(done, total)` is called while meshing.
+/// Builds the solid. `progress` follows the meshing (and simplification) and can stop it.
 pub fn solid(
     net: &Network,
     opts: &SolidOptions,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<Solid, SolidError> {
     solid_of(net, opts, shapes(net, opts)?, progress)
 }
@@ -402,7 +402,7 @@ pub fn solid_of(
     net: &Network,
     opts: &SolidOptions,
     shapes: Shapes,
-    progress: &(dyn Fn(u64, u64) + Sync),
+    progress: &dyn crate::stage::Progress,
 ) -> Result<Solid, SolidError> {
     let bounds = shapes.bounds();
     let Shapes {
@@ -443,16 +443,21 @@ pub fn solid_of(
         let field = simplify::Field::new(&prims, opts.cell);
         fit::fit(&mut mesh, &field, bounds)
     });
-    let simplified = opts.tolerance.map(|tol| {
-        let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
-        // A marched edge spans at most a cell's diagonal.
-        let spacing = 3f64.sqrt() * opts.cell;
-        let mut done = simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress);
-        done.cells_split = marched.cells_refined;
-        done.gaps_left = marched.gaps_left;
-        done.crotch_ends = marched.crotch_ends;
-        done
-    });
+    let simplified = match opts.tolerance {
+        None => None,
+        Some(tol) => {
+            let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
+            // A marched edge spans at most a cell's diagonal.
+            let spacing = 3f64.sqrt() * opts.cell;
+            let mut done =
+                simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress)
+                    .ok_or(SolidError::March(MarchError::Cancelled))?;
+            done.cells_split = marched.cells_refined;
+            done.gaps_left = marched.gaps_left;
+            done.crotch_ends = marched.crotch_ends;
+            Some(done)
+        }
+    };
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
     let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
     place(&mut mesh, opts.upright, shift);
@@ -738,7 +743,7 @@ mod tests {
                 }),
                 ..Default::default()
             };
-            let made = solid(&bar_at(z), &opts, &|_, _| {}).unwrap();
+            let made = solid(&bar_at(z), &opts, &crate::stage::Quiet).unwrap();
             // The bar spans z ± 1; the base goes 3 below that.
             let height = made.mesh.bbox().size().z;
             assert!((height - 5.0).abs() < 0.1, "z {z}: height {height}");
@@ -754,20 +759,20 @@ mod tests {
         };
         let mut bare = bare;
         bare.nodes.iter_mut().for_each(|n| n.radius = 0.0);
-        let err = solid(&bare, &SolidOptions::default(), &|_, _| {}).unwrap_err();
+        let err = solid(&bare, &SolidOptions::default(), &crate::stage::Quiet).unwrap_err();
         assert!(matches!(err, SolidError::NoRadius(0)));
         let opts = SolidOptions {
             cell: -1.0,
             ..Default::default()
         };
         assert!(matches!(
-            solid(&bar_at(0.0), &opts, &|_, _| {}).unwrap_err(),
+            solid(&bar_at(0.0), &opts, &crate::stage::Quiet).unwrap_err(),
             SolidError::NotPositive { what: "cell=", .. }
         ));
         let mut far = bar_at(0.0);
         far.edges.push(Edge::new(0, 7));
         assert!(matches!(
-            solid(&far, &SolidOptions::default(), &|_, _| {}).unwrap_err(),
+            solid(&far, &SolidOptions::default(), &crate::stage::Quiet).unwrap_err(),
             SolidError::EdgeOutOfRange {
                 edge: 1,
                 node: 7,

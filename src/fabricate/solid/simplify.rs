@@ -382,14 +382,16 @@ pub struct Simplified {
 
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of
 /// `field`, edges at most `spacing` long) so it stays within `tol` of the surface, whose least
-/// radius of curvature is about `radius`. `progress(done, total)` counts passes.
+/// radius of curvature is about `radius`. `progress` counts passes; asked to stop, the
+/// simplification ends after the pass it is in (the mesh stays within `tol`: every collapse
+/// was checked), and `None` is returned.
 pub fn simplify(
     mesh: &mut TriMesh,
     field: &Field,
     tol: f64,
     (spacing, radius): (f64, f64),
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Simplified {
+    progress: &dyn crate::stage::Progress,
+) -> Option<Simplified> {
     let marched = mesh.triangles.len();
     let debug = std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some();
     let clock = std::time::Instant::now();
@@ -412,6 +414,7 @@ pub fn simplify(
     };
     let mut whole = Whole::new(mesh);
     let mut sweeps = 0;
+    progress.begin("simplifying", Some(MAX_SWEEPS as u64));
     while sweeps < MAX_SWEEPS {
         sweeps += 1;
         // Bricks of about BRICK_TRIANGLES triangles of the mesh as it is now, shifted by
@@ -434,7 +437,10 @@ pub fn simplify(
                 clock.elapsed().as_secs_f64()
             );
         }
-        progress(sweeps as u64, MAX_SWEEPS as u64);
+        progress.set(sweeps as u64);
+        if progress.cancelled() {
+            return None;
+        }
         if (made as f64) < SETTLED * whole.live as f64 {
             break;
         }
@@ -448,7 +454,7 @@ pub fn simplify(
             clock.elapsed().as_secs_f64()
         );
     }
-    Simplified {
+    Some(Simplified {
         tolerance_mm: tol,
         marched,
         refined,
@@ -456,7 +462,7 @@ pub fn simplify(
         sweeps,
         unheld,
         ..Simplified::default()
-    }
+    })
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {

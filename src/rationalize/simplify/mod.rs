@@ -171,6 +171,7 @@ pub struct Report {
     pub input_crossings: usize,
 }
 
+#[derive(Clone, Debug)]
 pub struct Simplified {
     pub network: Network,
     /// Per node of the simplified network, the node of the input it stands for.

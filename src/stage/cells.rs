@@ -1,0 +1,240 @@
+//! `cells`: the closed cells of a network on a surface (faces of its rotation system),
+//! triangulated by constrained Delaunay, with V − E + F checked against the guide surface.
+//!
+//! ```
+//! use lamina::stage::cells;
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/calyx_veins.json"))?;
+//! let found = cells::run(&net, None, &cells::Options::default())?;
+//! assert_eq!(found.table.euler.chi, found.table.expected_chi);
+//! # Ok(()) }
+//! ```
+
+use serde::Serialize;
+
+use crate::network::arrangement::defects;
+use crate::rationalize::cells::{cells, CellError, Cells, Euler, Untriangulated};
+use crate::rationalize::reference::{reference_normals, ReferenceError};
+use crate::{Network, TriMesh};
+
+/// How cells are found.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Points closer than this are one (crossings and T-junctions are found beyond it), mm.
+    /// Default: 1e-9 of the network's bounding-box diagonal.
+    pub point_tolerance: Option<f64>,
+    /// The guide surface's name in the notes. Default "the surface".
+    pub surface_name: String,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            point_tolerance: None,
+            surface_name: "the surface".into(),
+        }
+    }
+}
+
+/// What the network's V − E + F should be, and how many faces should be holes, if it covers
+/// its surface with disk-shaped cells.
+#[derive(Clone, Debug)]
+pub struct Expected {
+    pub chi: i64,
+    pub holes: usize,
+    pub from: String,
+}
+
+/// The cells, and the table `--table` writes.
+#[derive(Clone, Debug)]
+pub struct Found {
+    pub cells: Cells,
+    pub expected: Expected,
+    /// The checks in words (χ, holes, open tips, faces left untriangulated).
+    pub notes: Vec<String>,
+    pub table: Table,
+}
+
+/// The cell table. Fields in the file's order.
+#[derive(Clone, Debug, Serialize)]
+pub struct Table {
+    pub cells: Vec<FaceRow>,
+    pub euler: Euler,
+    pub expected_chi: i64,
+    pub expected_holes: usize,
+    pub format: &'static str,
+    pub holes: Vec<FaceRow>,
+    pub notes: Vec<String>,
+    pub open_tips: usize,
+    pub untriangulated: Vec<Untriangulated>,
+    pub version: u32,
+}
+
+/// A face: its boundary and, for a cell, its number and triangles.
+#[derive(Clone, Debug, Serialize)]
+pub struct FaceRow {
+    pub alignment: f64,
+    pub area_mm2: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cell: Option<usize>,
+    pub edges: Vec<u32>,
+    pub face: usize,
+    pub inner_edges: Vec<u32>,
+    pub nodes: Vec<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<[usize; 2]>,
+}
+
+/// Why no cells were found.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(
+        "the drawing is not noded: {first}{more}; its cells cannot be found until every \
+         crossing is a node: give split_crossings="
+    )]
+    NotNoded { first: String, more: String },
+    #[error(transparent)]
+    Reference(#[from] ReferenceError),
+    #[error(transparent)]
+    Cells(#[from] CellError),
+}
+
+/// Finds and triangulates the cells of `net`; `surface` gives the reference normals and the
+/// χ to check against (else each component is taken as a disk).
+pub fn run(net: &Network, surface: Option<&TriMesh>, opts: &Options) -> Result<Found, Error> {
+    let tol = opts.point_tolerance.unwrap_or(1e-9 * net.bbox().diagonal());
+    let found = defects(net, tol);
+    if let Some(first) = found.first() {
+        return Err(Error::NotNoded {
+            first: first.to_string(),
+            more: match found.len() {
+                1 => String::new(),
+                n => format!(" (and {} more crossings or T-junctions)", n - 1),
+            },
+        });
+    }
+    let reference = reference_normals(net, surface)?;
+    let positions: Vec<_> = net.nodes.iter().map(|n| n.p).collect();
+    let edges: Vec<[u32; 2]> = net.edges.iter().map(|e| [e.a, e.b]).collect();
+    let c = cells(&positions, &edges, &reference)?;
+    let expected = match surface {
+        Some(mesh) => {
+            let topo = mesh.check_manifold();
+            Expected {
+                chi: topo.euler + topo.boundary_loops as i64,
+                holes: topo.boundary_loops,
+                from: format!(
+                    "{}: χ = {} with {} boundary loop(s), {} capped",
+                    opts.surface_name,
+                    topo.euler,
+                    topo.boundary_loops,
+                    topo.euler + topo.boundary_loops as i64
+                ),
+            }
+        }
+        None => Expected {
+            chi: 2 * c.euler.components as i64,
+            holes: c.euler.components,
+            from: format!(
+                "no guide surface: each of {} component(s) taken as a disk (χ = 1, 1 hole)",
+                c.euler.components
+            ),
+        },
+    };
+    let notes = notes(&c, &expected);
+    let table = table(&c, &expected, &notes);
+    Ok(Found {
+        cells: c,
+        expected,
+        notes,
+        table,
+    })
+}
+
+fn notes(c: &Cells, expected: &Expected) -> Vec<String> {
+    let mut out = vec![expected.from.clone()];
+    if c.euler.chi == expected.chi {
+        out.push(format!(
+            "V − E + F matches the surface's capped χ = {}",
+            expected.chi
+        ));
+    } else {
+        out.push(format!(
+            "MISMATCH: V − E + F = {} but the surface's capped χ is {}: some face is not a disk \
+             (a vein ring that does not close around the surface, or a separate piece of network)",
+            c.euler.chi, expected.chi
+        ));
+    }
+    if c.holes.len() != expected.holes {
+        out.push(format!(
+            "MISMATCH: {} hole face(s) where the surface has {} boundary loop(s): the network \
+             covers only part of the surface, or one face holds several of its boundaries",
+            c.holes.len(),
+            expected.holes
+        ));
+    }
+    if c.open_tips > 0 {
+        out.push(format!(
+            "{} open tip(s): veins that end without joining leave their cells merged, so there \
+             are fewer cells than a fully closed network would have",
+            c.open_tips
+        ));
+    }
+    if c.isolated > 0 {
+        out.push(format!(
+            "{} isolated node(s) bound no cell and are left out",
+            c.isolated
+        ));
+    }
+    for u in &c.untriangulated {
+        out.push(format!(
+            "face {} was not triangulated: {}",
+            u.face, u.reason
+        ));
+    }
+    out
+}
+
+fn table(c: &Cells, expected: &Expected, notes: &[String]) -> Table {
+    let face = |id: usize| {
+        let f = &c.faces[id];
+        FaceRow {
+            alignment: f.alignment,
+            area_mm2: f.area,
+            cell: None,
+            edges: f.edges.clone(),
+            face: id,
+            inner_edges: f.inner_edges.clone(),
+            nodes: f.nodes.clone(),
+            triangles: None,
+        }
+    };
+    Table {
+        cells: c
+            .cells
+            .iter()
+            .enumerate()
+            .map(|(k, cell)| FaceRow {
+                cell: Some(k),
+                triangles: Some([cell.triangles.start, cell.triangles.end]),
+                ..face(cell.face)
+            })
+            .collect(),
+        euler: c.euler,
+        expected_chi: expected.chi,
+        expected_holes: expected.holes,
+        format: "lamina-cells",
+        holes: c.holes.iter().map(|&h| face(h)).collect(),
+        notes: notes.to_vec(),
+        open_tips: c.open_tips,
+        untriangulated: c.untriangulated.clone(),
+        version: 1,
+    }
+}
+
+impl Table {
+    /// The table's text.
+    pub fn json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("tables serialise") + "\n"
+    }
+}

@@ -1,0 +1,193 @@
+//! `info`: what a network or a mesh is (counts, bounding box, degrees, components, cycles,
+//! lengths, every problem; a mesh's topology, area and volume), as a typed summary.
+//!
+//! ```
+//! use lamina::stage::info;
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let net = lamina::network::io::json::from_str(include_str!("../../fixtures/networks/small_loop.json"))?;
+//! let s = info::network("small_loop.json", &net, None, 1e-9);
+//! assert_eq!(s.cycles, 1);
+//! # Ok(()) }
+//! ```
+
+use serde::Serialize;
+use serde_json::Value;
+
+use crate::geom::Aabb;
+use crate::mesh::MeshWeld;
+use crate::network::arrangement::defects;
+use crate::network::io::Imported;
+use crate::{Network, TriMesh};
+
+/// A bounding box's corners, size and diagonal (None when empty).
+#[derive(Clone, Debug, Serialize)]
+pub struct Bbox {
+    pub diagonal: f64,
+    pub max: [f64; 3],
+    pub min: [f64; 3],
+    pub size: [f64; 3],
+}
+
+fn bbox(b: &Aabb) -> Option<Bbox> {
+    (!b.is_empty()).then(|| Bbox {
+        diagonal: b.diagonal(),
+        max: b.max.to_array(),
+        min: b.min.to_array(),
+        size: b.size().to_array(),
+    })
+}
+
+/// Edge lengths, mm.
+#[derive(Clone, Debug, Serialize)]
+pub struct Lengths {
+    pub max: f64,
+    pub mean: f64,
+    pub min: f64,
+    pub total: f64,
+}
+
+/// What a network is. Fields in the command's order.
+#[derive(Clone, Debug, Serialize)]
+pub struct NetworkInfo {
+    pub bbox: Option<Bbox>,
+    pub components: usize,
+    pub cycles: usize,
+    pub degree_histogram: Vec<usize>,
+    pub edges: usize,
+    pub file: String,
+    pub generator: Option<String>,
+    /// What reading the file did (null when the network came from memory).
+    pub import: Option<Value>,
+    pub kind: &'static str,
+    pub lengths: Option<Lengths>,
+    pub nodes: usize,
+    /// Every problem, each with its `kind`, where, and a `message`.
+    pub problems: Vec<Value>,
+    pub units: String,
+}
+
+/// The summary of `net` (named `file`); `imported` says what reading its file did, and
+/// crossings and T-junctions closer than `point_tolerance` (mm) are not problems.
+pub fn network(
+    file: &str,
+    net: &Network,
+    imported: Option<&Imported>,
+    point_tolerance: f64,
+) -> NetworkInfo {
+    let v = net.validate();
+    let with_message = |value: Result<Value, serde_json::Error>, message: String| {
+        let mut o = value.unwrap_or(Value::Null);
+        if let Value::Object(m) = &mut o {
+            m.insert("message".into(), message.into());
+        }
+        o
+    };
+    let mut problems: Vec<Value> = v
+        .problems
+        .iter()
+        .map(|p| with_message(serde_json::to_value(p), p.to_string()))
+        .collect();
+    // A flat drawing that is not noded: crossings and T-junctions are problems too.
+    problems.extend(
+        defects(net, point_tolerance)
+            .iter()
+            .map(|d| with_message(serde_json::to_value(d), d.to_string())),
+    );
+    NetworkInfo {
+        bbox: bbox(&net.bbox()),
+        components: v.components,
+        cycles: v.cycles,
+        degree_histogram: v.degree_histogram,
+        edges: net.edges.len(),
+        file: file.to_string(),
+        generator: net.meta.generator.clone(),
+        import: imported.map(|imp| {
+            serde_json::json!({
+                "weld": imp.weld,
+                "skipped": imp.skipped,
+                "source_units": imp.units,
+                "inserts": imp.inserts,
+                "split_crossings": imp.split,
+            })
+        }),
+        kind: "network",
+        lengths: net.lengths().map(|l| Lengths {
+            max: l.max,
+            mean: l.mean,
+            min: l.min,
+            total: l.total,
+        }),
+        nodes: net.nodes.len(),
+        problems,
+        units: net.meta.units.clone(),
+    }
+}
+
+/// A mesh's topology and size.
+#[derive(Clone, Debug, Serialize)]
+pub struct Topology {
+    pub area: f64,
+    pub boundary_edges: usize,
+    pub boundary_loops: usize,
+    pub closed: bool,
+    pub components: usize,
+    pub edges: usize,
+    pub euler: i64,
+    pub faces: usize,
+    pub genus: Option<i64>,
+    pub signed_volume: f64,
+    pub vertices: usize,
+    pub volume: Option<f64>,
+}
+
+/// What reading a mesh found besides its triangles.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MeshImport {
+    /// `solid` blocks of an ASCII STL.
+    pub bodies: Option<usize>,
+    /// What welding near corners did, when asked.
+    pub weld: Option<MeshWeld>,
+}
+
+/// What a mesh is. Fields in the command's order.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshInfo {
+    pub bbox: Option<Bbox>,
+    pub file: String,
+    pub import: MeshImport,
+    pub kind: &'static str,
+    pub problems: Vec<String>,
+    pub topology: Topology,
+    pub triangles: usize,
+    pub vertex_colors: bool,
+    pub vertices: usize,
+}
+
+/// The summary of `mesh` (named `file`).
+pub fn mesh(file: &str, mesh: &TriMesh, import: MeshImport) -> MeshInfo {
+    let t = mesh.check_manifold();
+    MeshInfo {
+        bbox: bbox(&mesh.bbox()),
+        file: file.to_string(),
+        import,
+        kind: "mesh",
+        problems: t.problems.iter().map(|p| p.to_string()).collect(),
+        topology: Topology {
+            area: t.area,
+            boundary_edges: t.boundary_edges,
+            boundary_loops: t.boundary_loops,
+            closed: t.closed,
+            components: t.components,
+            edges: t.edges,
+            euler: t.euler,
+            faces: t.faces,
+            genus: t.genus,
+            signed_volume: t.signed_volume,
+            vertices: t.vertices,
+            volume: t.volume,
+        },
+        triangles: mesh.triangles.len(),
+        vertex_colors: mesh.colors.is_some(),
+        vertices: mesh.positions.len(),
+    }
+}
