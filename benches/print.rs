@@ -31,7 +31,9 @@ fn main() {
             fit: Some(30.0),
             ..Default::default()
         };
-        let (secs, made) = best_of(3, || solid(&leaf.network, &o, &lamina::stage::Quiet).expect("solid"));
+        let (secs, made) = best_of(3, || {
+            solid(&leaf.network, &o, &lamina::stage::Quiet).expect("solid")
+        });
         println!(
             "solid, {nodes}-node leaf at 30 mm, {label}, cell {cell} mm: {secs:.3} s best of 3, \
              {} triangles",

@@ -3,7 +3,8 @@
 #
 # Inputs:  lines (list access, Line or Curve: each one member), guide (item, Mesh or None: its
 #          normals are the reference directions; without one the network must be flat),
-#          height (float, mm), tolerance (float, mm)
+#          height (float, or None: 100 mm), tolerance (float, or None: 0.01 mm), both in the
+#          document's units like the geometry (lamina is told them: a model in metres works)
 # Outputs: panels (list of Mesh quads), axes (list of Line), report (str)
 #
 # Install once, from a checkout of lamina with Rust installed, into Rhino's Python:
@@ -12,9 +13,17 @@
 import json
 
 import numpy as np
+import Rhino
 import Rhino.Geometry as rg
 
 import lamina
+
+# The document's unit system, as lamina names units (others: convert the model first).
+UNITS = {"Millimeters": "mm", "Centimeters": "cm", "Meters": "m", "Inches": "in", "Feet": "ft"}
+system = str(Rhino.RhinoDoc.ActiveDoc.ModelUnitSystem).split(".")[-1]
+if system not in UNITS:
+    raise ValueError(f"lamina takes mm, cm, m, in or ft; this document is in {system}")
+units = UNITS[system]
 
 # Members' ends become nodes: points closer than 1e-6 of the model size are one node.
 ends = []
@@ -37,8 +46,8 @@ if guide is not None:
     f = [(t.A, t.B, t.C) for t in guide.Faces]
     surface = (v, f)
 
-result = lamina.planarize(positions, edges, surface=surface, height=height or 100.0,
-                          tolerance=tolerance or 0.01)
+result = lamina.planarize(positions, edges, surface=surface, height=height,
+                          tolerance=tolerance, units=units)
 
 panels = []
 for quad in result["panels"]:

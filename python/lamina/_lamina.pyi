@@ -3,39 +3,100 @@
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 __all__ = [
-    "LaminaError",
+    "MAX_COORD",
     "__version__",
+    "audit",
+    "audit_file",
+    "bifurcate",
+    "buds",
+    "cells",
+    "lsystem",
+    "nest",
+    "option_names",
     "planarize",
+    "plates",
+    "print",
     "read_mesh",
     "read_network",
-    "run",
+    "simplify",
+    "size",
     "slice",
     "solid",
+    "veins",
+    "venation",
+    "venation_on_surface",
     "write_mesh",
     "write_network",
 ]
+
 __version__: str
+MAX_COORD: float
 
-class LaminaError(ValueError): ...
+Callback = Optional[Callable[..., Any]]
+# positions, edges, node radii, edge radii, normals (little-endian bytes) and meta (a dict)
+NetworkBytes = Tuple[bytes, bytes, bytes, bytes, bytes, Any]
+# vertices, faces, colours (little-endian bytes; colours may be empty)
+MeshBytes = Tuple[bytes, bytes, bytes]
+# positions, edges, axes, heights, reference, fixed normals, edge radii
+AxesBytes = Tuple[bytes, bytes, bytes, bytes, bytes, bytes, bytes]
 
-def run(
-    argv: List[str], progress: Optional[Callable[..., Any]] = None
-) -> Tuple[bool, str, List[str]]: ...
-# positions, edges, node radii, edge radii, normals (little-endian bytes) and meta (JSON text)
-NetworkBytes = Tuple[bytes, bytes, bytes, bytes, bytes, str]
-
+def venation(
+    shape: str, outline: Optional[bytes], options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
+def venation_on_surface(
+    mesh: MeshBytes, roots: List[Any], options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
+def veins(mesh: MeshBytes, options: Dict[str, Any], progress: Callback = None) -> Dict[str, Any]: ...
+def lsystem(
+    grammar: Optional[Tuple[str, str]],
+    options: Dict[str, Any],
+    derive_only: bool,
+    progress: Callback = None,
+) -> Dict[str, Any]: ...
+def bifurcate(options: Dict[str, Any]) -> Dict[str, Any]: ...
+def buds(
+    program: str, name: str, options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
+def cells(
+    network: NetworkBytes, surface: Optional[MeshBytes], options: Dict[str, Any]
+) -> Dict[str, Any]: ...
+def simplify(
+    network: NetworkBytes, surface: Optional[MeshBytes], options: Dict[str, Any]
+) -> Dict[str, Any]: ...
 def planarize(
-    argv: List[str], network: NetworkBytes, progress: Optional[Callable[..., Any]] = None
-) -> Tuple[bool, str, str, str, bytes, bytes, List[str]]: ...
+    network: NetworkBytes,
+    surface: Optional[MeshBytes],
+    options: Dict[str, Any],
+    progress: Callback = None,
+) -> Dict[str, Any]: ...
+def audit(
+    corners: bytes,
+    counts: List[int],
+    labels: Optional[Tuple[List[Optional[str]], List[Optional[str]], List[Optional[str]]]],
+    options: Dict[str, Any],
+) -> Dict[str, Any]: ...
+def audit_file(path: str, options: Dict[str, Any]) -> Dict[str, Any]: ...
+def size(axes: AxesBytes, options: Dict[str, Any], progress: Callback = None) -> Dict[str, Any]: ...
+def plates(
+    axes: AxesBytes,
+    sizing: Optional[Tuple[bytes, bytes]],
+    options: Dict[str, Any],
+    out: Optional[str] = None,
+) -> Dict[str, Any]: ...
+def nest(
+    plates: Any, options: Dict[str, Any], out: Optional[str] = None, progress: Callback = None
+) -> Dict[str, Any]: ...
 def solid(
-    argv: List[str], network: NetworkBytes, progress: Optional[Callable[..., Any]] = None
-) -> Tuple[str, bytes, bytes, List[str]]: ...
+    network: NetworkBytes, options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
 def slice(
-    argv: List[str],
-    models: List[Tuple[str, bytes, bytes]],
-    progress: Optional[Callable[..., Any]] = None,
-) -> Tuple[str, List[str]]: ...
+    models: List[Tuple[str, bytes, bytes]], options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
+def print(
+    network: NetworkBytes, options: Dict[str, Any], progress: Callback = None
+) -> Dict[str, Any]: ...
+def read_network(path: str, units: Optional[str] = None) -> Dict[str, Any]: ...
 def write_network(path: str, network: NetworkBytes) -> None: ...
-def read_network(path: str) -> Dict[str, Any]: ...
-def write_mesh(path: str, vertices: bytes, faces: bytes, colors: bytes) -> None: ...
-def read_mesh(path: str) -> Tuple[bytes, bytes, Optional[bytes]]: ...
+def read_mesh(path: str) -> Dict[str, Any]: ...
+def write_mesh(path: str, mesh: MeshBytes) -> None: ...
+def option_names(function: str) -> List[str]: ...

@@ -9,11 +9,11 @@ the network has none), lamina's edge order as the edge attribute ``index``. Node
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
-from ._lamina import LaminaError
+from ._errors import LaminaError
 
 
 def _compas():
@@ -47,13 +47,17 @@ def to_network(network: dict) -> Any:
     meta = network.get("meta")
     if meta:
         g.attributes["lamina_meta"] = meta
+    # The unit the positions are in travels with the graph, and comes back from it.
+    g.attributes["units"] = network.get("units", "mm")
     return g
 
 
-def from_network(graph: Any) -> dict:
+def from_network(graph: Any, units: Optional[str] = None) -> dict:
     """A ``compas.datastructures.Graph`` as a lamina network dict; ``keys`` lists the Graph's
     node keys in the order of ``positions``. Nodes without a radius get 0, edges too; normals
-    only when every node has one."""
+    only when every node has one. ``units``: the unit the Graph's coordinates are in (the
+    document's; default the Graph's ``units`` attribute, else mm): lamina's functions take the
+    network in that unit."""
     keys = list(graph.nodes())
     index = {k: i for i, k in enumerate(keys)}
     positions = np.array([graph.node_attributes(k, "xyz") for k in keys], dtype=np.float64)
@@ -76,7 +80,8 @@ def from_network(graph: Any) -> dict:
         raise LaminaError(f"graph node {bad!r}: position is not finite")
     return {"positions": positions, "edges": np.array(edges, dtype=np.int64).reshape(-1, 2),
             "node_radius": node_radius, "edge_radius": np.array(edge_radius, dtype=np.float64),
-            "normals": normals, "meta": graph.attributes.get("lamina_meta", {}), "keys": keys}
+            "normals": normals, "meta": graph.attributes.get("lamina_meta", {}), "keys": keys,
+            "units": units or graph.attributes.get("units", "mm")}
 
 
 def to_mesh(mesh: dict) -> Any:
@@ -90,12 +95,14 @@ def to_mesh(mesh: dict) -> Any:
     if colors is not None:
         for key, c in zip(m.vertices(), np.asarray(colors, dtype=np.float64)):
             m.vertex_attribute(key, "color", [float(x) for x in c])
+    m.attributes["units"] = mesh.get("units", "mm")
     return m
 
 
-def from_mesh(mesh: Any) -> dict:
+def from_mesh(mesh: Any, units: Optional[str] = None) -> dict:
     """A ``compas.datastructures.Mesh`` as a lamina mesh dict: polygons triangulated by COMPAS,
-    vertices renumbered 0..V-1 in the Mesh's order (``keys`` gives the Mesh's keys)."""
+    vertices renumbered 0..V-1 in the Mesh's order (``keys`` gives the Mesh's keys); ``units``
+    as for :func:`from_network`."""
     keys = list(mesh.vertices())
     vertices, faces = mesh.to_vertices_and_faces(triangulated=True)
     colors = [mesh.vertex_attribute(k, "color") for k in keys]
@@ -103,4 +110,4 @@ def from_mesh(mesh: Any) -> dict:
               if keys and all(c is not None for c in colors) else None)
     return {"vertices": np.array(vertices, dtype=np.float64).reshape(-1, 3),
             "faces": np.array(faces, dtype=np.int64).reshape(-1, 3), "colors": colors,
-            "keys": keys}
+            "keys": keys, "units": units or mesh.attributes.get("units", "mm")}

@@ -1,303 +1,60 @@
-//! `lamina._lamina`: the commands of the lamina binary, run in-process for the Python package.
-//!
-//! The command-line modules are compiled here as they are in the binary (`cli` below is
-//! `src/cli`), so a command parses its flags, computes, writes its files and words its errors
-//! with the same code: the package's results and reports are the binary's. What a command
-//! prints is captured (`cli::say`), its notes handed back, its progress bar read by a watcher
-//! that calls the Python callback. `planarize`, `solid` and `slice` take their input from
-//! memory and hand their results back without a file (but slice's archive); for the other commands the Python side (`python/lamina/`)
-//! moves arrays in and out of files in a private folder.
+//! `lamina._lamina`: every stage of the lamina library, called in memory for the Python package
+//! (`python/lamina/`). Arrays cross as little-endian bytes one way and numpy arrays the other;
+//! reports become dicts (numeric arrays as numpy arrays, large tables as columns) without
+//! JSON text; no file is read or written but those a caller names. Options arrive as a dict
+//! of the stage's option names; the Python side has checked the names, converted units and
+//! left out what was not given.
 
-#[allow(dead_code, clippy::all)]
-#[path = "../../src/cli/mod.rs"]
-mod cli;
+mod convert;
+mod options;
+mod run;
 
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
-use std::time::Duration;
 
-use clap::Parser;
-use glam::DVec3;
-use pyo3::exceptions::PyValueError;
+use glam::{DVec2, DVec3};
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyDict};
+use pyo3::types::{PyBytes, PyDict, PyList};
 
+use convert::{f64_array, from_py, i64_array, report, to_py};
 use lamina::mesh::io::{read_mesh as read_mesh_file, write_mesh as write_mesh_file};
 use lamina::network::io::{read_network as read_network_file, ReadOptions, RenderOptions};
-use lamina::{Edge, Meta, Network, Node, ReadError, TriMesh};
+use lamina::rationalize::axes::Axes;
+use lamina::stage;
+use lamina::{Edge, Meta, Network, Node, TriMesh};
+use options::Opts;
 
-pyo3::create_exception!(
-    _lamina,
-    LaminaError,
-    PyValueError,
-    "An error of a lamina command: bad input, a bad option or a failed write; the message is \
-     the one the lamina binary prints."
-);
-
-/// How often the progress callback is called while a command runs.
-const PROGRESS_EVERY: Duration = Duration::from_millis(100);
-
-/// Runs `lamina ARGV…` in-process with the GIL released. Returns (within, stdout, notes):
-/// within is False where the binary exits 1 (a tolerance not met). Raises LaminaError with the
-/// binary's message where it exits 2. `progress(stage, message, done, total)` is called about
-/// ten times a second while a progress bar runs (total None for a spinner).
-#[pyfunction]
-#[pyo3(signature = (argv, progress=None))]
-fn run(
-    py: Python<'_>,
-    argv: Vec<String>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<(bool, String, Vec<String>)> {
-    let parsed = match cli::Cli::try_parse_from(std::iter::once("lamina".to_string()).chain(argv)) {
-        Ok(parsed) => parsed,
-        // `--help` and `--version` are what the command prints, not errors.
-        Err(e) if !e.use_stderr() => return Ok((true, e.render().to_string(), Vec::new())),
-        Err(e) => return Err(clap_error(&e)),
-    };
-    let (within, captured) = in_process(py, progress.as_ref(), || cli::dispatch(parsed.command))?;
-    Ok((within, captured.out, captured.notes))
-}
-
-/// Runs `work` with the GIL released and its printing captured, the progress watcher beside
-/// it; its error becomes LaminaError with the binary's message.
-fn in_process<T: Send>(
-    py: Python<'_>,
-    progress: Option<&Py<PyAny>>,
-    work: impl FnOnce() -> anyhow::Result<T> + Send,
-) -> PyResult<(T, cli::say::Captured)> {
-    let mut callback_error: Option<PyErr> = None;
-    let (result, captured) = py.detach(|| {
-        std::thread::scope(|scope| {
-            // Dropping `done` (when the command returns) wakes the watcher at once.
-            let (done, finished) = mpsc::channel::<()>();
-            let worker = std::thread::current().id();
-            if let Some(callback) = progress {
-                let callback_error = &mut callback_error;
-                scope.spawn(move || watch(callback, worker, finished, callback_error));
-            }
-            cli::progress::reset();
-            let out = cli::say::capture(work);
-            cli::progress::reset();
-            drop(done);
-            out
-        })
-    });
-    if let Some(e) = callback_error {
-        return Err(e);
-    }
-    match result {
-        Ok(value) => Ok((value, captured)),
-        Err(e) => Err(LaminaError::new_err(cli::error_message(&e))),
-    }
-}
-
-/// `lamina planarize ARGV…` on a network in memory (a `NetworkBytes` tuple;
-/// ARGV's input names it in the report, and no file is read or written but a `--surface`).
-/// Returns (within, axes file text, report text, summary text, axes N×3 and heights N as
-/// float64 bytes, notes).
-#[pyfunction]
-#[pyo3(signature = (argv, network, progress=None))]
-fn planarize<'py>(
-    py: Python<'py>,
-    argv: Vec<String>,
-    network: NetworkBytes<'py>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<PlanarizeResult<'py>> {
-    let cli::Command::Planarize(args) = parse("planarize", argv)? else {
-        unreachable!("parsed as planarize");
-    };
-    no_reader_flags(&args.weld)?;
-    let net = network.build(&args.input)?;
-    let (solved, captured) =
-        in_process(py, progress.as_ref(), || cli::planarize::solve(&args, &net))?;
-    let mut axes_text = Vec::new();
-    lamina::rationalize::axes::write_axes_to(&mut axes_text, &solved.axes, &solved.summary)
-        .map_err(|e| LaminaError::new_err(e.to_string()))?;
-    Ok((
-        solved.solution.converged,
-        String::from_utf8(axes_text).expect("JSON is UTF-8"),
-        solved.report.json(),
-        solved.summary.to_string(),
-        f64_bytes(py, solved.axes.axes.iter().flat_map(|a| a.to_array())),
-        f64_bytes(py, solved.axes.heights.iter().copied()),
-        captured.notes,
-    ))
-}
-
-/// `lamina COMMAND ARGV…` parsed as the binary parses it (clap's message on a bad flag).
-fn parse(command: &str, argv: Vec<String>) -> PyResult<cli::Command> {
-    let parsed = cli::Cli::try_parse_from(
-        ["lamina", command]
-            .map(String::from)
-            .into_iter()
-            .chain(argv),
-    )
-    .map_err(|e| clap_error(&e))?;
-    Ok(parsed.command)
-}
-
-/// clap's message for bad arguments, as the binary prints it (without colours).
-fn clap_error(e: &clap::Error) -> PyErr {
-    LaminaError::new_err(e.render().to_string().trim_end().to_string())
-}
-
-/// A network from memory is taken as it is: the reader flags have no file to act on.
-fn no_reader_flags(flags: &cli::input::ReadArgs) -> PyResult<()> {
-    if flags.given() {
-        return Err(LaminaError::new_err(
-            "the reader flags (--weld, --units, --chord-tolerance, …) apply to files; a network \
-             from memory is taken as it is",
-        ));
-    }
-    Ok(())
-}
-
-/// `lamina solid ARGV…` on a network in memory (as `planarize`): no file is read or written.
-/// Returns (report text as `--report` writes it, vertices V×3 float64 and faces F×3 uint32
-/// bytes, notes).
-#[pyfunction]
-#[pyo3(signature = (argv, network, progress=None))]
-fn solid<'py>(
-    py: Python<'py>,
-    argv: Vec<String>,
-    network: NetworkBytes<'py>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<SolidResult<'py>> {
-    let cli::Command::Solid(args) = parse("solid", argv)? else {
-        unreachable!("parsed as solid");
-    };
-    no_reader_flags(&args.weld)?;
-    let net = network.build(&args.network)?;
-    let (made, captured) = in_process(py, progress.as_ref(), || {
-        let made = cli::solid::solve(&args, &net)?;
-        let text = cli::venation::json_text(&made.value)?;
-        Ok((made.mesh, text))
-    })?;
-    let (mesh, text) = made;
-    Ok((
-        text,
-        f64_bytes(py, mesh.positions.iter().flat_map(|p| p.to_array())),
-        u32_bytes(py, mesh.triangles.iter().flatten().copied()),
-        captured.notes,
-    ))
-}
-
-/// `lamina slice ARGV…` on meshes in memory: each model a (name, vertices V×3 float64 bytes,
-/// faces F×3 uint32 bytes), the names standing for ARGV's model files (checked as a mesh file
-/// is). The archive is written where ARGV's `-o` says. Returns (print.json's text, notes).
-#[pyfunction]
-#[pyo3(signature = (argv, models, progress=None))]
-fn slice(
-    py: Python<'_>,
-    argv: Vec<String>,
-    models: Vec<(String, Bound<'_, PyBytes>, Bound<'_, PyBytes>)>,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<(String, Vec<String>)> {
-    let names: Vec<String> = models.iter().map(|(name, ..)| name.clone()).collect();
-    let cli::Command::Slice(args) = parse("slice", names.iter().cloned().chain(argv).collect())?
-    else {
-        unreachable!("parsed as slice");
-    };
-    let meshes = models
-        .iter()
-        .map(|(name, v, f)| {
-            let path = PathBuf::from(name);
-            mesh_from(&path, v.as_bytes(), f.as_bytes()).map(|mesh| (path, mesh))
-        })
-        .collect::<PyResult<Vec<_>>>()?;
-    let (text, captured) = in_process(py, progress.as_ref(), || {
-        let (report, ..) = cli::slice::slice_models(&args, meshes)?;
-        cli::venation::json_text(&report)
-    })?;
-    Ok((text, captured.notes))
-}
-
-/// A triangle mesh from little-endian bytes, checked as the mesh readers check a file (`source`
-/// names it): triangles there, corners among the vertices, finite coordinates.
-fn mesh_from(source: &Path, vertices: &[u8], faces: &[u8]) -> PyResult<TriMesh> {
-    let positions = points(&f64s(vertices, "vertices")?);
-    let corners = u32s(faces, "faces")?;
-    let bad = |e: ReadError| LaminaError::new_err(e.to_string());
-    if corners.len() < 3 {
-        return Err(bad(ReadError::file(
-            source,
-            "no triangles: nothing to read",
-        )));
-    }
-    if let Some(k) = corners.iter().position(|&i| i as usize >= positions.len()) {
-        return Err(bad(ReadError::record(
-            source,
-            format!("triangle {}", k / 3),
-            format!(
-                "corner {} is not one of the {} vertices",
-                corners[k],
-                positions.len()
-            ),
-        )));
-    }
-    if let Some(v) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(bad(ReadError::record(
-            source,
-            format!("vertex {v}"),
-            "coordinate is not finite",
-        )));
-    }
-    Ok(TriMesh {
-        positions,
-        triangles: corners
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect(),
-        colors: None,
+/// `lamina.LaminaError(message)`: the package's own class (importable and picklable from
+/// `lamina`), made here with the stage's message.
+pub fn error(message: String) -> PyErr {
+    Python::attach(|py| {
+        match py
+            .import("lamina._errors")
+            .and_then(|m| m.getattr("LaminaError"))
+            .and_then(|c| c.call1((message.clone(),)))
+        {
+            Ok(e) => PyErr::from_value(e),
+            Err(e) => e,
+        }
     })
 }
 
-/// What `solid` hands back to Python.
-type SolidResult<'py> = (
-    String,
-    Bound<'py, PyBytes>,
-    Bound<'py, PyBytes>,
-    Vec<String>,
-);
-
-/// What `planarize` hands back to Python.
-type PlanarizeResult<'py> = (
-    bool,
-    String,
-    String,
-    String,
-    Bound<'py, PyBytes>,
-    Bound<'py, PyBytes>,
-    Vec<String>,
-);
-
-/// Calls the progress callback with the worker thread's bar until the command is done; a callback that
-/// raises is not called again and its exception is raised when the command returns.
-fn watch(
-    callback: &Py<PyAny>,
-    worker: std::thread::ThreadId,
-    finished: mpsc::Receiver<()>,
-    error: &mut Option<PyErr>,
-) {
-    while let Err(mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(PROGRESS_EVERY) {
-        let Some(p) = cli::progress::active(worker) else {
-            continue;
-        };
-        let called = Python::attach(|py| {
-            callback
-                .call1(py, (p.stage, p.message, p.done, p.total))
-                .map(drop)
-        });
-        if let Err(e) = called {
-            *error = Some(e);
-            return;
+/// `lamina.Cancelled(message)`.
+pub fn cancelled(message: &str) -> PyErr {
+    Python::attach(|py| {
+        match py
+            .import("lamina._errors")
+            .and_then(|m| m.getattr("Cancelled"))
+            .and_then(|c| c.call1((message,)))
+        {
+            Ok(e) => PyErr::from_value(e),
+            Err(e) => e,
         }
-    }
+    })
 }
 
 fn f64s(bytes: &[u8], what: &str) -> PyResult<Vec<f64>> {
     if !bytes.len().is_multiple_of(8) {
-        return Err(LaminaError::new_err(format!(
+        return Err(error(format!(
             "{what}: {} bytes is not a whole number of float64 values",
             bytes.len()
         )));
@@ -310,7 +67,7 @@ fn f64s(bytes: &[u8], what: &str) -> PyResult<Vec<f64>> {
 
 fn u32s(bytes: &[u8], what: &str) -> PyResult<Vec<u32>> {
     if !bytes.len().is_multiple_of(4) {
-        return Err(LaminaError::new_err(format!(
+        return Err(error(format!(
             "{what}: {} bytes is not a whole number of uint32 values",
             bytes.len()
         )));
@@ -327,19 +84,32 @@ fn points(v: &[f64]) -> Vec<DVec3> {
         .collect()
 }
 
-fn f64_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = f64>) -> Bound<'py, PyBytes> {
-    let bytes: Vec<u8> = values.flat_map(f64::to_le_bytes).collect();
-    PyBytes::new(py, &bytes)
+/// Coordinates beyond this are refused: 1000 km is no model, and far beyond it products of
+/// coordinates overflow.
+pub const MAX_COORD: f64 = 1e9;
+
+/// The index and value of the first coordinate that is not finite or beyond `MAX_COORD`.
+fn first_bad(p: &[DVec3]) -> Option<(usize, String)> {
+    p.iter().enumerate().find_map(|(i, q)| {
+        if !q.is_finite() {
+            Some((i, "is not finite (NaN or infinite)".to_string()))
+        } else if q.abs().max_element() > MAX_COORD {
+            Some((
+                i,
+                format!(
+                    "{} is beyond ±{MAX_COORD:e} mm (is the model in another unit? give units=)",
+                    lamina::text::num(q.abs().max_element())
+                ),
+            ))
+        } else {
+            None
+        }
+    })
 }
 
-fn u32_bytes<'py>(py: Python<'py>, values: impl Iterator<Item = u32>) -> Bound<'py, PyBytes> {
-    let bytes: Vec<u8> = values.flat_map(u32::to_le_bytes).collect();
-    PyBytes::new(py, &bytes)
-}
-
-/// A network as Python hands it over: a tuple of little-endian bytes (positions N×3 float64,
-/// edges E×2 uint32, node radii N and edge radii E float64, normals N×3 float64 or empty for
-/// none) and its meta as JSON text (empty for none).
+/// A network as Python hands it over: positions N×3 float64, edges E×2 uint32, node radii N
+/// and edge radii E float64, normals N×3 float64 or empty for none (all little-endian bytes),
+/// and its meta as a dict (or None).
 #[derive(FromPyObject)]
 struct NetworkBytes<'py>(
     Bound<'py, PyBytes>,
@@ -347,19 +117,30 @@ struct NetworkBytes<'py>(
     Bound<'py, PyBytes>,
     Bound<'py, PyBytes>,
     Bound<'py, PyBytes>,
-    String,
+    Bound<'py, PyAny>,
 );
 
 impl NetworkBytes<'_> {
-    /// The network, checked as the JSON reader checks a file (`source` names it in errors):
-    /// finite positions and normals, edges between existing nodes.
-    fn build(&self, source: &Path) -> PyResult<Network> {
+    /// The network, checked as strictly as the readers check a file, each problem naming the
+    /// argument and index: no nodes or no edges, coordinates not finite or huge, edges out of
+    /// range, repeated or of no length, radii not finite or negative.
+    fn build(&self) -> PyResult<Network> {
         let NetworkBytes(positions, edges, node_radius, edge_radius, normals, meta) = self;
         let p = points(&f64s(positions.as_bytes(), "positions")?);
         let e = u32s(edges.as_bytes(), "edges")?;
         let nr = f64s(node_radius.as_bytes(), "node_radius")?;
         let er = f64s(edge_radius.as_bytes(), "edge_radius")?;
         let n = points(&f64s(normals.as_bytes(), "normals")?);
+        if p.is_empty() {
+            return Err(error(
+                "positions: the network has no nodes: nothing to work on".into(),
+            ));
+        }
+        if e.is_empty() {
+            return Err(error(
+                "edges: the network has no edges: nothing to work on".into(),
+            ));
+        }
         let counts = [
             ("node_radius", nr.len(), p.len()),
             ("edge_radius", er.len(), e.len() / 2),
@@ -370,82 +151,81 @@ impl NetworkBytes<'_> {
             ),
         ];
         if let Some((what, got, want)) = counts.into_iter().find(|(_, got, want)| got != want) {
-            return Err(LaminaError::new_err(format!(
+            return Err(error(format!(
                 "{what}: {got} rows for {want} (one per node or edge)"
             )));
         }
-        let bad = |record: String, message: String| {
-            LaminaError::new_err(ReadError::record(source, record, message).to_string())
-        };
-        let mut nodes = Vec::with_capacity(p.len());
-        for (i, &p) in p.iter().enumerate() {
-            if !p.is_finite() {
-                return Err(bad(format!("node {i}"), "position is not finite".into()));
-            }
-            let normal = n.get(i).copied();
-            if normal.is_some_and(|v| !v.is_finite()) {
-                return Err(bad(format!("node {i}"), "normal is not finite".into()));
-            }
-            nodes.push(Node {
-                p,
-                normal,
-                radius: nr[i],
-            });
+        if let Some((i, why)) = first_bad(&p) {
+            return Err(error(format!("positions[{i}]: {why}")));
         }
-        let mut out = Vec::with_capacity(er.len());
-        for (k, (ab, &radius)) in e.chunks_exact(2).zip(&er).enumerate() {
-            if ab[0] as usize >= nodes.len() || ab[1] as usize >= nodes.len() {
-                return Err(bad(
-                    format!("edge {k}"),
-                    format!(
-                        "joins nodes {} and {}, but the file has {} nodes (numbered from 0)",
-                        ab[0],
-                        ab[1],
-                        nodes.len()
-                    ),
-                ));
-            }
-            out.push(Edge {
-                a: ab[0],
-                b: ab[1],
-                radius,
-            });
-        }
-        Ok(Network {
-            nodes,
-            edges: out,
+        let net = Network {
+            nodes: p
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| Node {
+                    p,
+                    // A row of NaN is "no normal" (as `read_network` gives nodes without one).
+                    normal: n
+                        .get(i)
+                        .copied()
+                        .filter(|v| !v.to_array().iter().all(|c| c.is_nan())),
+                    radius: nr[i],
+                })
+                .collect(),
+            edges: e
+                .chunks_exact(2)
+                .zip(&er)
+                .map(|(ab, &radius)| Edge {
+                    a: ab[0],
+                    b: ab[1],
+                    radius,
+                })
+                .collect(),
             meta: meta_of(meta)?,
-        })
+        };
+        use lamina::network::Problem;
+        if let Some(problem) = net.validate().problems.first() {
+            let (arg, k) = match *problem {
+                Problem::NonFinitePosition { node } => ("positions", node),
+                Problem::NonFiniteNormal { node } => ("normals", node),
+                Problem::BadNodeRadius { node, .. } => ("node_radius", node),
+                Problem::BadEdgeRadius { edge, .. } => ("edge_radius", edge),
+                Problem::EdgeOutOfRange { edge, .. }
+                | Problem::SelfLoop { edge, .. }
+                | Problem::RepeatedEdge { edge, .. }
+                | Problem::ZeroLength { edge, .. } => ("edges", edge),
+            };
+            return Err(error(format!("{arg}[{k}]: {problem}")));
+        }
+        Ok(net)
     }
 }
 
-/// A network's meta from the JSON text of the Python dict's `meta` (empty: the defaults).
-fn meta_of(text: &str) -> PyResult<Meta> {
+/// A network's meta from the dict (None: the defaults).
+fn meta_of(value: &Bound<'_, PyAny>) -> PyResult<Meta> {
     let mut meta = Meta::default();
-    if text.is_empty() {
+    if value.is_none() {
         return Ok(meta);
     }
-    let bad = |what: &str| LaminaError::new_err(format!("meta: {what}"));
-    let value: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| bad(&format!("not JSON ({e})")))?;
-    let Some(map) = value.as_object() else {
+    let bad = |what: &str| error(format!("meta: {what}"));
+    let serde_json::Value::Object(map) = from_py(value, "meta")? else {
         return Err(bad("expected a dict"));
     };
     for (key, v) in map {
         match (key.as_str(), v) {
             (_, serde_json::Value::Null) => {}
-            ("units", serde_json::Value::String(u)) => meta.units = u.clone(),
-            ("generator", serde_json::Value::String(g)) => meta.generator = Some(g.clone()),
+            ("units", serde_json::Value::String(u)) => meta.units = u,
+            ("generator", serde_json::Value::String(g)) => meta.generator = Some(g),
             ("seed", v) if v.as_u64().is_some() => meta.seed = v.as_u64(),
             ("parameters", serde_json::Value::Object(p)) => {
-                meta.parameters = p.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+                meta.parameters = p.into_iter().collect()
             }
             ("tags", serde_json::Value::Object(t)) => {
                 for (k, v) in t {
                     let serde_json::Value::String(v) = v else {
                         return Err(bad(&format!("tag {k:?} is not a string")));
                     };
-                    meta.tags.insert(k.clone(), v.clone());
+                    meta.tags.insert(k, v);
                 }
             }
             (key, _) => {
@@ -459,50 +239,29 @@ fn meta_of(text: &str) -> PyResult<Meta> {
     Ok(meta)
 }
 
-/// Writes a network (the tuple `NetworkBytes` describes) as lamina JSON (exact: shortest
-/// round-trip numbers), OBJ, DXF or SVG by extension.
-#[pyfunction]
-fn write_network(path: &str, network: NetworkBytes<'_>) -> PyResult<()> {
-    let path = Path::new(path);
-    let net = network.build(path)?;
-    lamina::network::io::write_network(&net, path, &RenderOptions::default())
-        .map_err(|e| LaminaError::new_err(e.to_string()))
-}
-
-/// Reads a network file (.json .obj .dxf) into a dict of little-endian arrays: positions,
-/// edges, node_radius, edge_radius, normals (None when no node has one), meta (JSON text).
-#[pyfunction]
-fn read_network<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, PyDict>> {
-    let net = read_network_file(Path::new(path), &ReadOptions::default())
-        .map_err(|e| LaminaError::new_err(e.to_string()))?
-        .network;
+/// A network as a dict of numpy arrays and its meta.
+fn network_dict<'py>(py: Python<'py>, net: &Network) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item(
-        "positions",
-        f64_bytes(py, net.nodes.iter().flat_map(|n| n.p.to_array())),
-    )?;
-    d.set_item(
-        "edges",
-        u32_bytes(py, net.edges.iter().flat_map(|e| [e.a, e.b])),
-    )?;
-    d.set_item(
-        "node_radius",
-        f64_bytes(py, net.nodes.iter().map(|n| n.radius)),
-    )?;
-    d.set_item(
-        "edge_radius",
-        f64_bytes(py, net.edges.iter().map(|e| e.radius)),
-    )?;
+    let n = net.nodes.len();
+    let p: Vec<f64> = net.nodes.iter().flat_map(|n| n.p.to_array()).collect();
+    d.set_item("positions", f64_array(py, &p, &[n, 3])?)?;
+    let e: Vec<i64> = net
+        .edges
+        .iter()
+        .flat_map(|e| [i64::from(e.a), i64::from(e.b)])
+        .collect();
+    d.set_item("edges", i64_array(py, &e, &[net.edges.len(), 2])?)?;
+    let nr: Vec<f64> = net.nodes.iter().map(|n| n.radius).collect();
+    d.set_item("node_radius", f64_array(py, &nr, &[n])?)?;
+    let er: Vec<f64> = net.edges.iter().map(|e| e.radius).collect();
+    d.set_item("edge_radius", f64_array(py, &er, &[net.edges.len()])?)?;
     if net.nodes.iter().any(|n| n.normal.is_some()) {
-        d.set_item(
-            "normals",
-            f64_bytes(
-                py,
-                net.nodes
-                    .iter()
-                    .flat_map(|n| n.normal.unwrap_or(DVec3::NAN).to_array()),
-            ),
-        )?;
+        let v: Vec<f64> = net
+            .nodes
+            .iter()
+            .flat_map(|n| n.normal.unwrap_or(DVec3::NAN).to_array())
+            .collect();
+        d.set_item("normals", f64_array(py, &v, &[n, 3])?)?;
     } else {
         d.set_item("normals", py.None())?;
     }
@@ -514,53 +273,970 @@ fn read_network<'py>(py: Python<'py>, path: &str) -> PyResult<Bound<'py, PyDict>
         "seed": m.seed,
         "tags": m.tags,
     });
-    d.set_item("meta", meta.to_string())?;
+    d.set_item("meta", to_py(py, &meta, &[])?)?;
     Ok(d)
 }
 
-/// Writes a triangle mesh (.obj .stl by extension): vertices V×3 float64, faces F×3 uint32,
-/// colours V×3 float32 in 0..=1 or empty, all little-endian bytes.
-#[pyfunction]
-fn write_mesh(path: &str, vertices: &[u8], faces: &[u8], colors: &[u8]) -> PyResult<()> {
-    let positions = points(&f64s(vertices, "vertices")?);
-    let triangles = u32s(faces, "faces")?
-        .chunks_exact(3)
-        .map(|t| [t[0], t[1], t[2]])
-        .collect();
-    let colors = (!colors.is_empty()).then(|| {
-        f64s(colors, "colors").map(|c| {
+/// A triangle mesh from bytes (vertices V×3 float64, faces F×3 uint32, colours V×3 float64 or
+/// empty), checked as the mesh readers check a file; `what` names the argument.
+fn mesh_from(what: &str, vertices: &[u8], faces: &[u8], colors: &[u8]) -> PyResult<TriMesh> {
+    let positions = points(&f64s(vertices, &format!("{what}: vertices"))?);
+    let corners = u32s(faces, &format!("{what}: faces"))?;
+    if corners.len() < 3 {
+        return Err(error(format!(
+            "{what}: faces: no triangles: nothing to work on"
+        )));
+    }
+    if let Some(k) = corners.iter().position(|&i| i as usize >= positions.len()) {
+        return Err(error(format!(
+            "{what}: faces[{}]: corner {} is not one of the {} vertices",
+            k / 3,
+            corners[k],
+            positions.len()
+        )));
+    }
+    if let Some((i, why)) = first_bad(&positions) {
+        return Err(error(format!("{what}: vertices[{i}]: {why}")));
+    }
+    let colors = if colors.is_empty() {
+        None
+    } else {
+        let c = f64s(colors, &format!("{what}: colors"))?;
+        if c.len() != positions.len() * 3 {
+            return Err(error(format!(
+                "{what}: colors: {} rows for {} vertices",
+                c.len() / 3,
+                positions.len()
+            )));
+        }
+        Some(
             c.chunks_exact(3)
                 .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
-                .collect()
-        })
-    });
-    let mesh = TriMesh {
-        positions,
-        triangles,
-        colors: colors.transpose()?,
+                .collect(),
+        )
     };
-    write_mesh_file(&mesh, Path::new(path), 0).map_err(|e| LaminaError::new_err(e.to_string()))
+    Ok(TriMesh {
+        positions,
+        triangles: corners
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+        colors,
+    })
 }
 
-/// Vertices, faces and colours (or None) as little-endian bytes.
+/// A mesh as Python hands it over: vertices, faces, colours (bytes; colours may be empty).
 type MeshBytes<'py> = (
     Bound<'py, PyBytes>,
     Bound<'py, PyBytes>,
-    Option<Bound<'py, PyBytes>>,
+    Bound<'py, PyBytes>,
 );
 
-/// Reads a triangle mesh (.obj .stl): (vertices, faces, colours or None) as little-endian
-/// float64, uint32 and float64 bytes.
+fn mesh_of(what: &str, m: &MeshBytes<'_>) -> PyResult<TriMesh> {
+    mesh_from(what, m.0.as_bytes(), m.1.as_bytes(), m.2.as_bytes())
+}
+
+/// A mesh as a dict: vertices V×3, faces F×3 (int64), colors V×3 or None.
+fn mesh_dict<'py>(py: Python<'py>, mesh: &TriMesh) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let v: Vec<f64> = mesh.positions.iter().flat_map(|p| p.to_array()).collect();
+    d.set_item("vertices", f64_array(py, &v, &[mesh.positions.len(), 3])?)?;
+    let f: Vec<i64> = mesh
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&i| i64::from(i))
+        .collect();
+    d.set_item("faces", i64_array(py, &f, &[mesh.triangles.len(), 3])?)?;
+    match &mesh.colors {
+        Some(c) => {
+            let c: Vec<f64> = c.iter().flatten().map(|&x| f64::from(x)).collect();
+            d.set_item("colors", f64_array(py, &c, &[mesh.positions.len(), 3])?)?;
+        }
+        None => d.set_item("colors", py.None())?,
+    }
+    Ok(d)
+}
+
+/// Notes (defaults taken, things left out) for the Python side to warn with.
+fn notes<'py>(py: Python<'py>, notes: &[String]) -> PyResult<Bound<'py, PyList>> {
+    PyList::new(py, notes)
+}
+
+// Growing.
+
+/// Leaf venation in a blade: `outline` (N×3 float64 bytes, z ignored) or a built-in `shape`.
 #[pyfunction]
-fn read_mesh<'py>(py: Python<'py>, path: &str) -> PyResult<MeshBytes<'py>> {
-    let mesh = read_mesh_file(Path::new(path)).map_err(|e| LaminaError::new_err(e.to_string()))?;
-    Ok((
-        f64_bytes(py, mesh.positions.iter().flat_map(|p| p.to_array())),
-        u32_bytes(py, mesh.triangles.iter().flatten().copied()),
-        mesh.colors
-            .as_ref()
-            .map(|c| f64_bytes(py, c.iter().flatten().map(|&v| f64::from(v)))),
+#[pyo3(signature = (shape, outline, options, progress=None))]
+fn venation<'py>(
+    py: Python<'py>,
+    shape: &str,
+    outline: Option<Bound<'py, PyBytes>>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use lamina::grow::outline::{Outline, Shape};
+    let blade = match outline {
+        Some(b) => {
+            let p = points(&f64s(b.as_bytes(), "outline")?);
+            if let Some((i, why)) = first_bad(&p) {
+                return Err(error(format!("outline[{i}]: {why}")));
+            }
+            Outline::new(p.iter().map(|q| DVec2::new(q.x, q.y)).collect())
+                .map_err(|e| error(format!("outline: {e}")))?
+        }
+        None => Outline::shape(match shape {
+            "ovate" => Shape::Ovate,
+            "lanceolate" => Shape::Lanceolate,
+            "cordate" => Shape::Cordate,
+            "circle" => Shape::Circle,
+            "rect" => Shape::Rect,
+            s => {
+                return Err(error(format!(
+                    "shape= {s:?}: give ovate, lanceolate, cordate, circle or rect"
+                )))
+            }
+        }),
+    };
+    let mut o = Opts::new(&options, "venation");
+    let opts = options::venation(&mut o)?;
+    o.finish()?;
+    let grown = run::run(py, progress.as_ref(), |h| {
+        stage::venation::run(&blade, &opts, None, h)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("network", network_dict(py, &grown.leaf.network)?)?;
+    d.set_item("report", report(py, &grown.report, &[])?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// A root on a surface: a vertex index, `"tK"` for a triangle, or an (x, y, z) point.
+fn surface_root(v: &Bound<'_, PyAny>) -> PyResult<stage::venation::Root> {
+    use stage::venation::Root;
+    if let Ok(i) = v.extract::<u32>() {
+        return Ok(Root::Vertex(i));
+    }
+    if let Ok(s) = v.extract::<String>() {
+        if let Some(t) = s.strip_prefix('t').and_then(|t| t.parse().ok()) {
+            return Ok(Root::Triangle(t));
+        }
+        return Err(error(format!(
+            "root= {s:?}: give a vertex index, \"tK\" for a triangle, or (x, y, z)"
+        )));
+    }
+    if let Ok([x, y, z]) = v.extract::<[f64; 3]>() {
+        return Ok(Root::Point(DVec3::new(x, y, z)));
+    }
+    Err(error(
+        "root=: give a vertex index, \"tK\" for a triangle, or (x, y, z)".into(),
     ))
+}
+
+/// Leaf venation on a triangle mesh.
+#[pyfunction]
+#[pyo3(signature = (mesh, roots, options, progress=None))]
+fn venation_on_surface<'py>(
+    py: Python<'py>,
+    mesh: MeshBytes<'py>,
+    roots: Vec<Bound<'py, PyAny>>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut surface = mesh_of("surface", &mesh)?;
+    let dropped = surface.drop_degenerate();
+    if surface.triangles.is_empty() {
+        return Err(error(format!(
+            "surface: has no triangles with an area ({dropped} degenerate)"
+        )));
+    }
+    let roots = roots
+        .iter()
+        .map(surface_root)
+        .collect::<PyResult<Vec<_>>>()?;
+    let mut o = Opts::new(&options, "venation_on_surface");
+    let opts = options::venation(&mut o)?;
+    o.finish()?;
+    let grown = run::run(py, progress.as_ref(), |h| {
+        stage::venation::on_surface(&surface, &roots, &opts, None, h)
+    })?;
+    let mut said = grown.notes.clone();
+    if dropped > 0 {
+        said.insert(
+            0,
+            format!(
+                "surface: {dropped} degenerate triangles (a vertex used twice or no area) left out"
+            ),
+        );
+    }
+    let d = PyDict::new(py);
+    d.set_item("network", network_dict(py, &grown.veins.network)?)?;
+    d.set_item("report", report(py, &grown.report, &[])?)?;
+    d.set_item("notes", notes(py, &said)?)?;
+    Ok(d)
+}
+
+/// Geodesic veins along mesh edges.
+#[pyfunction]
+#[pyo3(signature = (mesh, options, progress=None))]
+fn veins<'py>(
+    py: Python<'py>,
+    mesh: MeshBytes<'py>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut surface = mesh_of("surface", &mesh)?;
+    surface.drop_degenerate();
+    let mut o = Opts::new(&options, "veins");
+    let opts = options::veins(&mut o)?;
+    o.finish()?;
+    let grown = run::run(py, progress.as_ref(), |h| {
+        stage::veins::run(&surface, &opts, h)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("network", network_dict(py, &grown.network)?)?;
+    d.set_item("report", report(py, &grown.report, &[])?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// A bracketed L-system (a grammar file's text and name optional), drawn or only counted.
+#[pyfunction]
+#[pyo3(signature = (grammar, options, derive_only, progress=None))]
+fn lsystem<'py>(
+    py: Python<'py>,
+    grammar: Option<(String, String)>,
+    options: Bound<'py, PyDict>,
+    derive_only: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut o = Opts::new(&options, "lsystem");
+    let mut opts = options::lsystem(&mut o)?;
+    opts.shape = options::shape(&mut o)?;
+    o.finish()?;
+    if let Some((text, name)) = grammar {
+        let parsed = if name.ends_with(".json") {
+            lamina::grow::lsystem::parse_json(&text, &name)
+        } else {
+            lamina::grow::lsystem::parse_text(&text, &name)
+        };
+        opts.grammar = Some(parsed.map_err(|e| error(e.to_string()))?);
+        opts.grammar_name = name;
+    }
+    let d = PyDict::new(py);
+    if derive_only {
+        let counts = run::run(py, progress.as_ref(), |h| stage::lsystem::count(&opts, h))?;
+        let r = serde_json::json!({
+            "symbols": counts.symbols,
+            "segments": counts.segments,
+            "simplified_segments": counts.simplified_segments,
+        });
+        d.set_item("report", to_py(py, &r, &[])?)?;
+    } else {
+        let drawn = run::run(py, progress.as_ref(), |h| stage::lsystem::run(&opts, h))?;
+        d.set_item("network", network_dict(py, &drawn.network)?)?;
+        d.set_item("report", report(py, &drawn.report, &[])?)?;
+    }
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// A tree by recursive bifurcation.
+#[pyfunction]
+fn bifurcate<'py>(py: Python<'py>, options: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    let mut o = Opts::new(&options, "bifurcate");
+    let mut opts = options::bifurcate(&mut o)?;
+    opts.shape = options::shape(&mut o)?;
+    o.finish()?;
+    let drawn = run::run(py, None, |_| stage::bifurcate::run(&opts))?;
+    let d = PyDict::new(py);
+    d.set_item("network", network_dict(py, &drawn.network)?)?;
+    d.set_item("report", report(py, &drawn.report, &[])?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// A bud program (its text and name) grown into a form.
+#[pyfunction]
+#[pyo3(signature = (program, name, options, progress=None))]
+fn buds<'py>(
+    py: Python<'py>,
+    program: &str,
+    name: &str,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let program =
+        lamina::grow::buds::parse_program(program, name).map_err(|e| error(e.to_string()))?;
+    let mut o = Opts::new(&options, "buds");
+    let mut opts = options::buds(&mut o)?;
+    opts.program_name = name.to_string();
+    o.finish()?;
+    let grown = run::run(py, progress.as_ref(), |h| {
+        stage::buds::run(&program, &opts, None, h)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("mesh", mesh_dict(py, &grown.mesh)?)?;
+    d.set_item("report", report(py, &grown.report, &[])?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+// Rationalizing.
+
+/// The closed cells of a network, triangulated.
+#[pyfunction]
+#[pyo3(signature = (network, surface, options))]
+fn cells<'py>(
+    py: Python<'py>,
+    network: NetworkBytes<'py>,
+    surface: Option<MeshBytes<'py>>,
+    options: Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let net = network.build()?;
+    let surface = surface.map(|m| mesh_of("surface", &m)).transpose()?;
+    let mut o = Opts::new(&options, "cells");
+    let tolerance = o.f64("point_tolerance")?;
+    o.finish()?;
+    let opts = stage::cells::Options {
+        point_tolerance: tolerance,
+        surface_name: "surface".into(),
+    };
+    let found = run::run(py, None, |_| {
+        stage::cells::run(&net, surface.as_ref(), &opts)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("mesh", mesh_dict(py, &found.cells.mesh)?)?;
+    let n: Vec<f64> = found
+        .cells
+        .normals
+        .iter()
+        .flat_map(|v| v.to_array())
+        .collect();
+    d.set_item(
+        "normals",
+        f64_array(py, &n, &[found.cells.normals.len(), 3])?,
+    )?;
+    d.set_item("table", report(py, &found.table, &["cells", "holes"])?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// Fewer, straighter members.
+#[pyfunction]
+#[pyo3(signature = (network, surface, options))]
+fn simplify<'py>(
+    py: Python<'py>,
+    network: NetworkBytes<'py>,
+    surface: Option<MeshBytes<'py>>,
+    options: Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let net = network.build()?;
+    let surface = surface.map(|m| mesh_of("surface", &m)).transpose()?;
+    let mut o = Opts::new(&options, "simplify");
+    let opts = options::simplify(&mut o)?;
+    o.finish()?;
+    let done = run::run(py, None, |_| {
+        stage::simplify::run(&net, surface.as_ref(), &opts)
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("network", network_dict(py, &done.simplified.network)?)?;
+    d.set_item("report", report(py, &done.simplified.report, &[])?)?;
+    d.set_item("notes", notes(py, &done.notes)?)?;
+    Ok(d)
+}
+
+/// The tables of a planarity report held as columns.
+const PLANARITY_TABLES: &[&str] = &["panels", "worst"];
+
+/// Node axes that make every panel planar.
+#[pyfunction]
+#[pyo3(signature = (network, surface, options, progress=None))]
+fn planarize<'py>(
+    py: Python<'py>,
+    network: NetworkBytes<'py>,
+    surface: Option<MeshBytes<'py>>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let net = network.build()?;
+    let surface = surface.map(|m| mesh_of("surface", &m)).transpose()?;
+    let mut o = Opts::new(&options, "planarize");
+    let opts = options::planarize(&mut o)?;
+    o.finish()?;
+    let solved = run::run(py, progress.as_ref(), |h| {
+        stage::planarize::run(&net, surface.as_ref(), &opts, h)
+    })?;
+    let d = axes_dict(py, &solved.axes)?;
+    d.set_item("within", solved.solution.converged)?;
+    d.set_item("summary", report(py, &solved.summary, &[])?)?;
+    d.set_item("report", report(py, &solved.report, PLANARITY_TABLES)?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// Axes as a dict: what `size` and `plates` take back (positions, edges, axes, heights,
+/// reference, fixed_normals with NaN rows for none, edge_radius) and the panels P×4×3.
+fn axes_dict<'py>(py: Python<'py>, a: &Axes) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let n = a.positions.len();
+    let flat = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array()).collect::<Vec<f64>>();
+    d.set_item("positions", f64_array(py, &flat(&a.positions), &[n, 3])?)?;
+    let e: Vec<i64> = a.edges.iter().flatten().map(|&i| i64::from(i)).collect();
+    d.set_item("edges", i64_array(py, &e, &[a.edges.len(), 2])?)?;
+    d.set_item("axes", f64_array(py, &flat(&a.axes), &[n, 3])?)?;
+    d.set_item("heights", f64_array(py, &a.heights, &[n])?)?;
+    d.set_item("reference", f64_array(py, &flat(&a.reference), &[n, 3])?)?;
+    let fixed: Vec<DVec3> = a
+        .fixed_normals
+        .iter()
+        .map(|f| f.unwrap_or(DVec3::NAN))
+        .collect();
+    d.set_item(
+        "fixed_normals",
+        f64_array(py, &flat(&fixed), &[a.edges.len(), 3])?,
+    )?;
+    d.set_item(
+        "edge_radius",
+        f64_array(py, &a.edge_radii, &[a.edges.len()])?,
+    )?;
+    let quads: Vec<f64> = a
+        .quads()
+        .iter()
+        .flat_map(|q| q.iter().flat_map(|p| p.to_array()))
+        .collect();
+    d.set_item("panels", f64_array(py, &quads, &[a.edges.len(), 4, 3])?)?;
+    Ok(d)
+}
+
+/// Axes from the dict `planarize` returns (or one built the same way).
+#[derive(FromPyObject)]
+struct AxesBytes<'py>(
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+);
+
+impl AxesBytes<'_> {
+    fn build(&self) -> PyResult<Axes> {
+        let AxesBytes(p, e, a, h, r, f, er) = self;
+        let positions = points(&f64s(p.as_bytes(), "axes: positions")?);
+        let edges: Vec<[u32; 2]> = u32s(e.as_bytes(), "axes: edges")?
+            .chunks_exact(2)
+            .map(|c| [c[0], c[1]])
+            .collect();
+        let axes = points(&f64s(a.as_bytes(), "axes: axes")?);
+        let heights = f64s(h.as_bytes(), "axes: heights")?;
+        let reference = points(&f64s(r.as_bytes(), "axes: reference")?);
+        let fixed: Vec<Option<DVec3>> = points(&f64s(f.as_bytes(), "axes: fixed_normals")?)
+            .into_iter()
+            .map(|v| v.is_finite().then_some(v))
+            .collect();
+        let edge_radii = f64s(er.as_bytes(), "axes: edge_radius")?;
+        let n = positions.len();
+        for (what, got, want) in [
+            ("axes", axes.len(), n),
+            ("heights", heights.len(), n),
+            ("reference", reference.len(), n),
+            ("fixed_normals", fixed.len(), edges.len()),
+            ("edge_radius", edge_radii.len(), edges.len()),
+        ] {
+            if got != want {
+                return Err(error(format!("axes: {what}: {got} rows for {want}")));
+            }
+        }
+        if n == 0 || edges.is_empty() {
+            return Err(error(
+                "axes: no nodes or no edges: nothing to work on".into(),
+            ));
+        }
+        if let Some((i, why)) = first_bad(&positions) {
+            return Err(error(format!("axes: positions[{i}]: {why}")));
+        }
+        if let Some(k) = edges
+            .iter()
+            .position(|&[a, b]| a as usize >= n || b as usize >= n || a == b)
+        {
+            return Err(error(format!(
+                "axes: edges[{k}]: joins nodes {} and {} of {n}",
+                edges[k][0], edges[k][1]
+            )));
+        }
+        if let Some(i) = axes
+            .iter()
+            .position(|v| !(v.is_finite() && (v.length() - 1.0).abs() < 1e-6))
+        {
+            return Err(error(format!("axes: axes[{i}]: not a unit vector")));
+        }
+        if let Some(i) = heights.iter().position(|h| !(h.is_finite() && *h > 0.0)) {
+            return Err(error(format!("axes: heights[{i}]: not a positive height")));
+        }
+        Ok(Axes {
+            positions,
+            edges,
+            axes,
+            heights,
+            reference,
+            fixed_normals: fixed,
+            edge_radii,
+        })
+    }
+}
+
+/// Names, layers and groups of panels, one each (or None).
+type Labels = (
+    Vec<Option<String>>,
+    Vec<Option<String>>,
+    Vec<Option<String>>,
+);
+
+/// The planarity audit of panels: polygons (corners as float64 bytes, a count per polygon),
+/// with optional names, layers and groups.
+#[pyfunction]
+#[pyo3(signature = (corners, counts, labels, options))]
+fn audit<'py>(
+    py: Python<'py>,
+    corners: Bound<'py, PyBytes>,
+    counts: Vec<usize>,
+    labels: Option<Labels>,
+    options: Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use lamina::rationalize::audit::{Panel, Panels};
+    let p = points(&f64s(corners.as_bytes(), "panels")?);
+    if counts.iter().sum::<usize>() != p.len() {
+        return Err(error(
+            "panels: corner counts do not add up to the corners".into(),
+        ));
+    }
+    if let Some((i, why)) = first_bad(&p) {
+        return Err(error(format!("panels: corner {i}: {why}")));
+    }
+    let mut panels = Vec::with_capacity(counts.len());
+    let mut at = 0;
+    for (k, &c) in counts.iter().enumerate() {
+        let label = |v: &Vec<Option<String>>| v.get(k).cloned().flatten();
+        let (name, layer, group) = match &labels {
+            Some((n, l, g)) => (label(n), label(l), label(g)),
+            None => (None, None, None),
+        };
+        panels.push(Panel {
+            corners: p[at..at + c].to_vec(),
+            name,
+            layer,
+            group,
+            ..Default::default()
+        });
+        at += c;
+    }
+    let mut o = Opts::new(&options, "audit");
+    let opts = options::audit(&mut o)?;
+    o.finish()?;
+    audited(
+        py,
+        Panels {
+            panels,
+            notes: Vec::new(),
+        },
+        &opts,
+    )
+}
+
+/// The planarity audit of a panel file (.obj .dxf .json).
+#[pyfunction]
+fn audit_file<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    options: Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut o = Opts::new(&options, "audit");
+    let mut opts = options::audit(&mut o)?;
+    o.finish()?;
+    opts.name = path.display().to_string();
+    let read = py
+        .detach(|| lamina::rationalize::audit::read_panels(&path))
+        .map_err(|e| error(e.to_string()))?;
+    audited(py, read, &opts)
+}
+
+fn audited<'py>(
+    py: Python<'py>,
+    panels: lamina::rationalize::audit::Panels,
+    opts: &stage::audit::Options,
+) -> PyResult<Bound<'py, PyDict>> {
+    let read_notes = panels.notes.clone();
+    let done = run::run(py, None, |_| stage::audit::run(panels, opts))?;
+    let d = PyDict::new(py);
+    d.set_item("within", done.report.summary.within_tolerance)?;
+    d.set_item("report", report(py, &done.report, PLANARITY_TABLES)?)?;
+    let said: Vec<String> = read_notes.into_iter().chain(done.notes).collect();
+    d.set_item("notes", notes(py, &said)?)?;
+    Ok(d)
+}
+
+// Steel.
+
+/// Frame analysis of the plate network and the gauges it needs.
+#[pyfunction]
+#[pyo3(signature = (axes, options, progress=None))]
+fn size<'py>(
+    py: Python<'py>,
+    axes: AxesBytes<'py>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let axes = axes.build()?;
+    let mut o = Opts::new(&options, "size");
+    let opts = options::size(&mut o)?;
+    o.finish()?;
+    let sized = run::run(py, progress.as_ref(), |h| stage::size::run(&axes, &opts, h))?;
+    let d = PyDict::new(py);
+    d.set_item("within", sized.ok)?;
+    d.set_item("sizing", report(py, &sized.report, &["edges", "nodes"])?)?;
+    let gauges: Vec<f64> = sized.report.edges.iter().map(|e| e.gauge).collect();
+    d.set_item("gauges", f64_array(py, &gauges, &[gauges.len()])?)?;
+    d.set_item(
+        "gauge_list",
+        f64_array(py, &sized.report.gauges, &[sized.report.gauges.len()])?,
+    )?;
+    d.set_item("notes", notes(py, &sized.notes)?)?;
+    Ok(d)
+}
+
+/// Steel plates from node axes; with `out`, the command's files written into that folder.
+#[pyfunction]
+#[pyo3(signature = (axes, sizing, options, out=None))]
+fn plates<'py>(
+    py: Python<'py>,
+    axes: AxesBytes<'py>,
+    sizing: Option<(Bound<'py, PyBytes>, Bound<'py, PyBytes>)>,
+    options: Bound<'py, PyDict>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let axes = axes.build()?;
+    let mut o = Opts::new(&options, "plates");
+    let mut opts = options::plates(&mut o)?;
+    o.finish()?;
+    if let Some((per_edge, list)) = sizing {
+        opts.sizing = Some(stage::plates::Gauges {
+            per_edge: f64s(per_edge.as_bytes(), "sizing: gauges")?,
+            list: f64s(list.as_bytes(), "sizing: gauge_list")?,
+        });
+    }
+    let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;
+    let mut files = Vec::new();
+    if let Some(dir) = &out {
+        files = py
+            .detach(|| write_plates(&made, &axes, dir))
+            .map_err(|e| error(e.to_string()))?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("within", made.ok)?;
+    d.set_item("plates", report(py, &made.file, &[])?)?;
+    d.set_item("welds", report(py, &made.welds, &[])?)?;
+    d.set_item(
+        "assembly",
+        mesh_dict(py, &stage::plates::assembly(&made.set))?,
+    )?;
+    d.set_item("files", PyList::new(py, files)?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// What `lamina plates` writes, into `dir`.
+fn write_plates(
+    made: &stage::plates::Plated,
+    axes: &Axes,
+    dir: &Path,
+) -> Result<Vec<String>, Box<dyn std::error::Error + Send + Sync>> {
+    use lamina::files::write_atomic;
+    use lamina::view::scene::{scene, Input};
+    use std::io::Write as _;
+    std::fs::create_dir_all(dir)?;
+    let text = made.file.text();
+    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
+    write_mesh_file(
+        &stage::plates::assembly(&made.set),
+        &dir.join("assembly.stl"),
+        0,
+    )?;
+    stage::plates::write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
+    stage::plates::write_parts(made, dir)?;
+    let text = made.welds.json();
+    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
+    let inputs = vec![
+        (
+            "plates.json".to_string(),
+            Input::Plates(made.records(), made.core_records()),
+        ),
+        (
+            "welds.json".to_string(),
+            Input::Welds(
+                made.welds.weld_gap,
+                made.welds.weld_gap_tolerance,
+                made.welds.nodes(),
+            ),
+        ),
+        (
+            "axes".to_string(),
+            Input::Axes(Box::new(axes.clone()), None),
+        ),
+    ];
+    let page = scene(&inputs, Some("plates and welds".to_string()))?;
+    let html = stage::plates::welds_html(made, &lamina::view::embed(&page, "70vh"), false);
+    write_atomic(&dir.join("welds.html"), |w| w.write_all(html.as_bytes()))?;
+    let mut files: Vec<String> = ["plates.json", "assembly.stl", "assembly.obj", "welds.json"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    files.extend(
+        made.set
+            .plates
+            .iter()
+            .map(|p| format!("parts/{}.dxf", p.id)),
+    );
+    files.extend(["assembly.scad".to_string(), "welds.html".to_string()]);
+    Ok(files)
+}
+
+/// Plates nested on stock sheets; with `out`, the cut files written into that folder.
+#[pyfunction]
+#[pyo3(signature = (plates, options, out=None, progress=None))]
+fn nest<'py>(
+    py: Python<'py>,
+    plates: Bound<'py, PyAny>,
+    options: Bound<'py, PyDict>,
+    out: Option<PathBuf>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let doc = from_py(&plates, "plates")?;
+    let (records, cores) =
+        lamina::fabricate::plates_file::records_from_value(doc, Path::new("plates"))
+            .map_err(|e| error(e.to_string()))?;
+    let mut o = Opts::new(&options, "nest");
+    let opts = options::nest(&mut o)?;
+    o.finish()?;
+    let cut = run::run(py, progress.as_ref(), |h| {
+        stage::nest::run(records, cores, &opts, h)
+    })?;
+    let bom = stage::nest::bom_csv(&cut);
+    let mut files = Vec::new();
+    if let Some(dir) = &out {
+        files = py
+            .detach(|| write_nest(&cut, &bom, dir))
+            .map_err(|e| error(e.to_string()))?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("nest", report(py, &cut.doc, &["placements"])?)?;
+    d.set_item("bom", bom)?;
+    d.set_item("svg", stage::nest::svg(&cut))?;
+    let outlines = PyDict::new(py);
+    for (p, drawn) in cut.plates.iter().zip(&cut.drawn) {
+        let xy: Vec<f64> = drawn.outline.iter().flat_map(|q| [q.x, q.y]).collect();
+        outlines.set_item(&p.id, f64_array(py, &xy, &[drawn.outline.len(), 2])?)?;
+    }
+    d.set_item("outlines", outlines)?;
+    d.set_item("files", PyList::new(py, files)?)?;
+    d.set_item("notes", notes(py, &[])?)?;
+    Ok(d)
+}
+
+/// What `lamina nest` writes, into `dir`.
+fn write_nest(
+    cut: &stage::nest::Nested,
+    bom: &str,
+    dir: &Path,
+) -> Result<Vec<String>, Box<dyn std::error::Error + Send + Sync>> {
+    use lamina::files::write_atomic;
+    use std::io::Write as _;
+    std::fs::create_dir_all(dir)?;
+    stage::nest::write_sheets(cut, dir)?;
+    let mut files: Vec<String> = cut.sheets.iter().map(|s| s.file.clone()).collect();
+    if cut.joints.is_none() {
+        stage::nest::write_assembly(cut, &dir.join("assembly.scad"))?;
+        files.push("assembly.scad".into());
+    }
+    write_atomic(&dir.join("bom.csv"), |w| w.write_all(bom.as_bytes()))?;
+    let text = cut.doc.json();
+    write_atomic(&dir.join("nest.json"), |w| w.write_all(text.as_bytes()))?;
+    let svg = stage::nest::svg(cut);
+    write_atomic(&dir.join("sheets.svg"), |w| w.write_all(svg.as_bytes()))?;
+    files.extend(["bom.csv", "nest.json", "sheets.svg"].map(String::from));
+    Ok(files)
+}
+
+// Printing.
+
+/// The network's veins as one closed mesh.
+#[pyfunction]
+#[pyo3(signature = (network, options, progress=None))]
+fn solid<'py>(
+    py: Python<'py>,
+    network: NetworkBytes<'py>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let net = network.build()?;
+    let mut o = Opts::new(&options, "solid");
+    let opts = options::solid(&mut o)?;
+    o.finish()?;
+    let made = run::run(py, progress.as_ref(), |h| stage::solid::run(&net, &opts, h))?;
+    let d = PyDict::new(py);
+    d.set_item("mesh", mesh_dict(py, &made.mesh)?)?;
+    d.set_item("report", report(py, &made.report, &[])?)?;
+    let said: Vec<String> = made
+        .notes
+        .iter()
+        .cloned()
+        .chain(made.warnings.iter().map(|w| format!("warning: {w}")))
+        .collect();
+    d.set_item("notes", notes(py, &said)?)?;
+    Ok(d)
+}
+
+/// Closed meshes sliced into an SL1 archive (its bytes), each model (name, vertices, faces).
+#[pyfunction]
+#[pyo3(signature = (models, options, progress=None))]
+fn slice<'py>(
+    py: Python<'py>,
+    models: Vec<(String, Bound<'py, PyBytes>, Bound<'py, PyBytes>)>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let models = models
+        .iter()
+        .enumerate()
+        .map(|(k, (name, v, f))| {
+            Ok(stage::slice::Model {
+                path: PathBuf::from(name),
+                mesh: mesh_from(&format!("models[{k}]"), v.as_bytes(), f.as_bytes(), &[])?,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let mut o = Opts::new(&options, "slice");
+    let opts = options::slice(&mut o)?;
+    o.finish()?;
+    let mut archive = std::io::Cursor::new(Vec::new());
+    let sliced = run::run(py, progress.as_ref(), |h| {
+        stage::slice::run(&models, &opts, &mut archive, None, h)
+    })?;
+    sliced_dict(py, &sliced, archive.into_inner())
+}
+
+fn sliced_dict<'py>(
+    py: Python<'py>,
+    sliced: &stage::slice::Sliced,
+    archive: Vec<u8>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("sl1", PyBytes::new(py, &archive))?;
+    d.set_item(
+        "report",
+        report(py, &sliced.report, &["islands", "placements"])?,
+    )?;
+    d.set_item("notes", notes(py, &sliced.notes)?)?;
+    Ok(d)
+}
+
+/// The network's solid sliced straight from its distance, into an SL1 archive.
+#[pyfunction]
+#[pyo3(signature = (network, options, progress=None))]
+fn print<'py>(
+    py: Python<'py>,
+    network: NetworkBytes<'py>,
+    options: Bound<'py, PyDict>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let net = network.build()?;
+    let mut o = Opts::new(&options, "print");
+    let opts = options::print(&mut o)?;
+    o.finish()?;
+    let mut archive = std::io::Cursor::new(Vec::new());
+    let sliced = run::run(py, progress.as_ref(), |h| {
+        stage::print::run(&net, &opts, &mut archive, h)
+    })?;
+    sliced_dict(py, &sliced, archive.into_inner())
+}
+
+// Files.
+
+/// Reads a network file (.json .obj .dxf) as the commands read it with their default flags
+/// (and `units` for an OBJ or DXF); the notes say what was assumed or left out.
+#[pyfunction]
+#[pyo3(signature = (path, units=None))]
+fn read_network<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    units: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut opts = ReadOptions::default();
+    if let Some(u) = units {
+        opts.units = Some(
+            lamina::network::io::units::LengthUnit::parse(&u).ok_or_else(|| {
+                error(format!(
+                    "units= {u:?} is not a unit lamina knows ({})",
+                    lamina::network::io::units::LengthUnit::NAMES
+                ))
+            })?,
+        );
+    }
+    let imported = py
+        .detach(|| read_network_file(&path, &opts))
+        .map_err(|e| error(e.to_string()))?;
+    let mut said = Vec::new();
+    if let Some(u) = imported
+        .units
+        .as_ref()
+        .filter(|u| u.assumed || u.scale_to_mm != 1.0)
+    {
+        said.push(format!("{}: units {}", path.display(), u.describe()));
+    }
+    if !imported.skipped.is_empty() {
+        let list: Vec<String> = imported
+            .skipped
+            .iter()
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect();
+        said.push(format!("{}: not read: {}", path.display(), list.join(", ")));
+    }
+    let d = network_dict(py, &imported.network)?;
+    d.set_item("notes", notes(py, &said)?)?;
+    Ok(d)
+}
+
+/// Writes a network as lamina JSON, OBJ, DXF or SVG (by extension).
+#[pyfunction]
+fn write_network(py: Python<'_>, path: PathBuf, network: NetworkBytes<'_>) -> PyResult<()> {
+    let net = network.build()?;
+    py.detach(|| lamina::network::io::write_network(&net, &path, &RenderOptions::default()))
+        .map_err(|e| error(e.to_string()))
+}
+
+/// Reads a triangle mesh (.obj .stl) as a dict.
+#[pyfunction]
+fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
+    let mesh = py
+        .detach(|| read_mesh_file(&path))
+        .map_err(|e| error(e.to_string()))?;
+    mesh_dict(py, &mesh)
+}
+
+/// Writes a triangle mesh (.obj .stl .png by extension).
+#[pyfunction]
+fn write_mesh(py: Python<'_>, path: PathBuf, mesh: MeshBytes<'_>) -> PyResult<()> {
+    let m = mesh_of("mesh", &mesh)?;
+    py.detach(|| write_mesh_file(&m, &path, 1024))
+        .map_err(|e| error(e.to_string()))
+}
+
+/// The option names each function takes (the Python side checks keyword arguments against
+/// them, and suggests the closest).
+#[pyfunction]
+fn option_names(function: &str) -> Vec<&'static str> {
+    options::names(function).to_vec()
 }
 
 #[pymodule]
@@ -573,15 +1249,33 @@ fn _lamina(m: &Bound<'_, PyModule>) -> PyResult<()> {
             default_hook(info);
         }
     }));
-    m.add("LaminaError", m.py().get_type::<LaminaError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add_function(wrap_pyfunction!(run, m)?)?;
-    m.add_function(wrap_pyfunction!(planarize, m)?)?;
-    m.add_function(wrap_pyfunction!(solid, m)?)?;
-    m.add_function(wrap_pyfunction!(slice, m)?)?;
-    m.add_function(wrap_pyfunction!(write_network, m)?)?;
-    m.add_function(wrap_pyfunction!(read_network, m)?)?;
-    m.add_function(wrap_pyfunction!(write_mesh, m)?)?;
-    m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    m.add("MAX_COORD", MAX_COORD)?;
+    for f in [
+        wrap_pyfunction!(venation, m)?,
+        wrap_pyfunction!(venation_on_surface, m)?,
+        wrap_pyfunction!(veins, m)?,
+        wrap_pyfunction!(lsystem, m)?,
+        wrap_pyfunction!(bifurcate, m)?,
+        wrap_pyfunction!(buds, m)?,
+        wrap_pyfunction!(cells, m)?,
+        wrap_pyfunction!(simplify, m)?,
+        wrap_pyfunction!(planarize, m)?,
+        wrap_pyfunction!(audit, m)?,
+        wrap_pyfunction!(audit_file, m)?,
+        wrap_pyfunction!(size, m)?,
+        wrap_pyfunction!(plates, m)?,
+        wrap_pyfunction!(nest, m)?,
+        wrap_pyfunction!(solid, m)?,
+        wrap_pyfunction!(slice, m)?,
+        wrap_pyfunction!(print, m)?,
+        wrap_pyfunction!(read_network, m)?,
+        wrap_pyfunction!(write_network, m)?,
+        wrap_pyfunction!(read_mesh, m)?,
+        wrap_pyfunction!(write_mesh, m)?,
+        wrap_pyfunction!(option_names, m)?,
+    ] {
+        m.add_function(f)?;
+    }
     Ok(())
 }

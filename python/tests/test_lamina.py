@@ -1,16 +1,23 @@
-"""The lamina Python package against the lamina binary: every function on a small input, the
-same results as the command line for the same input and seed (reports byte for byte), errors
-as LaminaError with the binary's message, COMPAS round trips.
+"""The lamina Python package against the lamina binary: every function on a small input gives
+the command line's result for the same input and seed (reports equal to the files the command
+writes, tables compared row by row), with no file written (the calls run with a read-only
+temporary folder and working directory); errors as LaminaError naming the argument; forks,
+pickles, Ctrl-C, progress callbacks, units and a Dask sweep.
 
-The binary is $LAMINA_BIN (scripts/test gives target/debug/lamina); the command line runs in a
-folder holding its inputs under the names the package gives them, so reports name the same
-files."""
+The binary is $LAMINA_BIN (scripts/test gives the one it built); the command line runs in a
+folder of its own."""
 
 import json
+import math
+import multiprocessing
 import os
+import pickle
 import re
+import signal
+import stat
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import warnings
@@ -22,30 +29,95 @@ import pytest
 import lamina
 
 ROOT = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("LAMINA_BIN", str(ROOT / "target" / "debug" / "lamina"))
+BIN = os.environ.get("LAMINA_BIN", str(ROOT / "target" / "release" / "lamina"))
 CALYX = ROOT / "fixtures" / "networks" / "calyx_veins.json"
 CALYX_SURFACE = ROOT / "fixtures" / "surfaces" / "calyx.obj"
 SMALL_LOOP = ROOT / "fixtures" / "networks" / "small_loop.json"
 TORUS = ROOT / "fixtures" / "surfaces" / "torus.obj"
+SPHERE = ROOT / "fixtures" / "surfaces" / "sphere.obj"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def read_only_temp(tmp_path_factory):
+    """Every call of the package runs with a read-only temporary folder and working directory:
+    a call that wrote a file anywhere but where it was told would fail."""
+    tmp_path_factory.getbasetemp()
+    ro = tmp_path_factory.mktemp("read-only")
+    ro.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    old = (os.environ.get("TMPDIR"), tempfile.tempdir, os.getcwd())
+    os.environ["TMPDIR"] = str(ro)
+    tempfile.tempdir = str(ro)
+    os.chdir(ro)
+    try:
+        yield ro
+    finally:
+        os.chdir(old[2])
+        tempfile.tempdir = old[1]
+        if old[0] is None:
+            del os.environ["TMPDIR"]
+        else:
+            os.environ["TMPDIR"] = old[0]
+        ro.chmod(stat.S_IRWXU)
+
+
+def test_the_temporary_folder_is_read_only(read_only_temp):
+    if os.geteuid() == 0:
+        pytest.skip("root writes into read-only folders")
+    with pytest.raises(OSError):
+        tempfile.mkstemp()
 
 
 def cli(tmp: Path, *argv, ok=(0,)) -> subprocess.CompletedProcess:
     """Runs the binary in `tmp`; fails unless it exits with one of `ok`."""
-    p = subprocess.run([BIN, *map(str, argv)], cwd=tmp, capture_output=True, text=True)
+    env = dict(os.environ, TMPDIR=str(tmp))
+    p = subprocess.run([BIN, *map(str, argv)], cwd=tmp, capture_output=True, text=True, env=env)
     assert p.returncode in ok, p.stderr
     return p
 
 
 def cli_error(tmp: Path, *argv) -> str:
     """The message the binary prints when it refuses (exit 2)."""
-    p = subprocess.run([BIN, *map(str, argv)], cwd=tmp, capture_output=True, text=True)
+    env = dict(os.environ, TMPDIR=str(tmp))
+    p = subprocess.run([BIN, *map(str, argv)], cwd=tmp, capture_output=True, text=True, env=env)
     assert p.returncode == 2, (p.returncode, p.stdout)
     return p.stderr.strip().splitlines()[-1].removeprefix("lamina: error: ")
 
 
-def untimed(text: str) -> str:
-    """A report without its timings (seconds differ from run to run, on any one machine)."""
-    return re.sub(r'"(seconds|elapsed_s|time_s)": [0-9.e+-]+', r'"\1": 0', text)
+def plain(v, tables=()):
+    """A report as the JSON the command writes would read: numpy arrays as lists, tables
+    (columns) as rows, NaN as None, timings zeroed."""
+    if isinstance(v, dict):
+        out = {}
+        for k, x in v.items():
+            if k in ("seconds", "elapsed_s"):
+                out[k] = 0
+            elif k in tables and isinstance(x, dict):
+                out[k] = [plain(r, tables) for r in lamina.rows(x)]
+            else:
+                out[k] = plain(x, tables)
+        return out
+    if isinstance(v, np.ndarray):
+        return plain(v.tolist(), tables)
+    if isinstance(v, (list, tuple)):
+        return [plain(x, tables) for x in v]
+    if isinstance(v, float) and math.isnan(v):
+        return None
+    return v
+
+
+def file_json(path: Path, drop=()) -> dict:
+    doc = plain(json.loads(path.read_text()))
+    for k in drop:
+        doc.pop(k, None)
+    return doc
+
+
+def same_report(py: dict, path: Path, tables=(), drop=()) -> None:
+    got = plain(py, tables)
+    want = file_json(path, drop)
+    for k in drop:
+        got.pop(k, None)
+    assert got == want
 
 
 def cli_network(path: Path) -> dict:
@@ -65,8 +137,7 @@ def same_network(py: dict, path: Path) -> None:
 
 
 def same_triangles(got: dict, want: dict) -> None:
-    """The same triangles in the same order, corner for corner (a file may number its vertices
-    in another order)."""
+    """The same triangles in the same order, corner for corner."""
     assert np.array_equal(got["vertices"][got["faces"]], want["vertices"][want["faces"]])
     assert len(got["vertices"]) == len(want["vertices"])
 
@@ -78,7 +149,7 @@ def calyx():
 
 @pytest.fixture(scope="module")
 def solved(calyx):
-    return lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])
+    return lamina.planarize(calyx, fix_normal=["z<1:0,0,1"], name="network.json")
 
 
 # Growing.
@@ -88,54 +159,65 @@ def test_venation_equals_cli(tmp_path):
     py = lamina.venation(shape="lanceolate", mode="open", seed=3)
     cli(tmp_path, "venation", "--shape", "lanceolate", "--mode", "open", "--seed", 3,
         "-o", "venation.json", "--report", "report.json")
-    assert py["report_json"] == (tmp_path / "report.json").read_text()
+    same_report(py["report"], tmp_path / "report.json", drop=("output",))
     same_network(py["network"], tmp_path / "venation.json")
     assert py["network"]["meta"]["generator"] == json.loads(
         (tmp_path / "venation.json").read_text())["meta"]["generator"]
 
 
-def test_venation_in_an_outline(tmp_path):
+def test_venation_in_an_outline():
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
     outline = np.column_stack([30 * np.cos(t), 50 + 50 * np.sin(t)])
     py = lamina.venation(outline=outline, root=(0.0, 0.5))
     assert py["report"]["nodes"] == len(py["network"]["positions"]) > 50
-    # Every node lies in the circle.
     p = py["network"]["positions"]
     assert np.all(np.hypot(p[:, 0] / 30, (p[:, 1] - 50) / 50) <= 1 + 1e-9)
 
 
 def test_venation_on_surface_equals_cli(tmp_path):
-    mesh = lamina.read_mesh(ROOT / "fixtures" / "surfaces" / "sphere.obj")
-    py = lamina.venation_on_surface(mesh["vertices"], mesh["faces"], sources=300, seed=2)
-    lamina.write_mesh(tmp_path / "surface.obj", mesh)
-    cli(tmp_path, "venation", "--surface", "surface.obj", "--sources", 300, "--seed", 2,
+    mesh = lamina.read_mesh(SPHERE)
+    py = lamina.venation_on_surface(mesh, sources=300, seed=2)
+    cli(tmp_path, "venation", "--surface", SPHERE, "--sources", 300, "--seed", 2,
         "-o", "venation.json", "--report", "report.json")
-    assert py["report_json"] == (tmp_path / "report.json").read_text()
+    same_report(py["report"], tmp_path / "report.json", drop=("output", "surface"))
     same_network(py["network"], tmp_path / "venation.json")
 
 
 def test_veins_equals_cli(tmp_path):
     mesh = lamina.read_mesh(TORUS)
     py = lamina.veins(mesh["vertices"], mesh["faces"], sources=60, seed=5)
-    lamina.write_mesh(tmp_path / "surface.obj", mesh)
-    cli(tmp_path, "veins", "--surface", "surface.obj", "--sources", 60, "--seed", 5,
+    cli(tmp_path, "veins", "--surface", TORUS, "--sources", 60, "--seed", 5,
         "-o", "veins.json", "--report", "report.json")
-    assert py["report_json"] == (tmp_path / "report.json").read_text()
+    same_report(py["report"], tmp_path / "report.json", drop=("output", "surface"))
     same_network(py["network"], tmp_path / "veins.json")
-    assert 0 < py["report"]["sources"] <= 60  # about this many, Poisson-disk sampled
 
 
-def test_lsystem_equals_cli(tmp_path):
+def test_lsystem_and_bifurcate_equal_cli(tmp_path):
     rules = {"X": "F[-X]F[+X]-X", "F": "FF"}
     py = lamina.lsystem(axiom="X", rules=rules, iterations=4, angle=25.0)
     cli(tmp_path, "lsystem", "--axiom", "X", "--rule", "X=F[-X]F[+X]-X", "--rule", "F=FF",
         "--iterations", 4, "--angle", 25, "-o", "lsystem.json", "--report", "report.json")
-    assert py["report_json"] == (tmp_path / "report.json").read_text()
+    same_report(py["report"], tmp_path / "report.json")
     same_network(py["network"], tmp_path / "lsystem.json")
     counts = lamina.lsystem(axiom="X", rules=rules, iterations=7, derive_only=True)["report"]
     want = json.loads(cli(tmp_path, "lsystem", "--axiom", "X", "--rule", "X=F[-X]F[+X]-X",
                           "--rule", "F=FF", "-n", 7, "--derive-only", "--json").stdout)
     assert counts == want
+    tree = lamina.bifurcate(depth=7, angle="15..35", seed=4, boundary=(8000, 4000))
+    cli(tmp_path, "bifurcate", "--depth", 7, "--angle", "15..35", "--seed", 4, "--boundary",
+        "rect:8000,4000", "-o", "tree.json", "--report", "tree.report.json")
+    same_report(tree["report"], tmp_path / "tree.report.json")
+    same_network(tree["network"], tmp_path / "tree.json")
+
+
+def test_buds_equals_cli(tmp_path):
+    program = ROOT / "fixtures" / "buds" / "split.bud"
+    py = lamina.buds(str(program), cells=600, seed=2)
+    cli(tmp_path, "buds", program, "--cells", 600, "--seed", 2, "-o", "form.stl", "--report",
+        "report.json")
+    same_report(py["report"], tmp_path / "report.json")
+    want = lamina.read_mesh(tmp_path / "form.stl")
+    assert len(py["mesh"]["faces"]) == len(want["faces"])
 
 
 # Rationalizing.
@@ -144,11 +226,14 @@ def test_lsystem_equals_cli(tmp_path):
 def test_cells_equals_cli(tmp_path, calyx):
     surface = lamina.read_mesh(CALYX_SURFACE)
     py = lamina.cells(calyx, surface=surface)
-    lamina.write_network(tmp_path / "network.json", calyx)
-    lamina.write_mesh(tmp_path / "surface.obj", surface)
-    cli(tmp_path, "cells", "network.json", "--surface", "surface.obj", "-o", "cells.obj",
+    cli(tmp_path, "cells", CALYX, "--surface", CALYX_SURFACE, "-o", "cells.obj",
         "--table", "table.json")
-    assert py["table_json"] == (tmp_path / "table.json").read_text()
+    table = plain(py["table"], ("cells", "holes"))
+    want = file_json(tmp_path / "table.json")
+    # The note naming the surface says its file name on the command line.
+    table["notes"] = table["notes"][1:]
+    want["notes"] = want["notes"][1:]
+    assert table == want
     obj = (tmp_path / "cells.obj").read_text().splitlines()
     rows = {k: [line.split()[1:] for line in obj if line.startswith(k + " ")]
             for k in ("v", "vn", "f")}
@@ -156,21 +241,28 @@ def test_cells_equals_cli(tmp_path, calyx):
     assert np.array_equal(py["normals"], np.array(rows["vn"], dtype=float))
     faces = [[int(t.split("/")[0]) - 1 for t in f] for f in rows["f"]]
     assert np.array_equal(py["mesh"]["faces"], faces)
-    # One vertex per node, where the node is.
-    assert np.array_equal(py["mesh"]["vertices"], calyx["positions"])
+
+
+def test_simplify_equals_cli(tmp_path, calyx):
+    py = lamina.simplify(calyx, max_deviation=10)
+    cli(tmp_path, "simplify", CALYX, "--max-deviation", 10, "-o", "simple.json", "--report",
+        "report.json")
+    same_report(py["report"], tmp_path / "report.json")
+    same_network(py["network"], tmp_path / "simple.json")
 
 
 def test_planarize_equals_cli(tmp_path, calyx, solved):
-    lamina.write_network(tmp_path / "network.json", calyx)
-    cli(tmp_path, "planarize", "network.json", "--fix-normal", "z<1:0,0,1", "-o", "axes.json",
+    cli(tmp_path, "planarize", CALYX, "--fix-normal", "z<1:0,0,1", "-o", "axes.json",
         "--report", "report.json", "--panels", "panels.obj")
-    assert untimed(solved["report_json"]) == untimed((tmp_path / "report.json").read_text())
-    assert solved["axes_json"] == (tmp_path / "axes.json").read_text()
-    axes = json.loads(solved["axes_json"])
+    report = plain(solved["report"], ("panels", "worst"))
+    want = file_json(tmp_path / "report.json")
+    for r in (report, want):
+        r["title"] = r["source"] = ""
+    assert report == want
+    axes = json.loads((tmp_path / "axes.json").read_text())
     assert np.array_equal(solved["axes"], [n["axis"] for n in axes["nodes"]])
+    assert plain(solved["summary"]) == axes["summary"]
     assert solved["within"] and solved["summary"]["converged"]
-    assert np.allclose(np.linalg.norm(solved["axes"], axis=1), 1.0)
-    # The panels are the quads the command writes.
     obj = (tmp_path / "panels.obj").read_text().splitlines()
     v = np.array([line.split()[1:4] for line in obj if line.startswith("v ")], dtype=float)
     f = np.array([[int(t) - 1 for t in line.split()[1:5]] for line in obj
@@ -187,18 +279,17 @@ def test_planarize_methods_and_heights(calyx):
 
 
 def test_audit_equals_cli(tmp_path, solved):
-    lamina.write_network(tmp_path / "network.json", lamina.read_network(CALYX))
-    cli(tmp_path, "planarize", "network.json", "--fix-normal", "z<1:0,0,1", "-o", "axes.json",
+    cli(tmp_path, "planarize", CALYX, "--fix-normal", "z<1:0,0,1", "-o", "axes.json",
         "--panels", "panels.obj")
-    py = lamina.audit(str(tmp_path / "panels.obj"), tolerance=0.01)
     cli(tmp_path, "audit", "panels.obj", "--tolerance", 0.01, "--report", "report.json")
-    text = (tmp_path / "report.json").read_text()
-    assert py["report_json"] == text.replace('"panels.obj"', json.dumps(
-        str(tmp_path / "panels.obj"))).replace("audit of panels.obj",
-                                               f"audit of {tmp_path / 'panels.obj'}")
-    # Panels from memory: the same figures.
+    py = lamina.audit(str(tmp_path / "panels.obj"), tolerance=0.01)
+    report = plain(py["report"], ("panels", "worst"))
+    want = file_json(tmp_path / "report.json")
+    for r in (report, want):
+        r["title"] = r["source"] = ""
+    assert report == want
     mem = lamina.audit(list(solved["panels"]), tolerance=0.01)
-    assert mem["report"]["summary"] == json.loads(text)["summary"]
+    assert plain(mem["report"]["summary"]) == want["summary"]
     assert mem["within"]
 
 
@@ -206,17 +297,18 @@ def test_audit_equals_cli(tmp_path, solved):
 
 
 @pytest.fixture(scope="module")
-def steel(tmp_path_factory, calyx, solved):
+def steel(tmp_path_factory, solved):
     tmp = tmp_path_factory.mktemp("steel")
-    lamina.write_network(tmp / "network.json", calyx)
-    cli(tmp, "planarize", "network.json", "--fix-normal", "z<1:0,0,1", "-o", "axes.json")
+    cli(tmp, "planarize", CALYX, "--fix-normal", "z<1:0,0,1", "-o", "axes.json")
     sizing = lamina.size(solved, support="z<1", load="self-weight", deflection_limit="L/500")
     cli(tmp, "size", "axes.json", "-o", "sizing.json", "--support", "z<1", "--load",
         "self-weight", "--deflection-limit", "L/500", ok=(0, 1))
-    plates = lamina.plates(solved, sizing=sizing, groups=7)
+    out = tmp / "py-plates"
+    plates = lamina.plates(solved, sizing=sizing, groups=7, out=out)
     cli(tmp, "plates", "axes.json", "--sizing", "sizing.json", "--groups", 7, "-o", "plates",
         ok=(0, 1))
-    cut = lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5, lead_in=2)
+    cut = lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5, lead_in=2,
+                      out=tmp / "py-cut")
     cli(tmp, "nest", "plates/plates.json", "--sheet", "3000x1500", "--margin", 10, "--spacing",
         5, "--lead-in", 2, "-o", "cut")
     return tmp, sizing, plates, cut
@@ -229,91 +321,278 @@ def files_under(folder: Path) -> dict:
 
 def test_size_equals_cli(steel):
     tmp, sizing, _, _ = steel
-    assert sizing["sizing_json"] == (tmp / "sizing.json").read_text()
-    assert sizing["sizing"]["format"] == "lamina-sizing"
+    same_report(sizing["sizing"], tmp / "sizing.json", tables=("edges", "nodes"))
+    assert sizing["within"]
 
 
-def test_plates_equals_cli(steel):
+def test_plates_equal_cli(steel):
     tmp, _, plates, _ = steel
-    assert plates["plates_json"] == (tmp / "plates" / "plates.json").read_text()
+    same_report(plates["plates"], tmp / "plates" / "plates.json")
+    same_report(plates["welds"], tmp / "plates" / "welds.json")
     want = files_under(tmp / "plates")
-    assert sorted(plates["files"]) == sorted(want)
-    # The reports name their source: the package's is its own axes.json.
-    for name, data in want.items():
-        assert plates["files"][name] == data, name
-    assert len(plates["plates"]["plates"]) > 100
+    got = files_under(tmp / "py-plates")
+    assert sorted(got) == sorted(want) == sorted(plates["files"])
+    # The weld page's viewer names the files it came from; every other file is the same.
+    for name in want:
+        if name != "welds.html":
+            assert got[name] == want[name], name
     assert plates["assembly"]["faces"].shape[1] == 3
 
 
 def test_nest_equals_cli(steel):
     tmp, _, _, cut = steel
-    assert cut["nest_json"] == (tmp / "cut" / "nest.json").read_text()
+    same_report(cut["nest"], tmp / "cut" / "nest.json", tables=("placements",))
     want = files_under(tmp / "cut")
+    got = files_under(tmp / "py-cut")
+    assert got == want
+    assert cut["bom"].encode() == want["bom.csv"]
     assert sorted(cut["files"]) == sorted(want)
-    for name, data in want.items():
-        assert cut["files"][name] == data, name
 
 
 # Printing.
 
 
-def test_solid_and_slice_equal_cli(tmp_path):
+def test_solid_slice_and_print_equal_cli(tmp_path):
     net = lamina.read_network(SMALL_LOOP)
     py = lamina.solid(net, cell=0.25)
-    lamina.write_network(tmp_path / "network.json", net)
-    cli(tmp_path, "solid", "network.json", "--cell", 0.25, "-o", "solid.obj", "--report",
+    cli(tmp_path, "solid", SMALL_LOOP, "--cell", 0.25, "-o", "solid.obj", "--report",
         "report.json")
-    assert untimed(py["report_json"]) == untimed((tmp_path / "report.json").read_text())
+    same_report(py["report"], tmp_path / "report.json")
     same_triangles(py["mesh"], lamina.read_mesh(tmp_path / "solid.obj"))
-
     printed = lamina.slice(py["mesh"], layer=0.05)
     lamina.write_mesh(tmp_path / "model-0.obj", py["mesh"])
-    cli(tmp_path, "slice", "model-0.obj", "--layer", 0.05, "-o", "print.sl1", "--report",
+    cli(tmp_path, "slice", "model-0.obj", "--layer", 0.05, "-o", "lamina.sl1", "--report",
         "print.json")
-    assert untimed(printed["report_json"]) == untimed((tmp_path / "print.json").read_text())
-    assert printed["sl1"] == (tmp_path / "print.sl1").read_bytes()
-    assert printed["report"]["layers"] > 10
+    report = plain(printed["report"], ("islands", "placements"))
+    want = file_json(tmp_path / "print.json")
+    assert report["models"] == ["model-0"] and want["models"] == ["model-0.obj"]
+    for r in (report, want):
+        r["models"] = r["archive"] = None
+    assert report == want
+    assert printed["sl1"] == (tmp_path / "lamina.sl1").read_bytes()
+    straight = lamina.print(net, fit=20)
+    cli(tmp_path, "print", SMALL_LOOP, "--fit", 20, "-o", "lamina.sl1", "--report", "p.json")
+    assert straight["sl1"] == (tmp_path / "lamina.sl1").read_bytes()
 
 
-# Errors: LaminaError with the binary's message.
+# Errors: LaminaError naming the argument.
 
 
-def test_bad_flag_value_is_the_cli_message(tmp_path, calyx):
-    lamina.write_network(tmp_path / "network.json", calyx)
-    with pytest.raises(lamina.LaminaError) as e:
-        lamina.size(str(tmp_path / "nothing.json"), support="z<1", load="self-weight")
-    assert str(e.value) == cli_error(tmp_path, "size", tmp_path / "nothing.json", "-o", "s.json",
-                                     "--support", "z<1", "--load", "self-weight")
-    with pytest.raises(lamina.LaminaError) as e:
+def test_bad_options_name_the_argument(tmp_path, calyx):
+    with pytest.raises(lamina.LaminaError, match=r"^cell= must be a positive number"):
         lamina.solid(calyx, cell=-1.0)
-    assert str(e.value) == cli_error(tmp_path, "solid", "network.json", "--cell=-1", "-o",
-                                     "solid.obj")
-
-
-def test_bad_arrays_raise(calyx):
-    with pytest.raises(lamina.LaminaError, match="index 248 is not one of the 248 points"):
-        lamina.planarize(calyx["positions"], [[0, 248]], calyx["normals"])
-    with pytest.raises(lamina.LaminaError, match="N×3"):
-        lamina.planarize(calyx["positions"][:, :2], calyx["edges"])
-    bad = calyx["positions"].copy()
-    bad[3, 1] = np.nan
-    with pytest.raises(lamina.LaminaError, match="node 3"):
-        lamina.planarize(bad, calyx["edges"], calyx["normals"])
-    with pytest.raises(lamina.LaminaError, match="unexpected argument"):
-        lamina.planarize(calyx, no_such_flag=1)
-    with pytest.raises(lamina.LaminaError):
+    # The command line says the same of its flag.
+    assert "--cell must be a positive number" in cli_error(tmp_path, "solid", CALYX, "--cell=-1",
+                                                            "-o", "s.obj")
+    with pytest.raises(lamina.LaminaError, match=r"^tolerance= must be a positive distance"):
+        lamina.planarize(calyx, tolerance=0.0)
+    with pytest.raises(lamina.LaminaError, match="support= is needed"):
+        lamina.size(lamina.planarize(calyx), load="self-weight")
+    with pytest.raises(TypeError, match="'fix_normals'; did you mean 'fix_normal'"):
+        lamina.planarize(calyx, fix_normals=["z<1:0,0,1"])
+    with pytest.raises(lamina.LaminaError, match="shape="):
         lamina.venation(shape="hexagon")
+    with pytest.raises(lamina.LaminaError, match="units="):
+        lamina.planarize(calyx, units="furlong")
 
 
-def test_notes_are_warnings(solved):
-    with pytest.warns(lamina.LaminaWarning, match="material 1.4404"):
+@pytest.mark.parametrize("case, where", [
+    ("empty", "positions: the network has no nodes"),
+    ("no edges", "edges: the network has no edges"),
+    ("duplicate edge", r"edges\[3\]: edge 3: repeats edge"),
+    ("self loop", r"edges\[1\]: edge 1: self-loop"),
+    ("edge out of range", r"edges\[0\]: edge 0: joins nodes 0 and 248"),
+    ("negative index", r"edges\[2\]: index \[-1, 4\]"),
+    ("nan position", r"positions\[3\]: is not finite"),
+    ("inf position", r"positions\[5\]: is not finite"),
+    ("huge position", r"positions\[7\]: 1e300 is beyond"),
+    ("nan radius", r"edge_radius\[6\]: edge 6: radius NaN"),
+    ("negative node radius", r"node_radius\[2\]: node 2: radius -1"),
+    ("nan normal", r"normals\[4\]: node 4: normal is not finite"),
+    ("wrong shape", r"positions: expected an N×3 array"),
+    ("float edges", "edges: expected integer indices"),
+])
+def test_bad_arrays_raise_naming_the_argument(calyx, case, where):
+    net = {k: (v.copy() if isinstance(v, np.ndarray) else v) for k, v in calyx.items()}
+    if case == "empty":
+        net["positions"] = np.zeros((0, 3))
+        net["edges"] = np.zeros((0, 2), dtype=int)
+        net["node_radius"] = net["normals"] = None
+        net["edge_radius"] = None
+    elif case == "no edges":
+        net["edges"] = np.zeros((0, 2), dtype=int)
+        net["edge_radius"] = None
+    elif case == "duplicate edge":
+        net["edges"][3] = net["edges"][0][::-1]
+    elif case == "self loop":
+        net["edges"][1] = [2, 2]
+    elif case == "edge out of range":
+        net["edges"][0] = [0, 248]
+    elif case == "negative index":
+        net["edges"][2] = [-1, 4]
+    elif case == "nan position":
+        net["positions"][3, 1] = np.nan
+    elif case == "inf position":
+        net["positions"][5, 0] = np.inf
+    elif case == "huge position":
+        net["positions"][7, 2] = 1e300
+    elif case == "nan radius":
+        net["edge_radius"][6] = np.nan
+    elif case == "negative node radius":
+        net["node_radius"][2] = -1.0
+    elif case == "nan normal":
+        net["normals"][4] = [np.nan, 0, 1]
+    elif case == "wrong shape":
+        net["positions"] = net["positions"][:, :2]
+    elif case == "float edges":
+        net["edges"] = net["edges"].astype(float)
+    for call in (lambda: lamina.planarize(net), lambda: lamina.solid(net, radius=0.5)):
+        with pytest.raises(lamina.LaminaError, match=where):
+            call()
+
+
+def test_extreme_option_values_are_refused(calyx):
+    part = lamina.read_mesh(ROOT / "fixtures/surfaces/openscad_part.stl")
+    veins = lamina.read_network(ROOT / "fixtures/networks/ezdxf_veins.dxf")
+    flat = dict(veins, normals=np.tile([0.0, 0.0, 1.0], (len(veins["positions"]), 1)))
+    for value in (0.0, -1.0, float("nan"), 1e300):
+        for call in (lambda: lamina.planarize(flat, height=value),
+                     lambda: lamina.solid(veins, radius=0.5, cell=value),
+                     lambda: lamina.slice(part, layer=value)):
+            with pytest.raises(lamina.LaminaError):
+                call()
+
+
+def test_notes_are_warnings_at_the_callers_line(solved):
+    with pytest.warns(lamina.LaminaWarning, match="material 1.4404") as w:
         lamina.size(solved, support="z<1", load="self-weight")
+    assert w[0].filename == __file__
 
 
-# Threads and progress.
+def test_a_model_in_metres_warns_and_units_fix_it(calyx):
+    metres = dict(calyx, positions=calyx["positions"] / 1000)
+    with pytest.warns(lamina.LaminaWarning, match="give units=") as w:
+        lamina.planarize(metres, fix_normal=["z<0.001:0,0,1"])
+    assert w[0].filename == __file__
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", lamina.LaminaWarning)
+        r = lamina.planarize(metres, units="m", fix_normal=["z<1:0,0,1"])
+    mm = lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])
+    assert r["units"] == "m"
+    assert np.allclose(r["axes"], mm["axes"], atol=1e-9)
+    assert np.allclose(r["heights"], 0.1)  # the default 100 mm, in metres
+    assert np.allclose(r["positions"], metres["positions"])
+
+
+# Picklable errors and results; forks, spawns and Dask.
+
+
+def test_errors_and_results_pickle(solved):
+    e = pickle.loads(pickle.dumps(lamina.LaminaError("tolerance= must be positive")))
+    assert type(e) is lamina.LaminaError and str(e) == "tolerance= must be positive"
+    assert isinstance(e, ValueError)
+    w = pickle.loads(pickle.dumps(lamina.LaminaWarning("a note")))
+    assert type(w) is lamina.LaminaWarning
+    back = pickle.loads(pickle.dumps(solved))
+    assert np.array_equal(back["axes"], solved["axes"])
+    try:
+        lamina.solid(lamina.read_network(SMALL_LOOP), cell=-1.0)
+    except lamina.LaminaError as raised:
+        again = pickle.loads(pickle.dumps(raised))
+        assert str(again) == str(raised)
+
+
+def grow_and_audit(seed: int) -> tuple:
+    """A sweep's step: a leaf, its node axes, their audit."""
+    leaf = lamina.venation(shape="circle", seed=seed, birth=4.0, tip_radius=0.3)["network"]
+    solved = lamina.planarize(leaf, height=2.0, tolerance=0.01)
+    audited = lamina.audit(list(solved["panels"]), tolerance=0.01, metric="corner")
+    return seed, len(leaf["edges"]), solved["summary"]["max_deviation"], audited["within"]
+
+
+def fails(_):
+    lamina.solid(lamina.read_network(SMALL_LOOP), cell=-1.0)
+
+
+def test_fork_pool_after_a_call_then_spawn_pool(calyx):
+    lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])  # the parent's thread pool is running
+    serial = [grow_and_audit(s) for s in range(4)]
+    with multiprocessing.get_context("fork").Pool(4) as pool:
+        assert pool.map_async(grow_and_audit, range(4)).get(timeout=120) == serial
+        with pytest.raises(lamina.LaminaError, match="cell="):
+            pool.map_async(fails, [0]).get(timeout=60)
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        assert pool.map_async(grow_and_audit, range(4)).get(timeout=180) == serial
+
+
+def test_dask_sweep_equals_the_serial_sweep():
+    distributed = pytest.importorskip("dask.distributed")
+    serial = [grow_and_audit(s) for s in range(6)]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            futures = client.map(grow_and_audit, range(6))
+            assert client.gather(futures) == serial
+            bad = client.submit(fails, 0)
+            with pytest.raises(lamina.LaminaError, match="cell="):
+                bad.result()
+
+
+# Cancelling, progress, threads.
 
 
 PAPER = {"X": "F[-X]F[+X]-X", "F": "FF"}
+
+
+def long_solid():
+    # About 4 s and 5 M triangles here.
+    return lamina.read_network(SMALL_LOOP), dict(cell=0.015)
+
+
+def test_ctrl_c_stops_a_long_solid_promptly():
+    net, opts = long_solid()
+    sent = []
+
+    def interrupt():
+        sent.append(time.monotonic())
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+    timer = threading.Timer(1.0, interrupt)
+    start = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            lamina.solid(net, **opts)
+        stopped = time.monotonic()
+    finally:
+        timer.cancel()
+        timer.join()
+    assert sent, f"the solid ended after {stopped - start:.2f} s, before the signal"
+    # The watcher sees the signal within 20 ms; the stage stops at its next brick.
+    assert stopped - sent[0] < 0.2, stopped - sent[0]
+
+
+def test_a_progress_callback_stops_the_run():
+    calls = []
+
+    def stop_at_some_progress(stage, message, done, total):
+        calls.append((stage, done, total))
+        return False if done > 0 else None
+
+    net, opts = long_solid()
+    with pytest.raises(lamina.Cancelled):
+        lamina.solid(net, progress=stop_at_some_progress, **opts)
+    assert calls and calls[0][0] == "meshing"
+
+    def boom(*_):
+        raise RuntimeError("stop")
+
+    with pytest.raises(RuntimeError, match="stop"):
+        lamina.lsystem(axiom="X", rules=PAPER, iterations=15, derive_only=True, progress=boom)
+    cut_stop = []
+    plates = lamina.plates(lamina.planarize(lamina.read_network(CALYX)), thickness=3.0)
+    with pytest.raises(lamina.Cancelled):
+        lamina.nest(plates, tries=50, progress=lambda *a: cut_stop.append(a) or False)
 
 
 def test_gil_released_and_progress():
@@ -335,7 +614,6 @@ def test_gil_released_and_progress():
         ticks += 1
         time.sleep(0.001)
     t.join()
-    # While the derivation ran, this thread kept the interpreter (the GIL was released).
     assert ticks > 50
     assert calls, "no progress reported"
     stage, message, done_, total = calls[-1]
@@ -343,12 +621,20 @@ def test_gil_released_and_progress():
     assert total == result["report"]["symbols"]
 
 
-def test_progress_callback_errors_propagate():
-    def boom(*_):
-        raise RuntimeError("stop")
+def test_threads_run_stages_at_once():
+    want = [plain(lamina.venation(shape=s, seed=4)["report"]) for s in ("ovate", "cordate")]
+    got = [None, None]
 
-    with pytest.raises(RuntimeError, match="stop"):
-        lamina.lsystem(axiom="X", rules=PAPER, iterations=15, derive_only=True, progress=boom)
+    def grow(k, shape):
+        got[k] = plain(lamina.venation(shape=shape, seed=4)["report"])
+
+    threads = [threading.Thread(target=grow, args=(k, s))
+               for k, s in enumerate(("ovate", "cordate"))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert got == want
 
 
 # COMPAS.
@@ -364,7 +650,6 @@ def test_compas_network_round_trip(calyx, solved):
     back = lc.from_network(compas.json_loads(compas.json_dumps(g)))
     for k in ("positions", "edges", "node_radius", "edge_radius", "normals"):
         assert np.array_equal(back[k], calyx[k]), k
-    # A network that came through COMPAS solves to the same axes.
     assert np.array_equal(lamina.planarize(back, fix_normal=["z<1:0,0,1"])["axes"],
                           solved["axes"])
 
@@ -381,7 +666,6 @@ def test_compas_mesh_round_trip():
     back = lc.from_mesh(compas.json_loads(compas.json_dumps(m)))
     assert np.array_equal(back["vertices"], mesh["vertices"])
     assert np.array_equal(back["faces"], mesh["faces"])
-    # A quad mesh from COMPAS, triangulated, grows veins.
     quads = Mesh.from_meshgrid(dx=100, nx=12)
     grid = lc.from_mesh(quads)
     assert len(grid["faces"]) == 2 * 12 * 12
@@ -395,9 +679,6 @@ def test_compas_mesh_round_trip():
 class _Point3d:
     def __init__(self, x, y, z):
         self.X, self.Y, self.Z = float(x), float(y), float(z)
-
-    def __add__(self, other):
-        return _Point3d(self.X + other[0], self.Y + other[1], self.Z + other[2])
 
 
 class _Line:
@@ -431,33 +712,37 @@ class _Mesh:
         self.Vertices, self.Faces, self.Normals = _List(), _List(), _List()
 
 
-def test_grasshopper_example_runs_on_the_calyx(monkeypatch, calyx, solved):
-    import sys
+@pytest.mark.parametrize("rhino_units", ["mm", "m"])
+def test_grasshopper_example_runs_on_the_calyx(monkeypatch, calyx, rhino_units):
     import types
 
+    k = 1000.0 if rhino_units == "m" else 1.0
     rg = types.SimpleNamespace(Point3d=_Point3d, Line=_Line, Mesh=_Mesh, Curve=type(None))
     rhino = types.ModuleType("Rhino")
     rhino.Geometry = rg
+    system = type("UnitSystem", (), {"__str__": lambda self: {"mm": "Millimeters",
+                                                              "m": "Meters"}[rhino_units]})
+    rhino.RhinoDoc = types.SimpleNamespace(
+        ActiveDoc=types.SimpleNamespace(ModelUnitSystem=system()))
     monkeypatch.setitem(sys.modules, "Rhino", rhino)
     monkeypatch.setitem(sys.modules, "Rhino.Geometry", rg)
-    p, e = calyx["positions"], calyx["edges"]
+    p, e = calyx["positions"] / k, calyx["edges"]
     surface = lamina.read_mesh(CALYX_SURFACE)
     guide = _Mesh()
-    guide.Vertices.extend(_Point3d(*v) for v in surface["vertices"])
+    guide.Vertices.extend(_Point3d(*v) for v in surface["vertices"] / k)
     guide.Faces.extend(_Face(*f) for f in surface["faces"])
     scope = {"lines": [_Line(_Point3d(*p[a]), _Point3d(*p[b])) for a, b in e], "guide": guide,
-             "height": 100.0, "tolerance": 0.01}
-    exec(compile((ROOT / "python/examples/grasshopper_planarize.py").read_text(),
-                 "grasshopper_planarize.py", "exec"), scope)
+             "height": None, "tolerance": None}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", lamina.LaminaWarning)
+        exec(compile((ROOT / "python/examples/grasshopper_planarize.py").read_text(),
+                     "grasshopper_planarize.py", "exec"), scope)
     want = lamina.planarize(calyx["positions"], calyx["edges"], surface=surface)
     assert len(scope["panels"]) == len(e) == len(want["panels"])
     assert len(scope["axes"]) == len(p)
-    # The same network with its nodes in another order (the example numbers them by position):
-    # the same solve up to rounding.
     got = json.loads(scope["report"])
     assert got["converged"] and got["max_deviation"] <= 0.01
     assert got["iterations"] == want["summary"]["iterations"]
-    assert abs(got["max_deviation"] - want["summary"]["max_deviation"]) < 1e-6
 
 
 def test_blender_example_compiles():
@@ -465,116 +750,27 @@ def test_blender_example_compiles():
 
 
 @pytest.mark.parametrize("doc", ["README.md", "docs/python.md"])
-def test_documented_snippets_run(doc, tmp_path, monkeypatch):
-    """The page's ```python blocks run as written, one after the other (fixtures from the
-    repository; files they write land in a scratch folder)."""
+def test_documented_snippets_run(doc, tmp_path):
+    """The page's ```python blocks run as written, one after the other, as one script in a
+    scratch folder (fixtures from the repository)."""
     text = (ROOT / doc).read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
     assert blocks
-    monkeypatch.chdir(tmp_path)
-    scope = {}
-    for block in blocks:
-        block = block.replace('"fixtures/', f'"{ROOT}/fixtures/')
-        exec(compile(block, doc, "exec"), scope)
+    script = "\n".join(blocks).replace('"fixtures/', f'"{ROOT}/fixtures/')
+    (tmp_path / "snippets.py").write_text(script)
+    env = dict(os.environ, TMPDIR=str(tmp_path))
+    p = subprocess.run([sys.executable, "snippets.py"], cwd=tmp_path, capture_output=True,
+                       text=True, env=env, timeout=600)
+    assert p.returncode == 0, p.stderr
 
 
 def test_type_stubs_match_the_package():
     """mypy's stubtest: every stub matches what the installed package has at runtime."""
     pytest.importorskip("mypy")
     allow = Path(__file__).with_name("stubtest-allowlist.txt")
-    # The allowlist holds an entry only older Pythons need.
     argv = [sys.executable, "-m", "mypy.stubtest", "lamina", "--allowlist", str(allow),
             "--ignore-unused-allowlist"]
-    p = subprocess.run(argv, capture_output=True, text=True,
-                       cwd=Path(lamina.__file__).parents[2])
+    env = dict(os.environ, TMPDIR=tempfile.gettempdir() if os.access(
+        tempfile.gettempdir(), os.W_OK) else "/tmp", MYPY_CACHE_DIR="/tmp/.mypy_cache")
+    p = subprocess.run(argv, capture_output=True, text=True, env=env, cwd="/tmp")
     assert p.returncode == 0, p.stdout + p.stderr
-
-
-def test_threads_run_commands_at_once():
-    """Two threads, each its own captured command: the same results as one after the other."""
-    want = [lamina.venation(shape=s, seed=4)["report_json"] for s in ("ovate", "cordate")]
-    got = [None, None]
-
-    def grow(k, shape):
-        got[k] = lamina.venation(shape=shape, seed=4)["report_json"]
-
-    threads = [threading.Thread(target=grow, args=(k, s))
-               for k, s in enumerate(("ovate", "cordate"))]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert got == want
-
-
-def test_no_folder_left_behind(calyx):
-    """The private folders are removed, after a failure too."""
-    import tempfile
-
-    def ours():
-        return {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("lamina-")}
-
-    before = ours()
-    lamina.solid(lamina.read_network(SMALL_LOOP), cell=0.5)
-    with pytest.raises(lamina.LaminaError):
-        lamina.size(lamina.planarize(calyx, fix_normal=["z<1:0,0,1"]), support="z<1",
-                    load="nothing:1")
-    assert ours() <= before
-
-
-def test_solid_with_the_blade_from_meta_equals_cli(tmp_path):
-    """The leaf's outline travels in the network's meta: --lamina finds it in memory too."""
-    leaf = lamina.venation(shape="circle", seed=2)["network"]
-    assert "outline" in leaf["meta"]["parameters"]
-    py = lamina.solid(leaf, fit=10, lamina=0.3, cell=0.1)
-    lamina.write_network(tmp_path / "network.json", leaf)
-    cli(tmp_path, "solid", "network.json", "--fit", 10, "--lamina", 0.3, "--cell", 0.1,
-        "-o", "solid.obj", "--report", "report.json")
-    assert untimed(py["report_json"]) == untimed((tmp_path / "report.json").read_text())
-    same_triangles(py["mesh"], lamina.read_mesh(tmp_path / "solid.obj"))
-
-
-def test_command_help_and_refused_reader_flags(calyx):
-    assert lamina.command("planarize", "--help").startswith("Node axes that make every panel")
-    assert lamina.command("--version").strip() == f"lamina {lamina.__version__}"
-    with pytest.raises(lamina.LaminaError, match="reader flags"):
-        lamina.planarize(calyx, weld=0.1)
-    with pytest.raises(lamina.LaminaError, match="reader flags"):
-        lamina.solid(calyx, split_crossings=True)
-
-
-def test_slice_refuses_bad_meshes():
-    mesh = lamina.read_mesh(TORUS)
-    bad = mesh["vertices"].copy()
-    bad[3, 2] = np.inf
-    with pytest.raises(lamina.LaminaError, match="model-0.obj: vertex 3: coordinate is not finite"):
-        lamina.slice((bad, mesh["faces"]))
-    with pytest.raises(lamina.LaminaError, match="model 1: faces: index"):
-        lamina.slice([mesh, (mesh["vertices"], mesh["faces"] + len(mesh["vertices"]))])
-    with pytest.raises(lamina.LaminaError, match="--copies"):
-        lamina.slice(mesh, copies=0)
-
-
-def test_files_other_tools_wrote_and_extreme_values(tmp_path):
-    """OpenSCAD's STL sliced from memory and ezdxf's DXF made solid, each equal to the command
-    line on the file itself; 0, negative, NaN and huge values refused as the command refuses
-    them."""
-    part = lamina.read_mesh(ROOT / "fixtures/surfaces/openscad_part.stl")
-    printed = lamina.slice(part)
-    lamina.write_mesh(tmp_path / "model-0.obj", part)
-    cli(tmp_path, "slice", "model-0.obj", "-o", "print.sl1", "--report", "print.json")
-    assert untimed(printed["report_json"]) == untimed((tmp_path / "print.json").read_text())
-    veins = lamina.read_network(ROOT / "fixtures/networks/ezdxf_veins.dxf")
-    made = lamina.solid(veins, radius=0.5, cell=0.25)
-    lamina.write_network(tmp_path / "network.json", veins)
-    cli(tmp_path, "solid", "network.json", "--radius", 0.5, "--cell", 0.25, "-o", "solid.obj",
-        "--report", "report.json")
-    assert untimed(made["report_json"]) == untimed((tmp_path / "report.json").read_text())
-    flat = dict(veins, normals=np.tile([0.0, 0.0, 1.0], (len(veins["positions"]), 1)))
-    for value in (0.0, -1.0, float("nan"), 1e300):
-        calls = (lambda: lamina.planarize(flat, height=value),
-                 lambda: lamina.solid(veins, radius=0.5, cell=value),
-                 lambda: lamina.slice(part, layer=value))
-        for call in calls:
-            with pytest.raises(lamina.LaminaError):
-                call()

@@ -124,6 +124,11 @@ pub struct PlateDoc {
 /// plates.json: the plates, the node cores and the rules they were made by.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PlatesDoc {
+    /// `lamina-plates`.
+    pub format: &'static str,
+    pub version: u32,
+    /// `mm`.
+    pub units: &'static str,
     pub gauges: Vec<f64>,
     pub weld_gap: f64,
     pub weld_gap_tolerance: f64,
@@ -142,9 +147,9 @@ impl PlatesDoc {
         }
         let mut w = String::new();
         let _ = writeln!(w, "{{");
-        let _ = writeln!(w, "  \"format\": \"{FORMAT}\",");
-        let _ = writeln!(w, "  \"version\": {VERSION},");
-        let _ = writeln!(w, "  \"units\": \"mm\",");
+        let _ = writeln!(w, "  \"format\": \"{}\",", self.format);
+        let _ = writeln!(w, "  \"version\": {},", self.version);
+        let _ = writeln!(w, "  \"units\": \"{}\",", self.units);
         let _ = writeln!(w, "  \"gauges\": {},", json(&self.gauges));
         let _ = writeln!(w, "  \"weld_gap\": {},", json(&self.weld_gap));
         let _ = writeln!(
@@ -177,6 +182,26 @@ struct File {
     plates: Vec<PlateDoc>,
     #[serde(default)]
     cores: Vec<CoreRecord>,
+}
+
+/// The plates and node cores of a plates document held as a JSON value (`path` names it in
+/// errors), checked as the file reader checks a file.
+pub fn records_from_value(
+    doc: serde_json::Value,
+    path: &Path,
+) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+    let format = doc.get("format").and_then(|f| f.as_str()).unwrap_or("");
+    if format != FORMAT {
+        return Err(ReadError::file(
+            path,
+            format!(
+                "format is {format:?}, expected \"{FORMAT}\" (the plates the plates stage makes)"
+            ),
+        ));
+    }
+    let file: File =
+        serde_json::from_value(doc).map_err(|e| ReadError::file(path, e.to_string()))?;
+    records(file.plates, file.cores, path)
 }
 
 /// The thickest plate a file may hold: 1 m of steel is no plate.

@@ -271,6 +271,9 @@ fn plates_doc(set: &PlateSet, opts: &PlateOptions) -> PlatesDoc {
         })
         .collect();
     PlatesDoc {
+        format: crate::fabricate::plates_file::FORMAT,
+        version: crate::fabricate::plates_file::VERSION,
+        units: "mm",
         gauges: opts.gauges.clone(),
         weld_gap: opts.weld_gap,
         weld_gap_tolerance: opts.weld_gap_tolerance,

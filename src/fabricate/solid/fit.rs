@@ -53,12 +53,24 @@ pub struct Fitted {
 
 /// Moves the vertices of `mesh`, each on the surface of `field`, so that its triangles lie on
 /// that surface on average, none leaving `bounds` (see the module doc).
-pub fn fit(mesh: &mut TriMesh, field: &Field, bounds: (DVec3, DVec3)) -> Fitted {
-    fit_passes(mesh, field, bounds, PASSES)
+/// `progress` may stop it: then `None`, and the mesh is left part-fitted.
+pub fn fit(
+    mesh: &mut TriMesh,
+    field: &Field,
+    bounds: (DVec3, DVec3),
+    progress: &dyn crate::stage::Progress,
+) -> Option<Fitted> {
+    fit_passes(mesh, field, bounds, PASSES, &|| progress.cancelled())
 }
 
-/// `fit` in so many passes.
-fn fit_passes(mesh: &mut TriMesh, field: &Field, bounds: (DVec3, DVec3), passes: usize) -> Fitted {
+/// `fit` in so many passes; `stop` is asked for every vertex and triangle measured.
+fn fit_passes(
+    mesh: &mut TriMesh,
+    field: &Field,
+    bounds: (DVec3, DVec3),
+    passes: usize,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Fitted> {
     // Each vertex's triangles.
     let around = group(
         mesh.positions.len(),
@@ -70,7 +82,7 @@ fn fit_passes(mesh: &mut TriMesh, field: &Field, bounds: (DVec3, DVec3), passes:
     let mut moved = vec![false; mesh.positions.len()];
     let mut done = Fitted::default();
     for _ in 0..passes {
-        let step = steps(mesh, field, bounds, &around);
+        let step = steps(mesh, field, bounds, &around, stop)?;
         done.largest_move_mm = step
             .iter()
             .map(|s| s.length())
@@ -78,7 +90,7 @@ fn fit_passes(mesh: &mut TriMesh, field: &Field, bounds: (DVec3, DVec3), passes:
         done.held = apply(mesh, &around, &step, &mut moved);
     }
     done.moved = moved.iter().filter(|&&m| m).count();
-    done
+    Some(done)
 }
 
 /// Each vertex's move in one pass: minus the area-weighted mean over its triangles of their
@@ -88,18 +100,36 @@ fn steps(
     field: &Field,
     bounds: (DVec3, DVec3),
     around: &(Vec<u32>, Vec<u32>),
-) -> Vec<DVec3> {
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Option<Vec<DVec3>> {
     let pos = &mesh.positions;
     let tris = &mesh.triangles;
-    let at: Vec<f32> = pos.par_iter().map(|&p| field.eval(p) as f32).collect();
+    // Once asked to stop, the rest are skipped (and the result thrown away).
+    let stopped = std::sync::atomic::AtomicBool::new(false);
+    let skip = || {
+        if !stopped.load(std::sync::atomic::Ordering::Relaxed) && stop() {
+            stopped.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+        stopped.load(std::sync::atomic::Ordering::Relaxed)
+    };
+    let at: Vec<f32> = pos
+        .par_iter()
+        .map(|&p| if skip() { 0.0 } else { field.eval(p) as f32 })
+        .collect();
     let mean: Vec<f32> = tris
         .par_iter()
         .map(|t| {
+            if skip() {
+                return 0.0;
+            }
             let [a, b, c] = t.map(|i| pos[i as usize]);
             let corners: f32 = t.iter().map(|&i| at[i as usize]).sum();
             (0.75 * field.eval((a + b + c) / 3.0)) as f32 + corners / 12.0
         })
         .collect();
+    if stopped.into_inner() {
+        return None;
+    }
     let area = |k: u32| {
         let [a, b, c] = tris[k as usize].map(|i| pos[i as usize]);
         0.5 * (b - a).cross(c - a)
@@ -123,7 +153,8 @@ fn steps(
                 DVec3::ZERO
             }
         })
-        .collect()
+        .collect::<Vec<_>>()
+        .into()
 }
 
 /// Vertex `v`'s triangles in `around`.
@@ -256,7 +287,7 @@ mod tests {
         let field = Field::new(&prims, cell);
         let off = |passes| {
             let (mut mesh, _) = mesh_union(&prims, cell, None, &crate::stage::Quiet).unwrap();
-            fit_passes(&mut mesh, &field, bounds, passes);
+            fit_passes(&mut mesh, &field, bounds, passes, &|| false);
             let topo = mesh.check_manifold();
             assert!(topo.is_manifold() && topo.closed);
             (mesh.signed_volume() - want) / want

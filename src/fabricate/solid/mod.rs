@@ -435,14 +435,21 @@ pub fn solid_of(
             cell: opts.cell,
         });
     }
+    let cancelled = || SolidError::March(MarchError::Cancelled);
+    crate::stage::checkpoint(progress).map_err(|_| cancelled())?;
     let cavities = fill_cavities(&mut mesh);
+    crate::stage::checkpoint(progress).map_err(|_| cancelled())?;
     // Marched vertices lie on the surface and the chords under it: fitted so the mesh lies on it
     // on average, unless the simplifier is to hold it within a tolerance.
-    let fitted = opts.tolerance.is_none().then(|| {
-        // Chords lie within 3/8 of a cell of the surface where veins are a cell or more thick.
-        let field = simplify::Field::new(&prims, opts.cell);
-        fit::fit(&mut mesh, &field, bounds)
-    });
+    let fitted = match opts.tolerance {
+        Some(_) => None,
+        None => {
+            // Chords lie within 3/8 of a cell of the surface where veins are a cell or more
+            // thick.
+            let field = simplify::Field::new(&prims, opts.cell);
+            Some(fit::fit(&mut mesh, &field, bounds, progress).ok_or_else(cancelled)?)
+        }
+    };
     let simplified = match opts.tolerance {
         None => None,
         Some(tol) => {
@@ -459,6 +466,7 @@ pub fn solid_of(
         }
     };
     // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
+    crate::stage::checkpoint(progress).map_err(|_| cancelled())?;
     let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
     place(&mut mesh, opts.upright, shift);
     let topo = mesh.check_manifold();

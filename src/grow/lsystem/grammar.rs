@@ -358,7 +358,7 @@ struct JsonGrammar {
     step: Option<f64>,
 }
 
-fn parse_json(text: &str, name: &str) -> Result<GrammarFile, GrammarError> {
+pub fn parse_json(text: &str, name: &str) -> Result<GrammarFile, GrammarError> {
     let g: JsonGrammar = serde_json::from_str(text).map_err(|e| GrammarError::Syntax {
         at: format!("{name} line {}, column {}", e.line(), e.column()),
         problem: e.to_string(),

@@ -12,7 +12,7 @@ mod turtle;
 
 pub use derive::{derive, derive_until, word_length, DeriveError};
 pub use grammar::{
-    parse_rule, parse_text, read_grammar_file, Grammar, GrammarError, GrammarFile, Rule,
+    parse_json, parse_rule, parse_text, read_grammar_file, Grammar, GrammarError, GrammarFile, Rule,
 };
 pub use turtle::{Angle, Counts, Turtle, TurtleError, TurtleOptions, TurtleStats};
 
