@@ -239,7 +239,7 @@ mod tests {
         let before = mesh.signed_volume();
         let field = Field::new(&prims, 2.0 * cell);
         let bounds = (DVec3::new(-2.0, -1.0, -1.0), DVec3::new(2.0, 1.0, 1.0));
-        let done = fit(&mut mesh, &field, bounds);
+        let done = fit(&mut mesh, &field, bounds, &crate::stage::Quiet).expect("not cancelled");
         let after = mesh.signed_volume();
         // Chords of a fifth of the radius cut about 1 % off; fitted, the mesh is off by far less.
         assert!((want - before) / want > 0.005, "marched {before} vs {want}");
