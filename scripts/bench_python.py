@@ -1,29 +1,31 @@
 """The Python package against the command line, side by side in one run (`scripts/bench python`).
 
 For each job: the median wall time of the package's call (inputs from memory, results back as
-arrays and dicts) and of the binary run as a process on files (the same outputs asked for), the
-solve time the command reports where it reports one, and each one's peak memory.
+arrays and dicts) and of the binary run as a process on files (the same work, its outputs
+written), and peak memory of each in a fresh process for the large planarize.
 
 usage: bench_python.py LAMINA_BIN WORKDIR
 """
 
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import lamina
 
 ROOT = Path(__file__).resolve().parents[1]
-RUNS = 21
+RUNS = 11
 
 
 def median_time(fn, runs=RUNS):
     times = []
+    out = None
     for _ in range(runs):
         t = time.perf_counter()
         out = fn()
@@ -31,17 +33,44 @@ def median_time(fn, runs=RUNS):
     return statistics.median(times), out
 
 
-def cli_run(binary, work, argv):
-    """Median wall time of the binary over RUNS runs, and its peak RSS (MiB) from GNU time."""
+def cli_time(binary, work, argv, runs=RUNS, ok=(0,)):
     times = []
-    for _ in range(RUNS):
+    for _ in range(runs):
         t = time.perf_counter()
-        subprocess.run([binary, *argv], cwd=work, check=True, capture_output=True)
+        p = subprocess.run([binary, *argv], cwd=work, capture_output=True)
+        assert p.returncode in ok, p.stderr
         times.append(time.perf_counter() - t)
-    p = subprocess.run(["/usr/bin/time", "-f", "%M", binary, *argv], cwd=work,
-                       capture_output=True, text=True)
-    rss = int(p.stderr.strip().splitlines()[-1]) / 1024
-    return statistics.median(times), rss
+    return statistics.median(times)
+
+
+def peak_mib(argv, cwd):
+    """Peak RSS of a process (GNU time), MiB."""
+    p = subprocess.run(["/usr/bin/time", "-f", "%M", *argv], cwd=cwd, capture_output=True,
+                       text=True)
+    if p.returncode not in (0, 1):
+        raise RuntimeError(p.stderr)
+    return int(p.stderr.strip().splitlines()[-1]) / 1024
+
+
+def honeycomb(target: int):
+    """A honeycomb (every node of degree 3 inside) on a paraboloid, about `target` nodes, 20 mm
+    cells: positions, edges and the surface normals."""
+    # Brick-wall form of a hexagonal lattice: rows of nodes, every node linked along its row,
+    # and every other node linked to the row above (alternating by row).
+    n = int(np.sqrt(target))
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    x, y = i.ravel() * 17.3 - n * 8.65, j.ravel() * 10.0 - n * 5.0
+    z = (x * x + y * y) / (4 * 1500.0)
+    p = np.column_stack([x, y, z])
+    nrm = np.column_stack([-x / 3000.0, -y / 3000.0, np.ones_like(x)])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    idx = (i * n + j).ravel()
+    along = np.column_stack([idx.reshape(n, n)[:, :-1].ravel(), idx.reshape(n, n)[:, 1:].ravel()])
+    ii, jj = i[:-1, :], j[:-1, :]
+    up = ((ii + jj) % 2 == 0)
+    a = (ii * n + jj)[up]
+    across = np.column_stack([a, a + n])
+    return p, np.vstack([along, across]), nrm
 
 
 def main():
@@ -51,60 +80,66 @@ def main():
 
     calyx = lamina.read_network(ROOT / "fixtures/networks/calyx_veins.json")
     lamina.write_network(work / "network.json", calyx)
-    py_t, r = median_time(lambda: lamina.planarize(calyx, fix_normal=["z<1:0,0,1"]))
-    cli_t, cli_rss = cli_run(binary, work, ["planarize", "network.json", "--fix-normal",
-                                            "z<1:0,0,1", "-o", "axes.json", "--report",
-                                            "report.json"])
-    solve = json.loads((work / "report.json").read_text())["seconds"]
-    rows.append(("planarize Calyx (248 nodes, L-BFGS)", py_t, cli_t, solve, r["report"]["seconds"]))
+    py_t, solved = median_time(lambda: lamina.planarize(calyx, fix_normal=["z<1:0,0,1"]))
+    cli_t = cli_time(binary, work, ["planarize", "network.json", "--fix-normal", "z<1:0,0,1",
+                                    "-o", "axes.json", "--report", "report.json"])
+    rows.append(("planarize Calyx (248 nodes, L-BFGS)", py_t, cli_t))
 
-    leaf = lamina.venation(shape="ovate", seed=1)["network"]
-    lamina.write_network(work / "leaf.json", leaf)
-    py_t, r = median_time(lambda: lamina.planarize(leaf, method="newton", tolerance=0.05))
-    cli_t, _ = cli_run(binary, work, ["planarize", "leaf.json", "--method", "newton",
-                                      "--tolerance", "0.05", "-o", "leaf-axes.json", "--report",
-                                      "leaf-report.json"])
-    solve = json.loads((work / "leaf-report.json").read_text())["seconds"]
-    rows.append((f"planarize a grown leaf ({len(leaf['positions'])} nodes, Gauss-Newton)", py_t,
-                 cli_t, solve, r["report"]["seconds"]))
+    sizing = lamina.size(solved, support="z<1", load="self-weight")
+    subprocess.run([binary, "size", "axes.json", "-o", "sizing.json", "--support", "z<1",
+                    "--load", "self-weight"], cwd=work, capture_output=True)
+    py_t, made = median_time(lambda: lamina.plates(solved, sizing=sizing, groups=7))
+    py_out_t, written = median_time(lambda: lamina.plates(solved, sizing=sizing, groups=7,
+                                                    out=work / "py-plates"))
+    cli_t = cli_time(binary, work, ["plates", "axes.json", "--sizing", "sizing.json",
+                                    "--groups", "7", "-o", "plates"], ok=(0, 1))
+    n = len(made["plates"]["plates"])
+    rows.append((f"plates Calyx, sized, 7 groups ({n} plates), in memory", py_t, cli_t))
+    rows.append((f"plates Calyx, the same with out= (its {len(written['files'])} files)", py_out_t,
+                 cli_t))
 
-    loop = lamina.read_network(ROOT / "fixtures/networks/small_loop.json")
-    lamina.write_network(work / "loop.json", loop)
-    py_t, r = median_time(lambda: lamina.solid(loop, cell=0.03), runs=5)
-    cli_t = statistics.median(
-        _time(lambda: subprocess.run([binary, "solid", "loop.json", "--cell", "0.03", "-o",
-                                      "loop.stl", "--report", "loop.report.json"], cwd=work,
-                                     check=True, capture_output=True)) for _ in range(5))
-    rows.append((f"solid small_loop at 0.03 mm ({len(r['mesh']['faces']):,} triangles)", py_t,
-                 cli_t, None, None))
+    rng = np.random.default_rng(1)
+    quads = np.zeros((90_000, 4, 3))
+    quads[:, 1, 0] = quads[:, 2, 0] = 100.0
+    quads[:, 2, 1] = quads[:, 3, 1] = 80.0
+    quads += rng.normal(0.0, 0.01, quads.shape)
+    quads += (np.arange(90_000)[:, None, None] * np.array([0.0, 0.0, 7.0]))
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in quads.reshape(-1, 3).tolist()]
+    lines += [f"f {4 * k + 1} {4 * k + 2} {4 * k + 3} {4 * k + 4}" for k in range(len(quads))]
+    (work / "quads.obj").write_text("\n".join(lines) + "\n")
+    py_t, a = median_time(lambda: lamina.audit(quads, tolerance=0.05), runs=5)
+    cli_t = cli_time(binary, work, ["audit", "quads.obj", "--tolerance", "0.05", "--report",
+                                    "quads.report.json"], runs=5, ok=(0, 1))
+    rows.append(("audit 90,000 quads (P×4×3 array; the CLI reads an OBJ)", py_t, cli_t))
 
-    solved = lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])
-    plates = lamina.plates(solved, groups=7, thickness=3.0)
-    (work / "plates").mkdir(exist_ok=True)
-    (work / "plates/plates.json").write_text(plates["plates_json"])
-    py_t, _ = median_time(lambda: lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5),
-                          runs=5)
-    cli_t = statistics.median(
-        _time(lambda: subprocess.run([binary, "nest", "plates/plates.json", "--sheet", "3000x1500",
-                                      "--margin", "10", "--spacing", "5", "-o", "cut"], cwd=work,
-                                     check=True, capture_output=True)) for _ in range(5))
-    rows.append((f"nest the Calyx plates ({len(plates['plates']['plates'])} parts)", py_t, cli_t,
-                 None, None))
-
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(f"{'job':58} {'python':>9} {'cli':>9} {'ratio':>6} {'cli solve':>10} {'py solve':>9}")
-    for name, p, c, s, ps in rows:
-        solve = f"{s * 1000:8.1f}ms" if s is not None else " " * 10
-        psolve = f"{ps * 1000:7.1f}ms" if ps is not None else ""
-        print(f"{name:58} {p * 1000:7.1f}ms {c * 1000:7.1f}ms {p / c:6.2f} {solve} {psolve}")
-    print(f"peak memory: the Python process {rss:.0f} MiB (all jobs, numpy and the package "
-          f"loaded); the binary on Calyx planarize {cli_rss:.0f} MiB")
-
-
-def _time(fn):
+    p, e, nrm = honeycomb(90_000)
+    np.save(work / "comb-p.npy", p)
+    np.save(work / "comb-e.npy", e)
+    np.save(work / "comb-n.npy", nrm)
+    lamina.write_network(work / "comb.json", {"positions": p, "edges": e, "normals": nrm})
+    argv = ["planarize", "comb.json", "--method", "newton", "-o", "comb-axes.json", "--report",
+            "comb-report.json"]
     t = time.perf_counter()
-    fn()
-    return time.perf_counter() - t
+    cli_rss = peak_mib([binary, *argv], work)
+    cli_t = time.perf_counter() - t
+    script = ("import numpy as np, lamina, time; p = np.load('comb-p.npy'); e = np.load('comb-e.npy');"
+              " n = np.load('comb-n.npy'); t = time.perf_counter();"
+              " r = lamina.planarize(p, e, n, method='newton');"
+              " print(time.perf_counter() - t, r['within'], r['summary']['max_deviation'])")
+    t = time.perf_counter()
+    py_rss = peak_mib([sys.executable, "-c", script], work)
+    py_t = time.perf_counter() - t
+    base = peak_mib([sys.executable, "-c", "import numpy, lamina"], work)
+    report_mb = (work / "comb-report.json").stat().st_size / 1e6
+    rows.append((f"planarize {len(p):,} nodes (Gauss-Newton), whole process", py_t, cli_t))
+
+    print(f"{'job':62} {'python':>10} {'cli':>10} {'ratio':>6}")
+    for name, pt, ct in rows:
+        print(f"{name:62} {pt * 1000:8.1f}ms {ct * 1000:8.1f}ms {pt / ct:6.2f}")
+    print(f"planarize {len(p):,} nodes, peak memory: Python process {py_rss:.0f} MiB "
+          f"(of which {base:.0f} MiB is the interpreter with numpy and lamina loaded), the "
+          f"command {cli_rss:.0f} MiB (its report file {report_mb:.1f} MB): ratio "
+          f"{py_rss / cli_rss:.2f}")
 
 
 if __name__ == "__main__":

@@ -18,5 +18,10 @@ pub mod text;
 pub mod view;
 
 pub use files::{ReadError, WriteError};
+
+/// The README's Rust example ("As a Rust library"), run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 pub use mesh::TriMesh;
 pub use network::{Edge, Meta, Network, Node};

@@ -406,8 +406,9 @@ def _read_axes(path: str) -> dict:
 
 def audit(panels: Any, *, tolerance: Optional[float] = None, metric: str = "flatness",
           units: Optional[str] = None, **options: Any) -> dict:
-    """The planarity audit of panels made anywhere: a list of polygons (each K×3), a
-    (vertices, faces) pair with faces as lists of vertex indices, or a file (.obj .dxf .json).
+    """The planarity audit of panels made anywhere: a P×K×3 array (quads from planarize), a
+    list of polygons (each K×3), a (vertices, faces) pair with faces as lists of vertex
+    indices, or a file (.obj .dxf .json).
     Returns ``report`` (the planarity report; ``panels`` and ``worst`` as columns) and
     ``within``."""
     units = _units(units)
@@ -418,6 +419,13 @@ def audit(panels: Any, *, tolerance: Optional[float] = None, metric: str = "flat
         opts["tolerance"] = float(tolerance) * k
     if isinstance(panels, (str, os.PathLike)):
         return _done(_lamina.audit_file(os.fspath(panels), opts), units)
+    if isinstance(panels, np.ndarray) and panels.ndim == 3 and panels.shape[2] == 3:
+        # P×K×3: every panel K corners, passed whole.
+        if panels.shape[1] < 3:
+            raise LaminaError(f"panels: {panels.shape[1]} corners a panel; needs 3 or more")
+        corners = np.ascontiguousarray(panels.reshape(-1, 3) * k, dtype="<f8")
+        out = _lamina.audit(corners.tobytes(), [panels.shape[1]] * len(panels), None, opts)
+        return _done(out, units)
     if isinstance(panels, tuple) and len(panels) == 2:
         vertices = points(panels[0], "vertices")
         polygons = []

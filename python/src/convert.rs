@@ -127,12 +127,18 @@ pub fn to_py<'py>(py: Python<'py>, v: &Value, tables: &[&str]) -> PyResult<Bound
             _ => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
         },
         Value::String(s) => PyString::new(py, s).into_any(),
-        Value::Array(items) => array_to_py(py, items, tables)?,
+        Value::Array(items) => {
+            let refs: Vec<&Value> = items.iter().collect();
+            array_to_py(py, &refs, tables)?
+        }
         Value::Object(map) => {
             let d = PyDict::new(py);
             for (k, v) in map {
                 let item = match v {
-                    Value::Array(rows) if tables.contains(&k.as_str()) => table(py, rows, tables)?,
+                    Value::Array(rows) if tables.contains(&k.as_str()) => {
+                        let refs: Vec<&Value> = rows.iter().collect();
+                        table(py, &refs, tables)?
+                    }
                     _ => to_py(py, v, tables)?,
                 };
                 d.set_item(k, item)?;
@@ -144,11 +150,10 @@ pub fn to_py<'py>(py: Python<'py>, v: &Value, tables: &[&str]) -> PyResult<Bound
 
 fn array_to_py<'py>(
     py: Python<'py>,
-    items: &[Value],
+    items: &[&Value],
     tables: &[&str],
 ) -> PyResult<Bound<'py, PyAny>> {
-    let refs: Vec<&Value> = items.iter().collect();
-    if let Some(n) = column(&refs) {
+    if let Some(n) = column(items) {
         return numbers(py, n, &[items.len()]);
     }
     // Rows of equal length, all numbers: a 2-D array.
@@ -177,7 +182,11 @@ fn array_to_py<'py>(
 /// Rows (objects) as a dict of columns: each key's values as a numpy array when they are all
 /// numbers, booleans or numeric arrays of one length, else as a list (missing keys are None).
 /// `lamina.rows` turns it back into a list of dicts.
-pub fn table<'py>(py: Python<'py>, rows: &[Value], tables: &[&str]) -> PyResult<Bound<'py, PyAny>> {
+pub fn table<'py>(
+    py: Python<'py>,
+    rows: &[&Value],
+    tables: &[&str],
+) -> PyResult<Bound<'py, PyAny>> {
     if rows.iter().any(|r| !r.is_object()) {
         return array_to_py(py, rows, tables);
     }
@@ -191,9 +200,9 @@ pub fn table<'py>(py: Python<'py>, rows: &[Value], tables: &[&str]) -> PyResult<
     }
     let d = PyDict::new(py);
     for k in keys {
-        let values: Vec<Value> = rows
+        let values: Vec<&Value> = rows
             .iter()
-            .map(|r| r.get(k).cloned().unwrap_or(Value::Null))
+            .map(|r| r.get(k).unwrap_or(&Value::Null))
             .collect();
         let present = rows.iter().all(|r| r.get(k).is_some());
         let col = if present {

@@ -646,8 +646,98 @@ fn simplify<'py>(
     Ok(d)
 }
 
-/// The tables of a planarity report held as columns.
-const PLANARITY_TABLES: &[&str] = &["panels", "worst"];
+/// A planarity report as a dict, its `panels` and `worst` as columns built straight from the
+/// rows (a report of 100,000 panels would otherwise pass through a tree of 1.5 M values).
+fn planarity<'py>(
+    py: Python<'py>,
+    r: &lamina::report::planarity::Report,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    if let serde_json::Value::Object(context) =
+        serde_json::to_value(&r.context).map_err(|e| error(e.to_string()))?
+    {
+        for (k, v) in context {
+            d.set_item(k, to_py(py, &v, &[])?)?;
+        }
+    }
+    d.set_item("summary", report(py, &r.summary, &[])?)?;
+    d.set_item("definitions", report(py, &r.definitions, &[])?)?;
+    d.set_item("histogram", report(py, &r.histogram, &[])?)?;
+    d.set_item("worst", panel_columns(py, &r.worst)?)?;
+    d.set_item("panels", panel_columns(py, &r.panels)?)?;
+    Ok(d)
+}
+
+/// Panel rows as columns (the keys a row of the report file has).
+fn panel_columns<'py>(
+    py: Python<'py>,
+    rows: &[lamina::report::planarity::PanelRow],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let n = rows.len();
+    let f = |get: &dyn Fn(&lamina::report::planarity::PanelRow) -> f64| -> Vec<f64> {
+        rows.iter().map(get).collect()
+    };
+    let index: Vec<i64> = rows.iter().map(|r| r.index as i64).collect();
+    d.set_item("index", i64_array(py, &index, &[n])?)?;
+    if rows.iter().all(|r| r.nodes.is_some()) {
+        let nodes: Vec<i64> = rows
+            .iter()
+            .flat_map(|r| r.nodes.unwrap_or_default().map(i64::from))
+            .collect();
+        d.set_item("nodes", i64_array(py, &nodes, &[n, 2])?)?;
+    } else {
+        let list = PyList::empty(py);
+        for r in rows {
+            list.append(r.nodes.map(|v| v.to_vec()))?;
+        }
+        d.set_item("nodes", list)?;
+    }
+    for (key, get) in [
+        (
+            "name",
+            &(|r: &lamina::report::planarity::PanelRow| r.name.clone()) as &dyn Fn(_) -> _,
+        ),
+        ("layer", &|r: &lamina::report::planarity::PanelRow| {
+            r.layer.clone()
+        }),
+        ("group", &|r: &lamina::report::planarity::PanelRow| {
+            r.group.clone()
+        }),
+        ("class", &|r: &lamina::report::planarity::PanelRow| {
+            r.class_name.clone()
+        }),
+    ] {
+        let values: Vec<Option<String>> = rows.iter().map(get).collect();
+        if values.iter().any(Option::is_some) {
+            d.set_item(key, PyList::new(py, values)?)?;
+        }
+    }
+    d.set_item("tolerance", f64_array(py, &f(&|r| r.tolerance), &[n])?)?;
+    let pass: Vec<bool> = rows.iter().map(|r| r.pass).collect();
+    d.set_item("pass", convert::bool_array(py, &pass)?)?;
+    let m =
+        |get: &dyn Fn(&lamina::rationalize::panels::QuadMetrics) -> f64| f(&|r| get(&r.metrics));
+    d.set_item("flatness", f64_array(py, &m(&|q| q.flatness), &[n])?)?;
+    d.set_item("best_fit", f64_array(py, &m(&|q| q.best_fit), &[n])?)?;
+    let normal: Vec<f64> = rows.iter().flat_map(|r| r.metrics.normal).collect();
+    d.set_item("normal", f64_array(py, &normal, &[n, 3])?)?;
+    d.set_item("deviation", f64_array(py, &m(&|q| q.deviation), &[n])?)?;
+    d.set_item(
+        "diagonal_distance",
+        f64_array(py, &m(&|q| q.diagonal_distance), &[n])?,
+    )?;
+    d.set_item(
+        "diagonal_rel_edge",
+        f64_array(py, &m(&|q| q.diagonal_rel_edge), &[n])?,
+    )?;
+    d.set_item(
+        "diagonal_rel_diagonal",
+        f64_array(py, &m(&|q| q.diagonal_rel_diagonal), &[n])?,
+    )?;
+    d.set_item("torsion_deg", f64_array(py, &m(&|q| q.torsion_deg), &[n])?)?;
+    Ok(d)
+}
 
 /// Node axes that make every panel planar.
 #[pyfunction]
@@ -670,7 +760,7 @@ fn planarize<'py>(
     let d = axes_dict(py, &solved.axes)?;
     d.set_item("within", solved.solution.converged)?;
     d.set_item("summary", report(py, &solved.summary, &[])?)?;
-    d.set_item("report", report(py, &solved.report, PLANARITY_TABLES)?)?;
+    d.set_item("report", planarity(py, &solved.report)?)?;
     d.set_item("notes", notes(py, &[])?)?;
     Ok(d)
 }
@@ -871,7 +961,7 @@ fn audited<'py>(
     let done = run::run(py, None, |_| stage::audit::run(panels, opts))?;
     let d = PyDict::new(py);
     d.set_item("within", done.report.summary.within_tolerance)?;
-    d.set_item("report", report(py, &done.report, PLANARITY_TABLES)?)?;
+    d.set_item("report", planarity(py, &done.report)?)?;
     let said: Vec<String> = read_notes.into_iter().chain(done.notes).collect();
     d.set_item("notes", notes(py, &said)?)?;
     Ok(d)

@@ -58,6 +58,7 @@ impl Default for Options {
 /// The audit: the planarity report, and what the caller should be told.
 #[derive(Clone, Debug)]
 pub struct Audited {
+    /// The report, as the command writes it.
     pub report: Report,
     /// Things read or defaulted that the caller should hear (faces skipped, classes that match
     /// no panel), one line each.
@@ -68,24 +69,31 @@ pub struct Audited {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(
         "no face has 4 or more distinct corners: nothing to audit (a triangulated export, as \
          from STL or trimesh, has lost its panels: export quads or n-gons)"
     )]
+    /// No face to audit.
     NoPanels,
     #[error(
         "{0} faces have more than {MAX_FLATNESS_CORNERS} corners, beyond the exact flatness \
          search: give metric= best-fit"
     )]
+    /// Faces beyond the exact flatness search.
     TooManyCorners(usize),
     #[error(
         "panel {id} ({label}) matches no rule of {rules} and there is no default: add \
          \"default\" to the rules or give tolerance="
     )]
+    /// A panel no tolerance rule matches.
     Unmatched {
+        /// The panel's number in the input.
         id: usize,
+        /// Its name, layer and group.
         label: String,
+        /// Where the rules came from.
         rules: String,
     },
 }

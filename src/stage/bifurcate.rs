@@ -62,30 +62,38 @@ impl Default for Options {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// The tree refused.
     Bifurcation(#[from] BifurcationError),
     #[error(transparent)]
+    /// Shaping failed.
     Shape(#[from] ShapeError),
 }
 
 /// The tree's own figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct Figures {
+    /// Branches.
     pub branches: usize,
+    /// Section depth (the panel height across the member), mm.
     pub depth: u32,
 }
 
 /// The report: the tree's figures and the common sections. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// The tree's figures.
     pub bifurcation: Figures,
     #[serde(flatten)]
+    /// The sections shared with the other generators.
     pub sections: Sections,
 }
 
 /// The drawn tree and its report.
 #[derive(Clone, Debug)]
 pub struct Drawn {
+    /// The network made.
     pub network: Network,
+    /// The report, as the command writes it.
     pub report: Report,
 }
 

@@ -45,10 +45,15 @@ pub struct Shape {
 /// The sizes of what was made.
 #[derive(Clone, Debug, Serialize)]
 pub struct NetworkFigures {
+    /// Bounding box size, mm.
     pub bbox_mm: [f64; 3],
+    /// Edges (members).
     pub edges: usize,
+    /// Longest member, mm.
     pub longest_member_mm: f64,
+    /// Nodes.
     pub nodes: usize,
+    /// Total member length, mm.
     pub total_length_mm: f64,
 }
 
@@ -56,9 +61,12 @@ pub struct NetworkFigures {
 #[derive(Clone, Debug, Serialize)]
 pub struct Sections {
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The façade fitting.
     pub facade: Option<FacadeReport>,
+    /// The network made.
     pub network: NetworkFigures,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The projection onto a surface.
     pub projection: Option<ProjectReport>,
     /// Crossings and joints in the plane (a flat drawing only).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -69,10 +77,13 @@ pub struct Sections {
 #[derive(Debug, thiserror::Error)]
 pub enum ShapeError {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// Fitting to the façade failed.
     Facade(#[from] FacadeError),
     #[error(transparent)]
+    /// Projection onto the surface failed.
     Project(#[from] ProjectError),
 }
 

@@ -50,39 +50,58 @@ impl Default for Options {
 
 /// Frames of the growth: called with the cellular surface (vertex colours) every `every` cells.
 pub struct Frames<'a> {
+    /// Steps (or cells) between frames.
     pub every: usize,
+    /// Called with each frame.
     pub call: &'a mut dyn FnMut(&TriMesh) -> Result<(), String>,
 }
 
 /// The grown form, its mesh and report.
 #[derive(Clone, Debug)]
 pub struct Grown {
+    /// The grown form.
     pub form: Form,
+    /// The mesh.
     pub mesh: TriMesh,
+    /// The report, as the command writes it.
     pub report: Report,
 }
 
 /// The report. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// Frames written.
     pub frames: usize,
+    /// The growth's figures.
     pub growth: GrowthReport,
+    /// The mesh.
     pub mesh: MeshFigures,
+    /// The program's name.
     pub program: String,
+    /// Random seed.
     pub seed: u64,
+    /// The skin's figures.
     pub skin: SkinReport,
 }
 
 /// The skinned mesh's topology and size.
 #[derive(Clone, Debug, Serialize)]
 pub struct MeshFigures {
+    /// Area, mm².
     pub area_mm2: f64,
+    /// Whether every edge has two triangles.
     pub closed: bool,
+    /// Connected components.
     pub components: usize,
+    /// Genus.
     pub genus: Option<i64>,
+    /// Every problem found, in words.
     pub problems: usize,
+    /// Triangles.
     pub triangles: usize,
+    /// Vertices.
     pub vertices: usize,
+    /// Volume, mm³.
     pub volume_mm3: Option<f64>,
 }
 
@@ -90,12 +109,21 @@ pub struct MeshFigures {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error("{program}: {error}")]
-    Program { program: String, error: BudError },
+    /// The program refused.
+    Program {
+        /// The program's name.
+        program: String,
+        /// What is wrong with it.
+        error: BudError,
+    },
     #[error("frames= {0}")]
+    /// A frame could not be written.
     Frame(String),
     #[error(transparent)]
+    /// The caller stopped the stage.
     Cancelled(#[from] Cancelled),
 }
 

@@ -40,48 +40,72 @@ impl Default for Options {
 /// its surface with disk-shaped cells.
 #[derive(Clone, Debug)]
 pub struct Expected {
+    /// V − E + F.
     pub chi: i64,
+    /// Hole faces expected (the surface's boundary loops).
     pub holes: usize,
+    /// Where the expectation comes from.
     pub from: String,
 }
 
 /// The cells, and the table `--table` writes.
 #[derive(Clone, Debug)]
 pub struct Found {
+    /// Cells.
     pub cells: Cells,
+    /// What V − E + F should be.
     pub expected: Expected,
     /// The checks in words (χ, holes, open tips, faces left untriangulated).
     pub notes: Vec<String>,
+    /// The cell table (`--table`).
     pub table: Table,
 }
 
 /// The cell table. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Table {
+    /// Cells.
     pub cells: Vec<FaceRow>,
+    /// V − E + F and its parts.
     pub euler: Euler,
+    /// V − E + F expected.
     pub expected_chi: i64,
+    /// Hole faces expected.
     pub expected_holes: usize,
+    /// The file format's name.
     pub format: &'static str,
+    /// Faces that are holes, not cells.
     pub holes: Vec<FaceRow>,
+    /// Notes, one line each.
     pub notes: Vec<String>,
+    /// Veins that end without joining.
     pub open_tips: usize,
+    /// Faces not triangulated, and why.
     pub untriangulated: Vec<Untriangulated>,
+    /// The format's version.
     pub version: u32,
 }
 
 /// A face: its boundary and, for a cell, its number and triangles.
 #[derive(Clone, Debug, Serialize)]
 pub struct FaceRow {
+    /// How well the face's area vector agrees with the normals.
     pub alignment: f64,
+    /// Area, mm².
     pub area_mm2: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The cell's number.
     pub cell: Option<usize>,
+    /// Edges (members).
     pub edges: Vec<u32>,
+    /// The face's number.
     pub face: usize,
+    /// Edges inside the face (veins ending in it).
     pub inner_edges: Vec<u32>,
+    /// Nodes.
     pub nodes: Vec<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Triangles.
     pub triangles: Option<[usize; 2]>,
 }
 
@@ -92,10 +116,18 @@ pub enum Error {
         "the drawing is not noded: {first}{more}; its cells cannot be found until every \
          crossing is a node: give split_crossings="
     )]
-    NotNoded { first: String, more: String },
+    /// Crossings without nodes.
+    NotNoded {
+        /// The first crossing or T-junction.
+        first: String,
+        /// How many more there are, in words.
+        more: String,
+    },
     #[error(transparent)]
+    /// No reference directions.
     Reference(#[from] ReferenceError),
     #[error(transparent)]
+    /// Finding the cells failed.
     Cells(#[from] CellError),
 }
 

@@ -22,9 +22,13 @@ use crate::{Network, TriMesh};
 /// A bounding box's corners, size and diagonal (None when empty).
 #[derive(Clone, Debug, Serialize)]
 pub struct Bbox {
+    /// Diagonal, mm.
     pub diagonal: f64,
+    /// Largest.
     pub max: [f64; 3],
+    /// Smallest.
     pub min: [f64; 3],
+    /// Size, mm.
     pub size: [f64; 3],
 }
 
@@ -40,29 +44,44 @@ fn bbox(b: &Aabb) -> Option<Bbox> {
 /// Edge lengths, mm.
 #[derive(Clone, Debug, Serialize)]
 pub struct Lengths {
+    /// Largest.
     pub max: f64,
+    /// Mean.
     pub mean: f64,
+    /// Smallest.
     pub min: f64,
+    /// Every sheet together.
     pub total: f64,
 }
 
 /// What a network is. Fields in the command's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct NetworkInfo {
+    /// Bounding box.
     pub bbox: Option<Bbox>,
+    /// Connected components.
     pub components: usize,
+    /// Independent cycles.
     pub cycles: usize,
+    /// Nodes by degree.
     pub degree_histogram: Vec<usize>,
+    /// Edges (members).
     pub edges: usize,
+    /// The file's name.
     pub file: String,
+    /// What made the network.
     pub generator: Option<String>,
     /// What reading the file did (null when the network came from memory).
     pub import: Option<Value>,
+    /// What it is.
     pub kind: &'static str,
+    /// Edge lengths.
     pub lengths: Option<Lengths>,
+    /// Nodes.
     pub nodes: usize,
     /// Every problem, each with its `kind`, where, and a `message`.
     pub problems: Vec<Value>,
+    /// The unit of lengths.
     pub units: String,
 }
 
@@ -126,17 +145,29 @@ pub fn network(
 /// A mesh's topology and size.
 #[derive(Clone, Debug, Serialize)]
 pub struct Topology {
+    /// Area, mm².
     pub area: f64,
+    /// Edges with one triangle.
     pub boundary_edges: usize,
+    /// Boundary loops.
     pub boundary_loops: usize,
+    /// Whether every edge has two triangles.
     pub closed: bool,
+    /// Connected components.
     pub components: usize,
+    /// Edges (members).
     pub edges: usize,
+    /// V − E + F and its parts.
     pub euler: i64,
+    /// Faces.
     pub faces: usize,
+    /// Genus.
     pub genus: Option<i64>,
+    /// Signed volume (negative when inside out), mm³.
     pub signed_volume: f64,
+    /// Vertices.
     pub vertices: usize,
+    /// Volume, mm³.
     pub volume: Option<f64>,
 }
 
@@ -152,14 +183,23 @@ pub struct MeshImport {
 /// What a mesh is. Fields in the command's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct MeshInfo {
+    /// Bounding box.
     pub bbox: Option<Bbox>,
+    /// The file's name.
     pub file: String,
+    /// What reading the file did.
     pub import: MeshImport,
+    /// What it is.
     pub kind: &'static str,
+    /// Every problem found, in words.
     pub problems: Vec<String>,
+    /// Topology.
     pub topology: Topology,
+    /// Triangles.
     pub triangles: usize,
+    /// Whether vertices have colours.
     pub vertex_colors: bool,
+    /// Vertices.
     pub vertices: usize,
 }
 

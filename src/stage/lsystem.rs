@@ -99,19 +99,27 @@ impl Default for Options {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error("{source_name}: {error}")]
+    /// The grammar refused.
     Grammar {
+        /// Where the grammar came from.
         source_name: String,
+        /// The grammar's error.
         error: GrammarError,
     },
     #[error(transparent)]
+    /// The derivation failed.
     Derive(#[from] DeriveError),
     #[error(transparent)]
+    /// The turtle refused.
     Turtle(#[from] TurtleError),
     #[error("the derived word draws nothing (no F in {0} symbols)")]
+    /// The word draws nothing.
     NothingDrawn(u64),
     #[error(transparent)]
+    /// Shaping failed.
     Shape(#[from] ShapeError),
 }
 
@@ -125,7 +133,9 @@ impl Error {
 /// The drawn tree and its report.
 #[derive(Clone, Debug)]
 pub struct Drawn {
+    /// The network made.
     pub network: Network,
+    /// The report, as the command writes it.
     pub report: Report,
 }
 
@@ -133,7 +143,9 @@ pub struct Drawn {
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     #[serde(flatten)]
+    /// The sections shared with the other generators.
     pub sections: Sections,
+    /// The turtle's figures.
     pub lsystem: TurtleStats,
 }
 

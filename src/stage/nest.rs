@@ -159,18 +159,29 @@ pub fn parse_rotations(s: &str) -> Result<Rotations, String> {
 /// One sheet of the result.
 #[derive(Clone, Debug)]
 pub struct SheetInfo {
+    /// The file's name.
     pub file: String,
+    /// Thickness, mm.
     pub thickness: f64,
     /// Set with `keep_groups`.
     pub group: Option<u32>,
+    /// The stock sheet.
     pub stock: Stock,
+    /// The plates on it, by index.
     pub parts: Vec<usize>,
+    /// Area, mm².
     pub area: f64,
+    /// Free rectangles [lower-left, upper-right] left for later jobs.
     pub remnants: Vec<[DVec2; 2]>,
+    /// Cut length, mm (contours and leads, less micro-joints).
     pub cut_mm: f64,
+    /// Pierces: one per contour, one after each micro-joint.
     pub pierces: usize,
+    /// Etched length, mm.
     pub etch_mm: f64,
+    /// Lead-in and lead-out length, mm.
     pub lead_mm: f64,
+    /// Micro-joints.
     pub joints: usize,
     /// Seconds: laser, plasma.
     pub time_s: (f64, f64),
@@ -179,8 +190,11 @@ pub struct SheetInfo {
 /// Micro-joints as asked for.
 #[derive(Clone, Copy, Debug)]
 pub struct Joints {
+    /// Micro-joints per part.
     pub per_part: usize,
+    /// Parts smaller than this get micro-joints, mm.
     pub below: f64,
+    /// Width, mm.
     pub width: f64,
 }
 
@@ -199,13 +213,17 @@ impl Joints {
 /// The nest: every plate's place and drawing, the sheets, and nest.json.
 #[derive(Clone, Debug)]
 pub struct Nested {
+    /// Plates.
     pub plates: Vec<PlateRecord>,
+    /// Node cores (tubes).
     pub cores: Vec<CoreRecord>,
     /// One per plate, in plate order.
     pub places: Vec<Place>,
     /// Each plate as cut on its sheet, in plate order.
     pub drawn: Vec<Drawn>,
+    /// Sheets.
     pub sheets: Vec<SheetInfo>,
+    /// Micro-joints.
     pub joints: Option<Joints>,
     /// nest.json.
     pub doc: NestDoc,
@@ -235,26 +253,45 @@ impl Nested {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(
         "{count} plate(s) fit no {sheet_w} × {sheet_h} mm sheet ({usable_w:.0} × {usable_h:.0} mm inside the margin) at any allowed rotation: {names}"
     )]
+    /// Parts that fit no sheet.
     TooLarge {
+        /// How many plates fit no sheet.
         count: usize,
+        /// The largest sheet's width, mm.
         sheet_w: f64,
+        /// The largest sheet's height, mm.
         sheet_h: f64,
+        /// Usable width inside the margin, mm.
         usable_w: f64,
+        /// Usable height inside the margin, mm.
         usable_h: f64,
+        /// The parts that fit nowhere.
         names: String,
     },
     #[error("plate {id}: {source}")]
-    Plate { id: String, source: NestError },
+    /// A plate the nester refused.
+    Plate {
+        /// The plate's tag.
+        id: String,
+        /// What the nester said.
+        source: NestError,
+    },
     #[error(transparent)]
+    /// The nester failed.
     Nest(NestError),
     #[error("{table}: the time estimate for {sheet}: {source}")]
+    /// The speed table has no row for a thickness.
     Speeds {
+        /// The speed table's name.
         table: String,
+        /// The sheet file.
         sheet: String,
+        /// Where the input came from.
         source: SpeedError,
     },
 }
@@ -534,102 +571,164 @@ fn size(p: &[DVec2]) -> DVec2 {
 /// and overall, and every plate's placement. Fields in the file's order.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct NestDoc {
+    /// What the figures mean.
     pub definitions: BTreeMap<&'static str, &'static str>,
+    /// Sheets by thickness.
     pub families: Vec<Family>,
+    /// The file format's name.
     pub format: &'static str,
+    /// Kept clear along every sheet edge, mm.
     pub margin: f64,
+    /// Micro-joints.
     pub micro_joints: Option<JointsDoc>,
+    /// Parts not nested (tubes).
     pub not_nested: Vec<NotNested>,
+    /// Pairs of plates side by side at a node.
     pub pairs: bool,
+    /// Where each part (or model) lies.
     pub placements: Vec<Placement>,
+    /// Plates.
     pub plates: usize,
+    /// Allowed rotations.
     pub rotations: serde_json::Value,
+    /// Random seed.
     pub seed: u64,
+    /// Sheets.
     pub sheets: Vec<SheetDoc>,
+    /// Least distance between parts, mm.
     pub spacing: f64,
+    /// The speeds the times were computed with.
     pub speed_table: SpeedTable,
+    /// Every sheet together.
     pub total: Total,
+    /// Seeded tries.
     pub tries: usize,
+    /// The unit of lengths.
     pub units: &'static str,
+    /// The format's version.
     pub version: u32,
 }
 
 /// The sheets of one thickness together.
 #[derive(Clone, Debug, Serialize)]
 pub struct Family {
+    /// Stock cost.
     pub cost: f64,
+    /// Area of the parts, mm².
     pub part_area_mm2: f64,
+    /// Sheets.
     pub sheets: usize,
+    /// Thickness, mm.
     pub thickness: f64,
+    /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
 
 /// Micro-joints as nest.json states them.
 #[derive(Clone, Debug, Serialize)]
 pub struct JointsDoc {
+    /// Parts smaller than this get micro-joints, mm.
     pub below_mm: f64,
+    /// Kept clear of corners, the pierce point and each other, mm.
     pub clear_mm: f64,
+    /// Micro-joints per part.
     pub per_part: usize,
+    /// Width of a micro-joint along the contour, mm.
     pub width_mm: f64,
 }
 
 /// A node core: tube stock, not nested.
 #[derive(Clone, Debug, Serialize)]
 pub struct NotNested {
+    /// Its tag.
     pub id: String,
+    /// What it is.
     pub kind: &'static str,
+    /// Length, mm.
     pub length: f64,
+    /// Tube outer diameter, mm.
     pub outer_diameter: f64,
+    /// Tube wall, mm.
     pub wall: f64,
 }
 
 /// Where a plate lies.
 #[derive(Clone, Debug, Serialize)]
 pub struct Placement {
+    /// Lower corner of the bounding box, mm.
     pub bbox_min: [f64; 2],
+    /// Its tag.
     pub id: String,
+    /// Micro-joints.
     pub micro_joints: usize,
+    /// Offset after the rotation, mm.
     pub offset: [f64; 2],
+    /// Rotation from the plate's own frame, degrees.
     pub rotation_deg: f64,
+    /// The sheet file.
     pub sheet: String,
 }
 
 /// Laser and plasma seconds.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Seconds {
+    /// Laser, s.
     pub laser: f64,
+    /// Plasma, s.
     pub plasma: f64,
 }
 
 /// One sheet.
 #[derive(Clone, Debug, Serialize)]
 pub struct SheetDoc {
+    /// Stock cost.
     pub cost: f64,
+    /// Cut length, mm (contours and leads, less micro-joints).
     pub cut_mm: f64,
+    /// Etched length, mm.
     pub etch_mm: f64,
+    /// The file's name.
     pub file: String,
+    /// Assembly group (from 1).
     pub group: Option<u32>,
+    /// Micro-joints.
     pub micro_joints: usize,
+    /// Area of the parts, mm².
     pub part_area_mm2: f64,
+    /// The plates on it, by tag.
     pub parts: Vec<String>,
+    /// Pierces: one per contour, one after each micro-joint.
     pub pierces: usize,
+    /// Free rectangles [lower-left, upper-right] left for later jobs.
     pub remnants: Vec<[[f64; 2]; 2]>,
+    /// Size, mm.
     pub size: [f64; 2],
+    /// Thickness, mm.
     pub thickness: f64,
+    /// Machine time, s.
     pub time_s: Seconds,
+    /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
 
 /// Every sheet together.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Total {
+    /// Stock cost.
     pub cost: f64,
+    /// Cut length, mm (contours and leads, less micro-joints).
     pub cut_mm: f64,
+    /// Etched length, mm.
     pub etch_mm: f64,
+    /// Area of the parts, mm².
     pub part_area_mm2: f64,
+    /// Pierces: one per contour, one after each micro-joint.
     pub pierces: usize,
+    /// Sheets.
     pub sheets: usize,
+    /// Machine time, s.
     pub time_s: Seconds,
+    /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
 

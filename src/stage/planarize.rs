@@ -76,22 +76,34 @@ impl Default for Options {
 /// The figures the axes file keeps beside the axes (`summary`).
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    /// The α asked for.
     pub alpha_requested: f64,
+    /// The α the solve kept.
     pub alpha_used: f64,
+    /// Whether the rounds settled before the cap.
     pub converged: bool,
+    /// Edges not perpendicular to their fixed normal.
     pub impossible_normals: Vec<usize>,
+    /// Growth steps (or solver iterations) taken.
     pub iterations: usize,
+    /// Largest turn of an axis from its reference, degrees.
     pub max_axis_deviation_deg: f64,
+    /// Largest panel deviation, mm.
     pub max_deviation: f64,
+    /// The solver.
     pub method: Method,
+    /// Nodes of degree > 3.
     pub over_constrained: Vec<u32>,
+    /// Tolerance, mm.
     pub tolerance: f64,
 }
 
 /// A solved network: what `planarize` writes, before it is written.
 #[derive(Clone, Debug)]
 pub struct Planarized {
+    /// The solver's solution.
     pub solution: Solution,
+    /// Local axes.
     pub axes: Axes,
     /// The axes file's summary.
     pub summary: Summary,
@@ -100,6 +112,7 @@ pub struct Planarized {
     /// What the solve says in words: tolerance missed, over-constrained nodes, how far axes
     /// turned.
     pub notes: Vec<String>,
+    /// Wall time of the solve, s.
     pub seconds: f64,
 }
 
@@ -107,10 +120,13 @@ pub struct Planarized {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// No reference directions.
     Reference(#[from] ReferenceError),
     #[error(transparent)]
+    /// The solver failed.
     Solve(#[from] PlanarizeError),
 }
 

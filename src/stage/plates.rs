@@ -88,7 +88,9 @@ impl Default for Options {
 /// A sizing's gauges: one per edge, and the list they were chosen from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gauges {
+    /// The gauge of each edge, mm.
     pub per_edge: Vec<f64>,
+    /// The gauges to choose from, mm.
     pub list: Vec<f64>,
 }
 
@@ -106,19 +108,24 @@ impl Gauges {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(
         "no vein radii to take thicknesses from: give sizing= (from size), thickness= or edge_thickness="
     )]
+    /// No way to choose thicknesses.
     NoThickness,
     #[error(transparent)]
+    /// The plates failed.
     Plates(#[from] PlateError),
 }
 
 /// The plates made: the set, the documents the command writes, and the weld summary.
 #[derive(Clone, Debug)]
 pub struct Plated {
+    /// The plates.
     pub set: PlateSet,
+    /// The options as resolved.
     pub options: PlateOptions,
     /// plates.json.
     pub file: PlatesDoc,
@@ -288,33 +295,51 @@ fn plates_doc(set: &PlateSet, opts: &PlateOptions) -> PlatesDoc {
 /// angles, whether the gaps are even, and its core. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Welds {
+    /// What the figures mean.
     pub definitions: WeldDefinitions,
+    /// The file format's name.
     pub format: &'static str,
+    /// The minimum weld angle asked for, degrees.
     pub min_weld_angle: Option<f64>,
+    /// Nodes.
     pub nodes: Vec<WeldNodeDoc>,
+    /// Summary figures.
     pub summary: WeldSummary,
+    /// The unit of lengths.
     pub units: &'static str,
+    /// The format's version.
     pub version: u32,
+    /// Target root gap, mm.
     pub weld_gap: f64,
+    /// How far a root gap may be from the target, mm.
     pub weld_gap_tolerance: f64,
 }
 
 /// What welds.json's figures mean.
 #[derive(Clone, Debug, Serialize)]
 pub struct WeldDefinitions {
+    /// The weld access class.
     pub access: &'static str,
+    /// Dihedral angle between the two plates about the node axis, degrees.
     pub dihedral_deg: &'static str,
+    /// Root gap of the weld, mm.
     pub root_gap_mm: &'static str,
 }
 
 /// One node's welds.
 #[derive(Clone, Debug, Serialize)]
 pub struct WeldNodeDoc {
+    /// The node's core.
     pub core: Option<WeldCore>,
+    /// Edges (members).
     pub edges: Vec<usize>,
+    /// The node.
     pub node: u32,
+    /// Pairs of plates side by side at a node.
     pub pairs: Vec<WeldPairDoc>,
+    /// Plates.
     pub plates: Vec<String>,
+    /// Each plate's setback from the node axis, mm.
     pub setbacks_mm: Vec<f64>,
     /// `even`, `needs a node core` or `core`.
     pub status: &'static str,
@@ -323,37 +348,59 @@ pub struct WeldNodeDoc {
 /// A node's core as the weld report gives it.
 #[derive(Clone, Debug, Serialize)]
 pub struct WeldCore {
+    /// Its tag.
     pub id: String,
+    /// Length, mm.
     pub length: f64,
+    /// Tube outer diameter, mm.
     pub outer_diameter: f64,
+    /// Root gap of the weld, mm.
     pub root_gap_mm: Vec<f64>,
+    /// Tube wall, mm.
     pub wall: f64,
 }
 
 /// Two plates side by side at a node.
 #[derive(Clone, Debug, Serialize)]
 pub struct WeldPairDoc {
+    /// The weld access class.
     pub access: &'static str,
+    /// Dihedral angle between the two plates about the node axis, degrees.
     pub dihedral_deg: f64,
+    /// Edges (members).
     pub edges: [usize; 2],
+    /// Whether the root gap is within its tolerance.
     pub gap_within_tolerance: bool,
+    /// Plates.
     pub plates: [String; 2],
+    /// Root gap of the weld, mm.
     pub root_gap_mm: f64,
 }
 
 /// The weld report's totals.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct WeldSummary {
+    /// Node cores (tubes).
     pub cores: usize,
+    /// Nodes whose gaps are even.
     pub even_nodes: usize,
+    /// Nodes.
     pub nodes: usize,
+    /// Nodes whose gaps setbacks cannot even.
     pub nodes_needing_a_core: Vec<u32>,
+    /// Pairs of plates side by side at a node.
     pub pairs: usize,
+    /// Pairs at 120–135° (AWS D1.1 only).
     pub pairs_120_135: usize,
+    /// Pairs at 60–120° (prequalified fillet).
     pub pairs_60_120: usize,
+    /// Pairs below 60° (no prequalified fillet).
     pub pairs_below_60: usize,
+    /// Pairs below the minimum weld angle.
     pub pairs_below_min_weld_angle: usize,
+    /// Pairs over 135° (butt).
     pub pairs_over_135: usize,
+    /// The smallest dihedral angle, degrees.
     pub smallest_dihedral_deg: f64,
 }
 

@@ -25,7 +25,9 @@ use crate::Network;
 /// The solid and the job. `Default` is the command's defaults.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
+    /// What the solid or tree is made of.
     pub shape: Shape,
+    /// The printer, plate and estimate settings.
     pub job: JobOptions,
     /// The network's name in print.json (its path). Default "network".
     pub name: Option<String>,
@@ -35,8 +37,10 @@ pub struct Options {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// Meshing failed.
     Solid(#[from] SolidStageError),
     #[error(transparent)]
+    /// Slicing failed.
     Slice(#[from] SliceJobError),
 }
 

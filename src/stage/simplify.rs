@@ -47,6 +47,7 @@ impl Default for Options {
 /// The simplified network and what was defaulted.
 #[derive(Clone, Debug)]
 pub struct Done {
+    /// The simplified network.
     pub simplified: Simplified,
     /// Defaults taken that change the result, one line each.
     pub notes: Vec<String>,
@@ -56,8 +57,10 @@ pub struct Done {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("surface= has no triangles")]
+    /// The surface has no triangles.
     EmptySurface,
     #[error(transparent)]
+    /// Simplification failed.
     Simplify(#[from] SimplifyError),
 }
 

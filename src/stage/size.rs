@@ -107,9 +107,11 @@ pub fn group_by(s: &str) -> Result<GroupBy, String> {
 /// The sizing: the analysis, whether everything holds, and the sizing file's contents.
 #[derive(Clone, Debug)]
 pub struct Sized {
+    /// The analysis.
     pub sizing: Sizing,
     /// Utilisation and weld utilisation at most 1, and the deflection limit held.
     pub ok: bool,
+    /// The report, as the command writes it.
     pub report: Report,
     /// Defaults taken that change the result (the material), one line each.
     pub notes: Vec<String>,
@@ -119,10 +121,13 @@ pub struct Sized {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// The analysis failed.
     Sizing(#[from] SizingError),
     #[error(transparent)]
+    /// The caller stopped the stage.
     Cancelled(#[from] Cancelled),
 }
 
@@ -243,90 +248,145 @@ pub fn run(axes: &Axes, opts: &Options, progress: &dyn Progress) -> Result<Sized
 /// displacement and weld, the reactions and the totals. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// Frame or shells.
     pub analysis: serde_json::Value,
+    /// Load cases, the sum of them last.
     pub cases: Vec<String>,
+    /// Whether the rounds settled before the cap.
     pub converged: bool,
+    /// What the figures mean.
     pub definitions: Definitions,
+    /// Rounds of stiffening for the deflection limit.
     pub deflection_rounds: usize,
+    /// Edges (members).
     pub edges: Vec<EdgeRow>,
+    /// The file format's name.
     pub format: &'static str,
+    /// Gauges to choose from, mm.
     pub gauges: Vec<f64>,
+    /// How members are sized together.
     pub group_by: serde_json::Value,
+    /// The steel.
     pub material: Material,
+    /// Nodes.
     pub nodes: Vec<NodeRow>,
+    /// Support reactions under the sum of the loads.
     pub reactions: Vec<Reaction>,
+    /// Rounds of analysis and gauge choice.
     pub rounds: usize,
+    /// Whether neighbouring members keep within a gauge step.
     pub smooth: bool,
+    /// Where the input came from.
     pub source: String,
+    /// The supports added.
     pub supports: Vec<String>,
+    /// The whole structure's figures.
     pub totals: Totals,
+    /// The unit of lengths.
     pub units: BTreeMap<&'static str, &'static str>,
+    /// The format's version.
     pub version: u32,
 }
 
 /// What the figures mean.
 #[derive(Clone, Debug, Serialize)]
 pub struct Definitions {
+    /// Displacement, mm.
     pub displacement: &'static str,
+    /// End forces in the member's local axes under the sum of the loads [a: Fx Fy Fz Mx My Mz, b: …].
     pub end_forces: &'static str,
+    /// The model sliced.
     pub model: String,
+    /// Support reactions under the sum of the loads.
     pub reactions: &'static str,
+    /// Utilisation: the governing check's figure over its limit.
     pub utilisation: &'static str,
+    /// Weld utilisation (EN 1993-1-8 §4.5.3.3).
     pub weld_utilisation: &'static str,
 }
 
 /// One member.
 #[derive(Clone, Debug, Serialize)]
 pub struct EdgeRow {
+    /// The member's first node.
     pub a: usize,
+    /// Local axes.
     pub axes: LocalAxes,
+    /// The member's second node.
     pub b: usize,
+    /// The check that governs.
     pub check: &'static str,
+    /// Section depth (the panel height across the member), mm.
     pub depth: f64,
+    /// End forces in the member's local axes under the sum of the loads [a: Fx Fy Fz Mx My Mz, b: …].
     pub end_forces: [f64; 12],
+    /// Gauge, mm.
     pub gauge: f64,
+    /// Length, mm.
     pub length: f64,
+    /// The load case governing it.
     pub load: String,
+    /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
 
 /// A member's local axes.
 #[derive(Clone, Debug, Serialize)]
 pub struct LocalAxes {
+    /// Local x (along the member).
     pub x: [f64; 3],
+    /// Local y (in the panel plane, across the member).
     pub y: [f64; 3],
+    /// Local z (the panel normal).
     pub z: [f64; 3],
 }
 
 /// One node.
 #[derive(Clone, Debug, Serialize)]
 pub struct NodeRow {
+    /// Displacement, mm.
     pub displacement: [f64; 3],
+    /// Position, mm.
     pub position: [f64; 3],
+    /// Rotation, rad.
     pub rotation: [f64; 3],
+    /// Fillet weld throat, mm.
     pub throat: f64,
+    /// The load case governing the weld.
     pub weld_load: Option<String>,
+    /// Weld utilisation (EN 1993-1-8 §4.5.3.3).
     pub weld_utilisation: Option<f64>,
 }
 
 /// A support's reaction under the sum of the loads.
 #[derive(Clone, Debug, Serialize)]
 pub struct Reaction {
+    /// Force, N.
     pub force: [f64; 3],
+    /// Moment, N·mm.
     pub moment: [f64; 3],
+    /// The node.
     pub node: usize,
 }
 
 /// The whole structure's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct Totals {
+    /// The deflection limit, mm.
     pub deflection_limit: Option<f64>,
+    /// Mass, kg.
     pub mass_kg: f64,
+    /// Largest displacement, mm.
     pub max_displacement: f64,
+    /// The node that moves most.
     pub max_displacement_node: usize,
+    /// Largest member utilisation.
     pub max_utilisation: f64,
+    /// Largest weld utilisation.
     pub max_weld_utilisation: f64,
+    /// Largest out-of-balance force over the largest load.
     pub residual: f64,
+    /// The structure's largest horizontal extent, mm.
     pub span: f64,
 }
 

@@ -176,6 +176,7 @@ impl JobOptions {
 /// How meshes are sliced. `Default` is the command's defaults.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
+    /// The printer, plate and estimate settings.
     pub job: JobOptions,
     /// Print the models where they are instead of arranging them. Default false.
     pub keep_position: bool,
@@ -188,7 +189,9 @@ pub struct Options {
 /// A sliced job: print.json and the estimate (the archive went to the writer).
 #[derive(Clone, Debug)]
 pub struct Sliced {
+    /// The report, as the command writes it.
     pub report: Report,
+    /// Resin, cost and time.
     pub estimate: Estimate,
     /// What the caller should hear (models only a few layers tall), one line each.
     pub notes: Vec<String>,
@@ -199,26 +202,47 @@ pub struct Sliced {
 pub struct Report {
     /// The archive: the job's name with `.sl1` (the command line puts its path here).
     pub archive: String,
+    /// Upper corner of the bounding box, mm.
     pub bbox_max: [f64; 3],
+    /// Lower corner of the bounding box, mm.
     pub bbox_min: [f64; 3],
+    /// What the build time comes from.
     pub build_time_from: String,
+    /// Build time, h.
     pub build_time_h: f64,
+    /// Volume inside the sections' contours, mL.
     pub contour_volume_ml: Option<f64>,
+    /// Copies of each model.
     pub copies: usize,
+    /// Resin density, g/mL.
     pub density_g_ml: f64,
+    /// Height of the print, mm.
     pub height_mm: f64,
+    /// Islands in all.
     pub island_count: usize,
+    /// Islands (listed up to a limit).
     pub islands: Vec<Island>,
+    /// Each layer's area from its image, mm².
     pub layer_area_mm2: Vec<f64>,
+    /// Layer height, mm.
     pub layer_mm: f64,
+    /// Layers.
     pub layers: usize,
+    /// Resin mass, g.
     pub mass_g: f64,
+    /// The meshes' volume, mL.
     pub mesh_volume_ml: Option<f64>,
+    /// Build time by the exposure and peel model, h.
     pub model_build_time_h: f64,
+    /// The models' names.
     pub models: Vec<String>,
+    /// Where each part (or model) lies.
     pub placements: Vec<Placement>,
+    /// The printer.
     pub printer: Printer,
+    /// Resin cost.
     pub resin_cost: f64,
+    /// Resin price per litre.
     pub resin_cost_per_litre: f64,
     /// The solid sampled (`print` only).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -226,6 +250,7 @@ pub struct Report {
     /// The supports added (`print --supports` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub supports: Option<serde_json::Value>,
+    /// Resin from the layer images, mL.
     pub volume_ml: f64,
 }
 
@@ -233,12 +258,16 @@ pub struct Report {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// Slicing failed.
     Slice(#[from] SliceError),
     #[error("{0}")]
+    /// The archive could not be written.
     Write(#[from] std::io::Error),
     #[error("cancelled")]
+    /// The caller stopped the stage.
     Cancelled,
 }
 
@@ -312,8 +341,15 @@ pub fn run(
 /// What a job slices: closed meshes, or a solid's shapes sampled directly (`print`).
 #[derive(Clone, Copy)]
 pub enum Source<'a> {
+    /// Closed meshes.
     Meshes(&'a [Model]),
-    Shapes { model: &'a Placed, path: &'a Path },
+    /// A solid's shapes sampled directly.
+    Shapes {
+        /// The shapes, placed as the print places them.
+        model: &'a Placed,
+        /// The network's name.
+        path: &'a Path,
+    },
 }
 
 /// Why a layer's sink stopped.

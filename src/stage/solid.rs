@@ -47,6 +47,7 @@ pub struct Options {
     pub cell: f64,
     /// Simplify to within this of the exact surface, mm. Default: every marched triangle kept.
     pub tolerance: Option<f64>,
+    /// What the solid or tree is made of.
     pub shape: Shape,
 }
 
@@ -63,7 +64,9 @@ impl Default for Options {
 /// The solid: its mesh and its report.
 #[derive(Clone, Debug)]
 pub struct Made {
+    /// The mesh.
     pub mesh: TriMesh,
+    /// The report, as the command writes it.
     pub report: Report,
     /// Warnings (veins thinner than the cell, gaps left bridged, islands left), one line each.
     pub warnings: Vec<String>,
@@ -75,8 +78,10 @@ pub struct Made {
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     #[serde(flatten)]
+    /// The solid's figures.
     pub solid: SolidReport,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The supports added.
     pub supports: Option<SupportReport>,
 }
 
@@ -84,8 +89,10 @@ pub struct Report {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// Meshing failed.
     Solid(#[from] SolidError),
     #[error(transparent)]
+    /// Support planning failed.
     Supports(#[from] SupportError),
 }
 

@@ -66,27 +66,38 @@ impl Default for Options {
 /// The veins and their report.
 #[derive(Clone, Debug)]
 pub struct Grown {
+    /// The network made.
     pub network: Network,
+    /// The report, as the command writes it.
     pub report: Report,
 }
 
 /// The veins' report. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// Edges (members).
     pub edges: usize,
+    /// Growth steps (or solver iterations) taken.
     pub iterations: usize,
+    /// Nodes.
     pub nodes: usize,
     /// The file the network was written to (set by the command line).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// Shortest-path labels updated.
     pub relabelled: usize,
+    /// Root vertex.
     pub root: u32,
+    /// Radius at the root, mm.
     pub root_radius: Option<f64>,
+    /// Sources reached.
     pub sources: usize,
+    /// Sampled sources no mesh edge path reaches from the root.
     pub sources_unreachable_skipped: usize,
     /// The surface's name (set by the command line: its path).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub surface: Option<String>,
+    /// Vertices on the tree.
     pub tree_vertices: usize,
 }
 
@@ -94,12 +105,16 @@ pub struct Report {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// The veins failed.
     Veins(#[from] VeinError),
     #[error(transparent)]
+    /// Growth on the surface failed.
     Surface(#[from] SurfaceError),
     #[error(transparent)]
+    /// The caller stopped the stage.
     Cancelled(#[from] Cancelled),
 }
 

@@ -130,24 +130,35 @@ impl Default for Options {
 /// A leaf grown, with its report.
 #[derive(Clone, Debug)]
 pub struct Grown {
+    /// The leaf grown.
     pub leaf: Leaf,
+    /// The report, as the command writes it.
     pub report: Report,
 }
 
 /// What a growth did: the venation report `--report` writes. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// Edges (members).
     pub edges: usize,
+    /// Growth steps (or solver iterations) taken.
     pub iterations: usize,
+    /// Loop-closing edges.
     pub loop_edges: usize,
+    /// Nodes.
     pub nodes: usize,
     /// The file the network was written to (set by the command line).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// The quality report.
     pub quality: Quality,
+    /// Radius at the root, mm.
     pub root_radius: Option<f64>,
+    /// Sources never reached.
     pub sources_left: usize,
+    /// Sources placed.
     pub sources_placed: usize,
+    /// Why growth stopped.
     pub stop: Stop,
 }
 
@@ -155,10 +166,13 @@ pub struct Report {
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    /// An option out of range.
     Option(#[from] OptionError),
     #[error(transparent)]
+    /// Growth in the blade failed.
     Leaf(#[from] LeafError),
     #[error(transparent)]
+    /// Growth on the surface failed.
     Surface(#[from] SurfaceError),
 }
 
@@ -173,7 +187,9 @@ impl Error {
 
 /// Frames of the growth: called every `every` steps and after the last.
 pub struct Frames<'a, V> {
+    /// Steps (or cells) between frames.
     pub every: usize,
+    /// Called with each frame.
     pub call: &'a mut dyn FnMut(&Frame<V>),
 }
 
@@ -307,8 +323,11 @@ fn report(leaf: &Leaf) -> Report {
 /// One leaf of a sweep.
 #[derive(Clone, Debug)]
 pub struct SweptLeaf {
+    /// Peele's r.
     pub r: f64,
+    /// Blade size added per step.
     pub blade_rate: f64,
+    /// The leaf and its report.
     pub grown: Grown,
 }
 
@@ -383,8 +402,11 @@ pub fn contact_sheet(leaves: &[SweptLeaf]) -> String {
 /// report.
 #[derive(Clone, Debug)]
 pub struct OnSurface {
+    /// The veins grown.
     pub veins: SurfaceVeins,
+    /// The options as resolved.
     pub options: SurfaceOptions,
+    /// The report, as the command writes it.
     pub report: SurfaceReport,
     /// What the caller should hear (bodies no root reaches), one line each.
     pub notes: Vec<String>,
@@ -393,20 +415,32 @@ pub struct OnSurface {
 /// The report of venation on a surface. Fields in the file's order.
 #[derive(Clone, Debug, Serialize)]
 pub struct SurfaceReport {
+    /// Birth distance where lightest, mm.
     pub birth_max: f64,
+    /// Birth distance where darkest, mm.
     pub birth_min: f64,
+    /// Edges (members).
     pub edges: usize,
+    /// Growth steps (or solver iterations) taken.
     pub iterations: usize,
+    /// Kill distance, mm.
     pub kill: f64,
+    /// Loop-closing edges.
     pub loop_edges: usize,
+    /// Nodes.
     pub nodes: usize,
     /// The file the network was written to (set by the command line).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// The quality report.
     pub quality: surface::SurfaceQuality,
+    /// Sources never reached.
     pub sources_left: usize,
+    /// Sources placed.
     pub sources_placed: usize,
+    /// Growth step D, mm.
     pub step: f64,
+    /// Why growth stopped.
     pub stop: Stop,
     /// The surface's name (set by the command line: its path).
     #[serde(skip_serializing_if = "Option::is_none")]
