@@ -5,7 +5,8 @@ compares each with the same part in lamina's assembly.obj (one object per plate)
 
 The whole assemblies (every part unioned by CGAL, minutes on one core) are rebuilt by
 `scripts/bench scad`; a part alone renders in well under a second, and the sample covers the
-thinnest and thickest plates, plates with bolt holes, and parts spread over the file.
+thinnest and thickest plates, plates with bolt holes, a part from every DXF (every sheet of a cut plan), and
+parts spread evenly over the file.
 
     check_scad_parts.py ASSEMBLY.scad ASSEMBLY.obj [--parts N]
 """
@@ -82,13 +83,18 @@ def main():
     bolted = [pid for pid, _ in parts if pid in objects and "-" in pid and
               len(objects[pid][1]) > 200]
     picks += bolted[:2]
-    step = max(1, len(parts) // max(1, want_parts - len(picks)))
-    picks += [pid for pid, _ in parts[::step]]
-    seen, sample = set(), []
-    for p in picks:
-        if p not in seen and len(sample) < want_parts:
-            seen.add(p)
-            sample.append(p)
+    # One part from every file several parts are cut from (each sheet of a cut plan).
+    of_file = {}
+    for pid, ln in parts:
+        of_file.setdefault(re.match(r'\s*part\("([^"]*)"', ln).group(1), []).append(pid)
+    picks += [ids[0] for ids in of_file.values() if len(ids) > 1]
+    sample = list(dict.fromkeys(picks))
+    # The rest evenly over the file, up to the number asked for.
+    rest = [pid for pid, _ in parts if pid not in set(sample)]
+    room = max(0, want_parts - len(sample))
+    if room and rest:
+        step = max(1, len(rest) // room)
+        sample += rest[::step][:room]
     line_of = dict(parts)
     problems = []
 

@@ -256,10 +256,7 @@ fn global_stiffness(k: &[[f64; 12]; 12], x: DVec3, y: DVec3, z: DVec3) -> [[f64;
 
 /// Tᵀ k T for a stiffness over blocks of three freedoms (translations, rotations), T block-
 /// diagonal with `r`, whose rows are the local axes in global coordinates (local = r · global).
-pub(super) fn rotate_stiffness<const N: usize>(
-    k: &[[f64; N]; N],
-    r: [[f64; 3]; 3],
-) -> [[f64; N]; N] {
+fn rotate_stiffness<const N: usize>(k: &[[f64; N]; N], r: [[f64; 3]; 3]) -> [[f64; N]; N] {
     // kt = k T, then Tᵀ kt.
     let mut kt = [[0.0; N]; N];
     for i in 0..N {

@@ -23,11 +23,13 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 use glam::{DMat3, DVec3};
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector};
 use rayon::prelude::*;
 
-use super::frame::{
-    factor, local_frame, rotate_stiffness, CaseResult, FrameError, LoadCase, Model, Support,
-};
+use super::frame::{factor, local_frame, CaseResult, FrameError, LoadCase, Model, Support};
+
+/// An element's stiffness over its 24 freedoms (u, v, w, θx, θy, θz at each corner in turn).
+pub type Stiffness = SMatrix<f64, 24, 24>;
 
 /// The most elements a mesh may have: each costs about 12 kB while the stiffness is assembled.
 pub const MAX_ELEMENTS: usize = 100_000;
@@ -143,60 +145,40 @@ fn shape(xi: f64, eta: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
 }
 
 /// The Jacobian [[x,ξ, y,ξ], [x,η, y,η]] at (ξ, η).
-fn jacobian(xy: &[[f64; 2]; 4], dxi: &[f64; 4], deta: &[f64; 4]) -> [[f64; 2]; 2] {
-    let mut j = [[0.0; 2]; 2];
+fn jacobian(xy: &[[f64; 2]; 4], dxi: &[f64; 4], deta: &[f64; 4]) -> Matrix2<f64> {
+    let mut j = Matrix2::zeros();
     for i in 0..4 {
-        j[0][0] += dxi[i] * xy[i][0];
-        j[0][1] += dxi[i] * xy[i][1];
-        j[1][0] += deta[i] * xy[i][0];
-        j[1][1] += deta[i] * xy[i][1];
+        j[(0, 0)] += dxi[i] * xy[i][0];
+        j[(0, 1)] += dxi[i] * xy[i][1];
+        j[(1, 0)] += deta[i] * xy[i][0];
+        j[(1, 1)] += deta[i] * xy[i][1];
     }
     j
 }
 
-fn inverse2(j: &[[f64; 2]; 2]) -> ([[f64; 2]; 2], f64) {
-    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-    (
-        [
-            [j[1][1] / det, -j[0][1] / det],
-            [-j[1][0] / det, j[0][0] / det],
-        ],
-        det,
-    )
+/// J⁻¹ and det J (J⁻¹ not finite where the element is folded flat, which the factorisation
+/// then refuses).
+fn inverse_and_determinant(j: Matrix2<f64>) -> (Matrix2<f64>, f64) {
+    let inverse = j
+        .try_inverse()
+        .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
+    (inverse, j.determinant())
 }
 
 /// Plane-stress elasticity times a factor.
-fn plane_stress(e: f64, nu: f64, factor: f64) -> [[f64; 3]; 3] {
+fn plane_stress(e: f64, nu: f64, factor: f64) -> Matrix3<f64> {
     let c = factor * e / (1.0 - nu * nu);
-    [
-        [c, c * nu, 0.0],
-        [c * nu, c, 0.0],
-        [0.0, 0.0, c * 0.5 * (1.0 - nu)],
-    ]
-}
-
-/// Adds wᵀ·Bᵀ D B to `k` (B rows over the freedoms `cols`).
-fn add_btdb<const R: usize, const C: usize>(
-    k: &mut [[f64; 24]; 24],
-    b: &[[f64; C]; R],
-    d: &[[f64; R]; R],
-    cols: &[usize; C],
-    w: f64,
-) {
-    for p in 0..C {
-        for q in 0..C {
-            let mut s = 0.0;
-            for r in 0..R {
-                if b[r][p] == 0.0 {
-                    continue;
-                }
-                for t in 0..R {
-                    s += b[r][p] * d[r][t] * b[t][q];
-                }
-            }
-            k[cols[p]][cols[q]] += w * s;
-        }
-    }
+    Matrix3::new(
+        c,
+        c * nu,
+        0.0,
+        c * nu,
+        c,
+        0.0,
+        0.0,
+        0.0,
+        c * 0.5 * (1.0 - nu),
+    )
 }
 
 /// The element's local frame: rows e1, e2 (in its plane) and n, and its corners' local
@@ -215,21 +197,20 @@ pub fn element_frame(x: &[DVec3; 4]) -> (DMat3, [[f64; 2]; 4]) {
 }
 
 /// Local stiffness (freedoms per corner: u, v, w, θx, θy, θz in the element's axes).
-pub fn local_stiffness(xy: &[[f64; 2]; 4], p: Plate) -> [[f64; 24]; 24] {
-    let mut k = [[0.0; 24]; 24];
+pub fn local_stiffness(xy: &[[f64; 2]; 4], p: Plate) -> Stiffness {
     let t = p.thickness;
     let g = p.e / (2.0 * (1.0 + p.nu));
     let dm = plane_stress(p.e, p.nu, t);
     let db = plane_stress(p.e, p.nu, t * t * t / 12.0);
-    let ds = [[5.0 / 6.0 * g * t, 0.0], [0.0, 5.0 / 6.0 * g * t]];
-    let membrane: [usize; 8] = std::array::from_fn(|q| 6 * (q / 2) + q % 2);
-    let bending: [usize; 12] = std::array::from_fn(|q| 6 * (q / 3) + 2 + q % 3);
+    let ds = Matrix2::from_diagonal_element(5.0 / 6.0 * g * t);
     // Membrane with incompatible modes: compatible (c) and bubble (i) parts, condensed.
     let (_, dxi0, deta0) = shape(0.0, 0.0);
-    let (j0inv, det0) = inverse2(&jacobian(xy, &dxi0, &deta0));
-    let mut kcc = [[0.0; 8]; 8];
-    let mut kci = [[0.0; 4]; 8];
-    let mut kii = [[0.0; 4]; 4];
+    let (j0inv, det0) = inverse_and_determinant(jacobian(xy, &dxi0, &deta0));
+    let mut kcc = SMatrix::<f64, 8, 8>::zeros();
+    let mut kci = SMatrix::<f64, 8, 4>::zeros();
+    let mut kii = SMatrix::<f64, 4, 4>::zeros();
+    // Bending and transverse shear over w, θx, θy per corner.
+    let mut kb = SMatrix::<f64, 12, 12>::zeros();
     let points = [
         (-GAUSS, -GAUSS),
         (GAUSS, -GAUSS),
@@ -238,81 +219,73 @@ pub fn local_stiffness(xy: &[[f64; 2]; 4], p: Plate) -> [[f64; 24]; 24] {
     ];
     for &(xi, eta) in &points {
         let (_, dxi, deta) = shape(xi, eta);
-        let jac = jacobian(xy, &dxi, &deta);
-        let (jinv, det) = inverse2(&jac);
-        let dx: [f64; 4] = std::array::from_fn(|i| jinv[0][0] * dxi[i] + jinv[0][1] * deta[i]);
-        let dy: [f64; 4] = std::array::from_fn(|i| jinv[1][0] * dxi[i] + jinv[1][1] * deta[i]);
-        let mut bc = [[0.0; 8]; 3];
+        let (jinv, det) = inverse_and_determinant(jacobian(xy, &dxi, &deta));
+        let dx: [f64; 4] = std::array::from_fn(|i| jinv[(0, 0)] * dxi[i] + jinv[(0, 1)] * deta[i]);
+        let dy: [f64; 4] = std::array::from_fn(|i| jinv[(1, 0)] * dxi[i] + jinv[(1, 1)] * deta[i]);
+        let mut bc = SMatrix::<f64, 3, 8>::zeros();
         for i in 0..4 {
-            bc[0][2 * i] = dx[i];
-            bc[1][2 * i + 1] = dy[i];
-            bc[2][2 * i] = dy[i];
-            bc[2][2 * i + 1] = dx[i];
+            bc[(0, 2 * i)] = dx[i];
+            bc[(1, 2 * i + 1)] = dy[i];
+            bc[(2, 2 * i)] = dy[i];
+            bc[(2, 2 * i + 1)] = dx[i];
         }
         // Bubbles 1 − ξ² and 1 − η², by the centre's Jacobian scaled by det J0 / det J.
         let s = det0 / det;
         let (p1, p2) = (-2.0 * xi, -2.0 * eta);
-        let bx = [s * j0inv[0][0] * p1, s * j0inv[0][1] * p2];
-        let by = [s * j0inv[1][0] * p1, s * j0inv[1][1] * p2];
-        let bi = [
-            [bx[0], bx[1], 0.0, 0.0],
-            [0.0, 0.0, by[0], by[1]],
-            [by[0], by[1], bx[0], bx[1]],
-        ];
-        let w = det;
-        for (p, row) in kcc.iter_mut().enumerate() {
-            for (q, v) in row.iter_mut().enumerate() {
-                *v += w * quad(&bc, p, &dm, &bc, q);
-            }
-        }
-        for (p, row) in kci.iter_mut().enumerate() {
-            for (q, v) in row.iter_mut().enumerate() {
-                *v += w * quad(&bc, p, &dm, &bi, q);
-            }
-        }
-        for (p, row) in kii.iter_mut().enumerate() {
-            for (q, v) in row.iter_mut().enumerate() {
-                *v += w * quad(&bi, p, &dm, &bi, q);
-            }
-        }
-        // Bending.
-        let mut bb = [[0.0; 12]; 3];
+        let bx = [s * j0inv[(0, 0)] * p1, s * j0inv[(0, 1)] * p2];
+        let by = [s * j0inv[(1, 0)] * p1, s * j0inv[(1, 1)] * p2];
+        #[rustfmt::skip]
+        let bi = SMatrix::<f64, 3, 4>::new(
+            bx[0], bx[1], 0.0, 0.0,
+            0.0, 0.0, by[0], by[1],
+            by[0], by[1], bx[0], bx[1],
+        );
+        let dm_bc = dm * bc;
+        kcc += det * bc.transpose() * dm_bc;
+        kci += det * (dm_bc.transpose() * bi);
+        kii += det * bi.transpose() * (dm * bi);
+        // Bending: freedoms w, θx, θy; βx = θy, βy = −θx.
+        let mut bb = SMatrix::<f64, 3, 12>::zeros();
         for i in 0..4 {
-            // Freedoms w, θx, θy; βx = θy, βy = −θx.
-            bb[0][3 * i + 2] = dx[i];
-            bb[1][3 * i + 1] = -dy[i];
-            bb[2][3 * i + 2] = dy[i];
-            bb[2][3 * i + 1] = -dx[i];
+            bb[(0, 3 * i + 2)] = dx[i];
+            bb[(1, 3 * i + 1)] = -dy[i];
+            bb[(2, 3 * i + 2)] = dy[i];
+            bb[(2, 3 * i + 1)] = -dx[i];
         }
-        add_btdb(&mut k, &bb, &db, &bending, det);
+        kb += det * bb.transpose() * (db * bb);
         // MITC4 shear: covariant strains tied at the edge midpoints, to Cartesian by J⁻¹.
         let tie_xi_a = covariant_shear(xy, 0.0, -1.0, 0);
         let tie_xi_c = covariant_shear(xy, 0.0, 1.0, 0);
         let tie_eta_b = covariant_shear(xy, -1.0, 0.0, 1);
         let tie_eta_d = covariant_shear(xy, 1.0, 0.0, 1);
-        let mut cov = [[0.0; 12]; 2];
+        let mut cov = SMatrix::<f64, 2, 12>::zeros();
         for q in 0..12 {
-            cov[0][q] = 0.5 * (1.0 - eta) * tie_xi_a[q] + 0.5 * (1.0 + eta) * tie_xi_c[q];
-            cov[1][q] = 0.5 * (1.0 - xi) * tie_eta_b[q] + 0.5 * (1.0 + xi) * tie_eta_d[q];
+            cov[(0, q)] = 0.5 * (1.0 - eta) * tie_xi_a[q] + 0.5 * (1.0 + eta) * tie_xi_c[q];
+            cov[(1, q)] = 0.5 * (1.0 - xi) * tie_eta_b[q] + 0.5 * (1.0 + xi) * tie_eta_d[q];
         }
-        let mut bs = [[0.0; 12]; 2];
-        for q in 0..12 {
-            bs[0][q] = jinv[0][0] * cov[0][q] + jinv[0][1] * cov[1][q];
-            bs[1][q] = jinv[1][0] * cov[0][q] + jinv[1][1] * cov[1][q];
-        }
-        add_btdb(&mut k, &bs, &ds, &bending, det);
+        let bs = jinv * cov;
+        kb += det * bs.transpose() * (ds * bs);
     }
-    // Condense the bubbles: K = Kcc − Kci Kii⁻¹ Kic.
-    let kinv = inverse4(&kii);
+    // Condense the bubbles: K = Kcc − Kci Kii⁻¹ Kic (Kii is positive definite for an element
+    // that is not folded; LU where rounding says otherwise).
+    let kic = kci.transpose();
+    let x = kii
+        .cholesky()
+        .map(|c| c.solve(&kic))
+        .or_else(|| kii.lu().solve(&kic))
+        .unwrap_or_else(|| SMatrix::from_element(f64::NAN));
+    let km = kcc - kci * x;
+    let mut k = Stiffness::zeros();
+    let membrane = |q: usize| 6 * (q / 2) + q % 2;
+    let bending = |q: usize| 6 * (q / 3) + 2 + q % 3;
     for p in 0..8 {
         for q in 0..8 {
-            let mut s = kcc[p][q];
-            for a in 0..4 {
-                for b in 0..4 {
-                    s -= kci[p][a] * kinv[a][b] * kci[q][b];
-                }
-            }
-            k[membrane[p]][membrane[q]] += s;
+            k[(membrane(p), membrane(q))] += km[(p, q)];
+        }
+    }
+    for p in 0..12 {
+        for q in 0..12 {
+            k[(bending(p), bending(q))] += kb[(p, q)];
         }
     }
     // Drilling: a weak spring against differences between the corners' θz.
@@ -320,27 +293,10 @@ pub fn local_stiffness(xy: &[[f64; 2]; 4], p: Plate) -> [[f64; 24]; 24] {
     for i in 0..4 {
         for j in 0..4 {
             let v = if i == j { 0.75 } else { -0.25 };
-            k[6 * i + 5][6 * j + 5] += kd * v;
+            k[(6 * i + 5, 6 * j + 5)] += kd * v;
         }
     }
     k
-}
-
-/// bᵀ_p D c_q for columns p of `b` and q of `c`.
-fn quad<const P: usize, const Q: usize>(
-    b: &[[f64; P]; 3],
-    p: usize,
-    d: &[[f64; 3]; 3],
-    c: &[[f64; Q]; 3],
-    q: usize,
-) -> f64 {
-    let mut s = 0.0;
-    for r in 0..3 {
-        for t in 0..3 {
-            s += b[r][p] * d[r][t] * c[t][q];
-        }
-    }
-    s
 }
 
 /// The covariant transverse shear strain along ξ (`dir` 0) or η (1) at (ξ, η), over the
@@ -362,37 +318,6 @@ fn covariant_shear(xy: &[[f64; 2]; 4], xi: f64, eta: f64, dir: usize) -> [f64; 1
     row
 }
 
-/// The inverse of a symmetric positive definite 4 × 4 matrix (Gauss–Jordan).
-fn inverse4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
-    let mut m = *a;
-    let mut inv = [[0.0; 4]; 4];
-    for (i, row) in inv.iter_mut().enumerate() {
-        row[i] = 1.0;
-    }
-    for c in 0..4 {
-        let p = (c..4)
-            .max_by(|&x, &y| m[x][c].abs().total_cmp(&m[y][c].abs()))
-            .unwrap_or(c);
-        m.swap(c, p);
-        inv.swap(c, p);
-        let d = m[c][c];
-        for q in 0..4 {
-            m[c][q] /= d;
-            inv[c][q] /= d;
-        }
-        for r in 0..4 {
-            if r != c {
-                let f = m[r][c];
-                for q in 0..4 {
-                    m[r][q] -= f * m[c][q];
-                    inv[r][q] -= f * inv[c][q];
-                }
-            }
-        }
-    }
-    inv
-}
-
 /// ∫ N_i dA for each corner (2 × 2 Gauss, exact for the bilinear quad).
 fn corner_areas(xy: &[[f64; 2]; 4]) -> [f64; 4] {
     let mut out = [0.0; 4];
@@ -403,7 +328,7 @@ fn corner_areas(xy: &[[f64; 2]; 4]) -> [f64; 4] {
         (-GAUSS, GAUSS),
     ] {
         let (n, dxi, deta) = shape(xi, eta);
-        let (_, det) = inverse2(&jacobian(xy, &dxi, &deta));
+        let det = jacobian(xy, &dxi, &deta).determinant();
         for i in 0..4 {
             out[i] += n[i] * det;
         }
@@ -412,7 +337,7 @@ fn corner_areas(xy: &[[f64; 2]; 4]) -> [f64; 4] {
 }
 
 /// The element stiffness in global axes.
-fn global_stiffness(x: &[DVec3; 4], p: Plate) -> [[f64; 24]; 24] {
+fn global_stiffness(x: &[DVec3; 4], p: Plate) -> Stiffness {
     let (r, xy) = element_frame(x);
     let mut kl = local_stiffness(&xy, p);
     // A panel is planar only to planarize's tolerance: each corner sits h off the element's
@@ -423,32 +348,36 @@ fn global_stiffness(x: &[DVec3; 4], p: Plate) -> [[f64; 24]; 24] {
     let offsets: [f64; 4] = std::array::from_fn(|c| (x[c] - centre).dot(r.row(2)));
     if offsets.iter().any(|&h| h != 0.0) {
         // K W: column 6c+4 gains −h K[:, 6c], column 6c+3 gains h K[:, 6c+1].
-        for row in kl.iter_mut() {
-            for (c, &h) in offsets.iter().enumerate() {
-                row[6 * c + 4] -= h * row[6 * c];
-                row[6 * c + 3] += h * row[6 * c + 1];
-            }
+        for (c, &h) in offsets.iter().enumerate() {
+            let (ku, kv) = (
+                kl.column(6 * c).clone_owned(),
+                kl.column(6 * c + 1).clone_owned(),
+            );
+            let mut col = kl.column_mut(6 * c + 4);
+            col -= ku * h;
+            let mut col = kl.column_mut(6 * c + 3);
+            col += kv * h;
         }
         // Wᵀ (K W): the same on rows.
         for (c, &h) in offsets.iter().enumerate() {
-            let (ru, rv) = (kl[6 * c], kl[6 * c + 1]);
-            for (t, x) in kl[6 * c + 4].iter_mut().zip(&ru) {
-                *t -= h * x;
-            }
-            for (t, x) in kl[6 * c + 3].iter_mut().zip(&rv) {
-                *t += h * x;
-            }
+            let (ku, kv) = (kl.row(6 * c).clone_owned(), kl.row(6 * c + 1).clone_owned());
+            let mut row = kl.row_mut(6 * c + 4);
+            row -= ku * h;
+            let mut row = kl.row_mut(6 * c + 3);
+            row += kv * h;
         }
     }
-    // K = Tᵀ K_l T, T block-diagonal with R (local = R · global).
-    rotate_stiffness(
-        &kl,
-        [
-            r.row(0).to_array(),
-            r.row(1).to_array(),
-            r.row(2).to_array(),
-        ],
-    )
+    // K = Tᵀ K_l T, T block-diagonal with R (local = R · global): block by block, Rᵀ K_ij R.
+    let r = Matrix3::from_fn(|i, j| r.row(i)[j]);
+    let rt = r.transpose();
+    let mut k = Stiffness::zeros();
+    for i in 0..8 {
+        for j in 0..8 {
+            let block = rt * kl.fixed_view::<3, 3>(3 * i, 3 * j) * r;
+            k.fixed_view_mut::<3, 3>(3 * i, 3 * j).copy_from(&block);
+        }
+    }
+    k
 }
 
 /// Solves every case on the shell mesh of `model`'s panels and gives back what the frame
@@ -498,7 +427,7 @@ pub fn solve(
             })
             .unwrap_or(0)
     };
-    let stiffness: Vec<[[f64; 24]; 24]> = mesh
+    let stiffness: Vec<Stiffness> = mesh
         .elements
         .par_iter()
         .map(|&(q, k)| {
@@ -528,7 +457,7 @@ pub fn solve(
                 if c == usize::MAX || r < c {
                     continue;
                 }
-                triplets.push(Triplet::new(r, c, ke[i][j]));
+                triplets.push(Triplet::new(r, c, ke[(i, j)]));
             }
         }
     }
@@ -618,7 +547,7 @@ pub fn solve(
 }
 
 /// K u, element by element (global, every freedom).
-fn internal(mesh: &Mesh, stiffness: &[[[f64; 24]; 24]], u: &[f64]) -> Vec<f64> {
+fn internal(mesh: &Mesh, stiffness: &[Stiffness], u: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; u.len()];
     for (&(q, _), ke) in mesh.elements.iter().zip(stiffness) {
         let fe = element_forces(&q, ke, &[DVec3::ZERO; 4], u);
@@ -630,16 +559,9 @@ fn internal(mesh: &Mesh, stiffness: &[[[f64; 24]; 24]], u: &[f64]) -> Vec<f64> {
 }
 
 /// What each element takes at its corners: K u less its share of the load (global).
-fn element_forces(q: &[usize; 4], ke: &[[f64; 24]; 24], load: &[DVec3; 4], u: &[f64]) -> [f64; 24] {
-    let ue: [f64; 24] = std::array::from_fn(|i| u[6 * q[i / 6] + i % 6]);
-    let mut fe = [0.0; 24];
-    for i in 0..24 {
-        let mut s = 0.0;
-        for j in 0..24 {
-            s += ke[i][j] * ue[j];
-        }
-        fe[i] = s;
-    }
+fn element_forces(q: &[usize; 4], ke: &Stiffness, load: &[DVec3; 4], u: &[f64]) -> [f64; 24] {
+    let ue = SVector::<f64, 24>::from_fn(|i, _| u[6 * q[i / 6] + i % 6]);
+    let mut fe: [f64; 24] = (ke * ue).into();
     for c in 0..4 {
         for d in 0..3 {
             fe[6 * c + d] -= load[c][d];
@@ -660,7 +582,7 @@ struct State {
 fn results(
     model: &Model,
     mesh: &Mesh,
-    stiffness: &[[[f64; 24]; 24]],
+    stiffness: &[Stiffness],
     corner_load: &[[DVec3; 4]],
     state: &State,
     held: &[bool],
@@ -762,8 +684,8 @@ mod tests {
         thickness: 4.0,
     };
 
-    fn times(k: &[[f64; 24]; 24], u: &[f64; 24]) -> [f64; 24] {
-        std::array::from_fn(|i| (0..24).map(|j| k[i][j] * u[j]).sum())
+    fn times(k: &Stiffness, u: &[f64; 24]) -> [f64; 24] {
+        (k * SVector::<f64, 24>::from_column_slice(u)).into()
     }
 
     #[test]
@@ -779,7 +701,7 @@ mod tests {
         let n = (x[1] - x[0]).cross(x[2] - x[0]).normalize();
         let x = x.map(|p| p - n * (p - x[0]).dot(n));
         let k = global_stiffness(&x, STEEL);
-        let scale = (0..24).map(|i| k[i][i].abs()).fold(0.0, f64::max);
+        let scale = k.diagonal().amax();
         for mode in 0..6 {
             let mut u = [0.0; 24];
             for (c, p) in x.iter().enumerate() {
@@ -819,7 +741,7 @@ mod tests {
                 let ke = global_stiffness(&q.map(|m| nodes[m]), STEEL);
                 for a in 0..24 {
                     for c in 0..24 {
-                        k[6 * q[a / 6] + a % 6][6 * q[c / 6] + c % 6] += ke[a][c];
+                        k[6 * q[a / 6] + a % 6][6 * q[c / 6] + c % 6] += ke[(a, c)];
                     }
                 }
             }

@@ -254,6 +254,22 @@ impl Sizing {
             .map(|c| c.utilisation)
             .fold(0.0, f64::max)
     }
+
+    /// The mean gauge of the lowest third of the members (by the height of their midpoints)
+    /// and of the highest third, mm: a structure standing on its base should be thicker low.
+    pub fn mean_gauges_low_high(&self) -> (f64, f64) {
+        let m = &self.model;
+        let mid: Vec<f64> = m
+            .members
+            .iter()
+            .map(|e| 0.5 * (m.nodes[e.a].z + m.nodes[e.b].z))
+            .collect();
+        let mut order: Vec<usize> = (0..mid.len()).collect();
+        order.sort_by(|&a, &b| mid[a].total_cmp(&mid[b]));
+        let third = order.len() / 3;
+        let mean = |ks: &[usize]| ks.iter().map(|&k| self.gauges[k]).sum::<f64>() / ks.len() as f64;
+        (mean(&order[..third]), mean(&order[order.len() - third..]))
+    }
 }
 
 /// The frame of a network with a gauge per edge (see the module notes).

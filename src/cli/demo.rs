@@ -27,14 +27,13 @@ use lamina::analyze::frame::Support;
 use lamina::analyze::sizing::{DeflectionLimit, GroupBy};
 use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
-use lamina::grow::geodesic::{self, grow_veins, Incremental, MeshGraph, VeinOptions};
-use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
-use lamina::grow::surface::{self, grow_on_surface, Channel, SurfaceOptions};
-use lamina::grow::venation::{Frame, Mode, Observer};
+use lamina::grow::surface::Channel;
+use lamina::grow::venation::{Frame, Mode};
 use lamina::mesh::io::{read_mesh, render_png_bytes_with, write_mesh, Stroke3};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::rationalize::planarize::Selector;
+use lamina::stage::{venation, Quiet};
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -240,11 +239,12 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
 
 /// Grows a leaf in the ovate blade with the default parameters and seed, in `mode`.
 fn leaf(out: &Path, size: u32, mode: Mode) -> Result<Entry> {
-    let outline = Outline::shape(Shape::Ovate);
-    let mut opts = LeafOptions::default();
-    opts.growth.mode = mode;
-    let leaf = grow_leaf(&outline, &[outline.default_root()], &opts, None)?;
-    let (net, growth) = (&leaf.network, &leaf.growth);
+    let opts = venation::Options {
+        mode,
+        ..Default::default()
+    };
+    let grown = venation::run(&Outline::shape(Shape::Ovate), &opts, None, &Quiet)?;
+    let (net, growth) = (&grown.leaf.network, &grown.leaf.growth);
     let name = match mode {
         Mode::Open => "open",
         Mode::Closed => "closed",
@@ -269,7 +269,7 @@ fn leaf(out: &Path, size: u32, mode: Mode) -> Result<Entry> {
             growth.iterations,
             growth.sources_left,
             growth.sources_placed,
-            leaf.quality.lines().join("; ")
+            grown.leaf.quality.lines().join("; ")
         ),
     })
 }
@@ -342,13 +342,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         }
         axes.push(s.axes.clone());
     }
-    let apart = |k: usize| {
-        axes[0]
-            .iter()
-            .zip(&axes[k])
-            .map(|(a, b)| a.dot(*b).clamp(-1.0, 1.0).acos().to_degrees())
-            .fold(0.0, f64::max)
-    };
+    let apart = |k: usize| lamina::stage::planarize::largest_axis_angle(&axes[0], &axes[k]);
     let _ = write!(
         facts,
         "Projection's axes differ from L-BFGS's by at most {:.3}°, Gauss-Newton's by {:.3}°.",
@@ -450,25 +444,10 @@ fn steel(out: &Path) -> Result<Entry> {
     })?;
     let p = &plates.set.plates;
     let seams = p.iter().filter(|q| q.bolted_to.is_some()).count() / 2;
-    let mass: f64 = p
-        .iter()
-        .map(|q| q.area() * q.thickness * lamina::stage::nest::DENSITY * 1e-6)
-        .sum();
+    let mass = plates.set.mass_kg(lamina::stage::nest::DENSITY);
     let sz = &sized.sizing;
     let (_, dmax) = sz.max_displacement();
-    let lower_upper = {
-        let mid: Vec<f64> = sz
-            .model
-            .members
-            .iter()
-            .map(|m| 0.5 * (sz.model.nodes[m.a].z + sz.model.nodes[m.b].z))
-            .collect();
-        let mut order: Vec<usize> = (0..mid.len()).collect();
-        order.sort_by(|&a, &b| mid[a].total_cmp(&mid[b]));
-        let third = order.len() / 3;
-        let mean = |ks: &[usize]| ks.iter().map(|&k| sz.gauges[k]).sum::<f64>() / ks.len() as f64;
-        (mean(&order[..third]), mean(&order[order.len() - third..]))
-    };
+    let lower_upper = sz.mean_gauges_low_high();
     let mut facts = format!(
         "Sized by `lamina size` under self-weight with the base fixed and a deflection limit of          L/500: {} stress round(s), {} deflection round(s), largest displacement {dmax:.2} mm,          utilisation at most {:.2}, welds at most {:.2}; mean gauge {:.2} mm in the lower third          of the members, {:.2} mm in the upper third. ",
         sz.rounds,
@@ -562,22 +541,26 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     } else {
         Mode::Closed
     };
-    let opts = SurfaceOptions::for_mesh(&mesh, mode, 3000, density);
+    let opts = venation::Options {
+        mode,
+        sources: Some(3000),
+        density_channel: density,
+        ..Default::default()
+    };
     // The torus's growth is also kept every 10 steps, for a strip of five moments up to the end.
+    let (murray, tip) = {
+        let s = venation::surface_options(&mesh, &opts)?;
+        (s.murray, s.tip_radius)
+    };
     let mut moments: Vec<Vec<Stroke3>> = Vec::new();
     let mut keep = |f: &Frame<DVec3>| {
-        moments.push(lamina::grow::frames::surface_strokes(
-            f,
-            opts.murray,
-            opts.tip_radius,
-        ));
+        moments.push(lamina::grow::frames::surface_strokes(f, murray, tip));
     };
-    let observer = (stem == "torus").then_some(Observer {
+    let frames = (stem == "torus").then_some(venation::Frames {
         every: 10,
         call: &mut keep,
-        stop: &|| false,
     });
-    let veins = grow_on_surface(&mesh, &[], &opts, observer)
+    let grown = venation::on_surface(&mesh, &[], &opts, frames, &Quiet)
         .with_context(|| format!("venation on {}", mesh_path.display()))?;
     let mut outputs = Vec::new();
     let mut growth_link = String::new();
@@ -597,7 +580,7 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
     let venation_json = format!("on-surfaces/{stem}-venation.json");
     let venation_png = format!("on-surfaces/{stem}-venation.png");
     super::surface::write_outputs(
-        &veins.network,
+        &grown.veins.network,
         &mesh,
         &out.join(&venation_json),
         None,
@@ -605,26 +588,20 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
         size,
     )?;
     outputs.extend([venation_json, venation_png.clone()]);
-    let graph = MeshGraph::new(&mesh);
-    let root = surface::lowest_vertex(&mesh).context("a mesh with triangles")?;
-    let sources = geodesic::sample_sources(&mesh, &graph, root, 300, density, 1)?;
-    let tree = grow_veins(
-        &graph,
-        &mesh.positions,
-        root,
-        &sources.vertices,
-        &mut Incremental,
+    let veins = lamina::stage::veins::run(
+        &mesh,
+        &lamina::stage::veins::Options {
+            sources: Some(300),
+            density_channel: density,
+            smooth: 3,
+            ..Default::default()
+        },
+        &Quiet,
     )?;
-    let vein_opts = VeinOptions {
-        tip_radius: 0.08 * surface::mean_edge_length(&mesh),
-        murray: 3.0,
-        smooth: 3,
-    };
-    let net = geodesic::to_network(&mesh, &tree, &vein_opts)?;
     let veins_json = format!("on-surfaces/{stem}-veins.json");
     let veins_png = format!("on-surfaces/{stem}-veins.png");
     super::surface::write_outputs(
-        &net,
+        &veins.network,
         &mesh,
         &out.join(&veins_json),
         None,
@@ -647,10 +624,10 @@ fn surface_veins(out: &Path, mesh_path: &Path, about: &str, size: u32) -> Result
         preview: venation_png,
         facts: format!(
             "venation: {}; geodesic veins: {} tree vertices to {} sources in {} iterations",
-            veins.quality.lines().join("; "),
-            tree.order.len(),
-            tree.sources.len(),
-            tree.iterations
+            grown.veins.quality.lines().join("; "),
+            veins.report.tree_vertices,
+            veins.report.sources,
+            veins.report.iterations
         ),
     })
 }

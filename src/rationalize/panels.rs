@@ -22,6 +22,7 @@
 //! - normal: the minimum zone's, turned to agree with the polygon's Newell normal.
 
 use glam::DVec3;
+use nalgebra::{Matrix3, SymmetricEigen};
 
 /// Polygons with more corners than this get no flatness: the exact search grows as n⁵.
 pub const MAX_FLATNESS_CORNERS: usize = 48;
@@ -163,44 +164,12 @@ pub fn best_fit(p: &[DVec3]) -> f64 {
     p.iter().map(|q| (*q - c).dot(n).abs()).fold(0.0, f64::max)
 }
 
-/// The unit eigenvector of the least eigenvalue of a symmetric 3 × 3 matrix (cyclic Jacobi).
-fn least_eigenvector(mut a: [[f64; 3]; 3]) -> DVec3 {
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    for _ in 0..50 {
-        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
-        let diag = a[0][0].abs() + a[1][1].abs() + a[2][2].abs();
-        if off <= 1e-300 || off <= f64::EPSILON * 1e-3 * diag {
-            break;
-        }
-        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
-            if a[p][q] == 0.0 {
-                continue;
-            }
-            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
-            let t = if theta == 0.0 { 1.0 } else { t };
-            let (cs, sn) = (1.0 / (t * t + 1.0).sqrt(), t / (t * t + 1.0).sqrt());
-            for row in a.iter_mut() {
-                let (x, y) = (row[p], row[q]);
-                row[p] = cs * x - sn * y;
-                row[q] = sn * x + cs * y;
-            }
-            let (rp, rq) = (a[p], a[q]);
-            for (k, (x, y)) in rp.into_iter().zip(rq).enumerate() {
-                a[p][k] = cs * x - sn * y;
-                a[q][k] = sn * x + cs * y;
-            }
-            for row in v.iter_mut() {
-                let (x, y) = (row[p], row[q]);
-                row[p] = cs * x - sn * y;
-                row[q] = sn * x + cs * y;
-            }
-        }
-    }
-    let k = (0..3)
-        .min_by(|&i, &j| a[i][i].total_cmp(&a[j][j]))
-        .unwrap_or(0);
-    DVec3::new(v[0][k], v[1][k], v[2][k]).normalize_or(DVec3::Z)
+/// The unit eigenvector of the least eigenvalue of a symmetric 3 × 3 matrix.
+fn least_eigenvector(a: [[f64; 3]; 3]) -> DVec3 {
+    let eigen = SymmetricEigen::new(Matrix3::from_fn(|r, c| a[r][c]));
+    let k = eigen.eigenvalues.imin();
+    let v = eigen.eigenvectors.column(k);
+    DVec3::new(v[0], v[1], v[2]).normalize_or(DVec3::Z)
 }
 
 /// Newell's sum over a polygon's edges: twice its vector area.

@@ -604,6 +604,16 @@ pub struct PlateSet {
     pub cores: Vec<Core>,
 }
 
+impl PlateSet {
+    /// The plates' mass, kg, for a steel of `density` kg/dm³ (plates only: no bolts or cores).
+    pub fn mass_kg(&self, density: f64) -> f64 {
+        self.plates
+            .iter()
+            .map(|q| q.area() * q.thickness * density * 1e-6)
+            .sum()
+    }
+}
+
 pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> {
     check(axes, opts)?;
     let n = axes.positions.len();

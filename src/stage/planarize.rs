@@ -167,6 +167,15 @@ impl Options {
     }
 }
 
+/// The largest angle between two solutions' axes at the same node, degrees (how far apart two
+/// methods' answers are).
+pub fn largest_axis_angle(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.dot(*y).clamp(-1.0, 1.0).acos().to_degrees())
+        .fold(0.0, f64::max)
+}
+
 /// Solves `net`: reference directions from `surface` (its normals at the nodes), else the
 /// stored normals, else a flat network's plane. `progress` shows the rounds and can stop the
 /// solve between iterations.

@@ -496,6 +496,41 @@ pub fn slice_job(
     })
 }
 
+/// Layer images side by side as one grey PNG, each cropped to the footprint `min`..`max` (mm
+/// on the build plate, as [`Placement`] gives it) with `margin` pixels around it and `gap`
+/// pixels between images. `images` are whole layers of `printer` (row 0 at the plate's far
+/// edge), as [`OnLayer`] hands them out.
+pub fn layer_strip(
+    printer: &Printer,
+    min: [f64; 2],
+    max: [f64; 2],
+    images: &[&[u8]],
+    margin: usize,
+    gap: usize,
+) -> Vec<u8> {
+    let px = printer.pixel_mm;
+    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
+    let ([x0, y0], [x1, y1]) = (min, max);
+    let c0 = ((x0 / px) as usize).saturating_sub(margin);
+    let c1 = ((x1 / px).ceil() as usize + margin).min(w);
+    let r0 = ((h as f64 - y1 / px).max(0.0) as usize).saturating_sub(margin);
+    let r1 = ((h as f64 - y0 / px).ceil() as usize + margin).min(h);
+    let (cw, ch) = (c1.saturating_sub(c0), r1.saturating_sub(r0));
+    let sw = images.len() * cw + images.len().saturating_sub(1) * gap;
+    let mut strip = vec![96u8; sw * ch];
+    for (k, image) in images.iter().enumerate() {
+        if image.len() < w * h {
+            continue;
+        }
+        for r in 0..ch {
+            let src = &image[(r0 + r) * w + c0..(r0 + r) * w + c1];
+            let at = r * sw + k * (cw + gap);
+            strip[at..at + cw].copy_from_slice(src);
+        }
+    }
+    slicer::encode_grey(&strip, sw as u32, ch as u32)
+}
+
 impl Report {
     /// print.json's text.
     pub fn json(&self) -> String {

@@ -7,12 +7,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use glam::DVec3;
 
 use super::Entry;
 use crate::cli::input::ReadArgs;
-use lamina::mesh::io::write_mesh;
-use lamina::mesh::TriMesh;
+use lamina::files::write_atomic;
 use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};
 
 /// The paper's grammar, as the demo's commands spell it.
@@ -46,15 +44,9 @@ fn lsystem(extra: &[&str]) -> Result<serde_json::Value> {
 }
 
 /// A wall bowed 400 mm out over its 13 m width, standing in the XZ plane behind the façade
-/// (y from 2000 mm at the edges to 2400 mm in the middle), 0.5 m wider and taller all round.
-fn bowed_wall() -> TriMesh {
-    let (nx, nz) = (52u32, 10u32);
-    TriMesh::grid(nx, nz, |i, j| {
-        let x = -6500.0 + 13000.0 * i as f64 / nx as f64;
-        let z = -500.0 + 5000.0 * j as f64 / nz as f64;
-        DVec3::new(x, 2000.0 + 400.0 * (1.0 - (x / 6500.0).powi(2)), z)
-    })
-}
+/// (y from 2000 mm at the edges to 2400 mm in the middle), 0.5 m wider and taller all round: a
+/// 52 × 10 grid (fixtures/surfaces/bowed_wall.obj).
+const BOWED_WALL: &[u8] = include_bytes!("../../../fixtures/surfaces/bowed_wall.obj");
 
 pub fn facade(out: &Path, size: u32) -> Result<Entry> {
     let dir = out.join("facade");
@@ -103,8 +95,9 @@ pub fn facade(out: &Path, size: u32) -> Result<Entry> {
     })?;
 
     // The same façade stood up and projected onto a bowed wall.
-    let wall = bowed_wall();
-    write_mesh(&wall, &dir.join("wall.obj"), size)?;
+    write_atomic(&dir.join("wall.obj"), |w| {
+        std::io::Write::write_all(w, BOWED_WALL)
+    })?;
     let mut onto = fitted.to_vec();
     let (vault_json, vault_png, wall_obj) = (
         p("facade-on-wall.json"),

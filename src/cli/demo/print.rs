@@ -9,15 +9,14 @@ use anyhow::Result;
 use super::Entry;
 use crate::cli::slice::write_job;
 use crate::cli::venation::write_json;
-use lamina::fabricate::slice::{arrange, encode_grey, layer_count, Model, Printer};
+use lamina::fabricate::slice::{arrange, layer_count, Model, Printer};
 use lamina::fabricate::solid::{solid, Base, SolidOptions};
 use lamina::files::write_atomic;
-use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
 use lamina::mesh::io::write_mesh;
 use lamina::network::io::{write_network, RenderOptions};
-use lamina::stage::slice::{slice_job, JobOptions, OnLayer, Source};
-use lamina::stage::Quiet;
+use lamina::stage::slice::{layer_strip, slice_job, JobOptions, OnLayer, Source};
+use lamina::stage::{venation, Quiet};
 
 /// Leaves printed at once, as in Peele §4.2.
 const COPIES: usize = 5;
@@ -27,13 +26,12 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     std::fs::create_dir_all(&dir)?;
     // Sparser sources and thicker tips than the venation demo: veins a printer can make once
     // the leaf is 20 mm tall (tips 80 µm), and areoles wide enough to stay open.
-    let outline = Outline::shape(Shape::Ovate);
-    let opts = LeafOptions {
-        birth: 4.0,
-        tip_radius: 0.4,
+    let opts = venation::Options {
+        birth: Some(4.0),
+        tip_radius: Some(0.4),
         ..Default::default()
     };
-    let leaf = grow_leaf(&outline, &[outline.default_root()], &opts, None)?;
+    let leaf = venation::run(&Outline::shape(Shape::Ovate), &opts, None, &Quiet)?.leaf;
     write_network(
         &leaf.network,
         &dir.join("leaf.json"),
@@ -108,27 +106,8 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     write_json(&dir.join("print.json"), &report)?;
 
     // The strip: each kept layer cropped to the first leaf's footprint, side by side.
-    let px = printer.pixel_mm;
-    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
-    let ([x0, y0], [x1, y1]) = (placed[0].min, placed[0].max);
-    let margin = 8;
-    let c0 = ((x0 / px) as usize).saturating_sub(margin);
-    let c1 = ((x1 / px).ceil() as usize + margin).min(w);
-    let r0 = (h as f64 - y1 / px).max(0.0) as usize;
-    let r0 = r0.saturating_sub(margin);
-    let r1 = ((h as f64 - y0 / px).ceil() as usize + margin).min(h);
-    let (cw, ch) = (c1 - c0, r1 - r0);
-    let gap = 6;
-    let sw = kept.len() * cw + (kept.len().saturating_sub(1)) * gap;
-    let mut strip = vec![96u8; sw * ch];
-    for (k, (_, image)) in kept.iter().enumerate() {
-        for r in 0..ch {
-            let src = &image[(r0 + r) * w + c0..(r0 + r) * w + c1];
-            let at = r * sw + k * (cw + gap);
-            strip[at..at + cw].copy_from_slice(src);
-        }
-    }
-    let strip_png = encode_grey(&strip, sw as u32, ch as u32);
+    let images: Vec<&[u8]> = kept.iter().map(|(_, image)| image.as_slice()).collect();
+    let strip_png = layer_strip(&printer, placed[0].min, placed[0].max, &images, 8, 6);
     write_atomic(&dir.join("layers-strip.png"), |w| {
         std::io::Write::write_all(w, &strip_png)
     })?;

@@ -13,14 +13,12 @@ use crate::cli::input::ReadArgs;
 use crate::cli::planarize::{MethodArg, ReportArgs};
 use lamina::fabricate::nest::Rotations;
 use lamina::files::write_atomic;
-use lamina::grow::leaf::{grow_leaf, LeafOptions};
 use lamina::grow::outline::{Outline, Shape};
-use lamina::grow::surface::{grow_on_surface, SurfaceOptions};
-use lamina::grow::venation::Mode;
 use lamina::mesh::io::read_mesh;
 use lamina::network::io::{render_png_bytes, write_network, RenderOptions};
 use lamina::network::Network;
 use lamina::rationalize::simplify::{Figures, Report};
+use lamina::stage::{venation, Quiet};
 
 pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     let dir = out.join("simplify");
@@ -163,8 +161,13 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     }
 
     // The closed surface venation of the band, as the veins-on-surfaces entry grows it.
-    let opts = SurfaceOptions::for_mesh(&mesh, Mode::Closed, 3000, None);
-    let band = grow_on_surface(&mesh, &[], &opts, None).context("venation on the Calyx band")?;
+    let opts = venation::Options {
+        sources: Some(3000),
+        ..Default::default()
+    };
+    let band = venation::on_surface(&mesh, &[], &opts, None, &Quiet)
+        .context("venation on the Calyx band")?
+        .veins;
     let band_in = dir.join("band.json");
     write_network(&band.network, &band_in, &RenderOptions { size })?;
     let band_out = dir.join("band-simple.json");
@@ -183,10 +186,8 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     );
 
     // A closed leaf in the plane, as the venation entry grows it.
-    let outline = Outline::shape(Shape::Ovate);
-    let mut leaf_opts = LeafOptions::default();
-    leaf_opts.growth.mode = Mode::Closed;
-    let leaf = grow_leaf(&outline, &[outline.default_root()], &leaf_opts, None)?;
+    let leaf_opts = venation::Options::default();
+    let leaf = venation::run(&Outline::shape(Shape::Ovate), &leaf_opts, None, &Quiet)?.leaf;
     let leaf_in = dir.join("leaf.json");
     write_network(&leaf.network, &leaf_in, &RenderOptions { size })?;
     let leaf_out = dir.join("leaf-simple.json");

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
 
 use glam::{DMat3, DVec3};
+use nalgebra::{Matrix3, Vector3};
 
 use super::graph::CellGraph;
 use crate::geom::KeyHasher;
@@ -367,33 +368,18 @@ fn damped_newton(h: DMat3, g: DVec3) -> DVec3 {
     -g / scale
 }
 
+/// Solves m s = b by Cholesky, refusing a matrix that is not clearly positive definite: a pivot
+/// at most 1e-14 of the first (a near-singular Hessian would give a huge step).
 fn cholesky_solve(m: DMat3, b: DVec3) -> Option<DVec3> {
-    let a = |r: usize, c: usize| m.col(c)[r];
-    let l00 = a(0, 0);
-    if l00 <= 0.0 {
+    let m = Matrix3::from_column_slice(&m.to_cols_array());
+    let chol = m.cholesky()?;
+    let l = chol.l_dirty();
+    let first = l[(0, 0)] * l[(0, 0)];
+    if (1..3).any(|i| l[(i, i)] * l[(i, i)] <= 1e-14 * first) {
         return None;
     }
-    let l00 = l00.sqrt();
-    let l10 = a(1, 0) / l00;
-    let l20 = a(2, 0) / l00;
-    let d1 = a(1, 1) - l10 * l10;
-    if d1 <= 1e-14 * l00 * l00 {
-        return None;
-    }
-    let l11 = d1.sqrt();
-    let l21 = (a(2, 1) - l20 * l10) / l11;
-    let d2 = a(2, 2) - l20 * l20 - l21 * l21;
-    if d2 <= 1e-14 * l00 * l00 {
-        return None;
-    }
-    let l22 = d2.sqrt();
-    let y0 = b.x / l00;
-    let y1 = (b.y - l10 * y0) / l11;
-    let y2 = (b.z - l20 * y0 - l21 * y1) / l22;
-    let x2 = y2 / l22;
-    let x1 = (y1 - l21 * x2) / l11;
-    let x0 = (y0 - l10 * x1 - l20 * x2) / l00;
-    Some(DVec3::new(x0, x1, x2))
+    let s = chol.solve(&Vector3::new(b.x, b.y, b.z));
+    Some(DVec3::new(s[0], s[1], s[2]))
 }
 
 type Key = (i32, i32, i32);
