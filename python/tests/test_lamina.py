@@ -1,7 +1,8 @@
 """The lamina Python package against the lamina binary: every function on a small input gives
 the command line's result for the same input and seed (reports equal to the files the command
-writes, tables compared row by row), with no file written (the calls run with a read-only
-temporary folder and working directory); errors as LaminaError naming the argument; forks,
+writes, tables compared row by row), with no file written (the calls run with an unusable
+temporary folder, a file in its place, and a read-only working directory that must stay as it
+was, since root writes there anyway); errors as LaminaError naming the argument; forks,
 pickles, Ctrl-C, progress callbacks, units and a Dask sweep.
 
 The binary is $LAMINA_BIN (scripts/test gives the one it built); the command line runs in a
@@ -43,10 +44,15 @@ def read_only_temp(tmp_path_factory):
     a call that wrote a file anywhere but where it was told would fail."""
     tmp_path_factory.getbasetemp()
     ro = tmp_path_factory.mktemp("read-only")
+    # Root writes into read-only folders, so the temporary "folder" is a file: nothing can be
+    # made under it by anyone (NotADirectoryError), and the working folder is watched instead
+    # (`nothing_written_here`).
+    temp = ro / "not-a-folder"
+    temp.write_bytes(b"")
     ro.chmod(stat.S_IRUSR | stat.S_IXUSR)
     old = (os.environ.get("TMPDIR"), tempfile.tempdir, os.getcwd())
-    os.environ["TMPDIR"] = str(ro)
-    tempfile.tempdir = str(ro)
+    os.environ["TMPDIR"] = str(temp)
+    tempfile.tempdir = str(temp)
     os.chdir(ro)
     try:
         yield ro
@@ -60,11 +66,18 @@ def read_only_temp(tmp_path_factory):
         ro.chmod(stat.S_IRWXU)
 
 
-def test_the_temporary_folder_is_read_only(read_only_temp):
-    if os.geteuid() == 0:
-        pytest.skip("root writes into read-only folders")
+@pytest.fixture(autouse=True)
+def nothing_written_here(read_only_temp):
+    """After every test, the working folder holds what it held before (root can write there)."""
+    yield
+    assert sorted(os.listdir(read_only_temp)) == ["not-a-folder"]
+
+
+def test_the_temporary_folder_is_unusable(read_only_temp):
     with pytest.raises(OSError):
         tempfile.mkstemp()
+    with pytest.raises(OSError):
+        tempfile.mkstemp(dir=os.environ["TMPDIR"])
 
 
 def cli(tmp: Path, *argv, ok=(0,)) -> subprocess.CompletedProcess:
@@ -525,7 +538,15 @@ def test_fork_pool_after_a_call_then_spawn_pool(calyx):
         assert pool.map_async(grow_and_audit, range(4)).get(timeout=180) == serial
 
 
-def test_dask_sweep_equals_the_serial_sweep():
+@pytest.fixture
+def engine_temp(tmp_path, monkeypatch):
+    """A writable temporary folder for an engine's own files (Dask's worker space), not lamina's."""
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    return tmp_path
+
+
+def test_dask_sweep_equals_the_serial_sweep(engine_temp):
     distributed = pytest.importorskip("dask.distributed")
     serial = [grow_and_audit(s) for s in range(6)]
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -764,13 +785,12 @@ def test_documented_snippets_run(doc, tmp_path):
     assert p.returncode == 0, p.stderr
 
 
-def test_type_stubs_match_the_package():
+def test_type_stubs_match_the_package(tmp_path):
     """mypy's stubtest: every stub matches what the installed package has at runtime."""
     pytest.importorskip("mypy")
     allow = Path(__file__).with_name("stubtest-allowlist.txt")
     argv = [sys.executable, "-m", "mypy.stubtest", "lamina", "--allowlist", str(allow),
             "--ignore-unused-allowlist"]
-    env = dict(os.environ, TMPDIR=tempfile.gettempdir() if os.access(
-        tempfile.gettempdir(), os.W_OK) else "/tmp", MYPY_CACHE_DIR="/tmp/.mypy_cache")
-    p = subprocess.run(argv, capture_output=True, text=True, env=env, cwd="/tmp")
+    env = dict(os.environ, TMPDIR=str(tmp_path), MYPY_CACHE_DIR=str(tmp_path / "mypy-cache"))
+    p = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=tmp_path)
     assert p.returncode == 0, p.stdout + p.stderr

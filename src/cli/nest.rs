@@ -148,7 +148,7 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
 
 pub fn run(args: Args) -> Result<()> {
     let out = execute(&args)?;
-    let cost: f64 = out.sheets.iter().map(|s| s.stock.cost).sum();
+    let cost = out.cost();
     if args.json {
         outln!(
             "{}",
@@ -174,27 +174,15 @@ pub fn run(args: Args) -> Result<()> {
             String::new()
         }
     );
-    let mut t_prev = None;
-    for s in &out.sheets {
-        if t_prev != Some(s.thickness.to_bits()) {
-            let these: Vec<&nest::SheetInfo> = out
-                .sheets
-                .iter()
-                .filter(|o| o.thickness == s.thickness)
-                .collect();
-            let used: f64 = these.iter().map(|o| o.area).sum();
-            let stock: f64 = these.iter().map(|o| o.stock.size.x * o.stock.size.y).sum();
-            let remnants: usize = these.iter().map(|o| o.remnants.len()).sum();
-            let laser: f64 = these.iter().map(|o| o.time_s.0).sum();
-            outln!(
-                "  {} mm: {} sheet(s), {:.1} % used, {remnants} remnant(s), laser about {:.0} min",
-                nest::thickness_label(s.thickness),
-                these.len(),
-                100.0 * used / stock,
-                laser / 60.0
-            );
-            t_prev = Some(s.thickness.to_bits());
-        }
+    for t in out.by_thickness() {
+        outln!(
+            "  {} mm: {} sheet(s), {:.1} % used, {} remnant(s), laser about {:.0} min",
+            nest::thickness_label(t.thickness),
+            t.sheets,
+            100.0 * t.utilisation,
+            t.remnants,
+            t.laser_s / 60.0
+        );
     }
     if let Some(j) = out.joints {
         let small = out.plates.iter().filter(|p| j.applies(&p.outline)).count();

@@ -161,48 +161,23 @@ fn file_name(path: &Path) -> String {
 pub fn run(args: Args) -> Result<bool> {
     let made = execute(&args)?;
     let weld = &made.welds.summary;
-    let plates = &made.set.plates;
-    let untagged = made.parts.iter().filter(|(_, t)| t.is_none()).count();
-    let area: f64 = plates.iter().map(|p| p.area()).sum();
-    let volume: f64 = plates.iter().map(|p| p.area() * p.thickness).sum();
-    let flattening = plates.iter().map(|p| p.flattening).fold(0.0, f64::max);
-    let seams = plates.iter().filter(|p| p.bolted_to.is_some()).count() / 2;
-    let bolts: usize = plates
-        .iter()
-        .enumerate()
-        .filter(|(i, p)| p.bolted_to.is_some_and(|o| o > *i))
-        .map(|(_, p)| p.holes.len())
-        .sum();
-    let groups = plates.iter().map(|p| p.group + 1).max().unwrap_or(0);
+    let sum = made.summary();
     let ok = made.ok;
     if args.json {
-        outln!(
-            "{}",
-            json!({
-                "output": args.output,
-                "plates": plates.len(),
-                "area_mm2": area,
-                "volume_mm3": volume,
-                "max_flattening_mm": flattening,
-                "groups": groups,
-                "seams": seams,
-                "bolts": bolts,
-                "untagged": untagged,
-                "weld_nodes": weld.nodes,
-                "uneven_nodes": weld.nodes_needing_a_core,
-                "cores": weld.cores,
-                "smallest_weld_angle_deg": weld.smallest_dihedral_deg,
-                "below_min_weld_angle": weld.pairs_below_min_weld_angle,
-            })
-        );
+        let mut value = serde_json::to_value(&sum)?;
+        value["output"] = json!(args.output);
+        outln!("{value}");
     } else {
         outln!(
-            "{}: {} plates in {groups} group(s), {seams} seam(s) as bolted pairs ({bolts} bolts), {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
+            "{}: {} plates in {} group(s), {} seam(s) as bolted pairs ({} bolts), {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
             args.output.display(),
-            plates.len(),
-            area * 1e-6,
-            volume * 7.9e-6,
-            flattening
+            sum.plates,
+            sum.groups,
+            sum.seams,
+            sum.bolts,
+            sum.area_mm2 * 1e-6,
+            sum.volume_mm3 * 7.9e-6,
+            sum.max_flattening_mm
         );
         outln!(
             "  welds: {} node(s), {} pair(s); root gap {} ± {} mm at {} node(s){}; dihedral angles from {:.1}°: {} below 60°, {} 60–120°, {} 120–135°, {} over 135° (welds.html)",
@@ -232,10 +207,12 @@ pub fn run(args: Args) -> Result<bool> {
                 if uneven.len() > 10 { ", …" } else { "" }
             );
         }
-        if untagged > 0 {
+        if sum.untagged > 0 {
             outln!(
-                "  {untagged} plate(s) too small for a {} mm tag {} mm inside the outline: not etched",
-                TAG_HEIGHT.0, TAG_MARGIN
+                "  {} plate(s) too small for a {} mm tag {} mm inside the outline: not etched",
+                sum.untagged,
+                TAG_HEIGHT.0,
+                TAG_MARGIN
             );
         }
     }

@@ -247,6 +247,51 @@ impl Nested {
     pub fn joint_counts(&self) -> Vec<usize> {
         self.drawn.iter().map(|d| d.joints.len()).collect()
     }
+
+    /// The stock's cost over all sheets (0 when no costs were given).
+    pub fn cost(&self) -> f64 {
+        self.sheets.iter().map(|s| s.stock.cost).sum()
+    }
+
+    /// Per thickness, in the sheets' order: sheets, use, remnants and laser time.
+    pub fn by_thickness(&self) -> Vec<ThicknessSummary> {
+        let mut out: Vec<ThicknessSummary> = Vec::new();
+        for s in &self.sheets {
+            if out.iter().any(|t| t.thickness == s.thickness) {
+                continue;
+            }
+            let these: Vec<&SheetInfo> = self
+                .sheets
+                .iter()
+                .filter(|o| o.thickness == s.thickness)
+                .collect();
+            let used: f64 = these.iter().map(|o| o.area).sum();
+            let stock: f64 = these.iter().map(|o| o.stock.size.x * o.stock.size.y).sum();
+            out.push(ThicknessSummary {
+                thickness: s.thickness,
+                sheets: these.len(),
+                utilisation: used / stock,
+                remnants: these.iter().map(|o| o.remnants.len()).sum(),
+                laser_s: these.iter().map(|o| o.time_s.0).sum(),
+            });
+        }
+        out
+    }
+}
+
+/// The sheets of one thickness.
+#[derive(Clone, Debug, Serialize)]
+pub struct ThicknessSummary {
+    /// Plate thickness, mm.
+    pub thickness: f64,
+    /// Sheets cut.
+    pub sheets: usize,
+    /// Part area over stock area.
+    pub utilisation: f64,
+    /// Remnants kept.
+    pub remnants: usize,
+    /// Estimated laser time, s.
+    pub laser_s: f64,
 }
 
 /// Why no nest was made.

@@ -151,6 +151,63 @@ impl Plated {
     pub fn core_records(&self) -> Vec<CoreRecord> {
         self.file.cores.clone()
     }
+
+    /// The figures the command prints (and gives with `--json`).
+    pub fn summary(&self) -> Summary {
+        let plates = &self.set.plates;
+        let weld = &self.welds.summary;
+        Summary {
+            plates: plates.len(),
+            area_mm2: plates.iter().map(|p| p.area()).sum(),
+            volume_mm3: plates.iter().map(|p| p.area() * p.thickness).sum(),
+            max_flattening_mm: plates.iter().map(|p| p.flattening).fold(0.0, f64::max),
+            groups: plates.iter().map(|p| p.group + 1).max().unwrap_or(0),
+            seams: plates.iter().filter(|p| p.bolted_to.is_some()).count() / 2,
+            bolts: plates
+                .iter()
+                .enumerate()
+                .filter(|(i, p)| p.bolted_to.is_some_and(|o| o > *i))
+                .map(|(_, p)| p.holes.len())
+                .sum(),
+            untagged: self.parts.iter().filter(|(_, t)| t.is_none()).count(),
+            weld_nodes: weld.nodes,
+            uneven_nodes: weld.nodes_needing_a_core.clone(),
+            cores: weld.cores,
+            smallest_weld_angle_deg: weld.smallest_dihedral_deg,
+            below_min_weld_angle: weld.pairs_below_min_weld_angle,
+        }
+    }
+}
+
+/// What a plates run made, in figures. Fields in the order `--json` prints them.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Plates (a seam's two plies count as two).
+    pub plates: usize,
+    /// Plate area, one face, mm².
+    pub area_mm2: f64,
+    /// Plate volume, mm³.
+    pub volume_mm3: f64,
+    /// The most any panel was moved to make it flat, mm.
+    pub max_flattening_mm: f64,
+    /// Assembly groups.
+    pub groups: u32,
+    /// Seams made as two bolted plies.
+    pub seams: usize,
+    /// Bolts through the seams.
+    pub bolts: usize,
+    /// Plates too small for their tag.
+    pub untagged: usize,
+    /// Nodes where plates are welded.
+    pub weld_nodes: usize,
+    /// Nodes whose root gaps no setback evens (they need a node core).
+    pub uneven_nodes: Vec<u32>,
+    /// Node cores made.
+    pub cores: usize,
+    /// The smallest dihedral angle between welded plates, degrees.
+    pub smallest_weld_angle_deg: f64,
+    /// Pairs of plates meeting below `min_weld_angle`.
+    pub below_min_weld_angle: usize,
 }
 
 /// Makes the plates of `axes`.
