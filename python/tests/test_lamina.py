@@ -570,7 +570,17 @@ def long_solid():
     return lamina.read_network(SMALL_LOOP), dict(cell=0.015)
 
 
-def test_ctrl_c_stops_a_long_solid_promptly():
+@pytest.fixture
+def ctrl_c_raises():
+    # A process started in the background by a non-interactive shell (as scripts/test starts its
+    # checks) inherits SIGINT ignored, and Python then leaves it ignored: give it Python's own
+    # handler, as an interactive session, Jupyter or Grasshopper has.
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
+def test_ctrl_c_stops_a_long_solid_promptly(ctrl_c_raises):
     net, opts = long_solid()
     sent = []
 

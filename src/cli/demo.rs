@@ -442,8 +442,7 @@ fn steel(out: &Path) -> Result<Entry> {
         output: dir.join("cut"),
         json: false,
     })?;
-    let p = &plates.set.plates;
-    let seams = p.iter().filter(|q| q.bolted_to.is_some()).count() / 2;
+    let built = plates.summary();
     let mass = plates.set.mass_kg(lamina::stage::nest::DENSITY);
     let sz = &sized.sizing;
     let (_, dmax) = sz.max_displacement();
@@ -462,13 +461,11 @@ fn steel(out: &Path) -> Result<Entry> {
     }
     let _ = write!(
         facts,
-        "{} plates in 7 groups, {seams} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
-        p.len(),
-        p.iter()
-            .enumerate()
-            .filter(|(i, q)| q.bolted_to.is_some_and(|o| o > *i))
-            .map(|(_, q)| q.holes.len())
-            .sum::<usize>(),
+        "{} plates in {} groups, {} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
+        built.plates,
+        built.groups,
+        built.seams,
+        built.bolts,
         plates.welds.summary.nodes,
         plates.welds.summary.even_nodes,
         plates.welds.summary.cores,
@@ -485,7 +482,7 @@ fn steel(out: &Path) -> Result<Entry> {
                 s.parts.len(),
                 s.stock.size.x,
                 s.stock.size.y,
-                100.0 * s.area / (s.stock.size.x * s.stock.size.y),
+                100.0 * s.utilisation(),
                 s.time_s.0 / 60.0
             )
         })

@@ -231,6 +231,13 @@ pub struct Nested {
     pub spacing: f64,
 }
 
+impl SheetInfo {
+    /// Part area over this sheet's stock area.
+    pub fn utilisation(&self) -> f64 {
+        self.area / (self.stock.size.x * self.stock.size.y)
+    }
+}
+
 impl Nested {
     /// Part area over stock area, all sheets together.
     pub fn utilisation(&self) -> f64 {
@@ -881,7 +888,7 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
                     laser: s.time_s.0,
                     plasma: s.time_s.1,
                 },
-                utilisation: s.area / (s.stock.size.x * s.stock.size.y),
+                utilisation: s.utilisation(),
             })
             .collect(),
         spacing: opts.spacing,
@@ -1056,7 +1063,7 @@ pub fn svg(out: &Nested) -> String {
                 s.stock.size.x,
                 s.stock.size.y,
                 s.parts.len(),
-                100.0 * s.area / (s.stock.size.x * s.stock.size.y)
+                100.0 * s.utilisation()
             ),
             size: s.stock.size,
             remnants: s.remnants.clone(),
