@@ -112,6 +112,12 @@ def main():
                                     "quads.report.json"], runs=5, ok=(0, 1))
     rows.append(("audit 90,000 quads (P×4×3 array; the CLI reads an OBJ)", py_t, cli_t))
 
+    # The command's own compute: the stage functions it calls, timed in Rust on the same files.
+    p = subprocess.run(["cargo", "bench", "-q", "--bench", "stages"], cwd=ROOT,
+                       env={**os.environ, "LAMINA_BENCH_WORK": str(work)}, capture_output=True,
+                       text=True, check=True)
+    compute = json.loads(p.stdout.strip().splitlines()[-1])
+
     p, e, nrm = honeycomb(90_000)
     np.save(work / "comb-p.npy", p)
     np.save(work / "comb-e.npy", e)
@@ -136,6 +142,12 @@ def main():
     print(f"{'job':62} {'python':>10} {'cli':>10} {'ratio':>6}")
     for name, pt, ct in rows:
         print(f"{name:62} {pt * 1000:8.1f}ms {ct * 1000:8.1f}ms {pt / ct:6.2f}")
+    for what, suffix in [("the stage function alone", "_s"),
+                         ("the stage and the outputs the call returns, in memory", "_out_s")]:
+        print(f"against the command's own compute, in Rust, no files: {what}")
+        for name, pt, key in [(rows[1][0], rows[1][1], "plates"), (rows[3][0], rows[3][1], "audit")]:
+            ct = compute[key + suffix]
+            print(f"{name:62} {pt * 1000:8.1f}ms {ct * 1000:8.1f}ms {pt / ct:6.2f}")
     print(f"planarize {len(p):,} nodes, peak memory: Python process {py_rss:.0f} MiB "
           f"(of which {base:.0f} MiB is the interpreter with numpy and lamina loaded), the "
           f"command {cli_rss:.0f} MiB (its report file {report_mb:.1f} MB): ratio "
