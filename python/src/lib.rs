@@ -1016,7 +1016,13 @@ fn plates<'py>(
             list: f64s(list.as_bytes(), "sizing: gauge_list")?,
         });
     }
-    let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;
+    // The assembly mesh too on the pool (its plates side by side), the GIL released.
+    let (made, assembly) = run::run(py, None, |_| {
+        stage::plates::run(&axes, &opts).map(|made| {
+            let mesh = stage::plates::assembly(&made.set);
+            (made, mesh)
+        })
+    })?;
     let mut files = Vec::new();
     if let Some(dir) = &out {
         files = py
@@ -1027,10 +1033,7 @@ fn plates<'py>(
     d.set_item("within", made.ok)?;
     d.set_item("plates", report(py, &made.file, &[])?)?;
     d.set_item("welds", report(py, &made.welds, &[])?)?;
-    d.set_item(
-        "assembly",
-        mesh_dict(py, &stage::plates::assembly(&made.set))?,
-    )?;
+    d.set_item("assembly", mesh_dict(py, &assembly)?)?;
     d.set_item("files", PyList::new(py, files)?)?;
     d.set_item("notes", notes(py, &[])?)?;
     Ok(d)

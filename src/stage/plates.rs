@@ -22,6 +22,7 @@ use std::io::Write as _;
 use std::path::Path;
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::fabricate::assembly::{axis_frame, write_scad, ScadBolt, ScadCore, ScadPart};
@@ -613,8 +614,10 @@ pub fn assembly(set: &PlateSet) -> TriMesh {
         mesh.triangles
             .extend(t.iter().map(|tri| tri.map(|i| i + base)));
     };
-    for p in &set.plates {
-        add(p.prism());
+    // Plates triangulated side by side (each on its own); added in order.
+    let prisms: Vec<_> = set.plates.par_iter().map(|p| p.prism()).collect();
+    for prism in prisms {
+        add(prism);
     }
     for c in &set.cores {
         add(tube(c));
