@@ -169,7 +169,7 @@ pub struct SheetInfo {
     pub stock: Stock,
     /// The plates on it, by index.
     pub parts: Vec<usize>,
-    /// Area, mm².
+    /// Area of the parts on it, mm².
     pub area: f64,
     /// Free rectangles [lower-left, upper-right] left for later jobs.
     pub remnants: Vec<[DVec2; 2]>,
@@ -260,27 +260,38 @@ impl Nested {
         self.sheets.iter().map(|s| s.stock.cost).sum()
     }
 
-    /// Per thickness, in the sheets' order: sheets, use, remnants and laser time.
+    /// Per thickness, in the order the thicknesses first appear among the sheets: sheets, part
+    /// area, use, cost, remnants and laser time.
     pub fn by_thickness(&self) -> Vec<ThicknessSummary> {
         let mut out: Vec<ThicknessSummary> = Vec::new();
+        let mut stock_area: Vec<f64> = Vec::new();
         for s in &self.sheets {
-            if out.iter().any(|t| t.thickness == s.thickness) {
-                continue;
-            }
-            let these: Vec<&SheetInfo> = self
-                .sheets
-                .iter()
-                .filter(|o| o.thickness == s.thickness)
-                .collect();
-            let used: f64 = these.iter().map(|o| o.area).sum();
-            let stock: f64 = these.iter().map(|o| o.stock.size.x * o.stock.size.y).sum();
-            out.push(ThicknessSummary {
-                thickness: s.thickness,
-                sheets: these.len(),
-                utilisation: used / stock,
-                remnants: these.iter().map(|o| o.remnants.len()).sum(),
-                laser_s: these.iter().map(|o| o.time_s.0).sum(),
-            });
+            let k = match out.iter().position(|t| t.thickness == s.thickness) {
+                Some(k) => k,
+                None => {
+                    out.push(ThicknessSummary {
+                        thickness: s.thickness,
+                        sheets: 0,
+                        part_area_mm2: 0.0,
+                        utilisation: 0.0,
+                        cost: 0.0,
+                        remnants: 0,
+                        laser_s: 0.0,
+                    });
+                    stock_area.push(0.0);
+                    out.len() - 1
+                }
+            };
+            let t = &mut out[k];
+            t.sheets += 1;
+            t.part_area_mm2 += s.area;
+            t.cost += s.stock.cost;
+            t.remnants += s.remnants.len();
+            t.laser_s += s.time_s.0;
+            stock_area[k] += s.stock.size.x * s.stock.size.y;
+        }
+        for (t, stock) in out.iter_mut().zip(stock_area) {
+            t.utilisation = t.part_area_mm2 / stock;
         }
         out
     }
@@ -293,8 +304,12 @@ pub struct ThicknessSummary {
     pub thickness: f64,
     /// Sheets cut.
     pub sheets: usize,
+    /// Area of the parts, mm².
+    pub part_area_mm2: f64,
     /// Part area over stock area.
     pub utilisation: f64,
+    /// Stock cost.
+    pub cost: f64,
     /// Remnants kept.
     pub remnants: usize,
     /// Estimated laser time, s.
@@ -672,7 +687,7 @@ pub struct Family {
     pub sheets: usize,
     /// Thickness, mm.
     pub thickness: f64,
-    /// Utilisation: the governing check's figure over its limit.
+    /// Part area over stock area.
     pub utilisation: f64,
 }
 
@@ -759,7 +774,7 @@ pub struct SheetDoc {
     pub thickness: f64,
     /// Machine time, s.
     pub time_s: Seconds,
-    /// Utilisation: the governing check's figure over its limit.
+    /// Part area over stock area.
     pub utilisation: f64,
 }
 
@@ -780,20 +795,14 @@ pub struct Total {
     pub sheets: usize,
     /// Machine time, s.
     pub time_s: Seconds,
-    /// Utilisation: the governing check's figure over its limit.
+    /// Part area over stock area.
     pub utilisation: f64,
 }
 
 fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
-    // Per thickness (positive thicknesses order as their bits do).
-    let mut families: BTreeMap<u64, (usize, f64, f64, f64)> = BTreeMap::new();
-    for s in &out.sheets {
-        let f = families.entry(s.thickness.to_bits()).or_default();
-        f.0 += 1;
-        f.1 += s.area;
-        f.2 += s.stock.size.x * s.stock.size.y;
-        f.3 += s.stock.cost;
-    }
+    // Per thickness, thinnest first (positive thicknesses order as their bits do).
+    let mut families = out.by_thickness();
+    families.sort_by_key(|t| t.thickness.to_bits());
     let placed = |i: usize| {
         let lo = out.plates[i]
             .outline
@@ -816,12 +825,12 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
         .collect(),
         families: families
             .iter()
-            .map(|(t, f)| Family {
-                cost: f.3,
-                part_area_mm2: f.1,
-                sheets: f.0,
-                thickness: f64::from_bits(*t),
-                utilisation: f.1 / f.2,
+            .map(|t| Family {
+                cost: t.cost,
+                part_area_mm2: t.part_area_mm2,
+                sheets: t.sheets,
+                thickness: t.thickness,
+                utilisation: t.utilisation,
             })
             .collect(),
         format: "lamina-nest",
