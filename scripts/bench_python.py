@@ -21,6 +21,7 @@ import lamina
 
 ROOT = Path(__file__).resolve().parents[1]
 RUNS = 11
+ROUNDS = 7
 
 
 def median_time(fn, runs=RUNS):
@@ -112,11 +113,18 @@ def main():
                                     "quads.report.json"], runs=5, ok=(0, 1))
     rows.append(("audit 90,000 quads (P×4×3 array; the CLI reads an OBJ)", py_t, cli_t))
 
-    # The command's own compute: the stage functions it calls, timed in Rust on the same files.
-    p = subprocess.run(["cargo", "bench", "-q", "--bench", "stages"], cwd=ROOT,
-                       env={**os.environ, "LAMINA_BENCH_WORK": str(work)}, capture_output=True,
-                       text=True, check=True)
-    compute = json.loads(p.stdout.strip().splitlines()[-1])
+    # The command's own compute: the stage functions it calls, timed in Rust on the same files,
+    # in rounds that alternate with the Python calls (this machine's speed drifts by tens of
+    # per cent over a minute, so each ratio compares timings taken side by side).
+    rounds = []
+    for _ in range(ROUNDS):
+        plates_t, _ = median_time(lambda: lamina.plates(solved, sizing=sizing, groups=7))
+        audit_t, _ = median_time(lambda: lamina.audit(quads, tolerance=0.05), runs=5)
+        p = subprocess.run(["cargo", "bench", "-q", "--bench", "stages"], cwd=ROOT,
+                           env={**os.environ, "LAMINA_BENCH_WORK": str(work)},
+                           capture_output=True, text=True, check=True)
+        compute = json.loads(p.stdout.strip().splitlines()[-1])
+        rounds.append({"plates": plates_t, "audit": audit_t, **compute})
 
     p, e, nrm = honeycomb(90_000)
     np.save(work / "comb-p.npy", p)
@@ -144,10 +152,14 @@ def main():
         print(f"{name:62} {pt * 1000:8.1f}ms {ct * 1000:8.1f}ms {pt / ct:6.2f}")
     for what, suffix in [("the stage function alone", "_s"),
                          ("the stage and the outputs the call returns, in memory", "_out_s")]:
-        print(f"against the command's own compute, in Rust, no files: {what}")
-        for name, pt, key in [(rows[1][0], rows[1][1], "plates"), (rows[3][0], rows[3][1], "audit")]:
-            ct = compute[key + suffix]
-            print(f"{name:62} {pt * 1000:8.1f}ms {ct * 1000:8.1f}ms {pt / ct:6.2f}")
+        print(f"against the command's own compute, in Rust, no files: {what} "
+              f"({ROUNDS} rounds, each Python then Rust; the median ratio and each round's)")
+        for name, key in [(rows[1][0], "plates"), (rows[3][0], "audit")]:
+            ratios = [r[key] / r[key + suffix] for r in rounds]
+            each = ", ".join(f"{r[key] * 1000:.1f}/{r[key + suffix] * 1000:.1f} ms"
+                             for r in rounds)
+            print(f"{name:62} ratio {statistics.median(ratios):5.2f} "
+                  f"(each {', '.join(f'{x:.2f}' for x in ratios)}; {each})")
     print(f"planarize {len(p):,} nodes, peak memory: Python process {py_rss:.0f} MiB "
           f"(of which {base:.0f} MiB is the interpreter with numpy and lamina loaded), the "
           f"command {cli_rss:.0f} MiB (its report file {report_mb:.1f} MB): ratio "

@@ -3,6 +3,9 @@
 //! numpy arrays cross as little-endian bytes.
 
 use pyo3::exceptions::PyTypeError;
+use std::collections::HashMap;
+
+use pyo3::intern;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyByteArray, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::Value;
@@ -68,155 +71,221 @@ enum Numbers {
 
 /// The values as one typed column, when they are all integers, all numbers or all booleans
 /// (NaN travels as JSON null in a float column: a column of numbers and nulls is floats).
-fn column(values: &[&Value]) -> Option<Numbers> {
-    if values.is_empty() {
+fn column<'a>(values: impl Iterator<Item = &'a Value> + Clone) -> Option<Numbers> {
+    let mut all_bool = true;
+    let mut any_bool = false;
+    let mut all_int = true;
+    let mut any_number = false;
+    let mut len = 0;
+    for v in values.clone() {
+        len += 1;
+        match v {
+            Value::Bool(_) => {
+                any_bool = true;
+                all_int = false;
+            }
+            Value::Number(n) => {
+                all_bool = false;
+                any_number = true;
+                all_int &= n.as_i64().is_some();
+            }
+            Value::Null => {
+                all_bool = false;
+                all_int = false;
+            }
+            _ => return None,
+        }
+    }
+    if len == 0 {
         return None;
     }
-    if values.iter().all(|v| v.is_boolean()) {
+    if all_bool {
         return Some(Numbers::Bools(
-            values
-                .iter()
-                .map(|v| v.as_bool().unwrap_or(false))
-                .collect(),
+            values.map(|v| v.as_bool().unwrap_or(false)).collect(),
         ));
     }
-    if values.iter().all(|v| v.is_i64() || v.is_u64()) {
-        let ints: Option<Vec<i64>> = values
-            .iter()
-            .map(|v| {
-                v.as_i64()
-                    .or_else(|| v.as_u64().and_then(|u| i64::try_from(u).ok()))
-            })
-            .collect();
-        if let Some(ints) = ints {
-            return Some(Numbers::Ints(ints));
-        }
-    }
-    let numbers = values.iter().filter(|v| v.is_number()).count();
-    if numbers > 0 && values.iter().all(|v| v.is_number() || v.is_null()) {
-        return Some(Numbers::Floats(
-            values
-                .iter()
-                .map(|v| v.as_f64().unwrap_or(f64::NAN))
-                .collect(),
+    if all_int {
+        return Some(Numbers::Ints(
+            values.map(|v| v.as_i64().unwrap_or(0)).collect(),
         ));
     }
-    None
+    if any_bool || !any_number {
+        return None;
+    }
+    Some(Numbers::Floats(
+        values.map(|v| v.as_f64().unwrap_or(f64::NAN)).collect(),
+    ))
 }
 
-fn numbers<'py>(py: Python<'py>, n: Numbers, shape: &[usize]) -> PyResult<Bound<'py, PyAny>> {
-    match n {
-        Numbers::Ints(v) => i64_array(py, &v, shape),
-        Numbers::Floats(v) => f64_array(py, &v, shape),
-        Numbers::Bools(v) => {
-            bool_array(py, &v)?.call_method1("reshape", (PyTuple::new(py, shape)?,))
+/// Converting one report: numpy's `frombuffer` looked up once, and each key's Python string
+/// made once (reports repeat the same few keys thousands of times).
+struct Conv<'a, 'py> {
+    py: Python<'py>,
+    tables: &'a [&'a str],
+    frombuffer: Bound<'py, PyAny>,
+    keys: HashMap<&'a str, Bound<'py, PyString>>,
+}
+
+impl<'a, 'py> Conv<'a, 'py> {
+    fn new(py: Python<'py>, tables: &'a [&'a str]) -> PyResult<Self> {
+        Ok(Conv {
+            py,
+            tables,
+            frombuffer: numpy(py)?.getattr(intern!(py, "frombuffer"))?,
+            keys: HashMap::new(),
+        })
+    }
+
+    fn key(&mut self, k: &'a str) -> Bound<'py, PyString> {
+        let py = self.py;
+        self.keys
+            .entry(k)
+            .or_insert_with(|| PyString::new(py, k))
+            .clone()
+    }
+
+    /// A numpy array of `shape` from the values' little-endian bytes.
+    fn array<T: Copy>(
+        &self,
+        values: &[T],
+        dtype: &Bound<'py, PyString>,
+        shape: &[usize],
+        to_le: impl Fn(T, &mut [u8]),
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let width = std::mem::size_of::<T>();
+        let bytes = PyByteArray::new_with(self.py, std::mem::size_of_val(values), |buf| {
+            for (v, chunk) in values.iter().zip(buf.chunks_exact_mut(width)) {
+                to_le(*v, chunk);
+            }
+            Ok(())
+        })?;
+        let flat = self.frombuffer.call1((bytes, dtype))?;
+        if shape.len() == 1 {
+            return Ok(flat);
         }
+        flat.call_method1(
+            intern!(self.py, "reshape"),
+            (PyTuple::new(self.py, shape)?,),
+        )
+    }
+
+    fn numbers(&self, n: Numbers, shape: &[usize]) -> PyResult<Bound<'py, PyAny>> {
+        let py = self.py;
+        match n {
+            Numbers::Ints(v) => self.array(&v, intern!(py, "<i8"), shape, |v, b| {
+                b.copy_from_slice(&v.to_le_bytes())
+            }),
+            Numbers::Floats(v) => self.array(&v, intern!(py, "<f8"), shape, |v, b| {
+                b.copy_from_slice(&v.to_le_bytes())
+            }),
+            Numbers::Bools(v) => self.array(&v, intern!(py, "?"), shape, |v, b| b[0] = u8::from(v)),
+        }
+    }
+
+    fn value(&mut self, v: &'a Value) -> PyResult<Bound<'py, PyAny>> {
+        let py = self.py;
+        Ok(match v {
+            Value::Null => py.None().into_bound(py),
+            Value::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+            Value::Number(n) => match (n.as_i64(), n.as_u64()) {
+                (Some(i), _) => i.into_pyobject(py)?.into_any(),
+                (None, Some(u)) => u.into_pyobject(py)?.into_any(),
+                _ => PyFloat::new(py, n.as_f64().unwrap_or(f64::NAN)).into_any(),
+            },
+            Value::String(s) => PyString::new(py, s).into_any(),
+            Value::Array(items) => self.array_of(items.iter())?,
+            Value::Object(map) => {
+                let d = PyDict::new(py);
+                for (k, v) in map {
+                    let item = match v {
+                        Value::Array(rows) if self.tables.contains(&k.as_str()) => {
+                            self.table(rows)?
+                        }
+                        _ => self.value(v)?,
+                    };
+                    d.set_item(self.key(k), item)?;
+                }
+                d.into_any()
+            }
+        })
+    }
+
+    fn array_of<I>(&mut self, items: I) -> PyResult<Bound<'py, PyAny>>
+    where
+        I: ExactSizeIterator<Item = &'a Value> + Clone,
+    {
+        let len = items.len();
+        if let Some(n) = column(items.clone()) {
+            return self.numbers(n, &[len]);
+        }
+        // Rows of equal length, all numbers: a 2-D array.
+        let first = items
+            .clone()
+            .next()
+            .and_then(|v| v.as_array())
+            .map(Vec::len);
+        if let Some(width) = first {
+            if width > 0
+                && items
+                    .clone()
+                    .all(|r| r.as_array().is_some_and(|a| a.len() == width))
+            {
+                let flat = items
+                    .clone()
+                    .flat_map(|r| r.as_array().into_iter().flatten());
+                if let Some(n) = column(flat) {
+                    return self.numbers(n, &[len, width]);
+                }
+            }
+        }
+        let list = PyList::empty(self.py);
+        for v in items {
+            list.append(self.value(v)?)?;
+        }
+        Ok(list.into_any())
+    }
+
+    /// Rows (objects) as a dict of columns: each key's values as a numpy array when they are
+    /// all numbers, booleans or numeric arrays of one length, else as a list (missing keys are
+    /// None). `lamina.rows` turns it back into a list of dicts.
+    fn table(&mut self, rows: &'a [Value]) -> PyResult<Bound<'py, PyAny>> {
+        if rows.iter().any(|r| !r.is_object()) {
+            return self.array_of(rows.iter());
+        }
+        let mut keys: Vec<&'a str> = Vec::new();
+        for r in rows {
+            for k in r.as_object().into_iter().flat_map(|m| m.keys()) {
+                if !keys.contains(&k.as_str()) {
+                    keys.push(k);
+                }
+            }
+        }
+        let d = PyDict::new(self.py);
+        for k in keys {
+            let present = rows.iter().all(|r| r.get(k).is_some());
+            let col = if present {
+                self.array_of(rows.iter().map(|r| &r[k]))?
+            } else {
+                let list = PyList::empty(self.py);
+                for r in rows {
+                    list.append(match r.get(k) {
+                        Some(v) => self.value(v)?,
+                        None => self.py.None().into_bound(self.py),
+                    })?;
+                }
+                list.into_any()
+            };
+            d.set_item(self.key(k), col)?;
+        }
+        Ok(d.into_any())
     }
 }
 
 /// A serde value as Python: objects as dicts, arrays of numbers (or of equal-length arrays of
 /// numbers) as numpy arrays, other arrays as lists; the keys in `tables` hold arrays of
-/// objects, which become dicts of columns (see [`table`]).
+/// objects, which become dicts of columns (`lamina.rows` turns one back into rows).
 pub fn to_py<'py>(py: Python<'py>, v: &Value, tables: &[&str]) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match v {
-        Value::Null => py.None().into_bound(py),
-        Value::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
-        Value::Number(n) => match (n.as_i64(), n.as_u64()) {
-            (Some(i), _) => i.into_pyobject(py)?.into_any(),
-            (None, Some(u)) => u.into_pyobject(py)?.into_any(),
-            _ => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
-        },
-        Value::String(s) => PyString::new(py, s).into_any(),
-        Value::Array(items) => {
-            let refs: Vec<&Value> = items.iter().collect();
-            array_to_py(py, &refs, tables)?
-        }
-        Value::Object(map) => {
-            let d = PyDict::new(py);
-            for (k, v) in map {
-                let item = match v {
-                    Value::Array(rows) if tables.contains(&k.as_str()) => {
-                        let refs: Vec<&Value> = rows.iter().collect();
-                        table(py, &refs, tables)?
-                    }
-                    _ => to_py(py, v, tables)?,
-                };
-                d.set_item(k, item)?;
-            }
-            d.into_any()
-        }
-    })
-}
-
-fn array_to_py<'py>(
-    py: Python<'py>,
-    items: &[&Value],
-    tables: &[&str],
-) -> PyResult<Bound<'py, PyAny>> {
-    if let Some(n) = column(items) {
-        return numbers(py, n, &[items.len()]);
-    }
-    // Rows of equal length, all numbers: a 2-D array.
-    if let Some(width) = items.first().and_then(|v| v.as_array()).map(Vec::len) {
-        if width > 0
-            && items
-                .iter()
-                .all(|r| r.as_array().is_some_and(|a| a.len() == width))
-        {
-            let flat: Vec<&Value> = items
-                .iter()
-                .flat_map(|r| r.as_array().into_iter().flatten())
-                .collect();
-            if let Some(n) = column(&flat) {
-                return numbers(py, n, &[items.len(), width]);
-            }
-        }
-    }
-    let list = PyList::empty(py);
-    for v in items {
-        list.append(to_py(py, v, tables)?)?;
-    }
-    Ok(list.into_any())
-}
-
-/// Rows (objects) as a dict of columns: each key's values as a numpy array when they are all
-/// numbers, booleans or numeric arrays of one length, else as a list (missing keys are None).
-/// `lamina.rows` turns it back into a list of dicts.
-pub fn table<'py>(
-    py: Python<'py>,
-    rows: &[&Value],
-    tables: &[&str],
-) -> PyResult<Bound<'py, PyAny>> {
-    if rows.iter().any(|r| !r.is_object()) {
-        return array_to_py(py, rows, tables);
-    }
-    let mut keys: Vec<&str> = Vec::new();
-    for r in rows {
-        for k in r.as_object().into_iter().flat_map(|m| m.keys()) {
-            if !keys.contains(&k.as_str()) {
-                keys.push(k);
-            }
-        }
-    }
-    let d = PyDict::new(py);
-    for k in keys {
-        let values: Vec<&Value> = rows
-            .iter()
-            .map(|r| r.get(k).unwrap_or(&Value::Null))
-            .collect();
-        let present = rows.iter().all(|r| r.get(k).is_some());
-        let col = if present {
-            array_to_py(py, &values, tables)?
-        } else {
-            let list = PyList::empty(py);
-            for v in &values {
-                list.append(to_py(py, v, tables)?)?;
-            }
-            list.into_any()
-        };
-        d.set_item(k, col)?;
-    }
-    Ok(d.into_any())
+    Conv::new(py, tables)?.value(v)
 }
 
 /// A serializable report as Python (see [`to_py`]).

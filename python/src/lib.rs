@@ -1016,23 +1016,25 @@ fn plates<'py>(
             list: f64s(list.as_bytes(), "sizing: gauge_list")?,
         });
     }
-    // The assembly mesh too on the pool (its plates side by side), the GIL released.
-    let (made, assembly) = run::run(py, None, |_| {
-        stage::plates::run(&axes, &opts).map(|made| {
-            let mesh = stage::plates::assembly(&made.set);
-            (made, mesh)
-        })
-    })?;
+    let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;
     let mut files = Vec::new();
     if let Some(dir) = &out {
         files = py
             .detach(|| write_plates(&made, &axes, dir))
             .map_err(|e| error(e.to_string()))?;
     }
+    // The assembly mesh on the pool (its plates side by side) while this thread turns the
+    // reports into dicts.
     let d = PyDict::new(py);
-    d.set_item("within", made.ok)?;
-    d.set_item("plates", report(py, &made.file, &[])?)?;
-    d.set_item("welds", report(py, &made.welds, &[])?)?;
+    let (assembly, ()) = run::beside(
+        py,
+        || stage::plates::assembly(&made.set),
+        || {
+            d.set_item("within", made.ok)?;
+            d.set_item("plates", report(py, &made.file, &[])?)?;
+            d.set_item("welds", report(py, &made.welds, &[])?)
+        },
+    )?;
     d.set_item("assembly", mesh_dict(py, &assembly)?)?;
     d.set_item("files", PyList::new(py, files)?)?;
     d.set_item("notes", notes(py, &[])?)?;

@@ -170,3 +170,27 @@ where
         )),
     }
 }
+
+/// Runs `background` (short Rust work that needs no Python) on this process's pool while the
+/// calling thread, holding the GIL, does `foreground` (turning results into Python objects);
+/// returns both once both are done. The wait for `background` releases the GIL.
+pub fn beside<'py, A, B>(
+    py: Python<'py>,
+    background: impl FnOnce() -> A + Send,
+    foreground: impl FnOnce() -> PyResult<B>,
+) -> PyResult<(A, B)>
+where
+    A: Send,
+{
+    let pool = pool()?;
+    let (a, b) = std::thread::scope(|scope| {
+        let pool = &pool;
+        let worker = scope.spawn(move || pool.install(background));
+        let b = foreground();
+        (py.detach(|| worker.join()), b)
+    });
+    let a = a.map_err(|_| {
+        crate::error("internal error: a stage panicked (this is a bug, please report it)".into())
+    })?;
+    Ok((a, b?))
+}
