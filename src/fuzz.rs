@@ -1,7 +1,7 @@
 //! The readers a fuzzer drives, by name: each reads a file the way its command does and then
 //! checks what it read (a network validated, a mesh's topology counted, a grammar built), so a
 //! mutated file goes as deep as a real one. Used by `examples/fuzz.rs` (the mutation harness)
-//! and by `tests/fuzz_replay.rs` (every seed and every input the harness kept, replayed).
+//! and by `tests/suite/fuzz_replay.rs` (every seed and every input the harness kept, replayed).
 //!
 //! Seeds are the repository's fixtures (`fixtures/…`) and the small corpus in `fuzz/corpus/`.
 

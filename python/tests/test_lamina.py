@@ -782,17 +782,21 @@ def test_blender_example_compiles():
 
 @pytest.mark.parametrize("doc", ["README.md", "docs/python.md"])
 def test_documented_snippets_run(doc, tmp_path):
-    """The page's ```python blocks run as written, one after the other, as one script in a
-    scratch folder (fixtures from the repository)."""
+    """The page's ```python blocks run as written in a scratch folder (fixtures from the
+    repository): a block with its own `if __name__ == "__main__":` as the script it shows,
+    the others one after the other as one session."""
     text = (ROOT / doc).read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    blocks = [b.replace('"fixtures/', f'"{ROOT}/fixtures/')
+              for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)]
     assert blocks
-    script = "\n".join(blocks).replace('"fixtures/', f'"{ROOT}/fixtures/')
-    (tmp_path / "snippets.py").write_text(script)
+    scripts = [b for b in blocks if 'if __name__ == "__main__":' in b]
+    session = "\n".join(b for b in blocks if b not in scripts)
     env = dict(os.environ, TMPDIR=str(tmp_path))
-    p = subprocess.run([sys.executable, "snippets.py"], cwd=tmp_path, capture_output=True,
-                       text=True, env=env, timeout=600)
-    assert p.returncode == 0, p.stderr
+    for k, script in enumerate(([session] if session else []) + scripts):
+        (tmp_path / f"snippet{k}.py").write_text(script)
+        p = subprocess.run([sys.executable, f"snippet{k}.py"], cwd=tmp_path,
+                           capture_output=True, text=True, env=env, timeout=600)
+        assert p.returncode == 0, f"{doc}, script {k}:\n{script}\n{p.stderr}"
 
 
 def test_type_stubs_match_the_package(tmp_path):

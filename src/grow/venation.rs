@@ -1502,7 +1502,7 @@ mod tests {
 
     /// Sources on both sides of a vein pull its nodes along it; before nodes answered their
     /// closest source instead, such a vein retired node by node and the whole tree stopped
-    /// with most sources unreached (seed 20 here: 437 of 501). `tests/venation.rs` runs the
+    /// with most sources unreached (seed 20 here: 437 of 501). `tests/suite/venation.rs` runs the
     /// stalls seen with marginal growth through the CLI.
     #[test]
     fn open_venation_reaches_its_sources_when_they_flank_a_vein() {

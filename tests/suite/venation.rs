@@ -2,11 +2,11 @@
 //! written network, outlines from files, density maps, the Peele r sweep, frames, the report,
 //! and clear errors for bad input.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 
-use common::{expected_frames, frame_names, lamina, stderr, stdout, TestResult};
+use crate::common::{expected_frames, frame_names, lamina, stderr, stdout, TestResult};
 use glam::DVec2;
 use lamina::grow::outline::{Outline, Shape};
 use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};

@@ -1,11 +1,9 @@
 //! `lamina simplify` end to end: the Calyx network on its guide surface, then `cells`,
 //! `planarize`, `size` and `plates` on the result; bad flags exit 2 and write nothing.
 
-mod common;
-
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use crate::common::{fixture, lamina, stderr, stdout, TestResult};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")

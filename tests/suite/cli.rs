@@ -1,8 +1,6 @@
 //! End to end through the binary: info, convert, render, demo.
 
-mod common;
-
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use crate::common::{fixture, lamina, stderr, stdout, TestResult};
 use serde_json::Value;
 
 fn info_json(path: &str) -> Result<Value, Box<dyn std::error::Error>> {

@@ -4,12 +4,10 @@
 //! geodesic veins as a tree of mesh edges reaching every source, density from vertex colours,
 //! repeatable bytes and clear errors.
 
-mod common;
-
 use std::collections::HashSet;
 use std::path::Path;
 
-use common::{expected_frames, fixture, frame_names, lamina, stderr, stdout, TestResult};
+use crate::common::{expected_frames, fixture, frame_names, lamina, stderr, stdout, TestResult};
 use glam::DVec3;
 use lamina::mesh::closest::closest_on_triangle;
 use lamina::mesh::io::read_mesh;

@@ -3,11 +3,9 @@
 //! boundary, one piece holding the root), projection onto a surface, and bad input refused
 //! with exit 2 and no output.
 
-mod common;
-
 use std::path::Path;
 
-use common::{lamina, run_ok, stderr, TestResult};
+use crate::common::{lamina, run_ok, stderr, TestResult};
 use glam::{DVec2, DVec3};
 use lamina::grow::outline::Outline;
 use lamina::mesh::io::write_mesh;

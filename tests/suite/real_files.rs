@@ -2,9 +2,7 @@
 //! by hand in Rhino's style): units, curves, blocks, Rhino OBJ quirks, multi-body and jittered
 //! STLs. Each with the outcome a designer would expect, in counts, millimetres and topology.
 
-mod common;
-
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 use serde_json::Value;
 
 fn info(args: &[&str]) -> Result<Value, Box<dyn std::error::Error>> {

@@ -1,8 +1,6 @@
 //! `lamina size` end to end on the Calyx fixture, `plates --sizing`, and bad input.
 
-mod common;
-
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 
 fn s(p: &std::path::Path) -> &str {
     p.to_str().unwrap_or("")

@@ -1,11 +1,9 @@
 //! Growth forms (Hart): the paper's Figure 8 program, topology after every operation, holes,
 //! bud splitting, line buds, textures, determinism and bad programs.
 
-mod common;
-
 use std::collections::{BTreeSet, VecDeque};
 
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 use lamina::grow::buds::{
     grow, parse_program, program::FIGURE_8, read_program, skin, CellGraph, Form, GrowthOptions,
     SkinOptions,

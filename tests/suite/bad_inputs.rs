@@ -1,9 +1,7 @@
 //! Every file in fixtures/bad/ gets one clear error naming the file (and the line or record where
 //! there is one), exit status 2, no panic, and no output file.
 
-mod common;
-
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 
 /// (file, words the error must contain). Every file in fixtures/bad/ must be listed here.
 const EXPECTED: &[(&str, &[&str])] = &[

@@ -1,10 +1,8 @@
 //! `lamina planarize` and `lamina audit` end to end on the Calyx-like venation fixture.
 
-mod common;
-
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use crate::common::{fixture, lamina, stderr, stdout, TestResult};
 use glam::DVec3;
 use lamina::rationalize::axes::read_axes;
 

@@ -1,10 +1,8 @@
 //! `lamina plates` end to end on the Calyx-like fixture's axes.
 
-mod common;
-
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")

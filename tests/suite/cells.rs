@@ -1,11 +1,9 @@
 //! `lamina cells` end to end: the Calyx-like fixture on its guide surface, a flat leaf, and the
 //! cells mesh used as the guide for `planarize`.
 
-mod common;
-
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, stdout, TestResult};
+use crate::common::{fixture, lamina, stderr, stdout, TestResult};
 use lamina::mesh::io::read_mesh;
 
 fn s(p: &Path) -> &str {

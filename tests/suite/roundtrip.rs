@@ -1,9 +1,7 @@
 //! Format round trips: JSON -> DXF -> OBJ -> JSON keeps topology and coordinates (1e-9 mm), and
 //! STL written by lamina keeps the volume of the original.
 
-mod common;
-
-use common::{assert_same_topology, fixture, TestResult};
+use crate::common::{assert_same_topology, fixture, TestResult};
 use glam::DVec3;
 use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::network::io::{read_network, write_network, ReadOptions, RenderOptions};

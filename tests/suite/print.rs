@@ -3,12 +3,12 @@
 //! sections' areas, fills overlapping shells by the non-zero rule, reports Peele's figures, and
 //! refuses open meshes and models that do not fit, leaving no output behind.
 
-mod common;
+use crate::common;
 
 use std::io::Read;
 use std::path::Path;
 
-use common::{fixture, lamina, run_ok, stderr, TestResult};
+use crate::common::{fixture, lamina, run_ok, stderr, TestResult};
 use glam::DVec3;
 use lamina::mesh::io::{read_mesh, write_mesh};
 use lamina::TriMesh;

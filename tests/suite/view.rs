@@ -2,11 +2,9 @@
 //! it should (objects, figures, sheets, layers, islands), the same bytes twice; bad input exits 2
 //! and writes nothing. Headless Chromium opens the pages in scripts/test (check_viewer.py).
 
-mod common;
-
 use std::path::Path;
 
-use common::{fixture, lamina, stderr, TestResult};
+use crate::common::{fixture, lamina, stderr, TestResult};
 
 fn s(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")

@@ -3,13 +3,11 @@
 //! 4 GB address-space limit: refused with one line that names the file or flag and the cause,
 //! exit status 2, no panic and nothing written; or, where the input is fine, done.
 
-mod common;
-
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{fixture, TestResult};
+use crate::common::{fixture, TestResult};
 
 enum Outcome {
     /// Exit 2, one line, naming each of these.
