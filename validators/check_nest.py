@@ -19,7 +19,9 @@ with lamina.
   spacing apart (shapely distances, an STRtree for neighbours).
 - Parts in all sheets = BOM rows = plates in plates.json; the part areas match the plates'
   areas one to one; each BOM row's sheet and mass agree with the plate.
-- nest.json's utilisation per sheet and in total is recomputed from the DXF polygons.
+- nest.json's utilisation per sheet and in total is recomputed from the DXF polygons, and its
+  cut and etched lengths (`cut_mm`, `etch_mm`) from the polylines drawn (contours as cut,
+  holes as their polygons, micro-joint gaps left out, lead lines counted).
 """
 
 import argparse
@@ -70,6 +72,8 @@ def sheet_polygons(path, width, height, joint_width=None):
     parts, holes, remnants, gaps, joint_lines = [], [], [], [], []
     etch, inner, etched = [], [], 0
     pieces = []
+    # Lengths as drawn: the cut (outer and inner contours, lead lines) and the etching, mm.
+    lengths = {"cut": 0.0, "etch": 0.0}
 
     def close_part(pts, part_gaps):
         if signed_area(pts) <= 0:
@@ -91,6 +95,14 @@ def sheet_polygons(path, width, height, joint_width=None):
         layer = e.dxf.layer
         if layer in ("CUT_OUTER", "CUT_INNER", "ETCH", "LEAD", "REMNANT") and e.dxftype() != "LWPOLYLINE":
             fail(f"{path}: {layer} holds a {e.dxftype()}")
+        if layer in ("CUT_OUTER", "CUT_INNER", "LEAD", "ETCH"):
+            pts = [(x, y) for x, y, *_ in e.get_points()]
+            if any(b for *_, b in e.get_points("xyb")):
+                fail(f"{path}: a {layer} polyline has bulges")
+            run = sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
+            if e.closed and len(pts) > 1:
+                run += math.dist(pts[-1], pts[0])
+            lengths["etch" if layer == "ETCH" else "cut"] += run
         if layer == "CUT_OUTER":
             pts = [(x, y) for x, y, *_ in e.get_points()]
             if e.closed:
@@ -144,7 +156,7 @@ def sheet_polygons(path, width, height, joint_width=None):
             math.dist(a[0], b[0]) > 1e-6 or math.dist(a[1], b[1]) > 1e-6
             for a, b in zip(drawn_gaps, drawn_joints)):
         fail(f"{path}: JOINT lines ({len(drawn_joints)}) are not the micro-joint gaps ({len(drawn_gaps)})")
-    return parts, etched, remnants, gaps
+    return parts, etched, remnants, gaps, lengths
 
 
 def main():
@@ -184,7 +196,7 @@ def main():
     rmin = sorted(float(v) for v in args.remnant_min.lower().split("x"))
     all_areas = []
     n_remnants = 0
-    total_used = total_stock = 0.0
+    total_used = total_stock = total_cut = 0.0
     worst_gap = math.inf
     strokes = 0
     sheet_area = width * height
@@ -192,8 +204,17 @@ def main():
         width, height = s["size"]
         sheet_area = width * height
         inner = box(args.margin, args.margin, width - args.margin, height - args.margin)
-        parts, etched, remnants, _ = sheet_polygons(folder / s["file"], width, height, joint_width)
+        parts, etched, remnants, _, lengths = sheet_polygons(folder / s["file"], width, height,
+                                                             joint_width)
         strokes += etched
+        # The cut and etched lengths nest.json gives (and times the machine by) are the ones
+        # drawn: every contour as the polyline cut (holes as their polygons, micro-joint gaps
+        # left out), and the lead lines.
+        for key in ("cut", "etch"):
+            if abs(lengths[key] - s[f"{key}_mm"]) > 1e-9 * max(lengths[key], 1.0):
+                fail(f"{s['file']}: nest.json's {key}_mm {s[f'{key}_mm']!r} but the DXF draws "
+                     f"{lengths[key]!r} mm")
+        total_cut += lengths["cut"]
         sheet_box = box(0, 0, width, height).buffer(1e-9)
         if len(remnants) != len(s["remnants"]):
             fail(f"{s['file']}: {len(remnants)} remnants drawn, nest.json lists {len(s['remnants'])}")
@@ -236,13 +257,15 @@ def main():
     total = total_used / total_stock
     if abs(total - nest["total"]["utilisation"]) > 1e-9:
         fail(f"total utilisation {nest['total']['utilisation']}, recomputed {total}")
+    if abs(total_cut - nest["total"]["cut_mm"]) > 1e-9 * max(total_cut, 1.0):
+        fail(f"total cut_mm {nest['total']['cut_mm']!r}, the DXFs draw {total_cut!r} mm")
 
     sheet_of = {pid: s["file"] for s in nest["sheets"] for pid in s["parts"]}
     # Rotations: exactly an allowed angle, and the geometry on the sheet turned by it.
     drawn = {}
     for s in nest["sheets"]:
         width, height = s["size"]
-        parts, _, _, gaps = sheet_polygons(folder / s["file"], width, height, joint_width)
+        parts, _, _, gaps, _ = sheet_polygons(folder / s["file"], width, height, joint_width)
         drawn[s["file"]] = list(zip(parts, gaps))
     clear = nest["micro_joints"]["clear_mm"] if args.micro_joints else 0.0
     jointed = n_joints = 0

@@ -35,7 +35,8 @@ pub struct Args {
     /// e.g. `z<1:6` for a 6 mm base ring; repeatable, a later match wins
     #[arg(long, value_parser = parse_override)]
     pub edge_thickness: Vec<(EdgeSelector, f64)>,
-    /// Root gap between plates meeting at a node, for the weld, mm
+    /// Root gap between plates meeting at a node, for the weld, mm (above 0; 0 only with
+    /// --node-core)
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub weld_gap: f64,
     /// How far a root gap may be from --weld-gap, mm
@@ -99,9 +100,12 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         groups: args.groups,
         bolt: args.bolt,
     };
-    let made = plates::run(&axes, &opts).map_err(|e| match e {
-        plates::Error::Option(o) => anyhow::Error::new(o),
-        e => anyhow::anyhow!("{}: {e}", args.input.display()),
+    let made = plates::run(&axes, &opts).map_err(|e| match (e, &args.sizing) {
+        (plates::Error::Option(o), _) => anyhow::Error::new(o),
+        (plates::Error::Plates(e), Some(sizing)) if e.is_the_sizings() => {
+            anyhow::anyhow!("{}: {e}", sizing.display())
+        }
+        (e, _) => anyhow::anyhow!("{}: {e}", args.input.display()),
     })?;
     if args.output.exists() && !args.output.is_dir() {
         bail!("{}: exists and is not a folder", args.output.display());

@@ -58,18 +58,20 @@ pub struct Drawn {
 }
 
 impl Drawn {
-    /// Cut length: the outline's perimeter less its micro-joints and the holes'
-    /// circumferences, mm.
+    /// Cut length: the outline's perimeter less its micro-joints, and the perimeters of the
+    /// holes as cut (`HOLE_SEGMENTS`-gons on their circles), mm.
     pub fn cut_length(&self) -> f64 {
         let n = self.outline.len();
         let outer: f64 = (0..n)
             .map(|k| self.outline[k].distance(self.outline[(k + 1) % n]))
             .sum::<f64>()
             - self.joints.iter().map(|[a, b]| b - a).sum::<f64>();
+        // Holes as the DXF cuts them: `HOLE_SEGMENTS`-gons on their circles.
+        let n = crate::rationalize::plates::HOLE_SEGMENTS as f64;
         let inner: f64 = self
             .holes
             .iter()
-            .map(|h| std::f64::consts::PI * h.diameter)
+            .map(|h| n * h.diameter * (std::f64::consts::PI / n).sin())
             .sum();
         outer + inner
     }

@@ -30,7 +30,7 @@ const PASSES: usize = 50;
 pub enum GroupError {
     #[error("groups= must be at least 1, got 0")]
     Zero,
-    #[error("{0} groups asked for, but the network has only {1} nodes with edges")]
+    #[error("groups= {0}: more groups than the network's {1} nodes with edges")]
     TooMany(usize, usize),
 }
 

@@ -160,6 +160,11 @@ pub enum PlateError {
     WeldGap(f64),
     #[error("weld_gap_tolerance= must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGapTolerance(f64),
+    #[error(
+        "weld_gap= 0: the plates at a node would meet with no root gap (and overlap where the \
+         gaps cannot be evened); give a gap above 0, or node_core= for a tube they weld to"
+    )]
+    WeldGapZero,
     #[error("{what} {t} mm is not on the gauge list {gauges:?}: add it with gauges=")]
     OffGauge {
         what: &'static str,
@@ -193,6 +198,24 @@ pub enum PlateError {
     Lengths(usize, usize, usize, usize, usize),
     #[error("edge {0} refers to node {1}, which does not exist")]
     MissingNode(usize, u32),
+}
+
+/// What names the per-edge gauges when they come from a sizing (`PlateError::OffGauge`).
+pub const SIZING_GAUGE: &str = "the sizing's gauge";
+
+impl PlateError {
+    /// Whether the sizing's per-edge gauges are at fault (not the axes or the options): the
+    /// command names the sizing file then.
+    pub fn is_the_sizings(&self) -> bool {
+        matches!(
+            self,
+            PlateError::PerEdge(..)
+                | PlateError::OffGauge {
+                    what: SIZING_GAUGE,
+                    ..
+                }
+        )
+    }
 }
 
 /// Where a plate sits: world = origin + x·X + y·Y + z·Z for plate coordinates (x, y, z), with z
@@ -442,6 +465,9 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     if !(opts.weld_gap >= 0.0 && opts.weld_gap <= 100.0) {
         return Err(PlateError::WeldGap(opts.weld_gap));
     }
+    if opts.weld_gap == 0.0 && opts.node_core.is_none() {
+        return Err(PlateError::WeldGapZero);
+    }
     if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
         return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
     }
@@ -458,7 +484,7 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     }
     if let Thickness::PerEdge(list) = &opts.thickness {
         if let Some(t) = list.iter().find(|t| !on_list(**t)) {
-            return Err(off("the sizing's gauge", *t));
+            return Err(off(SIZING_GAUGE, *t));
         }
     }
     if let Some((_, t)) = opts.overrides.iter().find(|(_, t)| !on_list(*t)) {

@@ -54,7 +54,7 @@ pub struct Options {
     pub sizing: Option<Gauges>,
     /// Thickness for some edges over the rule; a later match wins.
     pub edge_thickness: Vec<(EdgeSelector, f64)>,
-    /// Root gap between plates meeting at a node, mm. Default 1.
+    /// Root gap between plates meeting at a node, mm: above 0, or 0 with `node_core`. Default 1.
     pub weld_gap: f64,
     /// How far a root gap may be from `weld_gap`, mm. Default 0.5.
     pub weld_gap_tolerance: f64,

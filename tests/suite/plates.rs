@@ -105,6 +105,8 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
     for (args, words) in [
         (vec!["--gauges", "3,2"], "ascending"),
         (vec!["--weld-gap=-1"], "--weld-gap"),
+        (vec!["--weld-gap", "0"], "--weld-gap 0"),
+        (vec!["--groups", "1000"], "--groups 1000"),
         (vec!["--thickness", "0"], "--thickness"),
     ] {
         let mut all = vec!["plates", s(&axes), "-o", s(&out)];
@@ -114,6 +116,36 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
         assert!(stderr(&o).contains(words), "{}", stderr(&o));
         assert!(!out.join("plates.json").exists());
     }
+    // A gauge the sizing chose and the list lacks: the sizing file is named, not the axes.
+    let sizing = dir.path().join("sizing.json");
+    let o = lamina(&[
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1",
+        "--load",
+        "self-weight",
+    ]);
+    assert!(sizing.exists(), "{}", stderr(&o));
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&sizing),
+        "--gauges",
+        "7,9",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let said = stderr(&o);
+    assert!(
+        said.contains(&format!("{}: the sizing's gauge", sizing.display())),
+        "{said}"
+    );
+    assert!(!out.join("plates.json").exists());
     let network = fixture("networks/calyx_veins.json");
     let o = lamina(&["plates", s(&network), "-o", s(&out)]);
     assert_eq!(o.status.code(), Some(2));
