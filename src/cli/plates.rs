@@ -39,7 +39,7 @@ pub struct Args {
     /// --node-core)
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub weld_gap: f64,
-    /// How far a root gap may be from --weld-gap, mm
+    /// How far a root gap may be from --weld-gap, mm (at most --weld-gap)
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub weld_gap_tolerance: f64,
     /// Nodes whose gaps setbacks cannot even get a tube on their axis the plates weld to:

@@ -161,6 +161,22 @@ pub enum PlateError {
     #[error("weld_gap_tolerance= must be from 0 to 100 mm, got {}", crate::text::num(*.0))]
     WeldGapTolerance(f64),
     #[error(
+        "weld_gap_tolerance= {} mm is more than weld_gap= {} mm: root gaps down to {} mm would \
+         let plates overlap; keep the tolerance at most the gap",
+        crate::text::num(*tolerance), crate::text::num(*gap), crate::text::num(*gap - *tolerance)
+    )]
+    ToleranceOverGap { gap: f64, tolerance: f64 },
+    #[error(
+        "node {node}: the plates on edges {} and {} overlap (root gap {} mm): give a larger \
+         weld_gap= or a node_core=",
+        edges[0], edges[1], crate::text::num(*gap)
+    )]
+    Overlap {
+        node: usize,
+        edges: [usize; 2],
+        gap: f64,
+    },
+    #[error(
         "weld_gap= 0: the plates at a node would meet with no root gap (and overlap where the \
          gaps cannot be evened); give a gap above 0, or node_core= for a tube they weld to"
     )]
@@ -199,6 +215,9 @@ pub enum PlateError {
     #[error("edge {0} refers to node {1}, which does not exist")]
     MissingNode(usize, u32),
 }
+
+/// How far two plates may cross at a node (rounding), mm: more is an overlap and an error.
+const OVERLAP: f64 = 1e-9;
 
 /// What names the per-edge gauges when they come from a sizing (`PlateError::OffGauge`).
 pub const SIZING_GAUGE: &str = "the sizing's gauge";
@@ -468,6 +487,12 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     if opts.weld_gap == 0.0 && opts.node_core.is_none() {
         return Err(PlateError::WeldGapZero);
     }
+    if opts.weld_gap_tolerance > opts.weld_gap {
+        return Err(PlateError::ToleranceOverGap {
+            gap: opts.weld_gap,
+            tolerance: opts.weld_gap_tolerance,
+        });
+    }
     if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
         return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
     }
@@ -681,6 +706,14 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
             continue;
         }
         let node = node_welds(axes, opts, v, here, &dir, &stack, &mut cores, &group)?;
+        // Plates that overlap cannot be built, whatever the report says about the node.
+        if let Some(pair) = node.pairs.iter().find(|p| p.gap < -OVERLAP) {
+            return Err(PlateError::Overlap {
+                node: v,
+                edges: pair.edges,
+                gap: pair.gap,
+            });
+        }
         for (&(k, end), s) in here.iter().zip(&node.setbacks) {
             setback[k][end] = *s;
         }

@@ -56,7 +56,7 @@ pub struct Options {
     pub edge_thickness: Vec<(EdgeSelector, f64)>,
     /// Root gap between plates meeting at a node, mm: above 0, or 0 with `node_core`. Default 1.
     pub weld_gap: f64,
-    /// How far a root gap may be from `weld_gap`, mm. Default 0.5.
+    /// How far a root gap may be from `weld_gap`, mm, at most `weld_gap`. Default 0.5.
     pub weld_gap_tolerance: f64,
     /// A tube at nodes whose gaps setbacks cannot even. Default: such nodes are reported.
     pub node_core: Option<CoreSize>,

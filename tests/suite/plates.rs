@@ -106,6 +106,14 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
         (vec!["--gauges", "3,2"], "ascending"),
         (vec!["--weld-gap=-1"], "--weld-gap"),
         (vec!["--weld-gap", "0"], "--weld-gap 0"),
+        (
+            vec!["--weld-gap", "0.2"],
+            "--weld-gap-tolerance 0.5 mm is more than --weld-gap 0.2 mm",
+        ),
+        (
+            vec!["--weld-gap", "0", "--node-core", "tube:60.3,4"],
+            "--weld-gap-tolerance 0.5 mm is more than --weld-gap 0 mm",
+        ),
         (vec!["--groups", "1000"], "--groups 1000"),
         (vec!["--thickness", "0"], "--thickness"),
     ] {
