@@ -407,6 +407,12 @@ def test_bad_options_name_the_argument(tmp_path, calyx):
         lamina.venation(shape="hexagon")
     with pytest.raises(lamina.LaminaError, match="units="):
         lamina.planarize(calyx, units="furlong")
+    solved = lamina.planarize(calyx, fix_normal=["z<1:0,0,1"])
+    with pytest.raises(lamina.LaminaError, match=r"^weld_gap= 0: .* node_core="):
+        lamina.plates(solved, weld_gap=0.0)
+    with pytest.raises(lamina.LaminaError,
+                       match=r"^weld_gap_tolerance= 0.5 mm is more than weld_gap= 0.2 mm"):
+        lamina.plates(solved, weld_gap=0.2)
 
 
 @pytest.mark.parametrize("case, where", [
