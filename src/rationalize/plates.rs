@@ -487,14 +487,14 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
     if opts.weld_gap == 0.0 && opts.node_core.is_none() {
         return Err(PlateError::WeldGapZero);
     }
+    if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
+        return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
+    }
     if opts.weld_gap_tolerance > opts.weld_gap {
         return Err(PlateError::ToleranceOverGap {
             gap: opts.weld_gap,
             tolerance: opts.weld_gap_tolerance,
         });
-    }
-    if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
-        return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
     }
     let on_list = |t: f64| opts.gauges.iter().any(|g| (g - t).abs() < 1e-9);
     let off = |what: &'static str, t: f64| PlateError::OffGauge {
