@@ -60,7 +60,7 @@ pub struct Args {
     /// Rounds of analysis and gauge choice at most
     #[arg(long, default_value_t = 20)]
     pub max_rounds: usize,
-    /// Analyse the panels themselves as flat shells, N elements up each (even, 2 to 32),
+    /// Analyse the panels themselves as flat shells, N elements up each (even, 4 to 32),
     /// welded along the node axes, instead of beams: for deep panels (Calyx's), where beam
     /// theory is stiffer than the plates are
     #[arg(long, value_name = "N")]

@@ -237,6 +237,10 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
             "even number",
         ),
         (
+            vec!["--support", "z<1", "--load", "self-weight", "--shells", "2"],
+            "--shells must be an even number of elements from 4 to 32 (2 is not converged)",
+        ),
+        (
             vec![
                 "--support",
                 "z<1",
