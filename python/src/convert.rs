@@ -15,14 +15,21 @@ pub fn numpy(py: Python<'_>) -> PyResult<Bound<'_, PyModule>> {
     py.import("numpy")
 }
 
-/// A numpy array of `shape` from little-endian values (writable: it owns a bytearray).
-pub fn array<'py, T: Copy>(
-    py: Python<'py>,
+/// numpy's `frombuffer`, looked up once per conversion.
+fn frombuffer(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    numpy(py)?.getattr(intern!(py, "frombuffer"))
+}
+
+/// A numpy array of `shape` from little-endian values (writable: it owns a bytearray), made by
+/// `frombuffer`.
+fn le_array<'py, T: Copy>(
+    frombuffer: &Bound<'py, PyAny>,
     values: &[T],
-    dtype: &str,
+    dtype: &Bound<'py, PyString>,
     shape: &[usize],
-    to_le: impl Fn(T, &mut [u8]),
+    to_le: fn(T, &mut [u8]),
 ) -> PyResult<Bound<'py, PyAny>> {
+    let py = frombuffer.py();
     let width = std::mem::size_of::<T>();
     let bytes = PyByteArray::new_with(py, std::mem::size_of_val(values), |buf| {
         for (v, chunk) in values.iter().zip(buf.chunks_exact_mut(width)) {
@@ -30,9 +37,23 @@ pub fn array<'py, T: Copy>(
         }
         Ok(())
     })?;
-    let np = numpy(py)?;
-    let flat = np.call_method1("frombuffer", (bytes, dtype))?;
-    flat.call_method1("reshape", (PyTuple::new(py, shape)?,))
+    let flat = frombuffer.call1((bytes, dtype))?;
+    if shape.len() == 1 {
+        return Ok(flat);
+    }
+    flat.call_method1(intern!(py, "reshape"), (PyTuple::new(py, shape)?,))
+}
+
+fn f64_le(v: f64, b: &mut [u8]) {
+    b.copy_from_slice(&v.to_le_bytes())
+}
+
+fn i64_le(v: i64, b: &mut [u8]) {
+    b.copy_from_slice(&v.to_le_bytes())
+}
+
+fn bool_le(v: bool, b: &mut [u8]) {
+    b[0] = u8::from(v)
 }
 
 /// float64 values as an array of `shape`.
@@ -41,9 +62,7 @@ pub fn f64_array<'py>(
     values: &[f64],
     shape: &[usize],
 ) -> PyResult<Bound<'py, PyAny>> {
-    array(py, values, "<f8", shape, |v, b| {
-        b.copy_from_slice(&v.to_le_bytes())
-    })
+    le_array(&frombuffer(py)?, values, intern!(py, "<f8"), shape, f64_le)
 }
 
 /// int64 values as an array of `shape`.
@@ -52,14 +71,18 @@ pub fn i64_array<'py>(
     values: &[i64],
     shape: &[usize],
 ) -> PyResult<Bound<'py, PyAny>> {
-    array(py, values, "<i8", shape, |v, b| {
-        b.copy_from_slice(&v.to_le_bytes())
-    })
+    le_array(&frombuffer(py)?, values, intern!(py, "<i8"), shape, i64_le)
 }
 
 /// bool values as an array.
 pub fn bool_array<'py>(py: Python<'py>, values: &[bool]) -> PyResult<Bound<'py, PyAny>> {
-    array(py, values, "?", &[values.len()], |v, b| b[0] = u8::from(v))
+    le_array(
+        &frombuffer(py)?,
+        values,
+        intern!(py, "?"),
+        &[values.len()],
+        bool_le,
+    )
 }
 
 /// What an array of JSON values is, for turning it into numpy.
@@ -131,7 +154,7 @@ impl<'a, 'py> Conv<'a, 'py> {
         Ok(Conv {
             py,
             tables,
-            frombuffer: numpy(py)?.getattr(intern!(py, "frombuffer"))?,
+            frombuffer: frombuffer(py)?,
             keys: HashMap::new(),
         })
     }
@@ -144,41 +167,12 @@ impl<'a, 'py> Conv<'a, 'py> {
             .clone()
     }
 
-    /// A numpy array of `shape` from the values' little-endian bytes.
-    fn array<T: Copy>(
-        &self,
-        values: &[T],
-        dtype: &Bound<'py, PyString>,
-        shape: &[usize],
-        to_le: impl Fn(T, &mut [u8]),
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let width = std::mem::size_of::<T>();
-        let bytes = PyByteArray::new_with(self.py, std::mem::size_of_val(values), |buf| {
-            for (v, chunk) in values.iter().zip(buf.chunks_exact_mut(width)) {
-                to_le(*v, chunk);
-            }
-            Ok(())
-        })?;
-        let flat = self.frombuffer.call1((bytes, dtype))?;
-        if shape.len() == 1 {
-            return Ok(flat);
-        }
-        flat.call_method1(
-            intern!(self.py, "reshape"),
-            (PyTuple::new(self.py, shape)?,),
-        )
-    }
-
     fn numbers(&self, n: Numbers, shape: &[usize]) -> PyResult<Bound<'py, PyAny>> {
-        let py = self.py;
+        let (py, fb) = (self.py, &self.frombuffer);
         match n {
-            Numbers::Ints(v) => self.array(&v, intern!(py, "<i8"), shape, |v, b| {
-                b.copy_from_slice(&v.to_le_bytes())
-            }),
-            Numbers::Floats(v) => self.array(&v, intern!(py, "<f8"), shape, |v, b| {
-                b.copy_from_slice(&v.to_le_bytes())
-            }),
-            Numbers::Bools(v) => self.array(&v, intern!(py, "?"), shape, |v, b| b[0] = u8::from(v)),
+            Numbers::Ints(v) => le_array(fb, &v, intern!(py, "<i8"), shape, i64_le),
+            Numbers::Floats(v) => le_array(fb, &v, intern!(py, "<f8"), shape, f64_le),
+            Numbers::Bools(v) => le_array(fb, &v, intern!(py, "?"), shape, bool_le),
         }
     }
 
