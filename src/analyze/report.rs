@@ -11,8 +11,11 @@ use super::material::Material;
 use super::sizing::Sizing;
 
 /// What the sizing figures mean (sizing.json's `definitions` and the page say the same).
-pub const UTILISATION: &str = "the largest over the load cases and five points along the member of: stress = von Mises of the largest corner normal stress (N, My, Mz) and the largest shear stress (torsion + 1.5 V/A) over f_y/gamma_M0; buckling = compression over the weak-axis flexural buckling resistance as a pin-ended strut (EN 1993-1-1 6.3.1.2, curve c), chi A f_y/gamma_M1";
-pub const WELD_UTILISATION: &str = "EN 1993-1-8 4.5.3.3 simplified method: the force per length on the two fillet welds (throat a = throat factor x the thinner plate at the node) along each member end's depth, over f_u/(sqrt(3) beta_w gamma_M2) a; the largest over the node's member ends and the cases";
+pub const UTILISATION: &str = "the largest over the ultimate combinations (EN 1990 6.10) and five points along the member of: stress = von Mises of the largest corner normal stress (N, My, Mz) and the largest shear stress (torsion + 1.5 V/A) over f_y/gamma_M0; buckling = compression over the weak-axis flexural buckling resistance as a pin-ended strut (EN 1993-1-1 6.3.1.2, curve c), chi A f_y/gamma_M1; lateral-torsional = the largest in-plane moment over chi_LT W_el f_y/gamma_M1 (6.3.2.2, curve d), M_cr = C1 pi/L sqrt(E I_weak G I_t) of the rectangle restrained only at its nodes, C1 from the moment diagram by the quarter-point formula (at most 2.5); interaction = (6.61) and (6.62) with Annex B's factors for elastic sections, C_m = C_mLT = 1, k_zy = 1";
+pub const WELD_UTILISATION: &str = "EN 1993-1-8 4.5.3.3 simplified method: the force per length on the two fillet welds (throat a = throat factor x the thinner plate at the node) along each member end's depth, over f_u/(sqrt(3) beta_w gamma_M2) a; the largest over the node's member ends and the ultimate combinations";
+/// EN 1993-1-8 §4.5.2(2): a fillet weld's throat is at least 3 mm.
+pub const MIN_THROAT: f64 = 3.0;
+pub const COMBINATIONS: &str = "EN 1990 with Table A1.2(B): ULS (6.10) the permanent loads (self-weight, or a load marked :G) at 1.35, each variable load (point or wind) leading at 1.5 and the others at 1.5 psi0, and again with the permanent loads at 1.0 (favourable); SLS characteristic (6.14b) the permanent loads at 1, each variable load leading at 1 and the others at psi0; psi0 = 0.6 for wind, 0.7 for point loads (imposed, categories A to D). Members and welds are checked under the ULS combinations, the deflection under the SLS ones";
 pub const DISPLACEMENT: &str =
     "under the sum of the loads, at the model's node (mid-height of the axis)";
 

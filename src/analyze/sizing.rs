@@ -8,21 +8,35 @@
 //! of every panel meeting there), a member per edge with a solid rectangular section, depth the
 //! panel's height across the member and thickness its gauge, the depth in the panel plane.
 //!
-//! Checks per member, at five points along it, for every load case and their sum:
+//! Loads are permanent (self-weight, or a load marked `:G`) or variable (point loads and wind)
+//! and combined as EN 1990 says ([`combinations`]): members and welds are checked under the
+//! ultimate combinations (6.10, with both γ_G = 1.35 and 1.0), the deflection under the
+//! characteristic serviceability ones (6.14b). The loads one by one and their sum are analysed
+//! too: sizing.json's displacements, end forces and reactions are the sum's.
+//!
+//! Checks per member, at five points along it, in every ultimate combination:
 //! - `stress`: von Mises from the largest normal stress at a corner of the section (axial force
 //!   and both bending moments) and the largest shear stress (torsion, Roark's modulus, plus
 //!   1.5 V/A of the resultant shear; the two are added although their peaks are at different
 //!   points, which is safe), over f_y/γ_M0;
 //! - `buckling`: the compression over the weak-axis flexural buckling resistance of the member
 //!   as a pin-ended strut (EN 1993-1-1 §6.3.1.2, curve c for solid sections, L_cr = L), over
-//!   χ A f_y/γ_M1. Interaction with bending (§6.3.3) is not checked.
+//!   χ A f_y/γ_M1;
+//! - `lateral-torsional`: the largest in-plane moment over χ_LT W_el f_y/γ_M1 (§6.3.2.2, curve
+//!   d for "other sections"), M_cr of the rectangle restrained against twist at its nodes only
+//!   (C1 π/L √(E I_weak G I_t), no warping stiffness), C1 from the moment diagram;
+//! - `interaction`: compression with bending about both axes, (6.61) and (6.62), with Annex B's
+//!   factors for elastic sections and the largest C_m, C_mLT and k_zy (1).
 //!
 //! Welds (EN 1993-1-8 §4.5.3.3, the simplified method): each member end is held by two fillet
 //! welds of throat a (0.7 × the thinner of the plates meeting at the node) along its depth, one
 //! on each face; the force per length is the sum of the parts from every end force (axial,
 //! shears, in-plane moment as a line's bending, out-of-plane moment as a couple across the
 //! thickness, torsion as the two lines' polar moment), over f_vw,d · a with
-//! f_vw,d = f_u / (√3 β_w γ_M2).
+//! f_vw,d = f_u / (√3 β_w γ_M2). The welds are part of the sizing: where one does not hold,
+//! the plates at its node thinner than it needs go up the gauge list; where even the thickest
+//! gauge is not enough the sizing stops ([`SizingError::WeldsExhausted`]). A throat below 3 mm
+//! (§4.5.2(2)) is named in the report: such a joint needs a thin-sheet procedure.
 
 use glam::DVec3;
 use thiserror::Error;
@@ -40,6 +54,13 @@ pub const GRAVITY: f64 = 9.80665;
 /// Stations along a member where it is checked, as fractions of its length.
 const STATIONS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
 
+/// Permanent (G) or variable (Q), as EN 1990 §4.1.1 classes an action.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Action {
+    Permanent,
+    Variable,
+}
+
 /// A load as given on the command line.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LoadSpec {
@@ -52,6 +73,36 @@ pub enum LoadSpec {
 }
 
 impl LoadSpec {
+    /// A load and its action: self-weight is permanent; a point load or wind is variable
+    /// unless it ends in `:G` (`:Q` says variable).
+    pub fn parse_action(s: &str) -> Result<(LoadSpec, Action), String> {
+        let t = s.trim();
+        let (body, marked) = match t.rsplit_once(':') {
+            Some((b, "G")) => (b, Some(Action::Permanent)),
+            Some((b, "Q")) => (b, Some(Action::Variable)),
+            _ => (t, None),
+        };
+        let spec = LoadSpec::parse(body)?;
+        let action = match (&spec, marked) {
+            (LoadSpec::SelfWeight { .. }, Some(Action::Variable)) => {
+                return Err(format!("`{t}`: self-weight is permanent (G), not variable"))
+            }
+            (LoadSpec::SelfWeight { .. }, _) => Action::Permanent,
+            (_, Some(a)) => a,
+            (_, None) => Action::Variable,
+        };
+        Ok((spec, action))
+    }
+
+    /// The combination value factor ψ0 of a variable load (EN 1990 Table A1.1): wind 0.6,
+    /// a point load as an imposed load of categories A to D, 0.7.
+    pub fn psi0(&self) -> f64 {
+        match self {
+            LoadSpec::Wind { .. } => 0.6,
+            _ => 0.7,
+        }
+    }
+
     /// `self-weight[:FACTOR]`, `point:SELECTOR:FX,FY,FZ` (N), `wind:KPA:DX,DY,DZ`.
     pub fn parse(s: &str) -> Result<LoadSpec, String> {
         let s = s.trim();
@@ -161,7 +212,8 @@ pub struct SizingOptions {
     /// Ascending, mm.
     pub gauges: Vec<f64>,
     pub supports: Vec<(Selector, Support)>,
-    pub loads: Vec<(String, LoadSpec)>,
+    /// Each load as written, what it is and its action.
+    pub loads: Vec<(String, LoadSpec, Action)>,
     pub deflection_limit: Option<DeflectionLimit>,
     pub group_by: GroupBy,
     pub smooth: bool,
@@ -190,6 +242,18 @@ pub enum SizingError {
         "node {0}: its axis or height cannot make a section (zero height or an axis along an edge)"
     )]
     BadNode(usize),
+    #[error(
+        "gauges= is too thin for the welds: at node {node} the weld is utilised {utilisation:.3} \
+         with a throat of {throat:.2} mm on the thickest gauge ({thickest} mm); it needs \
+         {needed:.2} mm: add a thicker gauge or give a larger throat="
+    )]
+    WeldsExhausted {
+        node: usize,
+        utilisation: f64,
+        throat: f64,
+        needed: f64,
+        thickest: f64,
+    },
     #[error(transparent)]
     Frame(#[from] FrameError),
     #[error("group_by= assembly: {0}")]
@@ -206,13 +270,110 @@ pub struct Check {
     pub case: usize,
 }
 
+/// Which limit state a combination serves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Limit {
+    /// EN 1990 6.10: strength and stability.
+    Ultimate,
+    /// EN 1990 6.14b, characteristic: deflection.
+    Serviceability,
+}
+
+/// Partial factors of EN 1990 Table A1.2(B) (set B, STR/GEO): permanent actions unfavourable and
+/// favourable, variable ones.
+pub const GAMMA_G_SUP: f64 = 1.35;
+pub const GAMMA_G_INF: f64 = 1.0;
+pub const GAMMA_Q: f64 = 1.5;
+
+/// A combination of the loads: a factor per load (in the loads' order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Combination {
+    pub name: String,
+    pub limit: Limit,
+    pub factors: Vec<f64>,
+}
+
+/// The combinations of EN 1990 for the loads given: for ultimate limit states (6.10) the
+/// permanent loads at γ_G,sup = 1.35 with each variable load leading at γ_Q = 1.5 and the others
+/// at γ_Q ψ0, and the same with the permanent loads at γ_G,inf = 1.0 (favourable, as under wind
+/// uplift); for serviceability (6.14b, characteristic) the permanent loads at 1 with each
+/// variable load leading at 1 and the others at ψ0. Without variable loads: 1.35 G and G.
+pub fn combinations(loads: &[(String, LoadSpec, Action)]) -> Vec<Combination> {
+    let variable: Vec<usize> = (0..loads.len())
+        .filter(|&i| loads[i].2 == Action::Variable)
+        .collect();
+    let leads: Vec<Option<usize>> = if variable.is_empty() {
+        vec![None]
+    } else {
+        variable.iter().map(|&i| Some(i)).collect()
+    };
+    let make = |limit: Limit, g: f64, q: f64, lead: Option<usize>| {
+        let factors: Vec<f64> = loads
+            .iter()
+            .enumerate()
+            .map(|(i, (_, spec, action))| match action {
+                Action::Permanent => g,
+                Action::Variable if Some(i) == lead => q,
+                Action::Variable => q * spec.psi0(),
+            })
+            .collect();
+        let terms: Vec<String> = loads
+            .iter()
+            .zip(&factors)
+            .map(|((name, _, _), f)| {
+                if *f == 1.0 {
+                    name.clone()
+                } else {
+                    format!("{} × {name}", fmt_factor(*f))
+                }
+            })
+            .collect();
+        let tag = match limit {
+            Limit::Ultimate => "ULS",
+            Limit::Serviceability => "SLS",
+        };
+        Combination {
+            name: format!("{tag}: {}", terms.join(" + ")),
+            limit,
+            factors,
+        }
+    };
+    let mut out = Vec::new();
+    let has_g = loads.iter().any(|l| l.2 == Action::Permanent);
+    for &lead in &leads {
+        out.push(make(Limit::Ultimate, GAMMA_G_SUP, GAMMA_Q, lead));
+    }
+    if has_g && !variable.is_empty() {
+        for &lead in &leads {
+            out.push(make(Limit::Ultimate, GAMMA_G_INF, GAMMA_Q, lead));
+        }
+    }
+    for &lead in &leads {
+        out.push(make(Limit::Serviceability, 1.0, 1.0, lead));
+    }
+    out
+}
+
+/// A factor as few digits as it needs (1.05, not 1.0500000000000003).
+fn fmt_factor(f: f64) -> String {
+    let r = (f * 1e6).round() / 1e6;
+    format!("{r}")
+}
+
 #[derive(Clone, Debug)]
 pub struct Sizing {
     pub model: Model,
+    /// The loads one by one (characteristic), their sum when there are several, then the
+    /// combinations (see [`Sizing::combinations`]).
     pub cases: Vec<LoadCase>,
     pub results: Vec<CaseResult>,
+    /// The combinations, the case of the first at `first_combination`.
+    pub combinations: Vec<Combination>,
+    pub first_combination: usize,
     pub gauges: Vec<f64>,
     pub checks: Vec<Check>,
+    /// Per member, by check ([`CHECK_NAMES`]): the largest utilisation and its case.
+    pub by_check: Vec<[(f64, usize); 4]>,
     /// Per node: the largest weld utilisation and its case.
     pub welds: Vec<Option<Check>>,
     pub throats: Vec<f64>,
@@ -228,14 +389,32 @@ pub struct Sizing {
 }
 
 impl Sizing {
-    /// The case that sums every load (the last one).
+    /// The case that sums every load at its characteristic value (the only load when there is
+    /// one): the state sizing.json's displacements, end forces and reactions describe.
     pub fn total(&self) -> &CaseResult {
-        self.results.last().expect("at least one case")
+        &self.results[self.first_combination - 1]
     }
 
-    /// The node moving most under the sum of the loads, and how far, mm.
+    /// The loads of [`Sizing::total`].
+    pub fn total_case(&self) -> &LoadCase {
+        &self.cases[self.first_combination - 1]
+    }
+
+    /// The case index of each combination for `limit`.
+    pub fn limit_cases(&self, limit: Limit) -> Vec<usize> {
+        limit_cases(&self.combinations, self.first_combination, limit)
+    }
+
+    /// The serviceability combination whose largest displacement is largest, that node and
+    /// how far, mm: what the deflection limit is checked against.
     pub fn max_displacement(&self) -> (usize, f64) {
-        max_displacement(self.total())
+        let c = self.deflection_case();
+        max_displacement(&self.results[c])
+    }
+
+    /// The case of the serviceability combination that moves a node most.
+    pub fn deflection_case(&self) -> usize {
+        deflection_case(&self.results, &self.limit_cases(Limit::Serviceability))
     }
 
     /// The largest member utilisation.
@@ -338,7 +517,8 @@ fn panel_areas(axes: &Axes) -> Vec<f64> {
         .collect()
 }
 
-/// The load cases: one per load, and their sum last (alone when there is one load).
+/// The load cases: one per load, their sum (when there are several), then the combinations of
+/// [`combinations`] in their order.
 pub fn cases(
     axes: &Axes,
     model: &Model,
@@ -349,7 +529,7 @@ pub fn cases(
     }
     let areas = panel_areas(axes);
     let mut out = Vec::new();
-    for (name, spec) in &opts.loads {
+    for (name, spec, _) in &opts.loads {
         let mut case = LoadCase {
             name: name.clone(),
             ..Default::default()
@@ -391,21 +571,90 @@ pub fn cases(
         }
         out.push(case);
     }
-    if out.len() > 1 {
-        let mut all = LoadCase {
-            name: "all loads".into(),
-            ..Default::default()
-        };
-        for c in &out {
-            all.nodal.extend(c.nodal.iter().copied());
-            all.member.extend(c.member.iter().copied());
-        }
+    let singles = out.len();
+    if singles > 1 {
+        let all = weighted(&out, "all loads".into(), &vec![1.0; singles]);
         out.push(all);
+    }
+    for c in combinations(&opts.loads) {
+        let case = weighted(&out[..singles], c.name, &c.factors);
+        out.push(case);
     }
     Ok(out)
 }
 
-/// Utilisation of a member's section for one case, and what governs.
+/// The loads of `cases`, each times its factor, as one case.
+fn weighted(cases: &[LoadCase], name: String, factors: &[f64]) -> LoadCase {
+    let mut sum = LoadCase {
+        name,
+        ..Default::default()
+    };
+    for (c, &f) in cases.iter().zip(factors) {
+        sum.nodal
+            .extend(c.nodal.iter().map(|&(i, v)| (i, v.map(|x| x * f))));
+        sum.member.extend(c.member.iter().map(|&(k, w)| (k, w * f)));
+    }
+    sum
+}
+
+/// A member's utilisation by each check, for one case.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MemberChecks {
+    /// Von Mises at the worst corner over f_y/γ_M0.
+    pub stress: f64,
+    /// Compression over the flexural buckling resistance about the weak axis (§6.3.1).
+    pub buckling: f64,
+    /// In-plane bending over the lateral-torsional buckling resistance (§6.3.2.2).
+    pub lateral_torsional: f64,
+    /// Compression with bending about both axes (§6.3.3, (6.61) and (6.62)).
+    pub interaction: f64,
+}
+
+/// The checks' names, in [`MemberChecks::values`]' order, as sizing.json writes them.
+pub const CHECK_NAMES: [&str; 4] = ["stress", "buckling", "lateral-torsional", "interaction"];
+
+impl MemberChecks {
+    pub fn values(&self) -> [f64; 4] {
+        [
+            self.stress,
+            self.buckling,
+            self.lateral_torsional,
+            self.interaction,
+        ]
+    }
+
+    /// The largest and its name (the first on a tie).
+    pub fn governing(&self) -> (f64, &'static str) {
+        self.values()
+            .into_iter()
+            .zip(CHECK_NAMES)
+            .fold((0.0, CHECK_NAMES[0]), |a, b| if b.0 > a.0 { b } else { a })
+    }
+}
+
+/// The reduction factor χ of EN 1993-1-1 (6.49) for a relative slenderness, imperfection
+/// factor α and plateau λ0.
+fn chi(lambda: f64, alpha: f64, plateau: f64) -> f64 {
+    if lambda <= plateau {
+        return 1.0;
+    }
+    let phi = 0.5 * (1.0 + alpha * (lambda - plateau) + lambda * lambda);
+    (1.0 / (phi + (phi * phi - lambda * lambda).max(0.0).sqrt())).min(1.0)
+}
+
+/// C1 of a moment diagram from its absolute values at the member's ends, quarter points and
+/// middle (Kirby and Nethercot's quarter-point formula, as AISC 360 (F1-1) writes C_b), at
+/// most 2.5; 1 for a uniform moment.
+pub fn c1_of(moments: &[f64; 5]) -> f64 {
+    let max = moments.iter().copied().fold(0.0, f64::max);
+    if max <= 0.0 {
+        return 1.0;
+    }
+    let (qa, mid, qb) = (moments[1], moments[2], moments[3]);
+    (12.5 * max / (2.5 * max + 3.0 * qa + 4.0 * mid + 3.0 * qb)).clamp(1.0, 2.5)
+}
+
+/// Utilisation of a member's section for one case by each check (see the module notes).
 pub fn member_check(
     model: &Model,
     k: usize,
@@ -413,7 +662,7 @@ pub fn member_check(
     end: &[f64; 12],
     w_global: DVec3,
     material: &Material,
-) -> (f64, &'static str) {
+) -> MemberChecks {
     let m = &model.members[k];
     let (x, y, z, l) = frame::local_frame(model, m);
     let w = DVec3::new(x.dot(w_global), y.dot(w_global), z.dot(w_global));
@@ -423,30 +672,56 @@ pub fn member_check(
         s.depth * s.thickness * s.thickness / 6.0,
         s.thickness * s.depth * s.depth / 6.0,
     );
-    let fyd = material.fy / material.gamma_m0;
+    let (fy, e) = (material.fy, material.e);
+    let fyd = fy / material.gamma_m0;
     let mut stress = 0.0f64;
     let mut compression = 0.0f64;
-    for f in STATIONS {
+    // |M| about the strong (local z: in the panel plane) and weak axes along the member.
+    let mut strong = [0.0f64; 5];
+    let mut weak = 0.0f64;
+    for (j, f) in STATIONS.into_iter().enumerate() {
         let [n, vy, vz, t, my, mz] = frame::internal_forces(end, w, f * l);
         let sigma = n.abs() / a + my.abs() / wy + mz.abs() / wz;
         let tau = t.abs() / s.torsion_modulus() + 1.5 * vy.hypot(vz) / a;
         stress = stress.max((sigma * sigma + 3.0 * tau * tau).sqrt() / fyd);
         compression = compression.max(-n);
+        strong[j] = mz.abs();
+        weak = weak.max(my.abs());
     }
-    let buckling = if compression > 0.0 {
-        let i = s.thickness / 12f64.sqrt();
-        let lambda1 = std::f64::consts::PI * (material.e / material.fy).sqrt();
-        let lambda = l / i / lambda1;
-        let phi = 0.5 * (1.0 + 0.49 * (lambda - 0.2) + lambda * lambda);
-        let chi = (1.0 / (phi + (phi * phi - lambda * lambda).max(0.0).sqrt())).min(1.0);
-        compression / (chi * a * material.fy / material.gamma_m1)
+    // Flexural buckling about each axis as a pin-ended strut, L_cr = L, curve c (α = 0.49).
+    let lambda1 = std::f64::consts::PI * (e / fy).sqrt();
+    let slenderness = |depth_across: f64| l / (depth_across / 12f64.sqrt()) / lambda1;
+    let (lambda_z, lambda_y) = (slenderness(s.thickness), slenderness(s.depth));
+    let (chi_z, chi_y) = (chi(lambda_z, 0.49, 0.2), chi(lambda_y, 0.49, 0.2));
+    let n_rd = a * fy / material.gamma_m1;
+    let n_z = compression / (chi_z * n_rd);
+    let n_y = compression / (chi_y * n_rd);
+    // Lateral-torsional buckling of the rectangle bent in its plane, restrained at the nodes
+    // only: M_cr = C1 π/L √(E I_weak G I_t) (no warping stiffness), curve d (α_LT = 0.76,
+    // λ_LT,0 = 0.2, §6.3.2.2); a section thicker than deep does not buckle so.
+    let m_max = strong.iter().copied().fold(0.0, f64::max);
+    let m_rk = wz * fy;
+    let chi_lt = if s.depth > s.thickness {
+        let mcr = c1_of(&strong) * std::f64::consts::PI / l
+            * (e * s.iy() * material.shear_modulus() * s.torsion_constant()).sqrt();
+        chi(((m_rk / mcr).sqrt()).min(1e6), 0.76, 0.2)
     } else {
-        0.0
+        1.0
     };
-    if buckling > stress {
-        (buckling, "buckling")
-    } else {
-        (stress, "stress")
+    let lateral_torsional = m_max / (chi_lt * m_rk / material.gamma_m1);
+    // §6.3.3 with Annex B's factors for elastic (class 3) sections, C_m = C_mLT = 1 (a
+    // uniform moment: the largest they take) and k_zy = 1 (its largest).
+    let k_yy = 1.0 + 0.6 * lambda_y.min(1.0) * n_y;
+    let k_zz = 1.0 + 0.6 * lambda_z.min(1.0) * n_z;
+    let bend_strong = lateral_torsional;
+    let bend_weak = weak / (wy * fy / material.gamma_m1);
+    let interaction =
+        (n_y + k_yy * bend_strong + k_zz * bend_weak).max(n_z + bend_strong + k_zz * bend_weak);
+    MemberChecks {
+        stress,
+        buckling: n_z,
+        lateral_torsional,
+        interaction,
     }
 }
 
@@ -454,6 +729,7 @@ pub fn member_check(
 fn weld_checks(
     model: &Model,
     results: &[CaseResult],
+    uls: &[usize],
     material: &Material,
     throat_factor: f64,
 ) -> (Vec<Option<Check>>, Vec<f64>) {
@@ -476,7 +752,8 @@ fn weld_checks(
         .collect();
     let fvw = material.fu / (3f64.sqrt() * material.beta_w * material.gamma_m2);
     let mut out: Vec<Option<Check>> = vec![None; n];
-    for (c, r) in results.iter().enumerate() {
+    for &c in uls {
+        let r = &results[c];
         for (k, m) in model.members.iter().enumerate() {
             let s = m.section;
             let (h, t) = (s.depth, s.thickness);
@@ -595,24 +872,63 @@ fn solve(
     })
 }
 
-/// Analyses with the given gauges and checks every member in every case.
-/// A model, its load cases, their results and each member's check.
-type Analysis = (Model, Vec<LoadCase>, Vec<CaseResult>, Vec<Check>);
+/// A model, its load cases (see [`cases`]), their results, each member's governing check and
+/// its largest utilisation by each check with the case.
+struct Analysis {
+    model: Model,
+    cases: Vec<LoadCase>,
+    results: Vec<CaseResult>,
+    checks: Vec<Check>,
+    by_check: Vec<[(f64, usize); 4]>,
+    welds: Vec<Option<Check>>,
+    throats: Vec<f64>,
+}
 
+/// The case of the first combination: after the loads and their sum (when there are several).
+fn first_combination(loads: usize) -> usize {
+    if loads > 1 {
+        loads + 1
+    } else {
+        1
+    }
+}
+
+/// Analyses with the given gauges and checks every member in every ultimate combination.
 fn analyse(axes: &Axes, gauges: &[f64], opts: &SizingOptions) -> Result<Analysis, SizingError> {
     let model = build(axes, gauges, &opts.supports, &opts.material)?;
     let cases = cases(axes, &model, opts)?;
     let results = solve(axes, &model, &cases, opts)?;
-    let checks = checks_of(&model, &cases, &results, &opts.material);
-    Ok((model, cases, results, checks))
+    let uls = uls_cases(opts);
+    let (checks, by_check) = checks_of(&model, &cases, &results, &uls, &opts.material);
+    let (welds, throats) = weld_checks(&model, &results, &uls, &opts.material, opts.throat_factor);
+    Ok(Analysis {
+        model,
+        cases,
+        results,
+        checks,
+        by_check,
+        welds,
+        throats,
+    })
 }
 
+fn uls_cases(opts: &SizingOptions) -> Vec<usize> {
+    limit_cases(
+        &combinations(&opts.loads),
+        first_combination(opts.loads.len()),
+        Limit::Ultimate,
+    )
+}
+
+/// Each member's governing check over the ultimate combinations `uls`, and its largest
+/// utilisation by each check with its case.
 fn checks_of(
     model: &Model,
     cases: &[LoadCase],
     results: &[CaseResult],
+    uls: &[usize],
     material: &Material,
-) -> Vec<Check> {
+) -> (Vec<Check>, Vec<[(f64, usize); 4]>) {
     let w: Vec<Vec<DVec3>> = cases
         .iter()
         .map(|c| c.member_loads(model.members.len()))
@@ -621,13 +937,26 @@ fn checks_of(
         .map(|k| {
             let mut best = Check {
                 utilisation: 0.0,
-                check: "stress",
-                case: 0,
+                check: CHECK_NAMES[0],
+                case: uls[0],
             };
-            for (c, r) in results.iter().enumerate() {
+            let mut each = [(0.0, uls[0]); 4];
+            for &c in uls {
                 let section = model.members[k].section;
-                let (u, what) =
-                    member_check(model, k, section, &r.end_forces[k], w[c][k], material);
+                let all = member_check(
+                    model,
+                    k,
+                    section,
+                    &results[c].end_forces[k],
+                    w[c][k],
+                    material,
+                );
+                for (slot, u) in each.iter_mut().zip(all.values()) {
+                    if u > slot.0 {
+                        *slot = (u, c);
+                    }
+                }
+                let (u, what) = all.governing();
                 if u > best.utilisation {
                     best = Check {
                         utilisation: u,
@@ -636,18 +965,19 @@ fn checks_of(
                     };
                 }
             }
-            best
+            (best, each)
         })
-        .collect()
+        .unzip()
 }
 
 /// The utilisation a member would have with another gauge under the same end forces (its own
-/// weight scaled with it): the choice of each round.
+/// weight scaled with it) in the ultimate combinations `uls`: the choice of each round.
 fn utilisation_with(
     model: &Model,
     k: usize,
     results: &[CaseResult],
     w: &[Vec<DVec3>],
+    uls: &[usize],
     gauge: f64,
     material: &Material,
 ) -> f64 {
@@ -655,11 +985,55 @@ fn utilisation_with(
         thickness: gauge,
         ..model.members[k].section
     };
-    results
-        .iter()
-        .enumerate()
-        .map(|(c, r)| member_check(model, k, section, &r.end_forces[k], w[c][k], material).0)
+    uls.iter()
+        .map(|&c| {
+            member_check(
+                model,
+                k,
+                section,
+                &results[c].end_forces[k],
+                w[c][k],
+                material,
+            )
+            .governing()
+            .0
+        })
         .fold(0.0, f64::max)
+}
+
+/// The least gauge level each member needs for the welds at its nodes to hold under the
+/// current forces: at an over-utilised node, the members thinner than the utilisation times
+/// the thinnest plate there (the throat scales with that plate).
+fn weld_levels(
+    model: &Model,
+    welds: &[Option<Check>],
+    throats: &[f64],
+    opts: &SizingOptions,
+) -> Vec<usize> {
+    let g = &opts.gauges;
+    let top = g.len() - 1;
+    model
+        .members
+        .iter()
+        .map(|m| {
+            [m.a, m.b]
+                .into_iter()
+                .filter_map(|v| {
+                    let w = welds[v].as_ref()?;
+                    if w.utilisation <= 1.0 {
+                        return None;
+                    }
+                    let need = throats[v] / opts.throat_factor * w.utilisation;
+                    Some(
+                        g.iter()
+                            .position(|&t| t >= need * (1.0 - 1e-12))
+                            .unwrap_or(top),
+                    )
+                })
+                .max()
+                .unwrap_or(0)
+        })
+        .collect()
 }
 
 /// The whole sizing (see the module notes).
@@ -669,25 +1043,40 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     }
     let g = &opts.gauges;
     let top = g.len() - 1;
+    let uls = uls_cases(opts);
     let mut level = vec![0usize; axes.edges.len()];
     let gauges_of = |level: &[usize]| level.iter().map(|&i| g[i]).collect::<Vec<f64>>();
-    let (mut model, mut cases, mut results, _) = analyse(axes, &gauges_of(&level), opts)?;
-    let group = groups(axes, &model, opts.group_by)?;
+    let mut now = analyse(axes, &gauges_of(&level), opts)?;
+    let group = groups(axes, &now.model, opts.group_by)?;
     let n_groups = group.iter().copied().max().map_or(0, |m| m + 1);
     let mut rounds = 1;
     let mut converged = false;
-    // Stress rounds: each group the thinnest gauge that holds its members' current forces.
+    // What the welds have asked of each member: it only rises, so the rounds settle.
+    let mut weld_floor = vec![0usize; level.len()];
+    // Stress rounds: each group the thinnest gauge that holds its members' current forces,
+    // and the welds at their nodes.
     while rounds <= opts.max_rounds {
-        let w: Vec<Vec<DVec3>> = cases
+        let w: Vec<Vec<DVec3>> = now
+            .cases
             .iter()
-            .map(|c| c.member_loads(model.members.len()))
+            .map(|c| c.member_loads(now.model.members.len()))
             .collect();
+        for (f, n) in
+            weld_floor
+                .iter_mut()
+                .zip(weld_levels(&now.model, &now.welds, &now.throats, opts))
+        {
+            *f = (*f).max(n);
+        }
         let mut want = vec![0usize; n_groups];
         for (k, &gk) in group.iter().enumerate() {
             let need = (0..=top)
-                .find(|&i| utilisation_with(&model, k, &results, &w, g[i], &opts.material) <= 1.0)
+                .find(|&i| {
+                    utilisation_with(&now.model, k, &now.results, &w, &uls, g[i], &opts.material)
+                        <= 1.0
+                })
                 .unwrap_or(top);
-            want[gk] = want[gk].max(need);
+            want[gk] = want[gk].max(need).max(weld_floor[k]);
         }
         let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
         if next == level {
@@ -695,7 +1084,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             break;
         }
         level = next;
-        (model, cases, results, _) = analyse(axes, &gauges_of(&level), opts)?;
+        now = analyse(axes, &gauges_of(&level), opts)?;
         rounds += 1;
     }
     // Deflection: raise the groups that stiffen the worst displacement most per added mass.
@@ -704,21 +1093,20 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         DeflectionLimit::Ratio(r) => span / r,
         DeflectionLimit::Millimetres(v) => v,
     });
+    let sls = limit_cases(
+        &combinations(&opts.loads),
+        first_combination(opts.loads.len()),
+        Limit::Serviceability,
+    );
     let mut deflection_rounds = 0;
     if let Some(limit) = limit {
         while deflection_rounds < 200 {
-            let (node, worst) = max_displacement(results.last().expect("a case"));
+            let c = deflection_case(&now.results, &sls);
+            let (node, worst) = max_displacement(&now.results[c]);
             if worst <= limit {
                 break;
             }
-            let shares = stiffening(
-                axes,
-                opts,
-                &model,
-                cases.last().expect("a case"),
-                results.last().expect("a case"),
-                node,
-            )?;
+            let shares = stiffening(axes, opts, &now.model, &now.cases[c], &now.results[c], node)?;
             let mut per_group = vec![0.0; n_groups];
             for (k, s) in shares.iter().enumerate() {
                 per_group[group[k]] += s;
@@ -738,11 +1126,10 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
                     }
                 }
             }
-            let checks;
-            (model, cases, results, checks) = analyse(axes, &gauges_of(&level), opts)?;
+            now = analyse(axes, &gauges_of(&level), opts)?;
             deflection_rounds += 1;
             // A raise adds weight: keep the stresses within the gauges too.
-            for (k, c) in checks.iter().enumerate() {
+            for (k, c) in now.checks.iter().enumerate() {
                 if c.utilisation > 1.0 && level[k] < top {
                     let gk = group[k];
                     for (j, lv) in level.iter_mut().enumerate() {
@@ -756,8 +1143,8 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     }
     if opts.smooth {
         // Neighbours within one step: raise the thinner until it holds everywhere.
-        let mut at: Vec<Vec<usize>> = vec![Vec::new(); model.nodes.len()];
-        for (k, m) in model.members.iter().enumerate() {
+        let mut at: Vec<Vec<usize>> = vec![Vec::new(); now.model.nodes.len()];
+        for (k, m) in now.model.members.iter().enumerate() {
             at[m.a].push(k);
             at[m.b].push(k);
         }
@@ -775,9 +1162,57 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             }
         }
     }
-    let checks;
-    (model, cases, results, checks) = analyse(axes, &gauges_of(&level), opts)?;
-    let (welds, throats) = weld_checks(&model, &results, &opts.material, opts.throat_factor);
+    // The raises for deflection and smoothness move forces: hold members and welds again,
+    // raising only.
+    let mut holding_rounds = 0;
+    loop {
+        now = analyse(axes, &gauges_of(&level), opts)?;
+        let for_welds = weld_levels(&now.model, &now.welds, &now.throats, opts);
+        let mut want = vec![0usize; n_groups];
+        for (k, &gk) in group.iter().enumerate() {
+            let member = if now.checks[k].utilisation > 1.0 {
+                level[k] + 1
+            } else {
+                level[k]
+            };
+            want[gk] = want[gk].max(member.max(for_welds[k]).min(top));
+        }
+        let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
+        if next == level || holding_rounds >= opts.max_rounds {
+            break;
+        }
+        level = next;
+        holding_rounds += 1;
+    }
+    rounds += holding_rounds;
+    let Analysis {
+        model,
+        cases,
+        results,
+        checks,
+        by_check,
+        welds,
+        throats,
+    } = now;
+    if let Some((node, w)) = welds
+        .iter()
+        .enumerate()
+        .filter_map(|(i, w)| Some((i, w.as_ref()?)))
+        .filter(|(_, w)| w.utilisation > 1.0)
+        .max_by(|a, b| a.1.utilisation.total_cmp(&b.1.utilisation))
+    {
+        let thickest = g[top];
+        let thinnest_here = throats[node] / opts.throat_factor;
+        if thinnest_here >= thickest {
+            return Err(SizingError::WeldsExhausted {
+                node,
+                utilisation: w.utilisation,
+                throat: throats[node],
+                needed: throats[node] * w.utilisation,
+                thickest,
+            });
+        }
+    }
     let areas = panel_areas(axes);
     let mass_kg = model
         .members
@@ -785,12 +1220,16 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         .zip(&areas)
         .map(|(m, a)| a * m.section.thickness * opts.material.density * 1e-6)
         .sum();
+    let combinations = combinations(&opts.loads);
     Ok(Sizing {
         gauges: gauges_of(&level),
         model,
         cases,
         results,
+        combinations,
+        first_combination: first_combination(opts.loads.len()),
         checks,
+        by_check,
         welds,
         throats,
         rounds,
@@ -811,6 +1250,30 @@ fn group_level(group: &[usize], level: &[usize], gk: usize) -> usize {
         .map(|(_, l)| *l)
         .min()
         .unwrap_or(0)
+}
+
+fn limit_cases(combinations: &[Combination], first: usize, limit: Limit) -> Vec<usize> {
+    combinations
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.limit == limit)
+        .map(|(j, _)| first + j)
+        .collect()
+}
+
+/// Of `among`, the case whose largest displacement is largest (the first on a tie).
+fn deflection_case(results: &[CaseResult], among: &[usize]) -> usize {
+    among
+        .iter()
+        .copied()
+        .fold(None, |best: Option<(usize, f64)>, c| {
+            let d = max_displacement(&results[c]).1;
+            match best {
+                Some((_, b)) if b >= d => best,
+                _ => Some((c, d)),
+            }
+        })
+        .map_or(0, |(c, _)| c)
 }
 
 /// The node moving most in a case, and how far, mm.
@@ -960,4 +1423,158 @@ pub fn read_checks(path: &std::path::Path) -> Result<Vec<CheckEdge>, crate::file
         ));
     }
     Ok(file.edges)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A horizontal plate `length` mm long, 200 mm deep (its axes vertical), clamped at node 0.
+    fn cantilever(length: f64) -> Axes {
+        Axes {
+            positions: vec![DVec3::ZERO, DVec3::new(length, 0.0, 0.0)],
+            edges: vec![[0, 1]],
+            axes: vec![DVec3::Z; 2],
+            heights: vec![200.0; 2],
+            reference: vec![DVec3::Z; 2],
+            fixed_normals: vec![None],
+            edge_radii: vec![0.0],
+        }
+    }
+
+    fn options(loads: &[&str], gauges: &[f64], throat: f64) -> SizingOptions {
+        SizingOptions {
+            material: Material::get("s355").unwrap(),
+            gauges: gauges.to_vec(),
+            supports: vec![(Selector::parse("node=0").unwrap(), Support::Fixed)],
+            loads: loads
+                .iter()
+                .map(|s| {
+                    let (spec, action) = LoadSpec::parse_action(s).unwrap();
+                    (s.to_string(), spec, action)
+                })
+                .collect(),
+            deflection_limit: None,
+            group_by: GroupBy::Member,
+            smooth: false,
+            throat_factor: throat,
+            max_rounds: 20,
+            shells: None,
+        }
+    }
+
+    #[test]
+    fn actions_are_read_from_the_load_and_its_mark() {
+        let action = |s: &str| LoadSpec::parse_action(s).map(|(_, a)| a);
+        assert_eq!(action("self-weight"), Ok(Action::Permanent));
+        assert_eq!(action("self-weight:1.2"), Ok(Action::Permanent));
+        assert_eq!(action("point:node=1:0,0,-5"), Ok(Action::Variable));
+        assert_eq!(action("point:node=1:0,0,-5:G"), Ok(Action::Permanent));
+        assert_eq!(action("wind:0.5:1,0,0:Q"), Ok(Action::Variable));
+        assert!(action("self-weight:Q").is_err());
+    }
+
+    #[test]
+    fn combinations_follow_en_1990_6_10_and_6_14b() {
+        let o = options(
+            &["self-weight", "wind:0.5:1,0,0", "point:node=1:0,0,-5"],
+            &[2.0],
+            0.7,
+        );
+        let c = combinations(&o.loads);
+        let factors: Vec<(Limit, Vec<f64>)> =
+            c.iter().map(|c| (c.limit, c.factors.clone())).collect();
+        let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        let expect = [
+            (Limit::Ultimate, [1.35, 1.5, 1.5 * 0.7]),
+            (Limit::Ultimate, [1.35, 1.5 * 0.6, 1.5]),
+            (Limit::Ultimate, [1.0, 1.5, 1.5 * 0.7]),
+            (Limit::Ultimate, [1.0, 1.5 * 0.6, 1.5]),
+            (Limit::Serviceability, [1.0, 1.0, 0.7]),
+            (Limit::Serviceability, [1.0, 0.6, 1.0]),
+        ];
+        assert_eq!(factors.len(), expect.len());
+        for ((limit, f), (l, e)) in factors.iter().zip(&expect) {
+            assert_eq!(limit, l);
+            assert!(close(f, e), "{f:?} against {e:?}");
+        }
+        assert_eq!(
+            c[0].name,
+            "ULS: 1.35 × self-weight + 1.5 × wind:0.5:1,0,0 + 1.05 × point:node=1:0,0,-5"
+        );
+        let g_only = combinations(&options(&["self-weight"], &[2.0], 0.7).loads);
+        assert_eq!(g_only.len(), 2);
+        assert_eq!(g_only[0].factors, vec![1.35]);
+        assert_eq!(g_only[1].factors, vec![1.0]);
+    }
+
+    #[test]
+    fn c1_is_one_for_a_uniform_moment_and_more_for_a_peak() {
+        assert_eq!(c1_of(&[5.0; 5]), 1.0);
+        // Linear from M to -M: 12.5 / (2.5 + 1.5 + 0 + 1.5).
+        assert!((c1_of(&[1.0, 0.5, 0.0, 0.5, 1.0]) - 12.5 / 5.5).abs() < 1e-12);
+        // A cantilever's triangle: 12.5 / (2.5 + 2.25 + 2 + 0.75).
+        assert!((c1_of(&[1.0, 0.75, 0.5, 0.25, 0.0]) - 12.5 / 7.5).abs() < 1e-12);
+        assert_eq!(c1_of(&[0.0; 5]), 1.0);
+    }
+
+    #[test]
+    fn lateral_torsional_buckling_of_a_plate_bent_in_its_plane() {
+        // A uniform in-plane moment on a 1 m, 200 × 3 mm plate: M_cr = π/L √(E I_z G I_t).
+        let axes = cantilever(1000.0);
+        let m = Material::get("s355").unwrap();
+        let model = build(&axes, &[3.0], &[], &m).unwrap();
+        let moment = 1.0e6;
+        let mut end = [0.0; 12];
+        end[5] = -moment;
+        end[11] = moment;
+        let got = member_check(&model, 0, model.members[0].section, &end, DVec3::ZERO, &m);
+        let (d, t, l) = (200.0, 3.0, 1000.0);
+        let i_weak = d * t * t * t / 12.0;
+        let r = t / d;
+        let i_t =
+            (d / 2.0) * (t / 2.0f64).powi(3) * (16.0 / 3.0 - 3.36 * r * (1.0 - r.powi(4) / 12.0));
+        let g = 210_000.0 / 2.6;
+        let mcr = std::f64::consts::PI / l * (210_000.0 * i_weak * g * i_t).sqrt();
+        let w_el = t * d * d / 6.0;
+        let lambda = (w_el * 355.0 / mcr).sqrt();
+        let phi = 0.5 * (1.0 + 0.76 * (lambda - 0.2) + lambda * lambda);
+        let chi = 1.0 / (phi + (phi * phi - lambda * lambda).sqrt());
+        let expect = moment / (chi * w_el * 355.0);
+        assert!(
+            (got.lateral_torsional - expect).abs() < 1e-9 * expect,
+            "{got:?} {expect}"
+        );
+        assert!(chi < 0.5, "a slender plate: χ_LT {chi}");
+        // No compression: the interaction is the bending alone, more than the stress check.
+        assert!((got.interaction - expect).abs() < 1e-9 * expect);
+        assert!(got.interaction > got.stress);
+        assert_eq!(got.governing().1, "lateral-torsional");
+    }
+
+    #[test]
+    fn welds_raise_the_gauges_until_they_hold() {
+        // A stub (no lateral-torsional buckling to speak of) with small throats: the welds
+        // govern and the sizing raises the gauge for them.
+        let axes = cantilever(150.0);
+        let gauges = [1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0];
+        let load = ["point:node=1:0,0,-20000"];
+        let plain = size(&axes, &options(&load, &gauges, 0.7)).unwrap();
+        let weak = size(&axes, &options(&load, &gauges, 0.2)).unwrap();
+        assert!(
+            weak.gauges[0] > plain.gauges[0],
+            "{:?} {:?}",
+            weak.gauges,
+            plain.gauges
+        );
+        assert!(weak.max_weld_utilisation() <= 1.0);
+        assert!(weak.max_utilisation() <= 1.0);
+        // One gauge thinner and the weld does not hold.
+        let below = gauges[gauges.iter().position(|g| *g == weak.gauges[0]).unwrap() - 1];
+        let one = size(&axes, &options(&load, &[below], 0.2));
+        assert!(
+            matches!(one, Err(SizingError::WeldsExhausted { .. })),
+            "{one:?}"
+        );
+    }
 }

@@ -35,8 +35,9 @@ pub struct Args {
     #[arg(long, value_parser = size::support)]
     pub support: Vec<(Selector, Support)>,
     /// A load: `self-weight[:FACTOR]`, `point:NODES:FX,FY,FZ` (N on each selected node),
-    /// `wind:KPA:DX,DY,DZ` (pressure on the panels across the direction); repeatable, each a
-    /// load case, and their sum another
+    /// `wind:KPA:DX,DY,DZ` (pressure on the panels across the direction); repeatable. Self-weight
+    /// is permanent (G), point and wind variable (Q) unless ending in `:G`; members and welds
+    /// are checked under EN 1990's ULS combinations (6.10), the deflection under the SLS ones
     #[arg(long)]
     pub load: Vec<String>,
     /// Largest displacement under the sum of the loads: `L/N` (L the network's largest
@@ -126,7 +127,7 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         );
         write_deck(
             &sizing.model,
-            sizing.cases.last().expect("a case"),
+            sizing.total_case(),
             &title,
             sized.report.material.nu,
             path,
@@ -188,10 +189,53 @@ pub fn run(args: Args) -> Result<bool> {
             None => String::new(),
         }
     );
-    if max_u > 1.0 || max_w > 1.0 {
+    let thin = &out.report.totals.thin_sheet_welds;
+    if !thin.is_empty() {
         outln!(
-            "  NOT ENOUGH: members or welds are over-utilised even on the thickest gauge ({} mm)",
-            s.gauges.iter().copied().fold(0.0, f64::max)
+            "  {} of {} welded nodes have a throat below 3 mm (EN 1993-1-8 4.5.2(2)): a thin-sheet \
+             procedure; sizing.json names them (totals.thin_sheet_welds)",
+            thin.len(),
+            s.welds.iter().flatten().count()
+        );
+    }
+    if max_u > 1.0 {
+        // The member that falls shortest, what governs it and the gauge it ran out on.
+        let (k, c) = s
+            .checks
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.utilisation.total_cmp(&b.1.utilisation))
+            .expect("a member");
+        let m = &s.model.members[k];
+        outln!(
+            "  NOT ENOUGH: member {k} (nodes {}–{}) is utilised {:.3} by {} under {} on {} mm{}",
+            m.a,
+            m.b,
+            c.utilisation,
+            c.check,
+            s.cases[c.case].name,
+            s.gauges[k],
+            if s.gauges[k] >= args.gauges.iter().copied().fold(0.0, f64::max) {
+                ", the thickest gauge on --gauges"
+            } else {
+                " (the rounds stopped at --max-rounds)"
+            }
+        );
+    }
+    if max_w > 1.0 {
+        let (node, w) = s
+            .welds
+            .iter()
+            .enumerate()
+            .filter_map(|(i, w)| Some((i, w.as_ref()?)))
+            .max_by(|a, b| a.1.utilisation.total_cmp(&b.1.utilisation))
+            .expect("a weld");
+        outln!(
+            "  NOT ENOUGH: the weld at node {node} is utilised {:.3} under {} (throat {:.2} mm; \
+             the rounds stopped at --max-rounds)",
+            w.utilisation,
+            s.cases[w.case].name,
+            s.throats[node]
         );
     }
     Ok(out.ok)

@@ -24,7 +24,7 @@ use serde::Serialize;
 use crate::analyze::frame::local_frame;
 pub use crate::analyze::frame::Support;
 pub use crate::analyze::material::Material;
-use crate::analyze::sizing::{size, LoadSpec, Sizing, SizingError, SizingOptions};
+use crate::analyze::sizing::{size, Limit, LoadSpec, Sizing, SizingError, SizingOptions};
 pub use crate::analyze::sizing::{DeflectionLimit, GroupBy};
 use crate::rationalize::axes::Axes;
 use crate::rationalize::planarize::Selector;
@@ -182,8 +182,8 @@ impl Options {
             .load
             .iter()
             .map(|s| {
-                LoadSpec::parse(s)
-                    .map(|l| (s.clone(), l))
+                LoadSpec::parse_action(s)
+                    .map(|(l, action)| (s.clone(), l, action))
                     .map_err(|e| OptionError::new("load", e))
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -255,8 +255,10 @@ pub fn run(axes: &Axes, opts: &Options, progress: &dyn Progress) -> Result<Sized
 pub struct Report {
     /// Frame or shells.
     pub analysis: serde_json::Value,
-    /// Load cases, the sum of them last.
+    /// Load cases at their characteristic values, the sum of them last (when there are several).
     pub cases: Vec<String>,
+    /// The combinations of EN 1990 the checks use.
+    pub combinations: Vec<CombinationRow>,
     /// Whether the rounds settled before the cap.
     pub converged: bool,
     /// What the figures mean.
@@ -293,9 +295,22 @@ pub struct Report {
     pub version: u32,
 }
 
+/// One combination of the loads.
+#[derive(Clone, Debug, Serialize)]
+pub struct CombinationRow {
+    /// The factor on each load, by its name.
+    pub factors: BTreeMap<String, f64>,
+    /// `ULS` (EN 1990 6.10: members and welds) or `SLS` (6.14b, characteristic: deflection).
+    pub limit: &'static str,
+    /// Its name, as edges' and nodes' `load` give it.
+    pub name: String,
+}
+
 /// What the figures mean.
 #[derive(Clone, Debug, Serialize)]
 pub struct Definitions {
+    /// How the loads are combined.
+    pub combinations: &'static str,
     /// Displacement, mm.
     pub displacement: &'static str,
     /// End forces in the member's local axes under the sum of the loads [a: Fx Fy Fz Mx My Mz, b: …].
@@ -321,6 +336,8 @@ pub struct EdgeRow {
     pub b: usize,
     /// The check that governs.
     pub check: &'static str,
+    /// Every check's largest utilisation and the combination giving it.
+    pub checks: BTreeMap<&'static str, CheckRow>,
     /// Section depth (the panel height across the member), mm.
     pub depth: f64,
     /// End forces in the member's local axes under the sum of the loads [a: Fx Fy Fz Mx My Mz, b: …].
@@ -332,6 +349,15 @@ pub struct EdgeRow {
     /// The load case governing it.
     pub load: String,
     /// Utilisation: the governing check's figure over its limit.
+    pub utilisation: f64,
+}
+
+/// One check of a member.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckRow {
+    /// The combination giving the largest utilisation.
+    pub load: String,
+    /// The largest utilisation over the ultimate combinations.
     pub utilisation: f64,
 }
 
@@ -355,6 +381,8 @@ pub struct NodeRow {
     pub position: [f64; 3],
     /// Rotation, rad.
     pub rotation: [f64; 3],
+    /// The throat is below EN 1993-1-8 §4.5.2(2)'s 3 mm: a thin-sheet weld procedure.
+    pub thin_sheet: bool,
     /// Fillet weld throat, mm.
     pub throat: f64,
     /// The load case governing the weld.
@@ -381,8 +409,10 @@ pub struct Totals {
     pub deflection_limit: Option<f64>,
     /// Mass, kg.
     pub mass_kg: f64,
-    /// Largest displacement, mm.
+    /// Largest displacement under the serviceability combinations, mm.
     pub max_displacement: f64,
+    /// The serviceability combination giving the largest displacement.
+    pub max_displacement_load: String,
     /// The node that moves most.
     pub max_displacement_node: usize,
     /// Largest member utilisation.
@@ -393,6 +423,9 @@ pub struct Totals {
     pub residual: f64,
     /// The structure's largest horizontal extent, mm.
     pub span: f64,
+    /// Nodes whose weld throat is below 3 mm (EN 1993-1-8 §4.5.2(2)): welded by a
+    /// thin-sheet procedure.
+    pub thin_sheet_welds: Vec<usize>,
 }
 
 fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
@@ -417,6 +450,19 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                 },
                 b: m.b,
                 check: c.check,
+                checks: crate::analyze::sizing::CHECK_NAMES
+                    .into_iter()
+                    .zip(s.by_check[k])
+                    .map(|(name, (u, case))| {
+                        (
+                            name,
+                            CheckRow {
+                                load: s.cases[case].name.clone(),
+                                utilisation: u,
+                            },
+                        )
+                    })
+                    .collect(),
                 depth: m.section.depth,
                 end_forces: total.end_forces[k],
                 gauge: s.gauges[k],
@@ -438,6 +484,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                 displacement: [d[0], d[1], d[2]],
                 position: v3(*p),
                 rotation: [d[3], d[4], d[5]],
+                thin_sheet: weld.is_some() && s.throats[i] < words::MIN_THROAT,
                 throat: s.throats[i],
                 weld_load: weld.map(|w| s.cases[w.case].name.clone()),
                 weld_utilisation: weld.map(|w| w.utilisation),
@@ -458,9 +505,30 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
             None => serde_json::json!("frame"),
             Some(n) => serde_json::json!({ "shells": n }),
         },
-        cases: s.cases.iter().map(|c| c.name.clone()).collect(),
+        cases: s.cases[..s.first_combination]
+            .iter()
+            .map(|c| c.name.clone())
+            .collect(),
+        combinations: s
+            .combinations
+            .iter()
+            .map(|c| CombinationRow {
+                factors: sizing
+                    .loads
+                    .iter()
+                    .zip(&c.factors)
+                    .map(|((name, _, _), f)| (name.clone(), *f))
+                    .collect(),
+                limit: match c.limit {
+                    Limit::Ultimate => "ULS",
+                    Limit::Serviceability => "SLS",
+                },
+                name: c.name.clone(),
+            })
+            .collect(),
         converged: s.converged,
         definitions: Definitions {
+            combinations: words::COMBINATIONS,
             displacement: words::DISPLACEMENT,
             end_forces: "under the sum of the loads, in the member's local axes: forces and moments the joints apply to its ends, [a: Fx Fy Fz Mx My Mz, b: ...]",
             model: match sizing.shells {
@@ -495,11 +563,15 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
             deflection_limit: s.deflection_limit,
             mass_kg: s.mass_kg,
             max_displacement: dmax,
+            max_displacement_load: s.cases[s.deflection_case()].name.clone(),
             max_displacement_node: dnode,
             max_utilisation: s.max_utilisation(),
             max_weld_utilisation: s.max_weld_utilisation(),
             residual: total.residual,
             span: s.span,
+            thin_sheet_welds: (0..s.throats.len())
+                .filter(|&i| s.welds[i].is_some() && s.throats[i] < words::MIN_THROAT)
+                .collect(),
         },
         units: [
             ("force", "N"),
