@@ -484,6 +484,43 @@ def compare_shells(axes_path, sizing_path, deck_path, per_height):
     return rel
 
 
+def lamina_shell_deck(deck_path, sizing_path, tolerance):
+    """lamina's own S8R deck (`size --shells N --export-ccx`), run as it is: the mid-height
+    node of network node i is deck node i + 1. Its displacements against sizing.json's, and
+    its loads (the sum of the CLOADs) against sizing.json's reactions: the deck holds what was
+    analysed."""
+    text = open(deck_path).read()
+    sizing = json.load(open(sizing_path))
+    if "TYPE=S8R" not in text:
+        fail(f"{deck_path} has no S8R elements: not a shell deck")
+    loads, inside = np.zeros(3), False
+    for line in text.splitlines():
+        if line.startswith("*"):
+            inside = line.upper().startswith("*CLOAD")
+        elif inside and line.strip():
+            node, dof, value = [v.strip() for v in line.split(",")]
+            if int(dof) <= 3:
+                loads[int(dof) - 1] += float(value)
+    reactions = np.sum([r["force"] for r in sizing["reactions"]], axis=0)
+    balance = np.linalg.norm(loads + reactions) / np.linalg.norm(loads)
+    if not balance <= 1e-9:
+        fail(f"{deck_path}: its loads {loads} do not balance sizing.json's reactions {reactions}")
+    lam_u = np.array([nd["displacement"] for nd in sizing["nodes"]])
+    with tempfile.TemporaryDirectory() as work:
+        disp = dat_blocks(run_ccx(text, "lamina-shells", work)).get("displacements", {})
+    ccx_u = np.array([disp[i + 1][:3] for i in range(len(lam_u))])
+    du = np.linalg.norm(ccx_u - lam_u, axis=1)
+    w, scale = int(du.argmax()), np.abs(ccx_u).max()
+    rel = du[w] / scale
+    print(f"check_ccx: lamina's shell deck ({deck_path}) in CalculiX: largest displacement "
+          f"{scale:.4g} mm (lamina {np.abs(lam_u).max():.4g}); worst difference {du[w]:.3g} mm "
+          f"at node {w} ({100 * rel:.2f} % of the largest); its loads balance lamina's "
+          f"reactions to {balance:.1e}")
+    if rel > tolerance:
+        fail(f"{sizing_path}: {100 * rel:.2f} % from CalculiX on the same mesh, over the "
+             f"{100 * tolerance:g} % allowed")
+
+
 def write_axes(path, nodes, edges, axis_of, height):
     recs = []
     for p in nodes:
@@ -577,6 +614,8 @@ def main():
     ap.add_argument("--shells", metavar="AXES", help="also model the panels as shells (axes.json)")
     ap.add_argument("--shell-tolerance", type=float, default=0.05)
     ap.add_argument("--per-height", type=int, default=4, help="shell elements up each panel")
+    ap.add_argument("--lamina-shells", action="store_true",
+                    help="the deck is lamina's own S8R deck (size --shells --export-ccx)")
     ap.add_argument("--write-shell-deck", metavar="INP",
                     help="with --shells: also write the S8R deck (for the benchmark)")
     args = ap.parse_args()
@@ -589,6 +628,8 @@ def main():
         compare(*portal(out, lamina), args.tolerance, False, "portal frame: ", forces=True)
         compare(*arm_frame(out, lamina), args.torsion_tolerance, True, "frame with an arm: ",
                 forces=True)
+    elif args.lamina_shells and args.deck and args.sizing:
+        lamina_shell_deck(args.deck, args.sizing, args.shell_tolerance)
     elif args.deck and args.sizing:
         analysis = json.load(open(args.sizing)).get("analysis")
         lamina_shells = isinstance(analysis, dict) and "shells" in analysis

@@ -1,4 +1,5 @@
-//! The frame as a CalculiX deck (`.inp`), for an independent solve: the same nodes, each member
+//! The frame (or the panels as shells, [`write_shell_deck`]) as a CalculiX deck (`.inp`), for
+//! an independent solve. The frame: the same nodes, each member
 //! split into `SPLIT` equal quadratic beams (B32: CalculiX expands them into 20-node bricks of the
 //! member's rectangle), a rectangular section per member with its depth direction as the
 //! section's 1-direction, the same supports, and the loads of the case summing them all as
@@ -18,6 +19,7 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::frame::{LoadCase, Model, Support};
+use super::shell::{mesh_loads, ElementAreas, Mesh};
 use crate::files::{write_atomic, WriteError};
 
 /// Quadratic beams per member.
@@ -157,6 +159,123 @@ pub fn write_deck(
         writeln!(w, "U")?;
         writeln!(w, "*NODE PRINT, NSET=SUPPORTS")?;
         writeln!(w, "RF")?;
+        writeln!(w, "*END STEP")?;
+        Ok(())
+    })
+}
+
+/// The panels as lamina's shell analysis meshed them, as a CalculiX deck of S8R shells: each
+/// four-node element with its edges' midpoints added (flat panels: the same geometry), its
+/// member's gauge as thickness, the same supports (fixed: every node up the axis line, all six
+/// freedoms; pinned: the mid-height node's displacements) and the loads lamina applied, as
+/// nodal forces at the corner nodes. Node i + 1 is network node i's mid-height node, the point
+/// sizing.json's displacements are of; the other mesh nodes follow, then the midside nodes.
+pub fn write_shell_deck(
+    model: &Model,
+    mesh: &Mesh,
+    case: &LoadCase,
+    title: &str,
+    poisson: f64,
+    path: &Path,
+) -> Result<(), WriteError> {
+    let n = model.nodes.len();
+    // Deck numbers: the mid-height nodes first.
+    let mut id = vec![0usize; mesh.nodes.len()];
+    for (i, line) in mesh.axis_lines.iter().enumerate() {
+        id[line[line.len() / 2]] = i + 1;
+    }
+    let mut next = n + 1;
+    for slot in id.iter_mut().filter(|v| **v == 0) {
+        *slot = next;
+        next += 1;
+    }
+    let mut order: Vec<usize> = (0..mesh.nodes.len()).collect();
+    order.sort_by_key(|&m| id[m]);
+    // Midside nodes, numbered as the elements first reach their edges.
+    let mut midside: std::collections::HashMap<(usize, usize), usize> = Default::default();
+    let mut midpoints: Vec<DVec3> = Vec::new();
+    let elements: Vec<[usize; 8]> = mesh
+        .elements
+        .iter()
+        .map(|&(q, _)| {
+            let mut e = [0; 8];
+            for c in 0..4 {
+                let (a, b) = (q[c], q[(c + 1) % 4]);
+                e[c] = id[a];
+                e[4 + c] = *midside.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    midpoints.push(mesh.nodes[a].lerp(mesh.nodes[b], 0.5));
+                    next + midpoints.len() - 1
+                });
+            }
+            e
+        })
+        .collect();
+    let areas = ElementAreas::of(mesh, model.members.len());
+    let loads = mesh_loads(model, mesh, &areas, case);
+    write_atomic(path, |w| {
+        writeln!(w, "*HEADING")?;
+        writeln!(w, "{title}")?;
+        writeln!(w, "*NODE, NSET=NALL")?;
+        for &m in &order {
+            let p = mesh.nodes[m];
+            writeln!(w, "{}, {}, {}, {}", id[m], num(p.x), num(p.y), num(p.z))?;
+        }
+        for (j, p) in midpoints.iter().enumerate() {
+            writeln!(w, "{}, {}, {}, {}", next + j, num(p.x), num(p.y), num(p.z))?;
+        }
+        // One element set per gauge.
+        let mut gauges: Vec<f64> = model.members.iter().map(|m| m.section.thickness).collect();
+        gauges.sort_by(f64::total_cmp);
+        gauges.dedup();
+        let set_of = |k: usize| {
+            let t = model.members[k].section.thickness;
+            gauges.iter().position(|g| *g == t).unwrap_or(0) + 1
+        };
+        for g in 1..=gauges.len() {
+            writeln!(w, "*ELEMENT, TYPE=S8R, ELSET=G{g}")?;
+            for (j, (e, &(_, k))) in elements.iter().zip(&mesh.elements).enumerate() {
+                if set_of(k) == g {
+                    let list: Vec<String> = e.iter().map(|v| v.to_string()).collect();
+                    writeln!(w, "{}, {}", j + 1, list.join(", "))?;
+                }
+            }
+        }
+        writeln!(w, "*MATERIAL, NAME=STEEL")?;
+        writeln!(w, "*ELASTIC")?;
+        writeln!(w, "{}, {}", num(model.elastic.e), num(poisson))?;
+        for (g, t) in gauges.iter().enumerate() {
+            writeln!(w, "*SHELL SECTION, ELSET=G{}, MATERIAL=STEEL", g + 1)?;
+            writeln!(w, "{}", num(*t))?;
+        }
+        writeln!(w, "*BOUNDARY")?;
+        for (i, s) in model.supports.iter().enumerate() {
+            let line = &mesh.axis_lines[i];
+            match s {
+                Some(Support::Fixed) => {
+                    for (j, &m) in line.iter().enumerate() {
+                        writeln!(w, "{}, 1, 6", id[m])?;
+                        if let Some(&up) = line.get(j + 1) {
+                            writeln!(w, "{}, 1, 6", midside[&(m.min(up), m.max(up))])?;
+                        }
+                    }
+                }
+                Some(Support::Pinned) => writeln!(w, "{}, 1, 3", i + 1)?,
+                None => {}
+            }
+        }
+        writeln!(w, "*STEP")?;
+        writeln!(w, "*STATIC")?;
+        writeln!(w, "*CLOAD")?;
+        for &m in &order {
+            for d in 0..6 {
+                let v = loads.f[6 * m + d];
+                if v != 0.0 {
+                    writeln!(w, "{}, {}, {}", id[m], d + 1, num(v))?;
+                }
+            }
+        }
+        writeln!(w, "*NODE PRINT, NSET=NALL")?;
+        writeln!(w, "U")?;
         writeln!(w, "*END STEP")?;
         Ok(())
     })

@@ -380,6 +380,83 @@ fn global_stiffness(x: &[DVec3; 4], p: Plate) -> Stiffness {
     k
 }
 
+/// Each corner's share of its element's area (∫ N_i dA: a uniform load's consistent nodal
+/// loads, whose resultant acts at the element's centroid), each element's area and each
+/// panel's.
+pub struct ElementAreas {
+    shares: Vec<[f64; 4]>,
+    areas: Vec<f64>,
+    panels: Vec<f64>,
+}
+
+impl ElementAreas {
+    pub fn of(mesh: &Mesh, members: usize) -> ElementAreas {
+        let shares: Vec<[f64; 4]> = mesh
+            .elements
+            .iter()
+            .map(|&(q, _)| corner_areas(&element_frame(&q.map(|i| mesh.nodes[i])).1))
+            .collect();
+        let areas: Vec<f64> = shares.iter().map(|s| s.iter().sum()).collect();
+        let mut panels = vec![0.0; members];
+        for (&(_, k), a) in mesh.elements.iter().zip(&areas) {
+            panels[k] += a;
+        }
+        ElementAreas {
+            shares,
+            areas,
+            panels,
+        }
+    }
+}
+
+/// A case's loads on the mesh, global, six per mesh node.
+pub struct MeshLoads {
+    /// The case's nodal loads alone (at the mid-height nodes of the axes).
+    pub point: Vec<f64>,
+    /// Everything: the nodal loads and the members' loads spread over their panels.
+    pub f: Vec<f64>,
+    /// Per element and corner: its part of the element's share of its member's load.
+    pub corner_load: Vec<[DVec3; 4]>,
+}
+
+/// The loads of `case` on the mesh: a node's load at its axis' mid-height node, a member's
+/// uniform load over its panel by area, each element's part at its corners by their shares.
+pub fn mesh_loads(model: &Model, mesh: &Mesh, areas: &ElementAreas, case: &LoadCase) -> MeshLoads {
+    let n = mesh.nodes.len();
+    let mid = |i: usize| mesh.axis_lines[i][mesh.axis_lines[i].len() / 2];
+    let w = case.member_loads(model.members.len());
+    let mut point = vec![0.0; 6 * n];
+    for &(node, v) in &case.nodal {
+        for (d, x) in v.iter().enumerate() {
+            point[6 * mid(node) + d] += x;
+        }
+    }
+    let mut f = point.clone();
+    let corner_load: Vec<[DVec3; 4]> = mesh
+        .elements
+        .iter()
+        .zip(areas.shares.iter().zip(&areas.areas))
+        .map(|(&(_, k), (s, a))| {
+            let m = &model.members[k];
+            let length = model.nodes[m.a].distance(model.nodes[m.b]);
+            let load = w[k] * (length * a / areas.panels[k]);
+            s.map(|si| load * (si / a))
+        })
+        .collect();
+    for (&(q, _), loads) in mesh.elements.iter().zip(&corner_load) {
+        for (&i, l) in q.iter().zip(loads) {
+            for d in 0..3 {
+                f[6 * i + d] += l[d];
+            }
+        }
+    }
+    MeshLoads {
+        point,
+        f,
+        corner_load,
+    }
+}
+
 /// Solves every case on the shell mesh of `model`'s panels and gives back what the frame
 /// solve gives: node displacements, member end forces, reactions and the residual.
 pub fn solve(
@@ -465,52 +542,14 @@ pub fn solve(
         .map_err(|_| FrameError::OutOfMemory)?;
     drop(triplets);
     let llt = factor(&k, owner)?;
-    // Each corner's share of its element's area (∫ N_i dA: a uniform load's consistent
-    // nodal loads, whose resultant acts at the element's centroid), and the panels' areas.
-    let shares: Vec<[f64; 4]> = mesh
-        .elements
-        .iter()
-        .map(|&(q, _)| corner_areas(&element_frame(&q.map(|i| mesh.nodes[i])).1))
-        .collect();
-    let areas: Vec<f64> = shares.iter().map(|s| s.iter().sum()).collect();
-    let mut panel_area = vec![0.0; model.members.len()];
-    for (&(_, k), a) in mesh.elements.iter().zip(&areas) {
-        panel_area[k] += a;
-    }
+    let areas = ElementAreas::of(mesh, model.members.len());
     let mut out = Vec::with_capacity(cases.len());
     for case in cases {
-        let w = case.member_loads(model.members.len());
-        // Nodal loads of the mesh, and each element's share of its member's load.
-        let mut point = vec![0.0; 6 * n];
-        for &(node, v) in &case.nodal {
-            for (d, x) in v.iter().enumerate() {
-                point[6 * mid(node) + d] += x;
-            }
-        }
-        let mut f = point.clone();
-        let element_load: Vec<DVec3> = mesh
-            .elements
-            .iter()
-            .zip(&areas)
-            .map(|(&(_, k), a)| {
-                let m = &model.members[k];
-                let length = model.nodes[m.a].distance(model.nodes[m.b]);
-                w[k] * (length * a / panel_area[k])
-            })
-            .collect();
-        // Per element and corner: its part of the element's load.
-        let corner_load: Vec<[DVec3; 4]> = element_load
-            .iter()
-            .zip(shares.iter().zip(&areas))
-            .map(|(load, (s, a))| s.map(|si| *load * (si / a)))
-            .collect();
-        for (&(q, _), loads) in mesh.elements.iter().zip(&corner_load) {
-            for (&i, l) in q.iter().zip(loads) {
-                for d in 0..3 {
-                    f[6 * i + d] += l[d];
-                }
-            }
-        }
+        let MeshLoads {
+            point,
+            f,
+            corner_load,
+        } = mesh_loads(model, mesh, &areas, case);
         // Solved, then refined twice (r = f − K u, K du = r): the weak drilling springs
         // cost the factorisation a few digits that one refinement gives back.
         let mut u = vec![0.0; 6 * n];

@@ -8,8 +8,9 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use serde_json::json;
 
-use lamina::analyze::ccx::write_deck;
+use lamina::analyze::ccx::{write_deck, write_shell_deck};
 use lamina::analyze::report::sizing_html;
+use lamina::analyze::shell;
 use lamina::files::write_atomic;
 use lamina::rationalize::axes::read_axes;
 use lamina::rationalize::planarize::Selector;
@@ -69,7 +70,8 @@ pub struct Args {
     /// An HTML report: the structure by utilisation and by gauge, the deformed shape, tables
     #[arg(long)]
     pub html: Option<PathBuf>,
-    /// The final model as a CalculiX deck (B32 beams), loaded by the sum of the loads
+    /// The final model as a CalculiX deck loaded by the sum of the loads: B32 beams, or with
+    /// --shells the panels as S8R shells on the mesh analysed
     #[arg(long)]
     pub export_ccx: Option<PathBuf>,
     /// Print a machine-readable summary on stdout
@@ -119,19 +121,31 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         write_atomic(path, |w| w.write_all(html.as_bytes()))?;
     }
     if let Some(path) = &args.export_ccx {
+        let model = &sizing.model;
         let title = format!(
-            "lamina size {}: {} members, {} nodes, the sum of the loads",
+            "lamina size {}: {} members, {} nodes, the sum of the loads{}",
             source_name(&args.input),
-            sizing.model.members.len(),
-            sizing.model.nodes.len()
+            model.members.len(),
+            model.nodes.len(),
+            match sizing.shells {
+                Some(n) => format!(", the panels as shells ({n} up each)"),
+                None => String::new(),
+            }
         );
-        write_deck(
-            &sizing.model,
-            sizing.total_case(),
-            &title,
-            sized.report.material.nu,
-            path,
-        )?;
+        let nu = sized.report.material.nu;
+        match sizing.shells {
+            None => write_deck(model, sizing.total_case(), &title, nu, path)?,
+            Some(per_height) => {
+                let mesh = shell::mesh(
+                    model,
+                    &axes.positions,
+                    &axes.axes,
+                    &axes.heights,
+                    per_height,
+                );
+                write_shell_deck(model, &mesh, sizing.total_case(), &title, nu, path)?
+            }
+        }
     }
     Ok(sized)
 }

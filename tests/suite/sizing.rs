@@ -285,8 +285,9 @@ fn calyx_as_shells_balances_and_deflects_like_the_frame() -> TestResult {
             "--gauges",
             "2",
         ];
+        let deck = dir.path().join("model.inp");
         if let Some(n) = shells {
-            args.extend(["--shells", n]);
+            args.extend(["--shells", n, "--export-ccx", s(&deck)]);
         }
         let o = lamina(&args);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -305,6 +306,45 @@ fn calyx_as_shells_balances_and_deflects_like_the_frame() -> TestResult {
             .unwrap_or(0.0)
     };
     assert!((lift(frame) / lift(shells) - 1.0).abs() < 1e-9);
+    // The deck of the shells is the shell model: S8R elements, node i + 1 at network node i's
+    // mid-height, loads adding up to the weight the reactions carry.
+    let deck = std::fs::read_to_string(dir.path().join("model.inp"))?;
+    assert!(deck.contains("*ELEMENT, TYPE=S8R") && !deck.contains("B32"));
+    let first = shells["nodes"][0]["position"]
+        .as_array()
+        .ok_or("position")?;
+    let line = deck
+        .lines()
+        .find(|l| l.starts_with("1, "))
+        .ok_or("node 1")?;
+    let xyz: Vec<f64> = line
+        .split(", ")
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    for (a, b) in xyz.iter().zip(first) {
+        assert!(
+            (a - b.as_f64().ok_or("x")?).abs() < 1e-9,
+            "{line} against {first:?}"
+        );
+    }
+    let mut in_cload = false;
+    let mut down = 0.0;
+    for l in deck.lines() {
+        if l.starts_with('*') {
+            in_cload = l == "*CLOAD";
+        } else if in_cload {
+            let v: Vec<&str> = l.split(", ").collect();
+            if v[1] == "3" {
+                down += v[2].parse::<f64>()?;
+            }
+        }
+    }
+    assert!(
+        (down + lift(shells)).abs() < 1e-9 * lift(shells).abs(),
+        "{down} {}",
+        lift(shells)
+    );
     let (df, ds) = (
         frame["totals"]["max_displacement"].as_f64().ok_or("d")?,
         shells["totals"]["max_displacement"].as_f64().ok_or("d")?,
