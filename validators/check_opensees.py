@@ -24,7 +24,16 @@ Pass: the largest difference in translation within --tolerance (default 1 %) of 
 translation, rotations of the largest rotation, end forces of the largest end force, end moments
 of the largest end moment. The figures are printed.
 
-    check_opensees.py axes.json sizing.json [--tolerance 0.01]
+With --checks, a second opinion on the design checks: the EN 1990 combinations rebuilt from the
+loads (self-weight and `:G` loads permanent, the rest variable; ULS 6.10 with γ_G 1.35 and 1.0,
+γ_Q 1.5, ψ0 0.6 for wind and 0.7 for point loads; SLS characteristic) must be the ones listed;
+each ULS combination solved by OpenSees, and every member's stress, flexural buckling,
+lateral-torsional buckling (EN 1993-1-1 6.3.2.2, curve d, M_cr of the rectangle with C1 from
+the quarter-point moments) and interaction (6.3.3, Annex B) recomputed along it, and every
+node's weld (EN 1993-1-8 4.5.3.3) — each must equal sizing.json's to 1e-6 and be at most 1;
+throats below 3 mm named; the largest SLS displacement as reported.
+
+    check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks]
 """
 import argparse
 import json
@@ -65,111 +74,295 @@ def torsion_constant(d, t):
     return a * b**3 * (1.0 / 3.0 - 0.21 * (b / a) * (1.0 - b**4 / (12.0 * a**4)))
 
 
+def read_loads(cases):
+    """[(name, kind, value)] of the characteristic cases (every case but "all loads"): kind is
+    self-weight (factor), wind ((kPa, unit direction)) or point ([(node, force)])."""
+    out = []
+    for case in cases:
+        if case == "all loads":
+            continue
+        body = re.sub(r":[GQ]$", "", case)
+        if body.startswith("self-weight"):
+            out.append((case, "self-weight", float(body.split(":")[1]) if ":" in body else 1.0))
+        elif body.startswith("wind:"):
+            _, kpa, direction = body.split(":")
+            v = np.array([float(c) for c in direction.split(",")])
+            out.append((case, "wind", (float(kpa), v / np.linalg.norm(v))))
+        elif body.startswith("point:"):
+            sel, force = body[len("point:"):].rsplit(":", 1)
+            out.append((case, "point", (selector(sel), [float(c) for c in force.split(",")])))
+        else:
+            fail(f"cannot read the load case {case!r}")
+    return out
+
+
+class Frame:
+    """The frame of the axes and sizing.json, solvable by OpenSees for any set of loads."""
+
+    def __init__(self, axes, s):
+        self.s = s
+        p = np.array([n["p"] for n in axes["nodes"]], dtype=float)
+        d = np.array([n["axis"] for n in axes["nodes"]], dtype=float)
+        h = np.array([n["height"] for n in axes["nodes"]], dtype=float)
+        self.p, self.mid = p, p + d * (h[:, None] / 2.0)
+        self.edges = s["edges"]
+        if len(self.edges) != len(axes["edges"]):
+            fail(f"{len(self.edges)} sized members for {len(axes['edges'])} axes edges")
+        mat = s["material"]
+        self.E, self.nu = mat["E"], mat["nu"]
+        self.G = self.E / (2.0 * (1.0 + self.nu))
+        rho = mat["density"] * 1e-6  # kg/mm³
+        # Per member: local axes, length, its panel's weight per length at gauge and area.
+        self.frames, self.weight, self.panel = [], [], []
+        for e in self.edges:
+            a, b = e["a"], e["b"]
+            x = self.mid[b] - self.mid[a]
+            length = np.linalg.norm(x)
+            y, z = np.array(e["axes"]["y"], dtype=float), np.array(e["axes"]["z"], dtype=float)
+            self.frames.append((x / length, y, z, length))
+            quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
+            area = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[1]))
+            self.panel.append(area)
+            self.weight.append(area * e["gauge"] * rho * G_ACC / length)
+        self.held = []
+        for text in s["supports"]:
+            sel, kind = text.rsplit(":", 1)
+            pick = selector(sel)
+            fix = [1] * 6 if kind.strip() == "Fixed" else [1, 1, 1, 0, 0, 0]
+            self.held += [(i, fix) for i in range(len(self.mid)) if pick(i, p[i])]
+        if not self.held:
+            fail("no support matches any node")
+
+    def member_loads(self, loads):
+        """Per member, the uniform load of `loads` ([(kind, value, factor)]), global, N/mm."""
+        w = np.zeros((len(self.edges), 3))
+        for kind, value, factor in loads:
+            for k, (x, y, z, length) in enumerate(self.frames):
+                if kind == "self-weight":
+                    w[k, 2] -= self.weight[k] * value * factor
+                elif kind == "wind":
+                    kpa, direction = value
+                    w[k] += direction * (kpa * 1e-3 * self.panel[k] * abs(z @ direction) / length
+                                         * factor)
+        return w
+
+    def solve(self, loads):
+        """Displacements (n × 6) and local end forces (members × 12) under `loads`."""
+        import openseespy.opensees as ops
+        ops.wipe()
+        ops.model("basic", "-ndm", 3, "-ndf", 6)
+        for i, x in enumerate(self.mid):
+            ops.node(i + 1, *map(float, x))
+        for i, fix in self.held:
+            ops.fix(i + 1, *fix)
+        ops.timeSeries("Constant", 1)
+        ops.pattern("Plain", 1, 1)
+        w = self.member_loads(loads)
+        for k, e in enumerate(self.edges):
+            x, y, z, _ = self.frames[k]
+            ops.geomTransf("Linear", k + 1, *map(float, z))
+            depth, t = e["depth"], e["gauge"]
+            area = depth * t
+            ops.element("ElasticTimoshenkoBeam", k + 1, e["a"] + 1, e["b"] + 1, self.E, self.G,
+                        area, torsion_constant(depth, t), depth * t**3 / 12.0,
+                        t * depth**3 / 12.0, 5.0 / 6.0 * area, 5.0 / 6.0 * area, k + 1)
+            if np.any(w[k]):
+                # OpenSees takes the uniform load in the element's axes: Wy, Wz, Wx.
+                ops.eleLoad("-ele", k + 1, "-type", "-beamUniform",
+                            float(w[k] @ y), float(w[k] @ z), float(w[k] @ x))
+        for kind, value, factor in loads:
+            if kind == "point":
+                pick, f = value
+                for i in range(len(self.mid)):
+                    if pick(i, self.p[i]):
+                        ops.load(i + 1, *(factor * np.array(f)), 0.0, 0.0, 0.0)
+        ops.constraints("Plain")
+        ops.numberer("RCM")
+        ops.system("UmfPack")
+        ops.test("NormDispIncr", 1e-12, 10)
+        ops.algorithm("Linear")
+        ops.integrator("LoadControl", 1.0)
+        ops.analysis("Static")
+        if ops.analyze(1) != 0:
+            fail("OpenSees did not solve the frame")
+        u = np.array([ops.nodeDisp(i + 1) for i in range(len(self.mid))])
+        f = np.array([ops.eleResponse(k + 1, "localForce") for k in range(len(self.edges))])
+        return u, f, w
+
+STATIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
+
+
+def chi(lam, alpha, plateau):
+    """EN 1993-1-1 (6.49)."""
+    if lam <= plateau:
+        return 1.0
+    phi = 0.5 * (1.0 + alpha * (lam - plateau) + lam * lam)
+    return min(1.0, 1.0 / (phi + math.sqrt(max(phi * phi - lam * lam, 0.0))))
+
+
+def member_checks(e, mat, end, w, length):
+    """[stress, buckling, lateral-torsional, interaction] of one member in one state: its end
+    forces (local, what the joints apply) and its uniform load (local)."""
+    d, t = e["depth"], e["gauge"]
+    fy, E = mat["fy"], mat["E"]
+    G = E / (2.0 * (1.0 + mat["nu"]))
+    area, w_weak, w_strong = d * t, d * t * t / 6.0, t * d * d / 6.0
+    a, b = max(d, t) / 2.0, min(d, t) / 2.0
+    r = b / a
+    # Roark, Table 10.7 case 4: the largest shear stress of a rectangle in torsion.
+    tau_modulus = 8.0 * a * b * b / (3.0 * (1 + 0.6095 * r + 0.8865 * r**2 - 1.8023 * r**3
+                                            + 0.9100 * r**4))
+    f, m = np.array(end[:3]), np.array(end[3:6])
+    stress, compression, strong, weak = 0.0, 0.0, [], 0.0
+    for frac in STATIONS:
+        x = frac * length
+        # The part [0, x] in equilibrium: the section's forces are minus the end's and the load's.
+        force = -(f + w * x)
+        moment = -(m + np.array([0.0, x * f[2] + 0.5 * x * x * w[2],
+                                 -x * f[1] - 0.5 * x * x * w[1]]))
+        n, vy, vz = force
+        tx, my, mz = moment
+        sigma = abs(n) / area + abs(my) / w_weak + abs(mz) / w_strong
+        tau = abs(tx) / tau_modulus + 1.5 * math.hypot(vy, vz) / area
+        stress = max(stress, math.sqrt(sigma**2 + 3 * tau**2) / (fy / mat["gamma_M0"]))
+        compression = max(compression, -n)
+        strong.append(abs(mz))
+        weak = max(weak, abs(my))
+    lam1 = math.pi * math.sqrt(E / fy)
+    lam_z = length / (t / math.sqrt(12.0)) / lam1
+    lam_y = length / (d / math.sqrt(12.0)) / lam1
+    n_rd = area * fy / mat["gamma_M1"]
+    n_z = compression / (chi(lam_z, 0.49, 0.2) * n_rd)
+    n_y = compression / (chi(lam_y, 0.49, 0.2) * n_rd)
+    m_max = max(strong)
+    if d > t:
+        c1 = 1.0 if m_max <= 0 else min(2.5, max(1.0, 12.5 * m_max / (
+            2.5 * m_max + 3 * strong[1] + 4 * strong[2] + 3 * strong[3])))
+        i_weak = d * t**3 / 12.0
+        it = max(d, t) * min(d, t)**3 * (1 / 3 - 0.21 * r * (1 - r**4 / 12))
+        mcr = c1 * math.pi / length * math.sqrt(E * i_weak * G * it)
+        chi_lt = chi(min(math.sqrt(w_strong * fy / mcr), 1e6), 0.76, 0.2)
+    else:
+        chi_lt = 1.0
+    ltb = m_max / (chi_lt * w_strong * fy / mat["gamma_M1"])
+    bend_weak = weak / (w_weak * fy / mat["gamma_M1"])
+    k_yy = 1 + 0.6 * min(lam_y, 1.0) * n_y
+    k_zz = 1 + 0.6 * min(lam_z, 1.0) * n_z
+    interaction = max(n_y + k_yy * ltb + k_zz * bend_weak, n_z + ltb + k_zz * bend_weak)
+    return [stress, n_z, ltb, interaction]
+
+
+def weld_per_length(e, end):
+    """Force per length on the two fillet welds at one member end (EN 1993-1-8 4.5.3.3)."""
+    h, t = e["depth"], e["gauge"]
+    nx, vy, vz, tx, my, mz = (abs(v) for v in end)
+    polar = 2.0 * (h**3 / 12.0 + h * t * t / 4.0)
+    f_t = tx * math.sqrt(0.25 * (h * h + t * t)) / polar
+    along = nx / (2 * h) + 3 * mz / (h * h) + my / (t * h)
+    return math.sqrt(along**2 + (vy / (2 * h) + f_t)**2 + (vz / (2 * h) + f_t)**2)
+
+
+def en1993(frame, s, loads, name):
+    """The EN 1990 combinations from the loads, and every member's and weld's checks under the
+    ultimate ones, recomputed from OpenSees' forces, against sizing.json."""
+    names = [n for n, _, _ in loads]
+    permanent = [k == "self-weight" or n.endswith(":G") for n, k, _ in loads]
+    psi0 = [0.6 if k == "wind" else 0.7 for _, k, _ in loads]
+    variable = [i for i in range(len(loads)) if not permanent[i]]
+    leads = variable or [None]
+    want = []
+    for limit, gs, q in (("ULS", [1.35] + ([1.0] if any(permanent) and variable else []), 1.5),
+                         ("SLS", [1.0], 1.0)):
+        for g in gs:
+            for lead in leads:
+                want.append((limit, tuple(g if permanent[i] else (q if i == lead else q * psi0[i])
+                                          for i in range(len(loads)))))
+    got = [(c["limit"], tuple(c["factors"][n] for n in names)) for c in s["combinations"]]
+    if len(got) != len(want) or any(a[0] != b[0] or not np.allclose(a[1], b[1], rtol=0, atol=1e-12)
+                                     for a, b in zip(sorted(got), sorted(want))):
+        fail(f"combinations {got} are not EN 1990's {want}")
+    mat = s["material"]
+    edges = frame.edges
+    worst = np.zeros((len(edges), 4))
+    welds = np.zeros(len(s["nodes"]))
+    largest_sls = 0.0
+    for c in s["combinations"]:
+        factored = [(kind, value, c["factors"][n]) for n, kind, value in loads]
+        u, f, w = frame.solve(factored)
+        if c["limit"] == "SLS":
+            largest_sls = max(largest_sls, np.linalg.norm(u[:, :3], axis=1).max())
+            continue
+        for k, e in enumerate(edges):
+            x, y, z, length = frame.frames[k]
+            local_w = np.array([w[k] @ x, w[k] @ y, w[k] @ z])
+            worst[k] = np.maximum(worst[k], member_checks(e, mat, f[k], local_w, length))
+            for end, node in ((f[k][:6], e["a"]), (f[k][6:], e["b"])):
+                welds[node] = max(welds[node], weld_per_length(e, end))
+    ours = np.array([[e["checks"][n]["utilisation"] for n in
+                      ("stress", "buckling", "lateral-torsional", "interaction")] for e in edges])
+    diff = np.abs(ours - worst).max()
+    if not diff <= 1e-6 * max(1.0, worst.max()):
+        k, j = np.unravel_index(np.argmax(np.abs(ours - worst)), ours.shape)
+        fail(f"member {k}: check {j} is {ours[k, j]:.6g} in {name}, {worst[k, j]:.6g} here")
+    util = np.array([e["utilisation"] for e in edges])
+    if np.abs(util - worst.max(axis=1)).max() > 1e-6:
+        fail("a member's utilisation is not its largest check")
+    # Welds: the throat is one factor times the thinnest plate at every node.
+    thinnest = np.full(len(s["nodes"]), np.inf)
+    for e in edges:
+        for v in (e["a"], e["b"]):
+            thinnest[v] = min(thinnest[v], e["gauge"])
+    throat = np.array([nd["throat"] for nd in s["nodes"]])
+    factor = throat / thinnest
+    if np.ptp(factor) > 1e-12:
+        fail(f"throats are not one factor times the thinnest plate ({factor.min()}..{factor.max()})")
+    fvw = mat["fu"] / (math.sqrt(3) * mat["beta_w"] * mat["gamma_M2"])
+    weld_u = welds / (fvw * throat)
+    lam_w = np.array([nd["weld_utilisation"] for nd in s["nodes"]], dtype=float)
+    if np.abs(weld_u - lam_w).max() > 1e-6 * max(1.0, weld_u.max()):
+        i = int(np.argmax(np.abs(weld_u - lam_w)))
+        fail(f"node {i}: weld utilisation {lam_w[i]:.6g} in {name}, {weld_u[i]:.6g} here")
+    thin = sorted(int(i) for i in np.nonzero(throat < 3.0)[0])
+    if thin != s["totals"]["thin_sheet_welds"] or \
+            any(nd["thin_sheet"] != (i in thin) for i, nd in enumerate(s["nodes"])):
+        fail("the nodes with throats under 3 mm are not the ones named")
+    if abs(largest_sls - s["totals"]["max_displacement"]) > 1e-6 * largest_sls:
+        fail(f"largest SLS displacement {largest_sls:.6g} mm here, "
+             f"{s['totals']['max_displacement']:.6g} in {name}")
+    governing = {}
+    for e in edges:
+        governing[e["check"]] = governing.get(e["check"], 0) + 1
+    over = [(k, util[k]) for k in range(len(edges)) if util[k] > 1.0]
+    over_w = [(i, weld_u[i]) for i in range(len(weld_u)) if weld_u[i] > 1.0]
+    if over or over_w:
+        fail(f"over-utilised: members {over[:5]}, welds {over_w[:5]}")
+    print(f"{name}: EN 1990/1993 ok ({len(s['combinations'])} combinations as EN 1990 gives "
+          f"them; {len(edges)} members' four checks recomputed from OpenSees' forces to "
+          f"{diff:.1e}, largest {worst.max():.3f}, governing {governing}; welds to "
+          f"{np.abs(weld_u - lam_w).max():.1e}, largest {weld_u.max():.3f}, {len(thin)} below a "
+          f"3 mm throat and named; largest SLS displacement {largest_sls:.3f} mm)")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("axes")
     ap.add_argument("sizing")
     ap.add_argument("--tolerance", type=float, default=0.01)
+    ap.add_argument("--checks", action="store_true",
+                    help="also recompute the EN 1990 combinations and EN 1993 checks")
     args = ap.parse_args()
-    import openseespy.opensees as ops
-
     axes = json.load(open(args.axes))
     s = json.load(open(args.sizing))
     if s.get("analysis") != "frame":
         fail(f"{args.sizing} is a {s.get('analysis')} analysis; this compares frames")
-    p = np.array([n["p"] for n in axes["nodes"]], dtype=float)
-    d = np.array([n["axis"] for n in axes["nodes"]], dtype=float)
-    h = np.array([n["height"] for n in axes["nodes"]], dtype=float)
-    mid = p + d * (h[:, None] / 2.0)
-    edges = s["edges"]
-    if len(edges) != len(axes["edges"]):
-        fail(f"{len(edges)} sized members for {len(axes['edges'])} axes edges")
-    mat = s["material"]
-    E, nu, rho = mat["E"], mat["nu"], mat["density"] * 1e-6  # kg/mm³
-    G = E / (2.0 * (1.0 + nu))
-
-    ops.wipe()
-    ops.model("basic", "-ndm", 3, "-ndf", 6)
-    for i, x in enumerate(mid):
-        ops.node(i + 1, *map(float, x))
-    held = 0
-    for text in s["supports"]:
-        sel, kind = text.rsplit(":", 1)
-        pick = selector(sel)
-        fix = [1] * 6 if kind.strip() == "Fixed" else [1, 1, 1, 0, 0, 0]
-        for i in range(len(mid)):
-            if pick(i, p[i]):
-                ops.fix(i + 1, *fix)
-                held += 1
-    if held == 0:
-        fail("no support matches any node")
-
-    # Loads from the case names (the sum: every case but "all loads").
-    self_weight, wind, points = 0.0, [], []
-    for case in s["cases"]:
-        if case == "all loads":
-            continue
-        body = re.sub(r":[GQ]$", "", case)
-        if body.startswith("self-weight"):
-            self_weight += float(body.split(":")[1]) if ":" in body else 1.0
-        elif body.startswith("wind:"):
-            _, kpa, direction = body.split(":")
-            v = np.array([float(c) for c in direction.split(",")])
-            wind.append((float(kpa), v / np.linalg.norm(v)))
-        elif body.startswith("point:"):
-            sel, force = body[len("point:"):].rsplit(":", 1)
-            pick = selector(sel)
-            f = [float(c) for c in force.split(",")]
-            points += [(i, f) for i in range(len(mid)) if pick(i, p[i])]
-        else:
-            fail(f"cannot read the load case {case!r}")
-
-    ops.timeSeries("Constant", 1)
-    ops.pattern("Plain", 1, 1)
-    for k, e in enumerate(edges):
-        a, b = e["a"], e["b"]
-        x = mid[b] - mid[a]
-        length = np.linalg.norm(x)
-        x /= length
-        z = np.array(e["axes"]["z"], dtype=float)
-        y = np.array(e["axes"]["y"], dtype=float)
-        ops.geomTransf("Linear", k + 1, *map(float, z))
-        depth, t = e["depth"], e["gauge"]
-        area = depth * t
-        iy, iz = depth * t**3 / 12.0, t * depth**3 / 12.0
-        ops.element("ElasticTimoshenkoBeam", k + 1, a + 1, b + 1, E, G, area,
-                    torsion_constant(depth, t), iy, iz, 5.0 / 6.0 * area, 5.0 / 6.0 * area, k + 1)
-        quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
-        cross = np.cross(quad[2] - quad[0], quad[3] - quad[1])
-        panel = 0.5 * np.linalg.norm(cross)
-        w = np.zeros(3)
-        if self_weight:
-            w += np.array([0.0, 0.0, -panel * t * rho * G_ACC * self_weight / length])
-        for kpa, direction in wind:
-            w += direction * (kpa * 1e-3 * panel * abs(z @ direction) / length)
-        if np.any(w):
-            # OpenSees takes the uniform load in the element's axes: Wy, Wz, Wx.
-            ops.eleLoad("-ele", k + 1, "-type", "-beamUniform",
-                        float(w @ y), float(w @ z), float(w @ x))
-    for i, f in points:
-        ops.load(i + 1, *f, 0.0, 0.0, 0.0)
-
-    ops.constraints("Plain")
-    ops.numberer("RCM")
-    ops.system("UmfPack")
-    ops.test("NormDispIncr", 1e-12, 10)
-    ops.algorithm("Linear")
-    ops.integrator("LoadControl", 1.0)
-    ops.analysis("Static")
-    if ops.analyze(1) != 0:
-        fail("OpenSees did not solve the frame")
-
+    frame = Frame(axes, s)
+    loads = read_loads(s["cases"])
+    os_all, os_f, _ = frame.solve([(kind, value, 1.0) for _, kind, value in loads])
+    os_u, os_r = os_all[:, :3], os_all[:, 3:]
+    edges = frame.edges
     lam_u = np.array([n["displacement"] for n in s["nodes"]])
     lam_r = np.array([n["rotation"] for n in s["nodes"]])
-    os_u = np.array([ops.nodeDisp(i + 1)[:3] for i in range(len(mid))])
-    os_r = np.array([ops.nodeDisp(i + 1)[3:] for i in range(len(mid))])
     lam_f = np.array([e["end_forces"] for e in edges])
-    os_f = np.array([ops.eleResponse(k + 1, "localForce") for k in range(len(edges))])
     forces = [0, 1, 2, 6, 7, 8]
     moments = [3, 4, 5, 9, 10, 11]
     figures = []
@@ -183,8 +376,10 @@ def main():
             at = np.unravel_index(np.argmax(np.abs(ours - theirs)), ours.shape)
             fail(f"{label} differ by {worst:.3%} of the largest ({scale:.4g}) at row {at[0]}: "
                  f"lamina {ours[at]:.6g}, OpenSees {theirs[at]:.6g}")
-    print(f"{args.sizing}: ok against OpenSees ({len(edges)} Timoshenko beams, {len(mid)} nodes, "
-          f"{held} held; largest differences: " + ", ".join(figures) + ")")
+    print(f"{args.sizing}: ok against OpenSees ({len(edges)} Timoshenko beams, {len(frame.mid)} "
+          f"nodes, {len(frame.held)} held; largest differences: " + ", ".join(figures) + ")")
+    if args.checks:
+        en1993(frame, s, loads, args.sizing)
 
 
 main()
