@@ -33,9 +33,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Ok(());
     };
     let axes = read_axes(&work.join("axes.json"))?;
-    let (per_edge, list) = lamina::analyze::sizing::read_gauges(&work.join("sizing.json"))?;
+    let (per_edge, list, material) =
+        lamina::analyze::sizing::read_gauges(&work.join("sizing.json"))?;
     let opts = plates::Options {
-        sizing: Some(plates::Gauges { per_edge, list }),
+        sizing: Some(plates::Gauges {
+            per_edge,
+            list,
+            material,
+        }),
         groups: 7,
         ..Default::default()
     };

@@ -36,7 +36,18 @@ from ezdxf import recover
 from shapely import STRtree
 from shapely.geometry import LineString, Point, Polygon, box
 
-DENSITY = 7.9  # g/cm³, stainless
+STAINLESS = ("1.40", "1.41", "1.42", "1.43", "1.44", "1.45", "1.46")  # EN 10088 numbers
+
+
+def header_comment(path):
+    """The DXF's leading comments (group 999), joined."""
+    lines = open(path, encoding="utf-8", newline="").read().splitlines()
+    out = []
+    for code, value in zip(lines[0::2], lines[1::2]):
+        if code.strip() != "999":
+            break
+        out.append(value)
+    return " ".join(out)
 
 
 def fail(msg):
@@ -178,6 +189,9 @@ def main():
 
     plates_doc = json.load(open(args.plates))
     plates = {p["id"]: p for p in plates_doc["plates"]}
+    # The steel travels: plates.json's grade and density into nest.json, the BOM's grade and
+    # masses, every sheet DXF's header and the speed table's family.
+    grade, density = plates_doc["material"]["grade"], plates_doc["material"]["density"]
     segments = plates_doc.get("hole_segments", 48)
 
     def plate_area(p):
@@ -306,7 +320,9 @@ def main():
             fail(f"BOM row {row['id']}: sheet {row['sheet']}, nest.json says {sheet_of.get(row['id'])}")
         if float(row["thickness_mm"]) != p["thickness"]:
             fail(f"BOM row {row['id']}: thickness {row['thickness_mm']} is not {p['thickness']}")
-        mass = plate_area(p) * p["thickness"] * DENSITY * 1e-6
+        if row["grade"] != grade:
+            fail(f"BOM row {row['id']}: grade {row['grade']!r}, plates.json says {grade!r}")
+        mass = plate_area(p) * p["thickness"] * density * 1e-6
         if abs(float(row["mass_kg"]) - mass) > 1e-4 + 1e-4 * mass:
             fail(f"BOM row {row['id']}: mass {row['mass_kg']} kg, expected {mass:.4f}")
     if strokes == 0:

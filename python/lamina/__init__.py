@@ -476,7 +476,9 @@ def plates(axes: Any, *, sizing: Any = None, out: Optional[PathLike] = None,
             raise LaminaError("sizing: give the result of size()")
         per_edge = np.ascontiguousarray(sizing["gauges"], dtype="<f8").tobytes()
         listed = np.ascontiguousarray(sizing["gauge_list"], dtype="<f8").tobytes()
-        gauges = (per_edge, listed)
+        import json
+
+        gauges = (per_edge, listed, json.dumps(sizing["sizing"]["material"]))
     return _done(_lamina.plates(_axes_bytes(axes), gauges, opts,
                                 None if out is None else os.fspath(out)), "mm")
 

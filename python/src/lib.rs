@@ -1002,7 +1002,7 @@ fn size<'py>(
 fn plates<'py>(
     py: Python<'py>,
     axes: AxesBytes<'py>,
-    sizing: Option<(Bound<'py, PyBytes>, Bound<'py, PyBytes>)>,
+    sizing: Option<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)>,
     options: Bound<'py, PyDict>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -1010,10 +1010,14 @@ fn plates<'py>(
     let mut o = Opts::new(&options, "plates");
     let mut opts = options::plates(&mut o)?;
     o.finish()?;
-    if let Some((per_edge, list)) = sizing {
+    if let Some((per_edge, list, material)) = sizing {
         opts.sizing = Some(stage::plates::Gauges {
             per_edge: f64s(per_edge.as_bytes(), "sizing: gauges")?,
             list: f64s(list.as_bytes(), "sizing: gauge_list")?,
+            material: Some(
+                serde_json::from_str(&material)
+                    .map_err(|e| error(format!("sizing: its material: {e}")))?,
+            ),
         });
     }
     let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;
@@ -1108,12 +1112,15 @@ fn nest<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let doc = from_py(&plates, "plates")?;
-    let (records, cores) =
+    let (records, cores, material) =
         lamina::fabricate::plates_file::records_from_value(doc, Path::new("plates"))
             .map_err(|e| error(e.to_string()))?;
     let mut o = Opts::new(&options, "nest");
-    let opts = options::nest(&mut o)?;
+    let mut opts = options::nest(&mut o)?;
     o.finish()?;
+    if let Some(m) = material {
+        opts.material = m;
+    }
     let cut = run::run(py, progress.as_ref(), |h| {
         stage::nest::run(records, cores, &opts, h)
     })?;

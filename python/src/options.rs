@@ -262,6 +262,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "min_weld_angle",
             "groups",
             "bolt",
+            "material",
         ],
         "nest" => &[
             "sheet",
@@ -674,16 +675,20 @@ pub fn audit(o: &mut Opts) -> PyResult<stage::audit::Options> {
     })
 }
 
+/// `material=`: a built-in steel's name or a material file's path.
+fn material(o: &mut Opts) -> PyResult<Option<lamina::analyze::material::Material>> {
+    o.string("material")?
+        .map(|m| {
+            lamina::analyze::material::Material::get(&m)
+                .map_err(|e| crate::error(format!("material= {e}")))
+        })
+        .transpose()
+}
+
 pub fn size(o: &mut Opts) -> PyResult<stage::size::Options> {
     use lamina::analyze::sizing::DeflectionLimit;
     let d = stage::size::Options::default();
-    let material = match o.string("material")? {
-        None => None,
-        Some(m) => Some(
-            lamina::analyze::material::Material::get(&m)
-                .map_err(|e| crate::error(e.to_string()))?,
-        ),
-    };
+    let material = material(o)?;
     let support = o
         .strings("support")?
         .iter()
@@ -759,6 +764,7 @@ pub fn plates(o: &mut Opts) -> PyResult<stage::plates::Options> {
         min_weld_angle: o.f64("min_weld_angle")?,
         groups: o.usize("groups")?.unwrap_or(d.groups),
         bolt: o.parsed("bolt", lamina::rationalize::bolts::parse)?,
+        material: material(o)?,
     })
 }
 
@@ -827,6 +833,7 @@ pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {
         micro_joints: o.usize("micro_joints")?,
         micro_joint_below: o.f64("micro_joint_below")?.unwrap_or(d.micro_joint_below),
         micro_joint_width: o.f64("micro_joint_width")?.unwrap_or(d.micro_joint_width),
+        material: d.material.clone(),
         speeds,
         speeds_name: "speeds=".into(),
     })

@@ -8,7 +8,9 @@
 //!  "gamma_M0": 1.0, "gamma_M1": 1.0, "gamma_M2": 1.25, "beta_w": 0.85}
 //! ```
 //!
-//! E, fy, fu in MPa, density in g/cm³.
+//! E, fy, fu in MPa, density in g/cm³ (EN 1993-1-1 §3.2.6: 7.85 for carbon steels; EN 10088-1:
+//! 8.0 for 1.4404). A name of the EN stainless series (1.40xx to 1.46xx) is stainless: its plates
+//! are cut with the stainless speed table.
 
 use std::path::Path;
 
@@ -35,6 +37,14 @@ pub struct Material {
     pub nu: f64,
 }
 
+/// Whether a grade's name is one of EN 10088's stainless steels (1.40xx to 1.46xx).
+pub fn is_stainless(grade: &str) -> bool {
+    let g = grade.trim();
+    ["1.40", "1.41", "1.42", "1.43", "1.44", "1.45", "1.46"]
+        .iter()
+        .any(|p| g.starts_with(p))
+}
+
 #[derive(Debug, Error)]
 pub enum MaterialError {
     #[error("unknown material `{0}`: give s235, s355, 1.4404 or a JSON file")]
@@ -44,6 +54,11 @@ pub enum MaterialError {
 }
 
 impl Material {
+    /// Whether the grade is a stainless steel (an EN number 1.40xx to 1.46xx).
+    pub fn is_stainless(&self) -> bool {
+        is_stainless(&self.name)
+    }
+
     pub fn shear_modulus(&self) -> f64 {
         self.e / (2.0 * (1.0 + self.nu))
     }
@@ -56,7 +71,7 @@ impl Material {
             nu: 0.3,
             fy,
             fu,
-            density: 7.9,
+            density: 7.85,
             gamma_m0: 1.0,
             gamma_m1: 1.0,
             gamma_m2: 1.25,
@@ -71,7 +86,7 @@ impl Material {
                 nu: 0.3,
                 fy: 240.0,
                 fu: 530.0,
-                density: 7.9,
+                density: 8.0,
                 gamma_m0: 1.1,
                 gamma_m1: 1.1,
                 gamma_m2: 1.25,

@@ -1349,6 +1349,7 @@ pub const VERSION: u32 = 1;
 struct GaugeFile {
     gauges: Vec<f64>,
     edges: Vec<GaugeEdge>,
+    material: Option<Material>,
 }
 
 #[derive(serde::Deserialize)]
@@ -1356,10 +1357,12 @@ struct GaugeEdge {
     gauge: f64,
 }
 
-/// A sizing file's gauge per edge and its gauge list, for `plates --sizing`.
-pub fn read_gauges(
-    path: &std::path::Path,
-) -> Result<(Vec<f64>, Vec<f64>), crate::files::ReadError> {
+/// A sizing file's gauge per edge, its gauge list and its steel (None in files from before it
+/// was written).
+pub type SizedGauges = (Vec<f64>, Vec<f64>, Option<Material>);
+
+/// A sizing file's gauges and steel, for `plates --sizing`.
+pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::ReadError> {
     use crate::files::{read_lamina_json, ReadError};
     let file: GaugeFile = read_lamina_json(
         path,
@@ -1383,7 +1386,20 @@ pub fn read_gauges(
             ));
         }
     }
-    Ok((file.edges.iter().map(|e| e.gauge).collect(), file.gauges))
+    if let Some(m) = &file.material {
+        if !(m.density > 0.1 && m.density <= 30.0) || m.name.trim().is_empty() || m.name.len() > 64
+        {
+            return Err(ReadError::file(
+                path,
+                "material: the name must be at most 64 characters and the density from 0.1 to 30 g/cm³",
+            ));
+        }
+    }
+    Ok((
+        file.edges.iter().map(|e| e.gauge).collect(),
+        file.gauges,
+        file.material,
+    ))
 }
 
 #[derive(serde::Deserialize)]

@@ -403,6 +403,7 @@ fn steel(out: &Path) -> Result<Entry> {
         ),
         min_weld_angle: None,
         bolt: None,
+        material: None,
         groups: 7,
         output: dir.join("plates"),
         json: false,
@@ -443,7 +444,7 @@ fn steel(out: &Path) -> Result<Entry> {
         json: false,
     })?;
     let built = plates.summary();
-    let mass = plates.set.mass_kg(lamina::stage::nest::DENSITY);
+    let mass = plates.set.mass_kg(plates.material.density);
     let sz = &sized.sizing;
     let (_, dmax) = sz.max_displacement();
     let lower_upper = sz.mean_gauges_low_high();

@@ -67,7 +67,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub micro_joint_width: f64,
     /// Cutting, pierce and marking speeds by thickness for the time estimate (JSON like the
-    /// built-in table nest.json repeats) [default: typical stainless steel figures]
+    /// built-in table nest.json repeats) [default: typical figures for the plates' grade,
+    /// stainless or carbon steel]
     #[arg(long)]
     pub speeds: Option<PathBuf>,
     /// Output folder (made if missing)
@@ -80,7 +81,8 @@ pub struct Args {
 
 /// Reads the plates (and speeds), nests, writes every file into the folder.
 pub fn execute(args: &Args) -> Result<nest::Nested> {
-    let (plates, cores) = read_plates(&args.input)?;
+    let (plates, cores, stated) = read_plates(&args.input)?;
+    let material = stated.clone().unwrap_or_else(nest::MaterialRecord::unstated);
     let stock: Vec<Stock> = match (&args.stock, args.sheet) {
         (Some(s), _) => s.clone(),
         (None, Some(size)) => vec![Stock { size, cost: 0.0 }],
@@ -101,6 +103,7 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
         micro_joints: args.micro_joints,
         micro_joint_below: args.micro_joint_below,
         micro_joint_width: args.micro_joint_width,
+        material,
         speeds,
         speeds_name: args.speeds.as_ref().map_or_else(
             || nest::Options::default().speeds_name,
@@ -113,6 +116,14 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
         }
         e => anyhow::Error::new(e),
     })?;
+    if stated.is_none() {
+        errln!(
+            "lamina: {} states no material (written before plates did): taken as {} ({} g/cm³)",
+            args.input.display(),
+            out.material.grade,
+            out.material.density
+        );
+    }
     if args.output.exists() && !args.output.is_dir() {
         bail!("{}: exists and is not a folder", args.output.display());
     }

@@ -58,6 +58,11 @@ pub struct Args {
     /// [default: by the grip (Unwin's rule), smaller where a plate is too small]
     #[arg(long, value_parser = bolts::parse)]
     pub bolt: Option<BoltSize>,
+    /// The steel: s235, s355, 1.4404 or a JSON file as `size` takes; its grade and density go
+    /// into plates.json, the mass and the cut files [default: the sizing's with --sizing, else
+    /// 1.4404]
+    #[arg(long)]
+    pub material: Option<String>,
     /// Output folder (made if missing): plates.json, welds.json, welds.html, assembly.stl,
     /// assembly.obj (one object per plate and core), parts/ID.dxf, assembly.scad
     #[arg(short, long)]
@@ -83,8 +88,12 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
     let axes = read_axes(&args.input)?;
     let sizing = match &args.sizing {
         Some(p) => {
-            let (per_edge, list) = lamina::analyze::sizing::read_gauges(p)?;
-            Some(plates::Gauges { per_edge, list })
+            let (per_edge, list, material) = lamina::analyze::sizing::read_gauges(p)?;
+            Some(plates::Gauges {
+                per_edge,
+                list,
+                material,
+            })
         }
         None => None,
     };
@@ -99,6 +108,11 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         min_weld_angle: args.min_weld_angle,
         groups: args.groups,
         bolt: args.bolt,
+        material: args
+            .material
+            .as_deref()
+            .map(plates::Material::get)
+            .transpose()?,
     };
     let made = plates::run(&axes, &opts).map_err(|e| match (e, &args.sizing) {
         (plates::Error::Option(o), _) => anyhow::Error::new(o),
@@ -107,6 +121,9 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         }
         (e, _) => anyhow::anyhow!("{}: {e}", args.input.display()),
     })?;
+    for n in &made.notes {
+        errln!("lamina: {n}");
+    }
     if args.output.exists() && !args.output.is_dir() {
         bail!("{}: exists and is not a folder", args.output.display());
     }
@@ -173,14 +190,16 @@ pub fn run(args: Args) -> Result<bool> {
         outln!("{value}");
     } else {
         outln!(
-            "{}: {} plates in {} group(s), {} seam(s) as bolted pairs ({} bolts), {:.3} m² of plate, {:.1} kg of stainless steel; panels flattened by at most {:.4} mm",
+            "{}: {} plates in {} group(s), {} seam(s) as bolted pairs ({} bolts), {:.3} m² of plate, {:.1} kg of {} ({} g/cm³); panels flattened by at most {:.4} mm",
             args.output.display(),
             sum.plates,
             sum.groups,
             sum.seams,
             sum.bolts,
             sum.area_mm2 * 1e-6,
-            sum.volume_mm3 * 7.9e-6,
+            sum.volume_mm3 * made.material.density * 1e-6,
+            made.material.name,
+            made.material.density,
             sum.max_flattening_mm
         );
         outln!(

@@ -50,7 +50,7 @@ fn read(path: &Path, args: &ReadArgs) -> Result<Input> {
                 return Ok(Input::Axes(Box::new(axes), tolerance));
             }
             Some("lamina-plates") => {
-                let (p, c) = lamina::fabricate::plates_file::read_plates(path)?;
+                let (p, c, _) = lamina::fabricate::plates_file::read_plates(path)?;
                 return Ok(Input::Plates(p, c));
             }
             Some("lamina-welds") => {

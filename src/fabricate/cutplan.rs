@@ -53,6 +53,53 @@ const fn row(thickness: f64, cut: f64, pierce: f64, etch: f64) -> SpeedRow {
 
 impl Default for SpeedTable {
     fn default() -> Self {
+        SpeedTable::typical(true)
+    }
+}
+
+impl SpeedTable {
+    /// Typical figures for stainless steel (a 3 kW fibre laser with nitrogen, an 85 A air
+    /// plasma) or carbon steel (the same laser with oxygen from 3 mm, the plasma on mild
+    /// steel), to be replaced by the shop's own.
+    pub fn typical(stainless: bool) -> SpeedTable {
+        if stainless {
+            SpeedTable::stainless()
+        } else {
+            SpeedTable::carbon()
+        }
+    }
+
+    fn carbon() -> SpeedTable {
+        SpeedTable {
+            material: "carbon steel (typical figures: replace with the shop's table)".into(),
+            laser: vec![
+                row(1.0, 32000.0, 0.1, 15000.0),
+                row(1.5, 24000.0, 0.2, 15000.0),
+                row(2.0, 18000.0, 0.3, 15000.0),
+                row(3.0, 4200.0, 0.6, 12000.0),
+                row(4.0, 3600.0, 0.8, 12000.0),
+                row(5.0, 3100.0, 1.0, 12000.0),
+                row(6.0, 2700.0, 1.4, 10000.0),
+                row(8.0, 2100.0, 2.0, 10000.0),
+                row(10.0, 1500.0, 3.0, 10000.0),
+                row(12.0, 1100.0, 4.0, 10000.0),
+            ],
+            plasma: vec![
+                row(1.5, 7500.0, 0.2, 8000.0),
+                row(2.0, 7000.0, 0.3, 8000.0),
+                row(3.0, 5700.0, 0.3, 8000.0),
+                row(4.0, 4800.0, 0.4, 8000.0),
+                row(5.0, 4100.0, 0.5, 8000.0),
+                row(6.0, 3400.0, 0.6, 8000.0),
+                row(8.0, 2600.0, 0.8, 8000.0),
+                row(10.0, 1900.0, 1.0, 8000.0),
+                row(12.0, 1500.0, 1.2, 8000.0),
+                row(20.0, 750.0, 1.8, 8000.0),
+            ],
+        }
+    }
+
+    fn stainless() -> SpeedTable {
         SpeedTable {
             material: "stainless steel (typical figures: replace with the shop's table)".into(),
             laser: vec![

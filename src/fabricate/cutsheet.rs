@@ -189,11 +189,14 @@ pub fn place_joints(outline: &[DVec2], n: usize, width: f64, clear: f64) -> Vec<
         .collect()
 }
 
-/// Writes the parts, and the sheet rectangle from the origin and remnant rectangles if given.
+/// Writes the parts, and the sheet rectangle from the origin and remnant rectangles if given;
+/// `label` (the grade, thickness and what the file holds) as a comment (group 999) heading
+/// the file: no entity a CAM import could cut.
 pub fn write_cut_dxf(
     parts: &[&Drawn],
     sheet: Option<DVec2>,
     remnants: &[[DVec2; 2]],
+    label: &str,
     path: &Path,
 ) -> Result<(), WriteError> {
     let mut drawing = fixed_drawing();
@@ -273,7 +276,7 @@ pub fn write_cut_dxf(
         }
     }
     write_atomic(path, |w| {
-        crate::network::io::dxf_write::save(&mut drawing, w)
+        crate::network::io::dxf_write::save_with_comment(&mut drawing, label, w)
     })
 }
 

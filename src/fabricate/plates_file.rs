@@ -129,6 +129,8 @@ pub struct PlatesDoc {
     pub version: u32,
     /// `mm`.
     pub units: &'static str,
+    /// The steel.
+    pub material: MaterialRecord,
     pub gauges: Vec<f64>,
     pub weld_gap: f64,
     pub weld_gap_tolerance: f64,
@@ -150,6 +152,7 @@ impl PlatesDoc {
         let _ = writeln!(w, "  \"format\": \"{}\",", self.format);
         let _ = writeln!(w, "  \"version\": {},", self.version);
         let _ = writeln!(w, "  \"units\": \"{}\",", self.units);
+        let _ = writeln!(w, "  \"material\": {},", json(&self.material));
         let _ = writeln!(w, "  \"gauges\": {},", json(&self.gauges));
         let _ = writeln!(w, "  \"weld_gap\": {},", json(&self.weld_gap));
         let _ = writeln!(
@@ -172,8 +175,36 @@ impl PlatesDoc {
 
     /// The records nesting, the BOM and the assembly take (checked as the file reader checks
     /// them; `path` names the document in errors).
-    pub fn records(&self, path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
-        records(self.plates.clone(), self.cores.clone(), path)
+    pub fn records(&self, path: &Path) -> Result<PlatesRead, ReadError> {
+        records(
+            self.plates.clone(),
+            self.cores.clone(),
+            Some(self.material.clone()),
+            path,
+        )
+    }
+}
+
+/// A plates file's steel: its grade and density (g/cm³).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialRecord {
+    pub density: f64,
+    pub grade: String,
+}
+
+impl MaterialRecord {
+    /// What files before the material travelled meant: stainless 1.4404.
+    pub fn unstated() -> MaterialRecord {
+        MaterialRecord {
+            density: 8.0,
+            grade: "1.4404".into(),
+        }
+    }
+}
+
+impl Default for MaterialRecord {
+    fn default() -> Self {
+        MaterialRecord::unstated()
     }
 }
 
@@ -182,14 +213,12 @@ struct File {
     plates: Vec<PlateDoc>,
     #[serde(default)]
     cores: Vec<CoreRecord>,
+    material: Option<MaterialRecord>,
 }
 
 /// The plates and node cores of a plates document held as a JSON value (`path` names it in
 /// errors), checked as the file reader checks a file.
-pub fn records_from_value(
-    doc: serde_json::Value,
-    path: &Path,
-) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+pub fn records_from_value(doc: serde_json::Value, path: &Path) -> Result<PlatesRead, ReadError> {
     let format = doc.get("format").and_then(|f| f.as_str()).unwrap_or("");
     if format != FORMAT {
         return Err(ReadError::file(
@@ -201,7 +230,7 @@ pub fn records_from_value(
     }
     let file: File =
         serde_json::from_value(doc).map_err(|e| ReadError::file(path, e.to_string()))?;
-    records(file.plates, file.cores, path)
+    records(file.plates, file.cores, file.material, path)
 }
 
 /// The thickest plate a file may hold: 1 m of steel is no plate.
@@ -211,8 +240,12 @@ pub const MAX_COORD: f64 = 1e5;
 /// The most bolt holes in one plate.
 pub const MAX_HOLES: usize = 10_000;
 
-/// The plates and the node cores.
-pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+/// A plates file read: the plates, the node cores and the steel (None in files from before it
+/// was written).
+pub type PlatesRead = (Vec<PlateRecord>, Vec<CoreRecord>, Option<MaterialRecord>);
+
+/// The plates, the node cores and the steel.
+pub fn read_plates(path: &Path) -> Result<PlatesRead, ReadError> {
     let text = utf8_text(path, read_nonempty(path)?)?;
     // Version 1 (before bolts and cores) reads as plates without holes.
     let what = "the plates file `lamina plates` writes";
@@ -220,15 +253,28 @@ pub fn read_plates(path: &Path) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), R
         .or_else(|e| check_format(path, &text, FORMAT, 1, what).map_err(|_| e))?;
     let file: File =
         serde_json::from_str(&text).map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
-    records(file.plates, file.cores, path)
+    records(file.plates, file.cores, file.material, path)
 }
 
 /// Plate records from the file's plates, every value checked.
 fn records(
     plates: Vec<PlateDoc>,
     cores: Vec<CoreRecord>,
+    material: Option<MaterialRecord>,
     path: &Path,
-) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+) -> Result<PlatesRead, ReadError> {
+    if let Some(m) = &material {
+        if !(m.density > 0.1 && m.density <= 30.0)
+            || m.grade.trim().is_empty()
+            || m.grade.len() > 64
+        {
+            return Err(ReadError::file(
+                path,
+                "material: the grade must be a name of at most 64 characters and the density \
+                 from 0.1 to 30 g/cm³",
+            ));
+        }
+    }
     if plates.is_empty() {
         return Err(ReadError::file(path, "holds no plates"));
     }
@@ -328,7 +374,7 @@ fn records(
             ));
         }
     }
-    Ok((out, cores))
+    Ok((out, cores, material))
 }
 
 pub const WELDS_FORMAT: &str = "lamina-welds";

@@ -23,6 +23,7 @@ use std::path::Path;
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 
+use crate::analyze::material::is_stainless;
 use crate::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
 use crate::fabricate::cutplan::{remnants, times, SpeedError, SpeedTable};
 use crate::fabricate::cutsheet::{place_joints, write_cut_dxf, Drawn, Hole};
@@ -30,14 +31,12 @@ use crate::fabricate::nest::{
     grown_hull, nest_families, BottomLeft, NestError, NestOptions, SLACK,
 };
 pub use crate::fabricate::nest::{Place, Rotations, Stock};
+pub use crate::fabricate::plates_file::MaterialRecord;
 use crate::fabricate::plates_file::{CoreRecord, PlateRecord};
 use crate::fabricate::preview::{sheets_svg, SheetView};
 use crate::fabricate::tags::part_marks;
 use crate::files::WriteError;
 use crate::stage::{OptionError, Progress};
-
-/// Stainless steel, g/cm³.
-pub const DENSITY: f64 = 7.9;
 
 /// The most seeded tries: each is a whole nesting of every part.
 pub const MAX_TRIES: usize = 1000;
@@ -76,7 +75,10 @@ pub struct Options {
     pub micro_joint_below: f64,
     /// Width of a micro-joint along the contour, mm. Default 0.5.
     pub micro_joint_width: f64,
-    /// Cutting, pierce and marking speeds by thickness. Default: typical stainless figures.
+    /// The plates' steel (plates.json's). Default: 1.4404, 8.0 g/cm³.
+    pub material: MaterialRecord,
+    /// Cutting, pierce and marking speeds by thickness. Default: typical figures for the
+    /// material (stainless or carbon steel).
     pub speeds: Option<SpeedTable>,
     /// Where the speeds came from, for errors. Default "the built-in speed table".
     pub speeds_name: String,
@@ -101,6 +103,7 @@ impl Default for Options {
             micro_joints: None,
             micro_joint_below: 200.0,
             micro_joint_width: 0.5,
+            material: MaterialRecord::unstated(),
             speeds: None,
             speeds_name: "the built-in speed table".into(),
         }
@@ -229,6 +232,8 @@ pub struct Nested {
     pub doc: NestDoc,
     /// The spacing parts keep, mm (for the assembly's clip polygons).
     pub spacing: f64,
+    /// The plates' steel.
+    pub material: MaterialRecord,
 }
 
 impl SheetInfo {
@@ -440,7 +445,10 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<Nested, Error> {
     let (nest_opts, joints) = opts.check(plates.len())?;
-    let speeds = opts.speeds.clone().unwrap_or_default();
+    let speeds = opts
+        .speeds
+        .clone()
+        .unwrap_or_else(|| SpeedTable::typical(is_stainless(&opts.material.grade)));
     let stock = &opts.stock;
     // Families: thickness (as its bits: positive floats order as their bits do), then group.
     let keys: Vec<(u64, u32)> = plates
@@ -529,6 +537,7 @@ pub fn run(
         joints,
         doc: NestDoc::default(),
         spacing: opts.spacing,
+        material: opts.material.clone(),
     };
     out.doc = nest_doc(&out, &nest_opts, &speeds);
     Ok(out)
@@ -646,6 +655,8 @@ pub struct NestDoc {
     pub format: &'static str,
     /// Kept clear along every sheet edge, mm.
     pub margin: f64,
+    /// The plates' steel.
+    pub material: MaterialRecord,
     /// Micro-joints.
     pub micro_joints: Option<JointsDoc>,
     /// Parts not nested (tubes).
@@ -835,6 +846,7 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
             .collect(),
         format: "lamina-nest",
         margin: opts.margin,
+        material: out.material.clone(),
         micro_joints: out.joints.map(|j| JointsDoc {
             below_mm: j.below,
             clear_mm: j.clear(),
@@ -933,11 +945,11 @@ impl NestDoc {
 /// sheet (`bbox_x_mm`, `bbox_y_mm`), its rotation the turn from its own frame.
 pub fn bom_csv(out: &Nested) -> String {
     let mut w = String::from(
-        "kind,id,group,thickness_mm,length_mm,width_mm,area_mm2,mass_kg,sheet,bbox_x_mm,bbox_y_mm,rotation_deg,holes,bolted_to,bolts,welded_at_a,welded_at_b\n",
+        "kind,id,group,grade,thickness_mm,length_mm,width_mm,area_mm2,mass_kg,sheet,bbox_x_mm,bbox_y_mm,rotation_deg,holes,bolted_to,bolts,welded_at_a,welded_at_b\n",
     );
     for (i, (p, place)) in out.plates.iter().zip(&out.places).enumerate() {
         let s = size(&p.outline);
-        let mass = p.area() * p.thickness * DENSITY * 1e-6;
+        let mass = p.area() * p.thickness * out.material.density * 1e-6;
         let ends: Vec<String> = p
             .ends
             .iter()
@@ -958,9 +970,10 @@ pub fn bom_csv(out: &Nested) -> String {
             .unwrap_or_default();
         let _ = writeln!(
             w,
-            "plate,\"{}\",{},{},{:.2},{:.2},{:.1},{:.4},\"{}\",{:.3},{:.3},{},{},\"{}\",\"{}\",{},{}",
+            "plate,\"{}\",{},\"{}\",{},{:.2},{:.2},{:.1},{:.4},\"{}\",{:.3},{:.3},{},{},\"{}\",\"{}\",{},{}",
             p.id,
             p.group,
+            out.material.grade,
             p.thickness,
             s.x,
             s.y,
@@ -987,7 +1000,7 @@ pub fn bom_csv(out: &Nested) -> String {
         }
         let _ = writeln!(
             w,
-            "bolts,\"{}+{}\",{},{},,,,,,,,,{},,\"{} x {}x{} with 2 washers and a nut, grip {} mm\",,",
+            "bolts,\"{}+{}\",{},,{},,,,,,,,,{},,\"{} x {}x{} with 2 washers and a nut, grip {} mm\",,",
             p.id, other, p.group, b.grip, p.holes.len(), p.holes.len(), b.size, b.length, b.grip
         );
     }
@@ -995,14 +1008,15 @@ pub fn bom_csv(out: &Nested) -> String {
         let area = std::f64::consts::PI * (c.outer_diameter - c.wall) * c.wall;
         let _ = writeln!(
             w,
-            "tube,\"{}\",{},{},{:.2},{},{:.1},{:.4},,,,,,,\"tube {} x {} at node {}\",,",
+            "tube,\"{}\",{},\"{}\",{},{:.2},{},{:.1},{:.4},,,,,,,\"tube {} x {} at node {}\",,",
             c.id,
             c.group,
+            out.material.grade,
             c.wall,
             c.length,
             c.outer_diameter,
             area,
-            area * c.length * DENSITY * 1e-6,
+            area * c.length * out.material.density * 1e-6,
             c.outer_diameter,
             c.wall,
             c.node
@@ -1013,12 +1027,25 @@ pub fn bom_csv(out: &Nested) -> String {
 
 /// Each sheet's cut DXF into `dir` (named as `SheetInfo::file`).
 pub fn write_sheets(out: &Nested, dir: &Path) -> Result<(), WriteError> {
-    for sheet in &out.sheets {
+    let count = out.sheets.len();
+    for (n, sheet) in out.sheets.iter().enumerate() {
         let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &out.drawn[i]).collect();
+        let label = format!(
+            "{} {} mm, sheet {} of {} ({}, {} x {} mm, {} parts)",
+            out.material.grade,
+            sheet.thickness,
+            n + 1,
+            count,
+            sheet.file,
+            sheet.stock.size.x,
+            sheet.stock.size.y,
+            sheet.parts.len()
+        );
         write_cut_dxf(
             &parts,
             Some(sheet.stock.size),
             &sheet.remnants,
+            &label,
             &dir.join(&sheet.file),
         )?;
     }

@@ -25,10 +25,12 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
+pub use crate::analyze::material::Material;
 use crate::fabricate::assembly::{axis_frame, write_scad, ScadBolt, ScadCore, ScadPart};
 use crate::fabricate::cutsheet::{write_cut_dxf, Drawn, Hole};
 use crate::fabricate::plates_file::{
-    BoltRecord, CoreRecord, EndDoc, PlateDoc, PlateRecord, PlatesDoc, WeldNode, WeldPair,
+    BoltRecord, CoreRecord, EndDoc, MaterialRecord, PlateDoc, PlateRecord, PlatesDoc, PlatesRead,
+    WeldNode, WeldPair,
 };
 use crate::fabricate::tags::part_marks;
 use crate::files::{write_atomic, ReadError, WriteError};
@@ -67,6 +69,9 @@ pub struct Options {
     pub groups: usize,
     /// Bolts through the seam plates. Default: by the grip.
     pub bolt: Option<BoltSize>,
+    /// The steel: its grade and density go into plates.json, the mass, the BOM and the cut
+    /// files. Default: the sizing's, else 1.4404 (stainless 316L) with a note saying so.
+    pub material: Option<Material>,
 }
 
 impl Default for Options {
@@ -82,6 +87,7 @@ impl Default for Options {
             min_weld_angle: None,
             groups: 1,
             bolt: None,
+            material: None,
         }
     }
 }
@@ -93,6 +99,8 @@ pub struct Gauges {
     pub per_edge: Vec<f64>,
     /// The gauges to choose from, mm.
     pub list: Vec<f64>,
+    /// The steel the sizing was made for.
+    pub material: Option<Material>,
 }
 
 impl Gauges {
@@ -101,6 +109,7 @@ impl Gauges {
         Gauges {
             per_edge: report.edges.iter().map(|e| e.gauge).collect(),
             list: report.gauges.clone(),
+            material: Some(report.material.clone()),
         }
     }
 }
@@ -137,6 +146,10 @@ pub struct Plated {
     pub parts: Vec<(Drawn, Option<f64>)>,
     /// No pair of plates meets below `min_weld_angle`.
     pub ok: bool,
+    /// The steel.
+    pub material: Material,
+    /// Defaults taken that change the result (the material), one line each.
+    pub notes: Vec<String>,
 }
 
 impl Plated {
@@ -250,8 +263,32 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         bolt: opts.bolt,
         node_core: opts.node_core,
     };
+    let mut notes = Vec::new();
+    let material = match (
+        &opts.material,
+        opts.sizing.as_ref().and_then(|g| g.material.as_ref()),
+    ) {
+        (Some(m), Some(sized)) if m.name != sized.name => {
+            return Err(OptionError::new(
+                "material",
+                format!(
+                    "is {} but the sizing was made for {}: size again, or leave material= out",
+                    m.name, sized.name
+                ),
+            )
+            .into())
+        }
+        (Some(m), _) | (None, Some(m)) => m.clone(),
+        (None, None) => {
+            notes.push(
+                "material 1.4404 (stainless 316L, 8.0 g/cm³), the default: give material= for another"
+                    .into(),
+            );
+            Material::get("1.4404").expect("a built-in material")
+        }
+    };
     let set = plates(axes, &options)?;
-    let file = plates_doc(&set, &options);
+    let file = plates_doc(&set, &options, &material);
     let welds = welds(&set, &options, opts.min_weld_angle);
     let ok = opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0;
     let parts = set.plates.iter().map(drawn).collect();
@@ -262,6 +299,8 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         welds,
         parts,
         ok,
+        material,
+        notes,
     })
 }
 
@@ -287,7 +326,7 @@ fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
     (part, marks.tag_height)
 }
 
-fn plates_doc(set: &PlateSet, opts: &PlateOptions) -> PlatesDoc {
+fn plates_doc(set: &PlateSet, opts: &PlateOptions, material: &Material) -> PlatesDoc {
     let plates = &set.plates;
     let cores = set
         .cores
@@ -339,6 +378,10 @@ fn plates_doc(set: &PlateSet, opts: &PlateOptions) -> PlatesDoc {
         format: crate::fabricate::plates_file::FORMAT,
         version: crate::fabricate::plates_file::VERSION,
         units: "mm",
+        material: MaterialRecord {
+            density: material.density,
+            grade: material.name.clone(),
+        },
         gauges: opts.gauges.clone(),
         weld_gap: opts.weld_gap,
         weld_gap_tolerance: opts.weld_gap_tolerance,
@@ -722,7 +765,8 @@ pub fn write_parts(made: &Plated, dir: &Path) -> Result<(), WriteError> {
     let mut names = Vec::with_capacity(set.plates.len());
     for (p, (part, _)) in set.plates.iter().zip(&made.parts) {
         let name = format!("parts/{}.dxf", p.id);
-        write_cut_dxf(&[part], None, &[], &dir.join(&name))?;
+        let label = format!("{} {} mm, part {}", made.material.name, p.thickness, p.id);
+        write_cut_dxf(&[part], None, &[], &label, &dir.join(&name))?;
         names.push(name);
     }
     let scad: Vec<ScadPart> = set
@@ -838,6 +882,6 @@ prequalified by EN 1993-1-8 §4.3.2.1; AWS D1.1 allows up to 135°; above that t
 }
 
 /// plates.json read back from its text in memory (for a caller that holds the document).
-pub fn records_of(doc: &PlatesDoc) -> Result<(Vec<PlateRecord>, Vec<CoreRecord>), ReadError> {
+pub fn records_of(doc: &PlatesDoc) -> Result<PlatesRead, ReadError> {
     doc.records(Path::new("plates"))
 }

@@ -384,3 +384,74 @@ fn micro_joints_shorten_the_cut_add_pierces_and_leave_no_assembly_to_rebuild() -
     );
     Ok(())
 }
+
+#[test]
+fn the_material_travels_from_the_sizing_to_the_cut_files() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &[])?;
+    let sizing = dir.path().join("sizing.json");
+    let o = lamina(&[
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1",
+        "--load",
+        "self-weight",
+        "--material",
+        "s355",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // A plates grade other than the sizing's is refused, naming the flag; nothing written.
+    let wrong = dir.path().join("wrong");
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&sizing),
+        "--material",
+        "1.4404",
+        "-o",
+        s(&wrong),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--material"), "{}", stderr(&o));
+    assert!(!wrong.exists());
+    let (out, doc) = plates_of(dir.path(), &axes, &["--sizing", s(&sizing)])?;
+    assert_eq!(doc["material"]["grade"], "S355");
+    assert_eq!(doc["material"]["density"], 7.85);
+    let cut = dir.path().join("cut");
+    let o = lamina(&[
+        "nest",
+        s(&out.join("plates.json")),
+        "--sheet",
+        "3000x1500",
+        "-o",
+        s(&cut),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let nest: serde_json::Value = serde_json::from_slice(&std::fs::read(cut.join("nest.json"))?)?;
+    assert_eq!(nest["material"]["grade"], "S355");
+    assert!(nest["speed_table"]["material"]
+        .as_str()
+        .is_some_and(|m| m.starts_with("carbon steel")));
+    let bom = std::fs::read_to_string(cut.join("bom.csv"))?;
+    let header: Vec<&str> = bom.lines().next().ok_or("a header")?.split(',').collect();
+    let grade = header
+        .iter()
+        .position(|h| *h == "grade")
+        .ok_or("a grade column")?;
+    for row in bom.lines().skip(1).filter(|r| r.starts_with("plate,")) {
+        assert_eq!(row.split(',').nth(grade), Some("\"S355\""), "{row}");
+    }
+    let sheet = nest["sheets"][0]["file"].as_str().ok_or("a sheet")?;
+    let dxf = std::fs::read_to_string(cut.join(sheet))?;
+    let mut lines = dxf.lines();
+    assert_eq!(lines.next(), Some("999"));
+    assert!(
+        lines.next().is_some_and(|l| l.starts_with("S355 ")),
+        "{dxf:.80}"
+    );
+    Ok(())
+}

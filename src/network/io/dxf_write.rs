@@ -22,6 +22,28 @@ pub(crate) fn save(drawing: &mut Drawing, w: &mut impl std::io::Write) -> std::i
     w.write_all(fix_handles(&text).as_bytes())
 }
 
+/// As [`save`], the file headed by `comment` as DXF comments (group 999, one per line; readers
+/// skip them).
+pub(crate) fn save_with_comment(
+    drawing: &mut Drawing,
+    comment: &str,
+    w: &mut impl std::io::Write,
+) -> std::io::Result<()> {
+    let mut body = Vec::new();
+    save(drawing, &mut body)?;
+    let eol = if body.windows(2).any(|p| p == b"\r\n") {
+        "\r\n"
+    } else {
+        "\n"
+    };
+    for line in comment.lines() {
+        // A comment line holds no control characters.
+        let clean: String = line.chars().filter(|c| !c.is_control()).collect();
+        write!(w, "999{eol}{clean}{eol}")?;
+    }
+    w.write_all(&body)
+}
+
 /// `$EXTMIN`/`$EXTMAX`: the box of every point the drawing's entities hold (LINE, LWPOLYLINE
 /// at its elevation, POLYLINE vertices, POINT); the origin for an empty drawing.
 fn set_extents(drawing: &mut Drawing) {

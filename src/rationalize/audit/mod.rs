@@ -528,7 +528,7 @@ fn read_json(path: &Path) -> Result<Panels, ReadError> {
             })
         }
         Some(PLATES_FORMAT) => {
-            let (plates, cores) = read_plates(path)?;
+            let (plates, cores, _) = read_plates(path)?;
             let panels = plates
                 .iter()
                 .map(|p| {
