@@ -82,7 +82,9 @@ pub struct Args {
 /// Reads the plates (and speeds), nests, writes every file into the folder.
 pub fn execute(args: &Args) -> Result<nest::Nested> {
     let (plates, cores, stated) = read_plates(&args.input)?;
-    let material = stated.clone().unwrap_or_else(nest::MaterialRecord::unstated);
+    let material = stated
+        .clone()
+        .unwrap_or_else(nest::MaterialRecord::unstated);
     let stock: Vec<Stock> = match (&args.stock, args.sheet) {
         (Some(s), _) => s.clone(),
         (None, Some(size)) => vec![Stock { size, cost: 0.0 }],
