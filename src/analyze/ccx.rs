@@ -167,8 +167,9 @@ pub fn write_deck(
 /// The panels as lamina's shell analysis meshed them, as a CalculiX deck of S8R shells: each
 /// four-node element with its edges' midpoints added (flat panels: the same geometry), its
 /// member's gauge as thickness, the same supports (fixed: every node up the axis line, all six
-/// freedoms; pinned: the mid-height node's displacements) and the loads lamina applied, as
-/// nodal forces at the corner nodes. Node i + 1 is network node i's mid-height node, the point
+/// freedoms; pinned: the mid-height node's displacements) and the loads lamina applied: its
+/// nodal loads as they are, each element's share of a member's load as the element's
+/// consistent loads. Node i + 1 is network node i's mid-height node, the point
 /// sizing.json's displacements are of; the other mesh nodes follow, then the midside nodes.
 pub fn write_shell_deck(
     model: &Model,
@@ -266,11 +267,33 @@ pub fn write_shell_deck(
         writeln!(w, "*STEP")?;
         writeln!(w, "*STATIC")?;
         writeln!(w, "*CLOAD")?;
+        // The nodal loads where lamina put them; each element's share of its member's load
+        // as the S8R element's consistent loads of a uniform load (−1/12 at each corner, 1/3
+        // at each midside node: the same resultant, at the same point).
+        let mut f: std::collections::BTreeMap<usize, [f64; 6]> = Default::default();
         for &m in &order {
-            for d in 0..6 {
-                let v = loads.f[6 * m + d];
-                if v != 0.0 {
-                    writeln!(w, "{}, {}, {}", id[m], d + 1, num(v))?;
+            let v = &loads.point[6 * m..6 * m + 6];
+            if v.iter().any(|x| *x != 0.0) {
+                f.insert(id[m], v.try_into().expect("six"));
+            }
+        }
+        for (e, corners) in elements.iter().zip(&loads.corner_load) {
+            let total: DVec3 = corners.iter().copied().sum();
+            if total == DVec3::ZERO {
+                continue;
+            }
+            for (j, &node) in e.iter().enumerate() {
+                let share = if j < 4 { -1.0 / 12.0 } else { 1.0 / 3.0 };
+                let slot = f.entry(node).or_default();
+                for d in 0..3 {
+                    slot[d] += total[d] * share;
+                }
+            }
+        }
+        for (node, v) in &f {
+            for (d, x) in v.iter().enumerate() {
+                if *x != 0.0 {
+                    writeln!(w, "{node}, {}, {}", d + 1, num(*x))?;
                 }
             }
         }
