@@ -37,10 +37,7 @@ fn grid(n: usize) -> Model {
             supports.push(edge.then_some(Support::Fixed));
         }
     }
-    let section = Section {
-        depth: 60.0,
-        thickness: 3.0,
-    };
+    let section = Section::solid(60.0, 3.0);
     let mut members = Vec::with_capacity(2 * n * (n - 1));
     for i in 0..n {
         for j in 0..n {

@@ -33,13 +33,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Ok(());
     };
     let axes = read_axes(&work.join("axes.json"))?;
-    let (per_edge, list, material) =
-        lamina::analyze::sizing::read_gauges(&work.join("sizing.json"))?;
+    let g = lamina::analyze::sizing::read_gauges(&work.join("sizing.json"))?;
     let opts = plates::Options {
         sizing: Some(plates::Gauges {
-            per_edge,
-            list,
-            material,
+            per_edge: g.per_edge,
+            list: g.list,
+            material: g.material,
+            seam_groups: g.seam_groups,
         }),
         groups: 7,
         ..Default::default()

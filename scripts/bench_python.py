@@ -86,9 +86,9 @@ def main():
                                     "-o", "axes.json", "--report", "report.json"])
     rows.append(("planarize Calyx (248 nodes, L-BFGS)", py_t, cli_t))
 
-    sizing = lamina.size(solved, support="z<1", load="self-weight")
+    sizing = lamina.size(solved, support="z<1", load="self-weight", groups=7)
     subprocess.run([binary, "size", "axes.json", "-o", "sizing.json", "--support", "z<1",
-                    "--load", "self-weight"], cwd=work, capture_output=True)
+                    "--load", "self-weight", "--groups", "7"], cwd=work, capture_output=True)
     py_t, made = median_time(lambda: lamina.plates(solved, sizing=sizing, groups=7))
     py_out_t, written = median_time(lambda: lamina.plates(solved, sizing=sizing, groups=7,
                                                     out=work / "py-plates"))

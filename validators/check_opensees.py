@@ -74,6 +74,38 @@ def torsion_constant(d, t):
     return a * b**3 * (1.0 / 3.0 - 0.21 * (b / a) * (1.0 - b**4 / (12.0 * a**4)))
 
 
+def tau_modulus(d, t):
+    """Roark, Table 10.7 case 4: the torque over the largest shear stress of a rectangle."""
+    a, b = max(d, t) / 2.0, min(d, t) / 2.0
+    r = b / a
+    return 8.0 * a * b * b / (3.0 * (1 + 0.6095 * r + 0.8865 * r**2 - 1.8023 * r**3
+                                     + 0.9100 * r**4))
+
+
+def layers(e):
+    """The plates across a member: a bolted seam's two plies (sizing.json `plies`, which must
+    add up to its gauge), or the one plate."""
+    plies = e.get("plies")
+    if plies is None:
+        return [e["gauge"]]
+    if abs(sum(plies) - e["gauge"]) > 1e-9:
+        fail(f"member {e['a']}-{e['b']}: plies {plies} do not add up to its gauge {e['gauge']}")
+    return list(plies)
+
+
+def section(e):
+    """Area, I out of the plane, I in it, torsion constant, W out of the plane, torsion
+    modulus: plies side by side with no shear connection bend out of their plane and twist each
+    on its own, sharing a moment by their stiffness (the thickest most stressed)."""
+    d, t = e["depth"], e["gauge"]
+    ts = layers(e)
+    i_weak = sum(d * ti**3 / 12.0 for ti in ts)
+    j = sum(torsion_constant(d, ti) for ti in ts)
+    w_weak = i_weak / (max(ts) / 2.0)
+    w_tau = min(tau_modulus(d, ti) * j / torsion_constant(d, ti) for ti in ts)
+    return d * t, i_weak, t * d**3 / 12.0, j, w_weak, w_tau
+
+
 def read_loads(cases):
     """[(name, kind, value)] of the characteristic cases (every case but "all loads"): kind is
     self-weight (factor), wind ((kPa, unit direction)) or point ([(node, force)])."""
@@ -161,11 +193,9 @@ class Frame:
         for k, e in enumerate(self.edges):
             x, y, z, _ = self.frames[k]
             ops.geomTransf("Linear", k + 1, *map(float, z))
-            depth, t = e["depth"], e["gauge"]
-            area = depth * t
+            area, i_weak, i_strong, j, _, _ = section(e)
             ops.element("ElasticTimoshenkoBeam", k + 1, e["a"] + 1, e["b"] + 1, self.E, self.G,
-                        area, torsion_constant(depth, t), depth * t**3 / 12.0,
-                        t * depth**3 / 12.0, 5.0 / 6.0 * area, 5.0 / 6.0 * area, k + 1)
+                        area, j, i_weak, i_strong, 5.0 / 6.0 * area, 5.0 / 6.0 * area, k + 1)
             if np.any(w[k]):
                 # OpenSees takes the uniform load in the element's axes: Wy, Wz, Wx.
                 ops.eleLoad("-ele", k + 1, "-type", "-beamUniform",
@@ -206,12 +236,8 @@ def member_checks(e, mat, end, w, length):
     d, t = e["depth"], e["gauge"]
     fy, E = mat["fy"], mat["E"]
     G = E / (2.0 * (1.0 + mat["nu"]))
-    area, w_weak, w_strong = d * t, d * t * t / 6.0, t * d * d / 6.0
-    a, b = max(d, t) / 2.0, min(d, t) / 2.0
-    r = b / a
-    # Roark, Table 10.7 case 4: the largest shear stress of a rectangle in torsion.
-    tau_modulus = 8.0 * a * b * b / (3.0 * (1 + 0.6095 * r + 0.8865 * r**2 - 1.8023 * r**3
-                                            + 0.9100 * r**4))
+    area, i_weak, i_strong, it, w_weak, w_tau = section(e)
+    w_strong = t * d * d / 6.0
     f, m = np.array(end[:3]), np.array(end[3:6])
     stress, compression, strong, weak = 0.0, 0.0, [], 0.0
     for frac in STATIONS:
@@ -223,14 +249,14 @@ def member_checks(e, mat, end, w, length):
         n, vy, vz = force
         tx, my, mz = moment
         sigma = abs(n) / area + abs(my) / w_weak + abs(mz) / w_strong
-        tau = abs(tx) / tau_modulus + 1.5 * math.hypot(vy, vz) / area
+        tau = abs(tx) / w_tau + 1.5 * math.hypot(vy, vz) / area
         stress = max(stress, math.sqrt(sigma**2 + 3 * tau**2) / (fy / mat["gamma_M0"]))
         compression = max(compression, -n)
         strong.append(abs(mz))
         weak = max(weak, abs(my))
     lam1 = math.pi * math.sqrt(E / fy)
-    lam_z = length / (t / math.sqrt(12.0)) / lam1
-    lam_y = length / (d / math.sqrt(12.0)) / lam1
+    lam_z = length / math.sqrt(i_weak / area) / lam1
+    lam_y = length / math.sqrt(i_strong / area) / lam1
     n_rd = area * fy / mat["gamma_M1"]
     n_z = compression / (chi(lam_z, 0.49, 0.2) * n_rd)
     n_y = compression / (chi(lam_y, 0.49, 0.2) * n_rd)
@@ -238,8 +264,6 @@ def member_checks(e, mat, end, w, length):
     if d > t:
         c1 = 1.0 if m_max <= 0 else min(2.5, max(1.0, 12.5 * m_max / (
             2.5 * m_max + 3 * strong[1] + 4 * strong[2] + 3 * strong[3])))
-        i_weak = d * t**3 / 12.0
-        it = max(d, t) * min(d, t)**3 * (1 / 3 - 0.21 * r * (1 - r**4 / 12))
         mcr = c1 * math.pi / length * math.sqrt(E * i_weak * G * it)
         chi_lt = chi(min(math.sqrt(w_strong * fy / mcr), 1e6), 0.76, 0.2)
     else:
@@ -252,10 +276,15 @@ def member_checks(e, mat, end, w, length):
     return [stress, n_z, ltb, interaction]
 
 
-def weld_per_length(e, end):
+def welded(e, end):
+    """The plate welded at a member's end (0 at node a): a seam's ply there, else the plate."""
+    return layers(e)[end] if e.get("plies") else e["gauge"]
+
+
+def weld_per_length(e, end_forces, end):
     """Force per length on the two fillet welds at one member end (EN 1993-1-8 4.5.3.3)."""
-    h, t = e["depth"], e["gauge"]
-    nx, vy, vz, tx, my, mz = (abs(v) for v in end)
+    h, t = e["depth"], welded(e, end)
+    nx, vy, vz, tx, my, mz = (abs(v) for v in end_forces)
     polar = 2.0 * (h**3 / 12.0 + h * t * t / 4.0)
     f_t = tx * math.sqrt(0.25 * (h * h + t * t)) / polar
     along = nx / (2 * h) + 3 * mz / (h * h) + my / (t * h)
@@ -296,8 +325,8 @@ def en1993(frame, s, loads, name):
             x, y, z, length = frame.frames[k]
             local_w = np.array([w[k] @ x, w[k] @ y, w[k] @ z])
             worst[k] = np.maximum(worst[k], member_checks(e, mat, f[k], local_w, length))
-            for end, node in ((f[k][:6], e["a"]), (f[k][6:], e["b"])):
-                welds[node] = max(welds[node], weld_per_length(e, end))
+            for end, (forces, node) in enumerate(((f[k][:6], e["a"]), (f[k][6:], e["b"]))):
+                welds[node] = max(welds[node], weld_per_length(e, forces, end))
     ours = np.array([[e["checks"][n]["utilisation"] for n in
                       ("stress", "buckling", "lateral-torsional", "interaction")] for e in edges])
     diff = np.abs(ours - worst).max()
@@ -310,8 +339,8 @@ def en1993(frame, s, loads, name):
     # Welds: the throat is one factor times the thinnest plate at every node.
     thinnest = np.full(len(s["nodes"]), np.inf)
     for e in edges:
-        for v in (e["a"], e["b"]):
-            thinnest[v] = min(thinnest[v], e["gauge"])
+        for end, v in enumerate((e["a"], e["b"])):
+            thinnest[v] = min(thinnest[v], welded(e, end))
     throat = np.array([nd["throat"] for nd in s["nodes"]])
     factor = throat / thinnest
     if np.ptp(factor) > 1e-12:
@@ -350,6 +379,8 @@ def main():
     ap.add_argument("--tolerance", type=float, default=0.01)
     ap.add_argument("--checks", action="store_true",
                     help="also recompute the EN 1990 combinations and EN 1993 checks")
+    ap.add_argument("--plates", metavar="PLATES_JSON",
+                    help="the plates cut from this sizing: built as analysed")
     args = ap.parse_args()
     axes = json.load(open(args.axes))
     s = json.load(open(args.sizing))
@@ -380,6 +411,39 @@ def main():
           f"nodes, {len(frame.held)} held; largest differences: " + ", ".join(figures) + ")")
     if args.checks:
         en1993(frame, s, loads, args.sizing)
+    if args.plates:
+        built_as_sized(s, json.load(open(args.plates)), args.plates)
+
+
+def built_as_sized(s, doc, name):
+    """Every edge cut as it was analysed: a single plate of its gauge, or a seam's two plies
+    (the sizing's, one in each group) adding up to it; the steel the sizing's; and the mass."""
+    by_edge = {}
+    for p in doc["plates"]:
+        by_edge.setdefault(p["edge"], []).append(p)
+    seams = 0
+    for k, e in enumerate(s["edges"]):
+        cut = by_edge.get(k, [])
+        got = sorted(p["thickness"] for p in cut)
+        want = sorted(e["plies"]) if e.get("plies") else [e["gauge"]]
+        if len(got) != len(want) or any(abs(a - b) > 1e-9 for a, b in zip(got, want)):
+            fail(f"edge {k}: cut as {got} mm, analysed as {want} mm")
+        if e.get("plies"):
+            seams += 1
+            if len({p["group"] for p in cut}) != 2:
+                fail(f"edge {k}: a seam's plies are not one in each group")
+    if doc["material"]["grade"] != s["material"]["name"] or \
+            abs(doc["material"]["density"] - s["material"]["density"]) > 1e-12:
+        fail(f"{name}: {doc['material']} is not the sizing's {s['material']['name']}")
+    rho = s["material"]["density"] * 1e-6
+    built = sum(p["area_mm2"] * p["thickness"] for p in doc["plates"]) * rho
+    analysed = s["totals"]["mass_kg"]
+    if built > analysed * (1 + 1e-9):
+        fail(f"{name}: built {built:.3f} kg, more than the {analysed:.3f} kg analysed")
+    print(f"{name}: built as analysed ({len(s['edges'])} edges, {seams} seams as their sized "
+          f"plies; {doc['material']['grade']}; plates {built:.3f} kg against {analysed:.3f} kg "
+          f"analysed on the uncut panels: {100 * (built / analysed - 1):+.2f} %, the setbacks at "
+          f"the nodes and the bolt holes)")
 
 
 main()

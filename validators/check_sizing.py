@@ -1,6 +1,6 @@
 """Checks `lamina size` output against the axes it sized, sharing no code with lamina (numpy):
 
-- every gauge is on the sizing's gauge list, every utilisation at most 1 (unless --allow-over);
+- every gauge is on the sizing's gauge list (a seam's two plies each), every utilisation at most 1;
 - equilibrium: the reactions balance the applied loads, recomputed here from the axes file —
   self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down;
   point loads on the nodes given; wind as the pressure on each panel's area projected across
@@ -47,8 +47,10 @@ def main():
         fail(f"{len(s['edges'])} sized edges for {len(edges)} axes edges")
     gauges = set(s["gauges"])
     for k, e in enumerate(s["edges"]):
-        if e["gauge"] not in gauges:
-            fail(f"edge {k}: gauge {e['gauge']} is not on the list {sorted(gauges)}")
+        # A bolted seam (sized for plates' groups) is two plies on the list adding up to it.
+        plies = e.get("plies") or [e["gauge"]]
+        if any(t not in gauges for t in plies) or abs(sum(plies) - e["gauge"]) > 1e-9:
+            fail(f"edge {k}: gauge {e['gauge']} (plies {plies}) is not on the list {sorted(gauges)}")
         if (e["a"], e["b"]) != (edges[k]["a"], edges[k]["b"]):
             fail(f"edge {k}: nodes {e['a']}-{e['b']}, the axes say {edges[k]['a']}-{edges[k]['b']}")
     worst = max(e["utilisation"] for e in s["edges"])

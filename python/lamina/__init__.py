@@ -478,7 +478,8 @@ def plates(axes: Any, *, sizing: Any = None, out: Optional[PathLike] = None,
         listed = np.ascontiguousarray(sizing["gauge_list"], dtype="<f8").tobytes()
         import json
 
-        gauges = (per_edge, listed, json.dumps(sizing["sizing"]["material"]))
+        report = sizing["sizing"]
+        gauges = (per_edge, listed, json.dumps(report["material"]), report.get("seam_groups"))
     return _done(_lamina.plates(_axes_bytes(axes), gauges, opts,
                                 None if out is None else os.fspath(out)), "mm")
 

@@ -996,13 +996,22 @@ fn size<'py>(
     Ok(d)
 }
 
+/// A sizing as the Python side hands it over: the gauges per edge and the list (little-endian
+/// f64), the material as JSON, the assembly groups its seams were sized for.
+type SizingArg<'py> = (
+    Bound<'py, PyBytes>,
+    Bound<'py, PyBytes>,
+    String,
+    Option<usize>,
+);
+
 /// Steel plates from node axes; with `out`, the command's files written into that folder.
 #[pyfunction]
 #[pyo3(signature = (axes, sizing, options, out=None))]
 fn plates<'py>(
     py: Python<'py>,
     axes: AxesBytes<'py>,
-    sizing: Option<(Bound<'py, PyBytes>, Bound<'py, PyBytes>, String)>,
+    sizing: Option<SizingArg<'py>>,
     options: Bound<'py, PyDict>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -1010,7 +1019,7 @@ fn plates<'py>(
     let mut o = Opts::new(&options, "plates");
     let mut opts = options::plates(&mut o)?;
     o.finish()?;
-    if let Some((per_edge, list, material)) = sizing {
+    if let Some((per_edge, list, material, seam_groups)) = sizing {
         opts.sizing = Some(stage::plates::Gauges {
             per_edge: f64s(per_edge.as_bytes(), "sizing: gauges")?,
             list: f64s(list.as_bytes(), "sizing: gauge_list")?,
@@ -1018,6 +1027,7 @@ fn plates<'py>(
                 serde_json::from_str(&material)
                     .map_err(|e| error(format!("sizing: its material: {e}")))?,
             ),
+            seam_groups,
         });
     }
     let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;

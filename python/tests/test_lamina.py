@@ -313,9 +313,10 @@ def test_audit_equals_cli(tmp_path, solved):
 def steel(tmp_path_factory, solved):
     tmp = tmp_path_factory.mktemp("steel")
     cli(tmp, "planarize", CALYX, "--fix-normal", "z<1:0,0,1", "-o", "axes.json")
-    sizing = lamina.size(solved, support="z<1", load="self-weight", deflection_limit="L/500")
+    sizing = lamina.size(solved, support="z<1", load="self-weight", deflection_limit="L/500",
+                         groups=7)
     cli(tmp, "size", "axes.json", "-o", "sizing.json", "--support", "z<1", "--load",
-        "self-weight", "--deflection-limit", "L/500", ok=(0, 1))
+        "self-weight", "--deflection-limit", "L/500", "--groups", 7, ok=(0, 1))
     out = tmp / "py-plates"
     plates = lamina.plates(solved, sizing=sizing, groups=7, out=out)
     cli(tmp, "plates", "axes.json", "--sizing", "sizing.json", "--groups", 7, "-o", "plates",

@@ -23,21 +23,46 @@ pub struct Elastic {
     pub g: f64,
 }
 
-/// A solid rectangle, mm: `depth` along the member's local y, `thickness` along z.
+/// A solid rectangle, mm: `depth` along the member's local y, `thickness` along z; or, for a
+/// bolted seam, two plies face to face (`plies`, adding up to `thickness`) that bend out of
+/// their plane and twist each on its own (no shear connection between them) and act as one
+/// in their plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Section {
     pub depth: f64,
     pub thickness: f64,
+    pub plies: Option<[f64; 2]>,
 }
 
 impl Section {
+    /// A solid rectangle.
+    pub fn solid(depth: f64, thickness: f64) -> Section {
+        Section {
+            depth,
+            thickness,
+            plies: None,
+        }
+    }
+
+    /// The plates across the section: the plies, or the one plate.
+    fn layers(&self) -> Vec<f64> {
+        match self.plies {
+            Some(p) => p.to_vec(),
+            None => vec![self.thickness],
+        }
+    }
+
     pub fn area(&self) -> f64 {
         self.depth * self.thickness
     }
 
-    /// Second moment about local y (bending out of the panel plane: the weak axis), mm⁴.
+    /// Second moment about local y (bending out of the panel plane: the weak axis), mm⁴: the
+    /// plies' own, summed.
     pub fn iy(&self) -> f64 {
-        self.depth * self.thickness.powi(3) / 12.0
+        self.layers()
+            .iter()
+            .map(|t| self.depth * t.powi(3) / 12.0)
+            .sum()
     }
 
     /// Second moment about local z (bending in the panel plane: the strong axis), mm⁴.
@@ -45,30 +70,57 @@ impl Section {
         self.thickness * self.depth.powi(3) / 12.0
     }
 
-    fn halves(&self) -> (f64, f64) {
-        let (a, b) = (0.5 * self.depth, 0.5 * self.thickness);
-        (a.max(b), a.min(b))
+    /// Elastic modulus about local y, mm³: the plies share a moment by their stiffness, so
+    /// the thickest sees the largest stress.
+    pub fn w_weak(&self) -> f64 {
+        let thickest = self.layers().into_iter().fold(0.0, f64::max);
+        2.0 * self.iy() / thickest
     }
 
-    /// St Venant torsion constant of the rectangle (Roark, Table 10.7 case 4), mm⁴.
+    /// Elastic modulus about local z, mm³.
+    pub fn w_strong(&self) -> f64 {
+        self.thickness * self.depth * self.depth / 6.0
+    }
+
+    /// The thickness of one plate as stiff in bending out of its plane: (Σ tᵢ³)^(1/3).
+    pub fn bending_thickness(&self) -> f64 {
+        self.layers().iter().map(|t| t.powi(3)).sum::<f64>().cbrt()
+    }
+
+    /// St Venant torsion constant (Roark, Table 10.7 case 4), the plies' summed, mm⁴.
     pub fn torsion_constant(&self) -> f64 {
-        let (a, b) = self.halves();
-        let r = b / a;
-        a * b.powi(3) * (16.0 / 3.0 - 3.36 * r * (1.0 - r.powi(4) / 12.0))
+        self.layers()
+            .iter()
+            .map(|&t| rect_torsion(self.depth, t).0)
+            .sum()
     }
 
-    /// Torsional section modulus: the largest shear stress is T over this (Roark), mm³.
+    /// Torsional section modulus: the largest shear stress is T over this (Roark), mm³. Plies
+    /// share a torque by their torsion constants.
     pub fn torsion_modulus(&self) -> f64 {
-        let (a, b) = self.halves();
-        let r = b / a;
-        let k = 1.0 + 0.6095 * r + 0.8865 * r * r - 1.8023 * r.powi(3) + 0.9100 * r.powi(4);
-        8.0 * a * b * b / (3.0 * k)
+        let j = self.torsion_constant();
+        self.layers()
+            .iter()
+            .map(|&t| {
+                let (ji, wi) = rect_torsion(self.depth, t);
+                wi * j / ji
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Shear area of a rectangle, either direction.
     pub fn shear_area(&self) -> f64 {
         5.0 / 6.0 * self.area()
     }
+}
+
+/// A rectangle's torsion constant and torsional modulus (Roark, Table 10.7 case 4), mm⁴, mm³.
+fn rect_torsion(depth: f64, thickness: f64) -> (f64, f64) {
+    let (a, b) = (0.5 * depth.max(thickness), 0.5 * depth.min(thickness));
+    let r = b / a;
+    let j = a * b.powi(3) * (16.0 / 3.0 - 3.36 * r * (1.0 - r.powi(4) / 12.0));
+    let k = 1.0 + 0.6095 * r + 0.8865 * r * r - 1.8023 * r.powi(3) + 0.9100 * r.powi(4);
+    (j, 8.0 * a * b * b / (3.0 * k))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -773,7 +825,7 @@ mod tests {
                 a: i,
                 b: i + 1,
                 y: DVec3::Y,
-                section: Section { depth, thickness },
+                section: Section::solid(depth, thickness),
             })
             .collect();
         let mut supports = vec![None; parts + 1];
@@ -798,10 +850,7 @@ mod tests {
             member: vec![],
         };
         let r = &solve(&model, &[case])?[0];
-        let s = Section {
-            depth: d,
-            thickness: t,
-        };
+        let s = Section::solid(d, t);
         let bend = p * l.powi(3) / (3.0 * STEEL.e * s.iz());
         let shear = p * l / (STEEL.g * s.shear_area());
         let tip = r.displacements[1];
@@ -827,10 +876,7 @@ mod tests {
     #[test]
     fn uniform_load_gives_wl4_over_8ei_at_the_tip_in_any_subdivision() -> Result<(), FrameError> {
         let (d, t, l, w) = (60.0, 8.0, 1000.0, 0.5);
-        let s = Section {
-            depth: d,
-            thickness: t,
-        };
+        let s = Section::solid(d, t);
         for parts in [1, 3, 10] {
             let model = cantilever(d, t, l, parts);
             let case = LoadCase {
@@ -865,10 +911,7 @@ mod tests {
             member: vec![],
         };
         let r = &solve(&model, &[case])?[0];
-        let s = Section {
-            depth: d,
-            thickness: t,
-        };
+        let s = Section::solid(d, t);
         let want = torque * l / (STEEL.g * s.torsion_constant());
         assert!((r.displacements[2][3] - want).abs() < 1e-9 * want);
         // Roark's J for a 10:1 rectangle: β = 0.312 of d t³ (tabulated 0.312 at 10).
@@ -882,14 +925,8 @@ mod tests {
     #[test]
     fn portal_frame_sways_as_slope_deflection_says() -> Result<(), FrameError> {
         let (h, l, force) = (3000.0, 4000.0, 500.0);
-        let col = Section {
-            depth: 60.0,
-            thickness: 40.0,
-        };
-        let beam = Section {
-            depth: 80.0,
-            thickness: 40.0,
-        };
+        let col = Section::solid(60.0, 40.0);
+        let beam = Section::solid(80.0, 40.0);
         let model = Model {
             nodes: vec![
                 DVec3::ZERO,
@@ -956,10 +993,7 @@ mod tests {
     #[test]
     fn bent_cantilever_in_space_deflects_by_bending_torsion_and_shear() -> Result<(), FrameError> {
         let (a, b, p) = (800.0, 500.0, 200.0);
-        let s = Section {
-            depth: 20.0,
-            thickness: 20.0,
-        };
+        let s = Section::solid(20.0, 20.0);
         let model = Model {
             nodes: vec![DVec3::ZERO, DVec3::new(a, 0.0, 0.0), DVec3::new(a, b, 0.0)],
             members: vec![

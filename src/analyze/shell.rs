@@ -39,7 +39,11 @@ pub const MAX_ELEMENTS: usize = 100_000;
 pub struct Plate {
     pub e: f64,
     pub nu: f64,
+    /// In its plane and in shear, mm.
     pub thickness: f64,
+    /// The thickness whose t³/12 is its bending stiffness: the thickness, or for a seam's two
+    /// plies bending each on its own (Σ tᵢ³)^(1/3), mm.
+    pub bending: f64,
 }
 
 /// The panels as a shell mesh.
@@ -201,7 +205,7 @@ pub fn local_stiffness(xy: &[[f64; 2]; 4], p: Plate) -> Stiffness {
     let t = p.thickness;
     let g = p.e / (2.0 * (1.0 + p.nu));
     let dm = plane_stress(p.e, p.nu, t);
-    let db = plane_stress(p.e, p.nu, t * t * t / 12.0);
+    let db = plane_stress(p.e, p.nu, p.bending.powi(3) / 12.0);
     let ds = Matrix2::from_diagonal_element(5.0 / 6.0 * g * t);
     // Membrane with incompatible modes: compatible (c) and bubble (i) parts, condensed.
     let (_, dxi0, deta0) = shape(0.0, 0.0);
@@ -515,6 +519,7 @@ pub fn solve(
                     e: model.elastic.e,
                     nu: poisson,
                     thickness: model.members[k].section.thickness,
+                    bending: model.members[k].section.bending_thickness(),
                 },
             )
         })
@@ -721,6 +726,7 @@ mod tests {
         e: 210_000.0,
         nu: 0.3,
         thickness: 4.0,
+        bending: 4.0,
     };
 
     fn times(k: &Stiffness, u: &[f64; 24]) -> [f64; 24] {
@@ -846,10 +852,7 @@ mod tests {
                 a: 0,
                 b: 1,
                 y: DVec3::Z,
-                section: Section {
-                    depth: 100.0,
-                    thickness: 4.0,
-                },
+                section: Section::solid(100.0, 4.0),
             }],
             supports: vec![Some(Support::Fixed), None],
             elastic: Elastic {

@@ -47,6 +47,7 @@ use super::shell;
 use crate::rationalize::axes::Axes;
 use crate::rationalize::groups::{partition, GroupError};
 use crate::rationalize::planarize::Selector;
+use crate::rationalize::plates::seam_gauges;
 
 pub use super::frame::Support;
 
@@ -223,6 +224,9 @@ pub struct SizingOptions {
     pub max_rounds: usize,
     /// Analyse the panels as flat shells, this many elements up each (even), not as beams.
     pub shells: Option<usize>,
+    /// The assembly groups `plates` will cut (`plates --groups K`): a member between two
+    /// groups is a bolted seam of two plies, sized as such from the sums of two gauges.
+    pub seam_groups: Option<usize>,
 }
 
 #[derive(Debug, Error)]
@@ -479,10 +483,7 @@ pub fn build(
             a,
             b,
             y,
-            section: Section {
-                depth,
-                thickness: gauges[k],
-            },
+            section: Section::solid(depth, gauges[k]),
         });
     }
     let mut held = vec![None; nodes.len()];
@@ -667,11 +668,7 @@ pub fn member_check(
     let (x, y, z, l) = frame::local_frame(model, m);
     let w = DVec3::new(x.dot(w_global), y.dot(w_global), z.dot(w_global));
     let s = section;
-    let (a, wy, wz) = (
-        s.area(),
-        s.depth * s.thickness * s.thickness / 6.0,
-        s.thickness * s.depth * s.depth / 6.0,
-    );
+    let (a, wy, wz) = (s.area(), s.w_weak(), s.w_strong());
     let (fy, e) = (material.fy, material.e);
     let fyd = fy / material.gamma_m0;
     let mut stress = 0.0f64;
@@ -690,8 +687,9 @@ pub fn member_check(
     }
     // Flexural buckling about each axis as a pin-ended strut, L_cr = L, curve c (α = 0.49).
     let lambda1 = std::f64::consts::PI * (e / fy).sqrt();
-    let slenderness = |depth_across: f64| l / (depth_across / 12f64.sqrt()) / lambda1;
-    let (lambda_z, lambda_y) = (slenderness(s.thickness), slenderness(s.depth));
+    // Radii of gyration: out of the plane (a seam's plies each on its own), and in it.
+    let slenderness = |i: f64| l / (i / a).sqrt() / lambda1;
+    let (lambda_z, lambda_y) = (slenderness(s.iy()), slenderness(s.iz()));
     let (chi_z, chi_y) = (chi(lambda_z, 0.49, 0.2), chi(lambda_y, 0.49, 0.2));
     let n_rd = a * fy / material.gamma_m1;
     let n_z = compression / (chi_z * n_rd);
@@ -736,8 +734,8 @@ fn weld_checks(
     let n = model.nodes.len();
     let mut thinnest = vec![f64::INFINITY; n];
     for m in &model.members {
-        for v in [m.a, m.b] {
-            thinnest[v] = thinnest[v].min(m.section.thickness);
+        for (e, v) in [m.a, m.b].into_iter().enumerate() {
+            thinnest[v] = thinnest[v].min(welded(&m.section, e));
         }
     }
     let throats: Vec<f64> = thinnest
@@ -756,8 +754,8 @@ fn weld_checks(
         let r = &results[c];
         for (k, m) in model.members.iter().enumerate() {
             let s = m.section;
-            let (h, t) = (s.depth, s.thickness);
             for (e, node) in [m.a, m.b].into_iter().enumerate() {
+                let (h, t) = (s.depth, welded(&s, e));
                 let f = &r.end_forces[k][e * 6..e * 6 + 6];
                 let (nx, vy, vz, tx, my, mz) = (
                     f[0].abs(),
@@ -893,9 +891,63 @@ fn first_combination(loads: usize) -> usize {
     }
 }
 
-/// Analyses with the given gauges and checks every member in every ultimate combination.
-fn analyse(axes: &Axes, gauges: &[f64], opts: &SizingOptions) -> Result<Analysis, SizingError> {
-    let model = build(axes, gauges, &opts.supports, &opts.material)?;
+/// One choice of a member's plate: a gauge, or a seam's stack and its two plies (thinner
+/// first: the ply at the member's first node).
+pub type Choice = (f64, Option<[f64; 2]>);
+
+/// Every thickness two gauges add up to, thinnest first, each with the pair `plates` cuts it
+/// from (the most even).
+pub fn stacks(gauges: &[f64]) -> Vec<Choice> {
+    let mut sums: Vec<f64> = gauges
+        .iter()
+        .enumerate()
+        .flat_map(|(i, a)| gauges[i..].iter().map(move |b| a + b))
+        .collect();
+    sums.sort_by(f64::total_cmp);
+    sums.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    sums.into_iter()
+        .filter_map(|s| seam_gauges(s, gauges).map(|(a, b)| (s, Some([a, b]))))
+        .collect()
+}
+
+/// What each member may be: the gauges, or for a seam between the assembly groups of
+/// `seam_groups`, the stacks of two gauges.
+pub fn choices(axes: &Axes, opts: &SizingOptions) -> Result<Vec<Vec<Choice>>, SizingError> {
+    let single: Vec<Choice> = opts.gauges.iter().map(|&g| (g, None)).collect();
+    let Some(k) = opts.seam_groups else {
+        return Ok(vec![single; axes.edges.len()]);
+    };
+    let group = partition(&axes.positions, &axes.edges, k)?;
+    let stacked = stacks(&opts.gauges);
+    Ok(axes
+        .edges
+        .iter()
+        .map(|&[a, b]| {
+            if group[a as usize] != group[b as usize] {
+                stacked.clone()
+            } else {
+                single.clone()
+            }
+        })
+        .collect())
+}
+
+/// The plate welded at a member's end `e` (0 at its first node): a seam's ply there.
+fn welded(section: &Section, e: usize) -> f64 {
+    section.plies.map_or(section.thickness, |p| p[e])
+}
+
+/// Analyses with the given sections and checks every member in every ultimate combination.
+fn analyse(
+    axes: &Axes,
+    sections: &[Choice],
+    opts: &SizingOptions,
+) -> Result<Analysis, SizingError> {
+    let gauges: Vec<f64> = sections.iter().map(|c| c.0).collect();
+    let mut model = build(axes, &gauges, &opts.supports, &opts.material)?;
+    for (m, c) in model.members.iter_mut().zip(sections) {
+        m.section.plies = c.1;
+    }
     let cases = cases(axes, &model, opts)?;
     let results = solve(axes, &model, &cases, opts)?;
     let uls = uls_cases(opts);
@@ -978,11 +1030,12 @@ fn utilisation_with(
     results: &[CaseResult],
     w: &[Vec<DVec3>],
     uls: &[usize],
-    gauge: f64,
+    choice: Choice,
     material: &Material,
 ) -> f64 {
     let section = Section {
-        thickness: gauge,
+        thickness: choice.0,
+        plies: choice.1,
         ..model.members[k].section
     };
     uls.iter()
@@ -1008,26 +1061,28 @@ fn weld_levels(
     model: &Model,
     welds: &[Option<Check>],
     throats: &[f64],
+    choices: &[Vec<Choice>],
     opts: &SizingOptions,
 ) -> Vec<usize> {
-    let g = &opts.gauges;
-    let top = g.len() - 1;
     model
         .members
         .iter()
-        .map(|m| {
+        .zip(choices)
+        .map(|(m, list)| {
             [m.a, m.b]
                 .into_iter()
-                .filter_map(|v| {
+                .enumerate()
+                .filter_map(|(e, v)| {
                     let w = welds[v].as_ref()?;
                     if w.utilisation <= 1.0 {
                         return None;
                     }
                     let need = throats[v] / opts.throat_factor * w.utilisation;
+                    let at_end = |c: &Choice| c.1.map_or(c.0, |p| p[e]);
                     Some(
-                        g.iter()
-                            .position(|&t| t >= need * (1.0 - 1e-12))
-                            .unwrap_or(top),
+                        list.iter()
+                            .position(|c| at_end(c) >= need * (1.0 - 1e-12))
+                            .unwrap_or(list.len() - 1),
                     )
                 })
                 .max()
@@ -1042,11 +1097,18 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         return Err(SizingError::NoLoad);
     }
     let g = &opts.gauges;
-    let top = g.len() - 1;
+    let choices = choices(axes, opts)?;
+    let tops: Vec<usize> = choices.iter().map(|c| c.len() - 1).collect();
     let uls = uls_cases(opts);
     let mut level = vec![0usize; axes.edges.len()];
-    let gauges_of = |level: &[usize]| level.iter().map(|&i| g[i]).collect::<Vec<f64>>();
-    let mut now = analyse(axes, &gauges_of(&level), opts)?;
+    let sections_of = |level: &[usize]| {
+        level
+            .iter()
+            .zip(&choices)
+            .map(|(&i, c)| c[i])
+            .collect::<Vec<Choice>>()
+    };
+    let mut now = analyse(axes, &sections_of(&level), opts)?;
     let group = groups(axes, &now.model, opts.group_by)?;
     let n_groups = group.iter().copied().max().map_or(0, |m| m + 1);
     let mut rounds = 1;
@@ -1061,21 +1123,30 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             .iter()
             .map(|c| c.member_loads(now.model.members.len()))
             .collect();
-        for (f, n) in
-            weld_floor
-                .iter_mut()
-                .zip(weld_levels(&now.model, &now.welds, &now.throats, opts))
-        {
+        for (f, n) in weld_floor.iter_mut().zip(weld_levels(
+            &now.model,
+            &now.welds,
+            &now.throats,
+            &choices,
+            opts,
+        )) {
             *f = (*f).max(n);
         }
         let mut want = vec![0usize; n_groups];
         for (k, &gk) in group.iter().enumerate() {
-            let need = (0..=top)
+            let need = (0..=tops[k])
                 .find(|&i| {
-                    utilisation_with(&now.model, k, &now.results, &w, &uls, g[i], &opts.material)
-                        <= 1.0
+                    utilisation_with(
+                        &now.model,
+                        k,
+                        &now.results,
+                        &w,
+                        &uls,
+                        choices[k][i],
+                        &opts.material,
+                    ) <= 1.0
                 })
-                .unwrap_or(top);
+                .unwrap_or(tops[k]);
             want[gk] = want[gk].max(need).max(weld_floor[k]);
         }
         let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
@@ -1084,7 +1155,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             break;
         }
         level = next;
-        now = analyse(axes, &gauges_of(&level), opts)?;
+        now = analyse(axes, &sections_of(&level), opts)?;
         rounds += 1;
     }
     // Deflection: raise the groups that stiffen the worst displacement most per added mass.
@@ -1112,7 +1183,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
                 per_group[group[k]] += s;
             }
             let mut order: Vec<usize> = (0..n_groups)
-                .filter(|&gk| per_group[gk] > 0.0 && group_level(&group, &level, gk) < top)
+                .filter(|&gk| per_group[gk] > 0.0 && has_room(&group, &level, &tops, gk))
                 .collect();
             if order.is_empty() {
                 break;
@@ -1122,19 +1193,19 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             for &gk in &order[..take] {
                 for (k, lv) in level.iter_mut().enumerate() {
                     if group[k] == gk {
-                        *lv = (*lv + 1).min(top);
+                        *lv = (*lv + 1).min(tops[k]);
                     }
                 }
             }
-            now = analyse(axes, &gauges_of(&level), opts)?;
+            now = analyse(axes, &sections_of(&level), opts)?;
             deflection_rounds += 1;
             // A raise adds weight: keep the stresses within the gauges too.
             for (k, c) in now.checks.iter().enumerate() {
-                if c.utilisation > 1.0 && level[k] < top {
+                if c.utilisation > 1.0 && level[k] < tops[k] {
                     let gk = group[k];
                     for (j, lv) in level.iter_mut().enumerate() {
                         if group[j] == gk {
-                            *lv = (*lv + 1).min(top);
+                            *lv = (*lv + 1).min(tops[j]);
                         }
                     }
                 }
@@ -1166,8 +1237,8 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     // raising only.
     let mut holding_rounds = 0;
     loop {
-        now = analyse(axes, &gauges_of(&level), opts)?;
-        let for_welds = weld_levels(&now.model, &now.welds, &now.throats, opts);
+        now = analyse(axes, &sections_of(&level), opts)?;
+        let for_welds = weld_levels(&now.model, &now.welds, &now.throats, &choices, opts);
         let mut want = vec![0usize; n_groups];
         for (k, &gk) in group.iter().enumerate() {
             let member = if now.checks[k].utilisation > 1.0 {
@@ -1175,7 +1246,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
             } else {
                 level[k]
             };
-            want[gk] = want[gk].max(member.max(for_welds[k]).min(top));
+            want[gk] = want[gk].max(member.max(for_welds[k]).min(tops[k]));
         }
         let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
         if next == level || holding_rounds >= opts.max_rounds {
@@ -1201,7 +1272,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         .filter(|(_, w)| w.utilisation > 1.0)
         .max_by(|a, b| a.1.utilisation.total_cmp(&b.1.utilisation))
     {
-        let thickest = g[top];
+        let thickest = g[g.len() - 1];
         let thinnest_here = throats[node] / opts.throat_factor;
         if thinnest_here >= thickest {
             return Err(SizingError::WeldsExhausted {
@@ -1222,7 +1293,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         .sum();
     let combinations = combinations(&opts.loads);
     Ok(Sizing {
-        gauges: gauges_of(&level),
+        gauges: sections_of(&level).iter().map(|c| c.0).collect(),
         model,
         cases,
         results,
@@ -1242,14 +1313,9 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     })
 }
 
-fn group_level(group: &[usize], level: &[usize], gk: usize) -> usize {
-    group
-        .iter()
-        .zip(level)
-        .filter(|(g, _)| **g == gk)
-        .map(|(_, l)| *l)
-        .min()
-        .unwrap_or(0)
+/// Whether a member of group `gk` can still go up its list.
+fn has_room(group: &[usize], level: &[usize], tops: &[usize], gk: usize) -> bool {
+    (0..group.len()).any(|k| group[k] == gk && level[k] < tops[k])
 }
 
 fn limit_cases(combinations: &[Combination], first: usize, limit: Limit) -> Vec<usize> {
@@ -1350,6 +1416,7 @@ struct GaugeFile {
     gauges: Vec<f64>,
     edges: Vec<GaugeEdge>,
     material: Option<Material>,
+    seam_groups: Option<usize>,
 }
 
 #[derive(serde::Deserialize)]
@@ -1357,9 +1424,18 @@ struct GaugeEdge {
     gauge: f64,
 }
 
-/// A sizing file's gauge per edge, its gauge list and its steel (None in files from before it
-/// was written).
-pub type SizedGauges = (Vec<f64>, Vec<f64>, Option<Material>);
+/// A sizing file's gauges and steel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SizedGauges {
+    /// The gauge of each edge (a seam's stack of two plies), mm.
+    pub per_edge: Vec<f64>,
+    /// The list they were chosen from, mm.
+    pub list: Vec<f64>,
+    /// The steel (None in files from before it was written).
+    pub material: Option<Material>,
+    /// The assembly groups its seams were sized for (None: no seams).
+    pub seam_groups: Option<usize>,
+}
 
 /// A sizing file's gauges and steel, for `plates --sizing`.
 pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::ReadError> {
@@ -1395,11 +1471,12 @@ pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::
             ));
         }
     }
-    Ok((
-        file.edges.iter().map(|e| e.gauge).collect(),
-        file.gauges,
-        file.material,
-    ))
+    Ok(SizedGauges {
+        per_edge: file.edges.iter().map(|e| e.gauge).collect(),
+        list: file.gauges,
+        material: file.material,
+        seam_groups: file.seam_groups,
+    })
 }
 
 #[derive(serde::Deserialize)]
@@ -1476,6 +1553,7 @@ mod tests {
             throat_factor: throat,
             max_rounds: 20,
             shells: None,
+            seam_groups: None,
         }
     }
 
@@ -1592,5 +1670,62 @@ mod tests {
             matches!(one, Err(SizingError::WeldsExhausted { .. })),
             "{one:?}"
         );
+    }
+
+    #[test]
+    fn seams_choose_from_stacks_of_two_gauges_and_bend_as_two_plies() {
+        let got = stacks(&[1.5, 2.0, 3.0]);
+        let want = [
+            (3.0, [1.5, 1.5]),
+            (3.5, [1.5, 2.0]),
+            (4.0, [2.0, 2.0]),
+            (4.5, [1.5, 3.0]),
+            (5.0, [2.0, 3.0]),
+            (6.0, [3.0, 3.0]),
+        ];
+        assert_eq!(got.len(), want.len());
+        for ((s, p), (ws, wp)) in got.iter().zip(want) {
+            assert!((s - ws).abs() < 1e-12);
+            assert_eq!(p.expect("plies"), wp);
+        }
+        // Two 2 mm plies: in-plane as a 4 mm plate, out of it as two 2 mm ones (a quarter).
+        let seam = Section {
+            depth: 100.0,
+            thickness: 4.0,
+            plies: Some([2.0, 2.0]),
+        };
+        let solid = Section::solid(100.0, 4.0);
+        assert!((seam.iz() - solid.iz()).abs() < 1e-9);
+        assert!((seam.iy() / solid.iy() - 0.25).abs() < 1e-12);
+        assert!((seam.w_weak() / solid.w_weak() - 0.5).abs() < 1e-12);
+        assert!((seam.bending_thickness() - 16f64.cbrt()).abs() < 1e-12);
+        assert!(seam.torsion_constant() < 0.3 * solid.torsion_constant());
+    }
+
+    #[test]
+    fn a_member_between_groups_is_sized_as_two_plies() {
+        // Two plates in a row, the middle node's group not the ends': with seam_groups the
+        // members are seams, their gauges stacks of two on the list.
+        let mut axes = cantilever(600.0);
+        axes.positions.push(DVec3::new(1200.0, 0.0, 0.0));
+        axes.axes.push(DVec3::Z);
+        axes.heights.push(200.0);
+        axes.reference.push(DVec3::Z);
+        axes.edges.push([1, 2]);
+        axes.fixed_normals.push(None);
+        axes.edge_radii.push(0.0);
+        let mut o = options(&["point:node=2:0,0,-300"], &[1.5, 2.0, 3.0, 4.0, 5.0], 0.7);
+        o.seam_groups = Some(2);
+        let sized = size(&axes, &o).unwrap();
+        let seams: Vec<_> = sized
+            .model
+            .members
+            .iter()
+            .filter_map(|m| m.section.plies.map(|p| (m.section.thickness, p)))
+            .collect();
+        assert_eq!(seams.len(), 1, "one member between the two groups");
+        let (t, [a, b]) = seams[0];
+        assert!((a + b - t).abs() < 1e-12 && o.gauges.contains(&a) && o.gauges.contains(&b));
+        assert!(sized.max_utilisation() <= 1.0);
     }
 }

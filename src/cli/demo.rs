@@ -380,7 +380,7 @@ fn steel(out: &Path) -> Result<Entry> {
         load: vec!["self-weight".into()],
         deflection_limit: Some(DeflectionLimit::Ratio(500.0)),
         group_by: GroupBy::Member,
-        groups: None,
+        groups: Some(7),
         smooth: true,
         throat: 0.7,
         max_rounds: 20,
@@ -462,7 +462,7 @@ fn steel(out: &Path) -> Result<Entry> {
     }
     let _ = write!(
         facts,
-        "{} plates in {} groups, {} seams as two plies from the gauge list bolted face to face          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
+        "{} plates in {} groups, {} seams as two plies from the gauge list bolted face to face, as sized          ({} bolts), {mass:.1} kg of stainless steel. Welds: {} nodes, root gaps 1 ± 0.5 mm at {},          {} with a node core (tube 60.3 × 4); smallest dihedral angle {:.1}°. Nested on {} sheets,          one family per thickness, rotations exactly 0/90/180/270: ",
         built.plates,
         built.groups,
         built.seams,
@@ -514,7 +514,7 @@ fn steel(out: &Path) -> Result<Entry> {
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
     Ok(Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
-        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth`: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
+        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7`, seams as their two plies: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

@@ -88,11 +88,12 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
     let axes = read_axes(&args.input)?;
     let sizing = match &args.sizing {
         Some(p) => {
-            let (per_edge, list, material) = lamina::analyze::sizing::read_gauges(p)?;
+            let g = lamina::analyze::sizing::read_gauges(p)?;
             Some(plates::Gauges {
-                per_edge,
-                list,
-                material,
+                per_edge: g.per_edge,
+                list: g.list,
+                material: g.material,
+                seam_groups: g.seam_groups,
             })
         }
         None => None,

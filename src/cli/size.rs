@@ -50,7 +50,9 @@ pub struct Args {
     /// makes; the seam members between two groups together)
     #[arg(long, default_value = "member", value_parser = size::group_by)]
     pub group_by: GroupBy,
-    /// Assembly groups for `--group-by assembly`, as `plates --groups`
+    /// The assembly groups `plates --groups K` will cut: members between two groups are
+    /// bolted seams, sized as the two plies they are cut from (gauges that are sums of two on
+    /// the list, each ply's own bending and torsion); also the groups of `--group-by assembly`
     #[arg(long)]
     pub groups: Option<usize>,
     /// Neighbouring members within one gauge step (thinner ones raised)

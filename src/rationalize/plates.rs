@@ -35,7 +35,8 @@ pub enum Thickness {
     /// The gauge at the edge radius's place between 0 and the largest radius (thicker veins,
     /// thicker plates); edges without a radius get the thinnest gauge.
     FromRadius,
-    /// One per edge, in edge order (from a sizing), mm.
+    /// One per edge, in edge order (from a sizing), mm: on the gauge list, or for a seam
+    /// between groups the sum of two gauges (its plies, as the sizing analysed them).
     PerEdge(Vec<f64>),
 }
 
@@ -508,7 +509,10 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
         }
     }
     if let Thickness::PerEdge(list) = &opts.thickness {
-        if let Some(t) = list.iter().find(|t| !on_list(**t)) {
+        // A seam's stack may be two gauges; `plates` checks single plates are on the list.
+        let stack =
+            |t: f64| seam_gauges(t, &opts.gauges).is_some_and(|(a, b)| (a + b - t).abs() < 1e-9);
+        if let Some(t) = list.iter().find(|t| !on_list(**t) && !stack(**t)) {
             return Err(off(SIZING_GAUGE, *t));
         }
     }
@@ -670,6 +674,19 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
     let n = axes.positions.len();
     let t = thicknesses(axes, opts)?;
     let group = super::groups::partition(&axes.positions, &axes.edges, opts.groups)?;
+    // A sized stack of two gauges is a seam's; a single plate is on the list.
+    if let Thickness::PerEdge(_) = opts.thickness {
+        for (k, &[a, b]) in axes.edges.iter().enumerate() {
+            let single = group[a as usize] == group[b as usize];
+            if single && !opts.gauges.iter().any(|g| (g - t[k]).abs() < 1e-9) {
+                return Err(PlateError::OffGauge {
+                    what: SIZING_GAUGE,
+                    t: t[k],
+                    gauges: opts.gauges.clone(),
+                });
+            }
+        }
+    }
     // A seam's two plies, and the stack every plate's cut allows for.
     let plies: Vec<Option<(f64, f64)>> = axes
         .edges

@@ -101,6 +101,8 @@ pub struct Gauges {
     pub list: Vec<f64>,
     /// The steel the sizing was made for.
     pub material: Option<Material>,
+    /// The assembly groups its seams were sized for, as stacks of two plies (None: no seams).
+    pub seam_groups: Option<usize>,
 }
 
 impl Gauges {
@@ -110,6 +112,7 @@ impl Gauges {
             per_edge: report.edges.iter().map(|e| e.gauge).collect(),
             list: report.gauges.clone(),
             material: Some(report.material.clone()),
+            seam_groups: report.seam_groups,
         }
     }
 }
@@ -231,6 +234,20 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
             return Err(OptionError::new(
                 "min_weld_angle",
                 format!("must be from 0 to 180 degrees, got {}", crate::text::num(a)),
+            )
+            .into());
+        }
+    }
+    if let Some(g) = &opts.sizing {
+        let sized_for = g.seam_groups.unwrap_or(1);
+        if sized_for != opts.groups {
+            return Err(OptionError::new(
+                "groups",
+                format!(
+                    "is {} but the sizing was made for {sized_for} group(s): size with groups= {} \
+                     so that each seam is analysed as the two plies it is cut from",
+                    opts.groups, opts.groups
+                ),
             )
             .into());
         }

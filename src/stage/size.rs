@@ -47,7 +47,9 @@ pub struct Options {
     pub deflection_limit: Option<DeflectionLimit>,
     /// Members sized together. Default: each member.
     pub group_by: GroupBy,
-    /// Assembly groups for `GroupBy::Assembly`, as `plates`' groups.
+    /// The assembly groups `plates` will cut (its groups=): members between two groups are
+    /// bolted seams, sized as their two plies from the sums of two gauges; and the groups of
+    /// `GroupBy::Assembly`. Default: none (one group, no seams).
     pub groups: Option<usize>,
     /// Neighbouring members within one gauge step. Default false.
     pub smooth: bool,
@@ -205,13 +207,18 @@ impl Options {
                         "assembly needs groups= K (at least 1), the count plates' groups= is given",
                     ))
                 }
-                (by, None) => by,
-                (_, Some(_)) => {
+                (by, _) => by,
+            },
+            seam_groups: match (self.groups, self.group_by) {
+                (Some(0), _) => {
                     return Err(OptionError::new(
                         "groups",
-                        "applies only with group_by= assembly",
+                        "must be at least 1 (the assembly groups plates will cut)",
                     ))
                 }
+                (Some(k), _) => Some(k),
+                (None, GroupBy::Assembly(k)) if k >= 1 => Some(k),
+                (None, _) => None,
             },
             smooth: self.smooth,
             throat_factor: self.throat,
@@ -281,6 +288,8 @@ pub struct Report {
     pub reactions: Vec<Reaction>,
     /// Rounds of analysis and gauge choice.
     pub rounds: usize,
+    /// The assembly groups the seams were sized for (`plates --groups`), when given.
+    pub seam_groups: Option<usize>,
     /// Whether neighbouring members keep within a gauge step.
     pub smooth: bool,
     /// Where the input came from.
@@ -348,6 +357,9 @@ pub struct EdgeRow {
     pub length: f64,
     /// The load case governing it.
     pub load: String,
+    /// A bolted seam's two plies, mm (the first welded at node a, the second at node b;
+    /// adding up to the gauge); None for a single plate.
+    pub plies: Option<[f64; 2]>,
     /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
@@ -468,6 +480,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                 gauge: s.gauges[k],
                 length: l,
                 load: s.cases[c.case].name.clone(),
+                plies: m.section.plies,
                 utilisation: c.utilisation,
             }
         })
@@ -552,6 +565,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
         nodes,
         reactions,
         rounds: s.rounds,
+        seam_groups: sizing.seam_groups,
         smooth: sizing.smooth,
         source: opts.name.clone(),
         supports: sizing

@@ -83,6 +83,8 @@ fn plates_with_welds_sizing_and_axes_and_their_cut_sheets() -> TestResult {
         "z<1",
         "--load",
         "self-weight",
+        "--groups",
+        "4",
     ]);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
     let plates = d.join("plates");
