@@ -5,8 +5,9 @@ code with lamina:
 - every bolted pair: the same number of holes, each hole's axis (its centre along the plate
   normal, in 3D) the same line in both plies within 0.01 mm; the hole diameter is the normal
   clearance hole of the bolt size (EN 1090-2 Table 11, ISO 273 below M12); every hole centre
-  at least e1 = e2 = 1.2 d0 from every edge of the plate, neighbouring holes at least
-  p1 = 2.2 d0 apart (EN 1993-1-8 Table 3.3); the part DXF has the holes on CUT_INNER;
+  at least e1 = e2 = 1.2 d0 from every edge of the plate, at least two bolts a seam,
+  neighbouring holes at least p1 = 2.2 d0 and at most min(14 t, 200 mm) apart for the thinner
+  ply t (EN 1993-1-8 Table 3.3); the part DXF has the holes on CUT_INNER;
 - at every node (positions and axes from axes.json): the plates (a bolted seam as its two
   plies together) projected along the node axis; side by side around the axis, every pair's
   root gap (shapely distance of the projections) is within the weld gap ± tolerance, unless
@@ -95,6 +96,9 @@ def main():
             if np.linalg.norm(off) > 0.01:
                 fail(problems, f"{p['id']}/{other}: hole axes {np.linalg.norm(off):.4f} mm apart")
         outline = Polygon(p["outline"])
+        if len(p["holes"]) < 2:
+            fail(problems, f"{p['id']}: {len(p['holes'])} bolt(s): the plies can turn about one")
+        largest = min(14 * min(p["thickness"], q["thickness"]), 200.0)
         for k, h in enumerate(p["holes"]):
             holes_checked += 1
             pt = Point(h)
@@ -105,6 +109,9 @@ def main():
                 pitch = math.dist(h, p["holes"][k - 1])
                 if pitch < 2.2 * d0 - 1e-6:
                     fail(problems, f"{p['id']}: holes {k - 1},{k} {pitch:.2f} mm apart (< 2.2 d0)")
+                if pitch > largest + 1e-6:
+                    fail(problems, f"{p['id']}: holes {k - 1},{k} {pitch:.2f} mm apart "
+                                   f"(> min(14 t, 200) = {largest:.2f})")
         dxf = ezdxf.readfile(folder / "parts" / f"{p['id']}.dxf")
         inner = [e for e in dxf.modelspace() if e.dxf.layer == "CUT_INNER"]
         if len(inner) != len(p["holes"]):

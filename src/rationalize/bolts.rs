@@ -111,8 +111,10 @@ pub fn max_pitch(t: f64) -> f64 {
 
 /// Hole centres along the line through `from` and `to` (the plate's mid-height line) inside the
 /// convex counter-clockwise `outline`, every centre at least e = 1.2 d0 from every edge: as
-/// many as the largest pitch needs (at least two where two fit at the least pitch), evenly
-/// spread over the part of the line that keeps e. None if not even one hole fits.
+/// many as the largest pitch needs and at least two (one bolt lets the plies turn about it),
+/// evenly spread over the part of the line that keeps e. None when no such row meets Table
+/// 3.3: too short for two at the least pitch, or too long for the pitch to stay between the
+/// least and the largest (a bolt whose 2.2 d0 is over 14 t never does).
 pub fn row(
     outline: &[DVec2],
     from: DVec2,
@@ -148,10 +150,10 @@ pub fn row(
     let span = a.distance(b);
     let most = (span / min_pitch(bolt)).floor() as usize + 1;
     let wanted = ((span / max_pitch(thinner)).ceil() as usize + 1).max(2);
-    let n = wanted.min(most);
-    if n == 1 {
-        return Some(vec![0.5 * (a + b)]);
+    if wanted > most {
+        return None;
     }
+    let n = wanted;
     Some(
         (0..n)
             .map(|i| a + (b - a) * (i as f64 / (n - 1) as f64))
@@ -190,7 +192,7 @@ mod tests {
         assert!((holes[0].x - 15.6).abs() < 1e-9 && (holes[7].x - 284.4).abs() < 1e-9);
         let pitch = holes[1].x - holes[0].x;
         assert!(pitch >= min_pitch(&m12) && pitch <= max_pitch(3.0));
-        // Too short for two at the least pitch, long enough for one.
+        // Too short for two at the least pitch: no row (one bolt would let the plies turn).
         let short = rect(40.0, 100.0);
         let one = row(
             &short,
@@ -199,7 +201,21 @@ mod tests {
             &m12,
             3.0,
         );
-        assert_eq!(one, Some(vec![DVec2::new(20.0, 50.0)]));
+        assert_eq!(one, None);
+        // 1.5 mm plies: 14 t = 21 mm is under M12's least pitch 28.6 mm, so no M12 row; M8's
+        // 2.2 × 9 = 19.8 mm fits, every pitch within both limits.
+        let long = rect(300.0, 100.0);
+        let line = (DVec2::new(0.0, 50.0), DVec2::new(300.0, 50.0));
+        assert_eq!(row(&long, line.0, line.1, &m12, 1.5), None);
+        let m8 = parse("M8").expect("listed");
+        let holes = row(&long, line.0, line.1, &m8, 1.5).expect("M8 fits");
+        for w in holes.windows(2) {
+            let p = w[0].distance(w[1]);
+            assert!(
+                p >= min_pitch(&m8) - 1e-9 && p <= max_pitch(1.5) + 1e-9,
+                "{p}"
+            );
+        }
         // Too low for e2 on both sides: 2·15.6 > 30.
         let low = rect(300.0, 30.0);
         assert_eq!(

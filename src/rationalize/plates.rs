@@ -188,12 +188,17 @@ pub enum PlateError {
         t: f64,
         gauges: Vec<f64>,
     },
-    #[error("edge {edge} (nodes {} and {}): the seam plate is too small for one {bolt} bolt ({:.1} mm from every edge)", .nodes[0], .nodes[1], .edge_distance)]
+    #[error("edge {edge} (nodes {} and {}): the seam takes no row of {bolt} bolts by EN 1993-1-8 Table 3.3 (at least two, {:.1} mm from every edge, pitch {:.1} to {:.1} mm on its {thinner} mm ply): {}", .nodes[0], .nodes[1], .edge_distance, .min_pitch, .max_pitch, if *.chosen { "give a smaller bolt= or thicker gauges" } else { "the smallest size is too big for it: give another groups= (the seams fall elsewhere) or thicker gauges" })]
     NoRoomForBolt {
+        /// Whether the size was the caller's (bolt=) rather than the smallest tried.
+        chosen: bool,
         edge: usize,
         nodes: [u32; 2],
         bolt: &'static str,
         edge_distance: f64,
+        min_pitch: f64,
+        max_pitch: f64,
+        thinner: f64,
     },
     #[error("node {0} has no usable axis or height")]
     Axis(u32),
@@ -874,10 +879,14 @@ fn bolt_seam(
     }
     let last = tried.last().expect("at least one size");
     Err(PlateError::NoRoomForBolt {
+        chosen: size.is_some(),
         edge: p.edge,
         nodes: p.nodes,
         bolt: last.name,
         edge_distance: bolts::edge_distance(last),
+        min_pitch: bolts::min_pitch(last),
+        max_pitch: bolts::max_pitch(thinner),
+        thinner,
     })
 }
 
@@ -1138,8 +1147,13 @@ mod tests {
         let gap = (b.placement.origin - a.placement.origin).dot(a.placement.z);
         assert!((gap - 2.5).abs() < 1e-12, "{gap}");
         let bolt = a.bolt.expect("bolted");
-        // Unwin: 10 (√2.5 − 0.2) = 13.8 mm, nearest M12.
-        assert_eq!(bolt.size.name, "M12");
+        // Unwin: 10 (√2.5 − 0.2) = 13.8 mm, nearest M12; but on the 2 mm ply 14 t = 28 mm is
+        // under M12's least pitch 2.2 × 13 = 28.6 mm (Table 3.3): M10.
+        assert_eq!(bolt.size.name, "M10");
+        assert!(a.holes.len() >= 2);
+        for w in a.holes.windows(2) {
+            assert!(w[0].distance(w[1]) <= 14.0 * 2.0 + 1e-9);
+        }
         assert!(!a.holes.is_empty() && a.holes == b.holes);
         // Every hole 1.2 d0 inside every edge, neighbours 2.2 d0 apart.
         let e = 1.2 * bolt.size.hole;

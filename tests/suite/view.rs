@@ -84,7 +84,7 @@ fn plates_with_welds_sizing_and_axes_and_their_cut_sheets() -> TestResult {
         "--load",
         "self-weight",
         "--groups",
-        "4",
+        "5",
     ]);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{}", stderr(&o));
     let plates = d.join("plates");
@@ -94,7 +94,7 @@ fn plates_with_welds_sizing_and_axes_and_their_cut_sheets() -> TestResult {
         "--sizing",
         s(&sizing),
         "--groups",
-        "4",
+        "5",
         "-o",
         s(&plates),
     ]);
