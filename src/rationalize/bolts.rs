@@ -122,6 +122,24 @@ pub fn row(
     bolt: &BoltSize,
     thinner: f64,
 ) -> Option<Vec<DVec2>> {
+    row_with_pitch(outline, from, to, bolt, thinner, min_pitch(bolt))
+}
+
+/// Least pitch across the force, p2 = 2.4 d0: a row up a short seam plate (its bolts side by
+/// side across the member's axis).
+pub fn min_pitch_across(bolt: &BoltSize) -> f64 {
+    2.4 * bolt.hole
+}
+
+/// As [`row`], with the least pitch given.
+pub fn row_with_pitch(
+    outline: &[DVec2],
+    from: DVec2,
+    to: DVec2,
+    bolt: &BoltSize,
+    thinner: f64,
+    least: f64,
+) -> Option<Vec<DVec2>> {
     let e = edge_distance(bolt);
     let dir = to - from;
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -148,7 +166,7 @@ pub fn row(
     }
     let (a, b) = (from + dir * lo, from + dir * hi);
     let span = a.distance(b);
-    let most = (span / min_pitch(bolt)).floor() as usize + 1;
+    let most = (span / least).floor() as usize + 1;
     let wanted = ((span / max_pitch(thinner)).ceil() as usize + 1).max(2);
     if wanted > most {
         return None;
@@ -202,6 +220,22 @@ mod tests {
             3.0,
         );
         assert_eq!(one, None);
+        // Up the middle of that short plate instead, across the member: M8's p2 = 2.4 × 9 =
+        // 21.6 mm is over 14 t = 21 mm on 1.5 mm plies, so no row; two M6 at least 2.4 d0 and
+        // at most 14 t apart.
+        let (m6, m8) = (parse("M6").expect("listed"), parse("M8").expect("listed"));
+        let (lo, hi) = (DVec2::new(20.0, -1e4), DVec2::new(20.0, 1e4));
+        assert_eq!(
+            row_with_pitch(&short, lo, hi, &m8, 1.5, min_pitch_across(&m8)),
+            None
+        );
+        let up =
+            row_with_pitch(&short, lo, hi, &m6, 1.5, min_pitch_across(&m6)).expect("fits across");
+        assert!(up.len() >= 2 && up.iter().all(|h| (h.x - 20.0).abs() < 1e-9));
+        for w in up.windows(2) {
+            let p = w[0].distance(w[1]);
+            assert!((2.4 * 6.6 - 1e-9..=21.0 + 1e-9).contains(&p), "{p}");
+        }
         // 1.5 mm plies: 14 t = 21 mm is under M12's least pitch 28.6 mm, so no M12 row; M8's
         // 2.2 × 9 = 19.8 mm fits, every pitch within both limits.
         let long = rect(300.0, 100.0);

@@ -867,7 +867,21 @@ fn bolt_seam(
         }
     };
     for b in &tried {
-        if let Some(holes) = bolts::row(&p.outline, mid[0], mid[1], b, thinner) {
+        // Along the mid-height line; on a plate too short for that, up its middle across the
+        // member (p2 ≥ 2.4 d0), which holds the plies against turning as well.
+        let centre = 0.5 * (mid[0] + mid[1]);
+        let up = (mid[1] - mid[0]).perp().normalize_or_zero() * 1e4;
+        let holes = bolts::row(&p.outline, mid[0], mid[1], b, thinner).or_else(|| {
+            bolts::row_with_pitch(
+                &p.outline,
+                centre - up,
+                centre + up,
+                b,
+                thinner,
+                bolts::min_pitch_across(b),
+            )
+        });
+        if let Some(holes) = holes {
             p.holes = holes;
             p.bolt = Some(Bolting {
                 size: *b,
