@@ -268,7 +268,7 @@ pub enum SizingError {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Check {
     pub utilisation: f64,
-    /// `stress` or `buckling`.
+    /// One of [`CHECK_NAMES`], or `weld`.
     pub check: &'static str,
     /// Index of the load case (`cases()` order).
     pub case: usize,
