@@ -255,8 +255,12 @@ pub fn write_shell_deck(
                 Some(Support::Fixed) => {
                     for (j, &m) in line.iter().enumerate() {
                         writeln!(w, "{}, 1, 6", id[m])?;
-                        if let Some(&up) = line.get(j + 1) {
-                            writeln!(w, "{}, 1, 6", midside[&(m.min(up), m.max(up))])?;
+                        // The midside node up the axis line (none on an axis no panel meets).
+                        if let Some(mid) = line
+                            .get(j + 1)
+                            .and_then(|&up| midside.get(&(m.min(up), m.max(up))))
+                        {
+                            writeln!(w, "{mid}, 1, 6")?;
                         }
                     }
                 }
