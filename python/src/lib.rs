@@ -1051,7 +1051,7 @@ fn plates<'py>(
     )?;
     d.set_item("assembly", mesh_dict(py, &assembly)?)?;
     d.set_item("files", PyList::new(py, files)?)?;
-    d.set_item("notes", notes(py, &[])?)?;
+    d.set_item("notes", notes(py, &made.notes)?)?;
     Ok(d)
 }
 
