@@ -844,6 +844,18 @@ pub fn groups(axes: &Axes, model: &Model, by: GroupBy) -> Result<Vec<usize>, Siz
     })
 }
 
+/// The shell mesh of the panels of `axes` (the frame `model` built from them), `per_height`
+/// elements up each: what `shells=` analyses, and what its CalculiX deck holds.
+pub fn shell_mesh(axes: &Axes, model: &Model, per_height: usize) -> shell::Mesh {
+    shell::mesh(
+        model,
+        &axes.positions,
+        &axes.axes,
+        &axes.heights,
+        per_height,
+    )
+}
+
 /// The frame's solve, or the shells' when asked: the same results either way.
 fn solve(
     axes: &Axes,
@@ -858,13 +870,7 @@ fn solve(
             if count > shell::MAX_ELEMENTS {
                 return Err(SizingError::TooManyShells(count));
             }
-            let mesh = shell::mesh(
-                model,
-                &axes.positions,
-                &axes.axes,
-                &axes.heights,
-                per_height,
-            );
+            let mesh = shell_mesh(axes, model, per_height);
             shell::solve(model, &mesh, opts.material.nu, cases)?
         }
     })

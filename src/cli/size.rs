@@ -10,7 +10,6 @@ use serde_json::json;
 
 use lamina::analyze::ccx::{write_deck, write_shell_deck};
 use lamina::analyze::report::sizing_html;
-use lamina::analyze::shell;
 use lamina::files::write_atomic;
 use lamina::rationalize::axes::read_axes;
 use lamina::rationalize::planarize::Selector;
@@ -138,13 +137,7 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         match sizing.shells {
             None => write_deck(model, sizing.total_case(), &title, nu, path)?,
             Some(per_height) => {
-                let mesh = shell::mesh(
-                    model,
-                    &axes.positions,
-                    &axes.axes,
-                    &axes.heights,
-                    per_height,
-                );
+                let mesh = lamina::analyze::sizing::shell_mesh(&axes, model, per_height);
                 write_shell_deck(model, &mesh, sizing.total_case(), &title, nu, path)?
             }
         }
