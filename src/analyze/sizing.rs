@@ -260,7 +260,7 @@ pub enum SizingError {
     },
     #[error(transparent)]
     Frame(#[from] FrameError),
-    #[error("group_by= assembly: {0}")]
+    #[error("{0}")]
     Groups(#[from] GroupError),
 }
 
