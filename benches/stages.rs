@@ -35,12 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let axes = read_axes(&work.join("axes.json"))?;
     let g = lamina::analyze::sizing::read_gauges(&work.join("sizing.json"))?;
     let opts = plates::Options {
-        sizing: Some(plates::Gauges {
-            per_edge: g.per_edge,
-            list: g.list,
-            material: g.material,
-            seam_groups: g.seam_groups,
-        }),
+        sizing: Some(g.into()),
         groups: 7,
         ..Default::default()
     };

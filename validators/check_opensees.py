@@ -33,7 +33,19 @@ the quarter-point moments) and interaction (6.3.3, Annex B) recomputed along it,
 node's weld (EN 1993-1-8 4.5.3.3) — each must equal sizing.json's to 1e-6 and be at most 1;
 throats below 3 mm named; the largest SLS displacement as reported.
 
-    check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks]
+With --plates (after --checks), every edge cut as analysed (a seam as its sized plies, one per
+group), the grade the sizing's, the mass; and every seam's bolts by EN 1993-1-8 Table 3.4
+recomputed here: the seam's section forces (each component's largest magnitude at either end
+over the ULS combinations OpenSees solved, which must equal sizing.json's `seam_forces`), an
+elastic bolt group on the holes (N and V shared, M_z ⊥ each arm; V_z shared, M_y and T as
+couples about the plies' overlap's far edges), shear on one plane through the thread, bearing
+on the thinner ply (k1 = min(2.8 e/d0 − 1.7, 2.5), α_d = min(e/3d0, p/3d0 − 1/4), e the least
+hole-to-edge distance of the overlap by shapely, p the least pitch; stainless plies on
+f_u,red = 0.5 f_y + 0.6 f_u), tension, punching (d_m the mean of the nut's flats and corners)
+and shear with tension; class 8.8 (f_ub 800, α_v 0.6) with carbon steel, A4-70 (700, 0.5) with
+stainless. Each must equal plates.json's to 1e-6 and be at most 1.
+
+    check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks] [--plates plates.json]
 """
 import argparse
 import json
@@ -314,6 +326,7 @@ def en1993(frame, s, loads, name):
     edges = frame.edges
     worst = np.zeros((len(edges), 4))
     welds = np.zeros(len(s["nodes"]))
+    seam = {k: [] for k, e in enumerate(edges) if e.get("plies")}
     largest_sls = 0.0
     for c in s["combinations"]:
         factored = [(kind, value, c["factors"][n]) for n, kind, value in loads]
@@ -321,6 +334,8 @@ def en1993(frame, s, loads, name):
         if c["limit"] == "SLS":
             largest_sls = max(largest_sls, np.linalg.norm(u[:, :3], axis=1).max())
             continue
+        for k in seam:
+            seam[k].append(f[k])
         for k, e in enumerate(edges):
             x, y, z, length = frame.frames[k]
             local_w = np.array([w[k] @ x, w[k] @ y, w[k] @ z])
@@ -358,6 +373,16 @@ def en1993(frame, s, loads, name):
     if abs(largest_sls - s["totals"]["max_displacement"]) > 1e-6 * largest_sls:
         fail(f"largest SLS displacement {largest_sls:.6g} mm here, "
              f"{s['totals']['max_displacement']:.6g} in {name}")
+    # What each seam's bolts carry: the ULS envelope of its section forces.
+    envelope = {k: np.max(np.abs(np.array(seam[k])).reshape(-1, 2, 6), axis=(0, 1))
+                for k in seam}
+    for k, env in envelope.items():
+        theirs = edges[k].get("seam_forces")
+        if theirs is None or np.abs(np.array(theirs) - env).max() > 1e-6 * max(1.0, env.max()):
+            fail(f"member {k}: seam forces {theirs} in {name}, {env.tolist()} here")
+    for k, e in enumerate(edges):
+        if e.get("plies") is None and e.get("seam_forces") is not None:
+            fail(f"member {k}: seam forces on a member that is no seam")
     governing = {}
     for e in edges:
         governing[e["check"]] = governing.get(e["check"], 0) + 1
@@ -370,6 +395,7 @@ def en1993(frame, s, loads, name):
           f"{diff:.1e}, largest {worst.max():.3f}, governing {governing}; welds to "
           f"{np.abs(weld_u - lam_w).max():.1e}, largest {weld_u.max():.3f}, {len(thin)} below a "
           f"3 mm throat and named; largest SLS displacement {largest_sls:.3f} mm)")
+    return envelope
 
 
 def main():
@@ -409,10 +435,93 @@ def main():
                  f"lamina {ours[at]:.6g}, OpenSees {theirs[at]:.6g}")
     print(f"{args.sizing}: ok against OpenSees ({len(edges)} Timoshenko beams, {len(frame.mid)} "
           f"nodes, {len(frame.held)} held; largest differences: " + ", ".join(figures) + ")")
-    if args.checks:
-        en1993(frame, s, loads, args.sizing)
+    envelope = en1993(frame, s, loads, args.sizing) if args.checks else None
     if args.plates:
-        built_as_sized(s, json.load(open(args.plates)), args.plates)
+        doc = json.load(open(args.plates))
+        built_as_sized(s, doc, args.plates)
+        if envelope is not None:
+            bolts_hold(s, doc, envelope, args.plates)
+
+
+# Bolt: d, d0, tensile stress area A_s (ISO 898-1), nut across flats s (ISO 4032).
+BOLTS = {"M6": (6, 6.6, 20.1, 10), "M8": (8, 9, 36.6, 13), "M10": (10, 11, 58, 16),
+         "M12": (12, 13, 84.3, 18), "M16": (16, 18, 157, 24), "M20": (20, 22, 245, 30),
+         "M22": (22, 24, 303, 34), "M24": (24, 26, 353, 36), "M27": (27, 30, 459, 41),
+         "M30": (30, 33, 561, 46)}
+
+
+def bolt_checks(bolt, stainless, mat, holes, overlap, t, forces):
+    """EN 1993-1-8 Table 3.4 on the most loaded bolt: shear, bearing, tension, punching, and
+    shear with tension, as utilisations."""
+    from shapely.geometry import Point
+    d, d0, area, flats = BOLTS[bolt]
+    fub, alpha_v = (700.0, 0.5) if stainless else (800.0, 0.6)
+    fu = min(0.5 * mat["fy"] + 0.6 * mat["fu"], mat["fu"]) if stainless else mat["fu"]
+    g = mat["gamma_M2"]
+    n = len(holes)
+    fx, fy, fz, mx, my, mz = (abs(v) for v in forces)
+    h = np.array(holes, dtype=float)
+    r = np.abs(h - h.mean(axis=0))
+    polar = float((r ** 2).sum())
+    twist = mz / polar if polar > 0 else 0.0
+    shear = float(np.hypot(fx / n + twist * r[:, 1], fy / n + twist * r[:, 0]).max())
+    xs, ys = np.array(overlap.exterior.coords).T
+
+    def couple(moment, along, coords):
+        if moment == 0:
+            return 0.0
+        out = 0.0
+        for edge in (coords.min(), coords.max()):
+            arm = np.abs(h[:, along] - edge)
+            out = max(out, moment * arm.max() / (arm ** 2).sum())
+        return out
+
+    tension = fz / n + couple(my, 0, xs) + couple(mx, 1, ys)
+    f_v = alpha_v * fub * area / g
+    f_t = 0.9 * fub * area / g
+    e = min(overlap.exterior.distance(Point(p)) for p in holes)
+    p = min(math.dist(a, b) for a, b in zip(holes, holes[1:]))
+    alpha_b = min(e / (3 * d0), p / (3 * d0) - 0.25, fub / fu, 1.0)
+    k1 = min(2.8 * e / d0 - 1.7, 2.5)
+    f_b = max(k1 * alpha_b * fu * d * t / g, 0.0)
+    b_p = 0.6 * math.pi * 0.5 * flats * (1 + 2 / math.sqrt(3)) * t * fu / g
+    return {"shear": shear / f_v, "bearing": shear / f_b, "tension": tension / f_t,
+            "punching": tension / b_p, "shear and tension": shear / f_v + tension / (1.4 * f_t)}
+
+
+def bolts_hold(s, doc, envelope, name):
+    """Every seam's bolts recomputed by Table 3.4 under OpenSees' ULS envelope."""
+    from shapely.geometry import Polygon
+    stainless = re.match(r"1\.4[0-6]", s["material"]["name"].strip()) is not None
+    by_edge = {}
+    for p in doc["plates"]:
+        by_edge.setdefault(p["edge"], []).append(p)
+    worst, diff, count = 0.0, 0.0, 0
+    for k, env in envelope.items():
+        a, b = by_edge[k]
+        bolt = a["bolt"]
+        want_class = "A4-70" if stainless else "8.8"
+        if bolt.get("class") != want_class or not bolt.get("preload"):
+            fail(f"edge {k}: bolts of class {bolt.get('class')} ({bolt.get('preload')!r}), "
+                 f"{want_class} with its installation stated expected")
+        overlap = Polygon(a["outline"]).intersection(Polygon(b["outline"]))
+        ours = bolt_checks(bolt["size"], stainless, s["material"], a["holes"], overlap,
+                           min(a["thickness"], b["thickness"]), env)
+        theirs = bolt.get("checks") or {}
+        for check, u in ours.items():
+            got = theirs.get(check)
+            if got is None or abs(got - u) > 1e-6 * max(1.0, u):
+                fail(f"edge {k}: bolt {check} {got} in {name}, {u:.6g} here")
+            diff = max(diff, abs((got or 0.0) - u))
+        top = max(ours.values())
+        if abs(bolt.get("utilisation", -1) - top) > 1e-6 * max(1.0, top):
+            fail(f"edge {k}: bolt utilisation {bolt.get('utilisation')}, its largest check {top:.6g}")
+        if top > 1.0:
+            fail(f"edge {k}: {bolt['size']} bolts at utilisation {top:.3f}")
+        worst = max(worst, top)
+        count += 1
+    print(f"{name}: bolts ok ({count} seams' rows recomputed by EN 1993-1-8 Table 3.4 under "
+          f"OpenSees' ULS forces to {diff:.1e}; largest utilisation {worst:.3f})")
 
 
 def built_as_sized(s, doc, name):

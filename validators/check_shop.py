@@ -8,12 +8,29 @@ code with lamina:
   at least e1 = e2 = 1.2 d0 from every edge of the plate, at least two bolts a seam,
   neighbouring holes at least p1 = 2.2 d0 and at most min(14 t, 200 mm) apart for the thinner
   ply t (EN 1993-1-8 Table 3.3); the part DXF has the holes on CUT_INNER;
-- at every node (positions and axes from axes.json): the plates (a bolted seam as its two
-  plies together) projected along the node axis; side by side around the axis, every pair's
-  root gap (shapely distance of the projections) is within the weld gap ± tolerance, unless
-  welds.json reports the node (needing a core, or with one: then every plate is the gap from
-  the core's tube); no other pair is closer than the gap less the tolerance;
-- the dihedral angle of every pair welds.json lists equals the one computed here to 0.01°.
+- a node's assembly group is that of the unbolted plates there (of a node with seams only, the
+  group every seam there has a ply in); a seam's plies are in two groups;
+- every plate's weld partners (plates.json `welded_to`) at a node are exactly the other plates of
+  the node's group there, and a ply has none at the other group's node (nor a core): no weld
+  joins two groups; welds.json names at each node the plate of the node's group per edge;
+- at every node (positions and axes from axes.json): the plates welded there (of a seam, its ply
+  of the node's group) projected along the node axis; side by side around the axis, every
+  pair's root gap (shapely distance of the projections) is within the weld gap ± tolerance,
+  unless welds.json reports the node (needing a core, or with one: then every plate is the gap
+  from the core's tube); no other pair is closer than the gap less the tolerance; a seam's
+  other ply passes the node at least the weld gap plus the thickness of its partner ply (which
+  welds there; less 0.01 mm for the panels' flattening) from every welded plate, the core and
+  every other passing ply (room for the leg of that ply's fillet);
+- the dihedral angle of every pair welds.json lists equals the one computed here to 0.01°;
+- every bolt can be fitted and tightened: on the stack's face the nut is on (+z, or −z for the
+  holes in `nut_below`) the washer, nut and two threads, and a socket over the nut (radius and
+  reach from --bolt-clearance, else the nut's corners plus 3 mm and 40 mm), on the other face
+  the washer and head (ISO 7089, 4032, 4017 sizes), as cylinders on the hole's axis, cross no
+  other plate or core: each cylinder as the 128-gon inside it (so a crossing found is a true
+  one, and the true cylinder is missed by at most 4e-4 of its radius) against each plate's
+  prism, tested by a linear program (the deepest point inside both, scipy's HiGHS).
+
+    check_shop.py PLATES_DIR AXES_JSON --gauges ... --weld-gap 1 --tolerance 0.5 [--bolt-clearance R:H]
 
     check_shop.py PLATES_DIR AXES_JSON --gauges 1.5,2,3,4,5,6 --weld-gap 1 --tolerance 0.5
 """
@@ -26,8 +43,7 @@ from pathlib import Path
 
 import ezdxf
 import numpy as np
-from shapely.geometry import MultiPolygon, Point, Polygon
-from shapely.ops import unary_union
+from shapely.geometry import Point, Polygon
 
 # Bolt: (d, d0).
 HOLES = {"M6": 6.6, "M8": 9.0, "M10": 11.0, "M12": 13.0, "M14": 15.0, "M16": 18.0,
@@ -49,6 +65,124 @@ def corners(p):
     return [world(p, q, z) for q in p["outline"] for z in (-t, t)]
 
 
+# Bolt: thread pitch, washer OD and thickness (ISO 7089), nut height and width across flats
+# (ISO 4032), head height (ISO 4017).
+FASTENERS = {"M6": (1.0, 12, 1.6, 5.2, 10, 4.0), "M8": (1.25, 16, 1.6, 6.8, 13, 5.3),
+             "M10": (1.5, 20, 2.0, 8.4, 16, 6.4), "M12": (1.75, 24, 2.5, 10.8, 18, 7.5),
+             "M16": (2.0, 30, 3.0, 14.8, 24, 10.0), "M20": (2.5, 37, 3.0, 18.0, 30, 12.5),
+             "M22": (2.5, 39, 3.0, 19.4, 34, 14.0), "M24": (3.0, 44, 4.0, 21.5, 36, 15.0),
+             "M27": (3.0, 50, 4.0, 23.8, 41, 17.0), "M30": (3.5, 56, 4.0, 25.6, 46, 18.7)}
+
+
+def halfspaces_prism(corners2d, origin, ex, ey, ez, z0, z1):
+    """A x <= b rows (unit normals) of a convex outline in a frame, between heights z0, z1."""
+    rows, rhs = [], []
+    pts = [origin + ex * p[0] + ey * p[1] for p in corners2d]
+    area = sum(corners2d[i][0] * corners2d[(i + 1) % len(corners2d)][1] -
+               corners2d[(i + 1) % len(corners2d)][0] * corners2d[i][1] for i in range(len(corners2d)))
+    sign = 1.0 if area > 0 else -1.0
+    for i in range(len(pts)):
+        a, b = pts[i], pts[(i + 1) % len(pts)]
+        out = np.cross(b - a, ez) * sign
+        n = np.linalg.norm(out)
+        if n < 1e-12:
+            continue
+        out /= n
+        rows.append(out)
+        rhs.append(out @ a)
+    rows += [ez, -ez]
+    rhs += [ez @ origin + z1, -(ez @ origin + z0)]
+    return np.array(rows), np.array(rhs)
+
+
+def deepest(shapes):
+    """The largest t with a point t inside every shape's half-spaces (negative: apart)."""
+    from scipy.optimize import linprog
+    a = np.vstack([np.hstack([r, np.ones((len(r), 1))]) for r, _ in shapes])
+    b = np.concatenate([h for _, h in shapes])
+    res = linprog([0, 0, 0, -1], A_ub=a, b_ub=b, bounds=[(None, None)] * 3 + [(None, 1.0)],
+                  method="highs")
+    return -res.fun if res.status == 0 else -math.inf
+
+
+def bolt_room(plates, by_id, cores, clearance, problems):
+    """Every bolt's washer, head, nut and socket clear of every other plate and core."""
+    n = 128
+    circle = [(math.cos(2 * math.pi * i / n), math.sin(2 * math.pi * i / n)) for i in range(n)]
+
+    def cylinder(base, axis, r, length):
+        u = np.cross(axis, [1.0, 0, 0] if abs(axis[0]) < 0.9 else [0, 1.0, 0])
+        u /= np.linalg.norm(u)
+        v = np.cross(axis, u)
+        shape = halfspaces_prism([(r * c, r * s) for c, s in circle], base, u, v, axis, 0.0, length)
+        return shape, base + axis * length / 2, math.hypot(r, length / 2)
+
+    solids = []
+    for p in plates:
+        m = np.array(p["matrix"], dtype=float)
+        ex, ey, ez, o = m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3]
+        t = p["thickness"] / 2
+        shape = halfspaces_prism(p["outline"], o, ex, ey, ez, -t, t)
+        pts = [o + ex * q[0] + ey * q[1] for q in p["outline"]]
+        c = np.mean(pts, axis=0)
+        solids.append((p["id"], shape, c, max(np.linalg.norm(q - c) for q in pts) + t))
+    for c in cores:
+        axis = np.array(c["axis"], dtype=float)
+        solids.append((c["id"],) + cylinder(np.array(c["base"], dtype=float), axis,
+                                            c["outer_diameter"] / 2, c["length"]))
+    fitted = 0
+    for p in plates:
+        other = p.get("bolted_to")
+        if not other or p["id"] > other:
+            continue
+        q = by_id[other]
+        m = np.array(p["matrix"], dtype=float)
+        ez = m[:3, 2]
+        faces = [np.array(x["matrix"], dtype=float)[:3, 3] @ ez + sgn * x["thickness"] / 2
+                 for x in (p, q) for sgn in (-1, 1)]
+        low, high = min(faces), max(faces)
+        b = p["bolt"]
+        pitch, w_od, w_h, nut_h, flats, head_h = FASTENERS[b["size"]]
+        corners = flats / math.sqrt(3)
+        fit_r = max(w_od / 2, corners)
+        if clearance:
+            r_s, h_s = (float(v) for v in clearance.split(":"))
+        else:
+            r_s, h_s = corners + 3.0, 40.0
+        below = set(b.get("nut_below", []))
+        for k, h in enumerate(p["holes"]):
+            centre = m[:3, :3] @ np.array([h[0], h[1], 0.0]) + m[:3, 3]
+            on_axis = centre - (centre @ ez) * ez
+            if k in below:
+                head_at, nut_at, out = high, low, -ez
+            else:
+                head_at, nut_at, out = low, high, ez
+            envelopes = [
+                ("head and washer", cylinder(on_axis + ez * head_at, -out, fit_r, w_h + head_h)),
+                ("nut and washer", cylinder(on_axis + ez * nut_at, out, fit_r, w_h + nut_h + 2 * pitch)),
+                ("socket", cylinder(on_axis + ez * nut_at + out * w_h, out, r_s, h_s)),
+            ]
+            hit = None
+            for name, (shape, c, rad) in envelopes:
+                for sid, sshape, sc, srad in solids:
+                    if sid in (p["id"], other) or np.linalg.norm(c - sc) > rad + srad:
+                        continue
+                    depth = deepest([shape, sshape])
+                    if depth > 1e-6:
+                        hit = f"{name} {depth:.3f} mm into {sid}"
+                        break
+                if hit:
+                    break
+            listed = b.get("clashes", [])
+            if hit:
+                fail(problems, f"{p['id']}/{other} hole {k}: the {hit}" +
+                     (" (reported)" if any(c.startswith(f"hole {k}:") for c in listed) else
+                      ", not reported"))
+            else:
+                fitted += 1
+    return fitted, None
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("plates_dir")
@@ -56,6 +190,7 @@ def main():
     ap.add_argument("--gauges", required=True)
     ap.add_argument("--weld-gap", type=float, required=True)
     ap.add_argument("--tolerance", type=float, required=True)
+    ap.add_argument("--bolt-clearance", help="RADIUS:REACH of the socket, mm")
     args = ap.parse_args()
     folder = Path(args.plates_dir)
     doc = json.load(open(folder / "plates.json"))
@@ -123,6 +258,47 @@ def main():
             if np.linalg.norm(centre - h) > 0.01 or abs(r.max() - d0 / 2) > 0.01:
                 fail(problems, f"{p['id']}: a CUT_INNER circle is not the hole at {h}")
 
+    # Groups of the nodes, and weld partners only within them.
+    node_group, seam_groups = {}, defaultdict(list)
+    for p in plates:
+        if p.get("bolted_to") is None:
+            for v in p["nodes"]:
+                if node_group.setdefault(v, p["group"]) != p["group"]:
+                    fail(problems, f"node {v}: plates of groups {node_group[v]} and {p['group']} meet unbolted")
+    for p in plates:
+        if p.get("bolted_to") is not None:
+            q = by_id[p["bolted_to"]]
+            if q["group"] == p["group"] or q.get("bolted_to") != p["id"]:
+                fail(problems, f"{p['id']}/{q['id']}: a seam's plies are not a pair in two groups")
+            for v in p["nodes"]:
+                seam_groups[v].append({p["group"], q["group"]})
+    for v, sets in seam_groups.items():
+        if v not in node_group:
+            common = set.intersection(*sets)
+            if len(common) != 1:
+                fail(problems, f"node {v}: only seams meet there and their groups {sets} leave its group open")
+                continue
+            node_group[v] = common.pop()
+    at_node = defaultdict(list)
+    for p in plates:
+        for v in p["nodes"]:
+            at_node[v].append(p)
+    cross = 0
+    for p in plates:
+        for end in p["ends"]:
+            v, g = end["node"], node_group.get(end["node"])
+            want = set() if p["group"] != g else \
+                {q["id"] for q in at_node[v] if q["id"] != p["id"] and q["group"] == g}
+            got = set(end["welded_to"])
+            cross += sum(1 for i in got if i not in by_id or by_id[i]["group"] != p["group"])
+            if end.get("core") is not None:
+                if p["group"] != g:
+                    fail(problems, f"{p['id']}: welded to the core at node {v}, of another group")
+                continue
+            if got != want:
+                fail(problems, f"{p['id']} at node {v} (group {g}): welded to {sorted(got)}, "
+                               f"the group's plates there are {sorted(want)}")
+
     # Welds at nodes.
     positions = np.array([n["p"] for n in axes["nodes"]], dtype=np.float64)
     node_axes = np.array([n["axis"] for n in axes["nodes"]], dtype=np.float64)
@@ -136,6 +312,7 @@ def main():
     reported = {n["node"]: n for n in welds["nodes"]}
     cores = {c["node"]: c for c in doc.get("cores", [])}
     pairs_checked, worst_angle, worst_gap = 0, 0.0, 0.0
+    passes_checked, worst_pass = 0, math.inf
     for v, edges in at.items():
         if len(edges) < 2:
             continue
@@ -143,14 +320,22 @@ def main():
         e1 = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
         e1 /= np.linalg.norm(e1)
         e2 = np.cross(d, e1)
-        sections, angle = {}, {}
+        sections, angle, passing = {}, {}, {}
+
+        def section(p):
+            pts = [((c - positions[v]) @ e1, (c - positions[v]) @ e2) for c in corners(p)]
+            return Polygon(pts).convex_hull
+
+        g = node_group.get(v)
         for k in edges:
-            polys = []
+            mine = [p for p in by_edge[k] if p["group"] == g]
+            if len(mine) != 1:
+                fail(problems, f"node {v}: edge {k} has {len(mine)} plates of the node's group {g}")
+                mine = by_edge[k][:1]
+            sections[k] = section(mine[0])
             for p in by_edge[k]:
-                pts = [((c - positions[v]) @ e1, (c - positions[v]) @ e2) for c in corners(p)]
-                polys.append(Polygon(pts).convex_hull)
-            sec = unary_union(polys)
-            sections[k] = sec.convex_hull if isinstance(sec, MultiPolygon) else sec
+                if p is not mine[0]:
+                    passing[k] = (p["id"], section(p), mine[0]["thickness"])
             # Direction: toward the plate's other node, across the axis.
             other = [n for n in by_edge[k][0]["nodes"] if n != v]
             w = positions[other[0] if other else v] - positions[v]
@@ -170,22 +355,41 @@ def main():
         adjacent = {frozenset((a, b)) for a, b, _ in wedges}
         for i, a in enumerate(edges):
             for b in edges[i + 1:]:
-                g = sections[a].distance(sections[b])
+                gap = sections[a].distance(sections[b])
                 if frozenset((a, b)) in adjacent:
                     pairs_checked += 1
-                    off = abs(g - args.weld_gap)
+                    off = abs(gap - args.weld_gap)
                     if node["status"] == "even":
                         worst_gap = max(worst_gap, off)
                         if off > args.tolerance + 1e-6:
-                            fail(problems, f"node {v}: edges {a},{b} root gap {g:.3f} mm, not reported")
-                if node["core"] is None and g < args.weld_gap - args.tolerance - 1e-6:
-                    fail(problems, f"node {v}: edges {a},{b} only {g:.3f} mm apart")
+                            fail(problems, f"node {v}: edges {a},{b} root gap {gap:.3f} mm, not reported")
+                if node["core"] is None and gap < args.weld_gap - args.tolerance - 1e-6:
+                    fail(problems, f"node {v}: edges {a},{b} only {gap:.3f} mm apart")
         if node["core"] is not None:
             c = cores[v]
             for k in edges:
-                g = sections[k].distance(Point(0, 0)) - c["outer_diameter"] / 2
-                if abs(g - args.weld_gap) > args.tolerance + 1e-6:
-                    fail(problems, f"node {v}: edge {k} is {g:.3f} mm from the core")
+                gc = sections[k].distance(Point(0, 0)) - c["outer_diameter"] / 2
+                if abs(gc - args.weld_gap) > args.tolerance + 1e-6:
+                    fail(problems, f"node {v}: edge {k} is {gc:.3f} mm from the core")
+        # The plies passing unwelded: clear of every weld here.
+        seen = []
+        for k, (pid, sec, t_welded) in passing.items():
+            clear = args.weld_gap + t_welded
+            passes_checked += 1
+            near = [sections[j].distance(sec) for j in edges if j != k] + [o.distance(sec) for o in seen]
+            if node["core"] is not None:
+                near.append(sec.distance(Point(0, 0)) - cores[v]["outer_diameter"] / 2)
+            seen.append(sec)
+            worst_pass = min(worst_pass, min(near) - clear)
+            # Within the panels' flattening (the plate's plane holds its second node's axis to
+            # the flattening plates.json reports, some micrometres).
+            if min(near) < clear - 0.01:
+                fail(problems, f"node {v}: {pid} passes {min(near):.3f} mm from a plate welded there "
+                               f"(< gap + its welded partner's thickness = {clear:.3f})")
+        names = [next((p["id"] for p in by_edge[k] if p["group"] == g), "?") for k in node["edges"]] \
+            if "edges" in node else None
+        if names is not None and names != node["plates"]:
+            fail(problems, f"node {v}: welds.json names {node['plates']}, the plates of its group are {names}")
         listed = {(p["edges"][0], p["edges"][1]): p["dihedral_deg"] for p in node["pairs"]}
         for a, b, wd in wedges:
             got = listed.get((a, b))
@@ -197,6 +401,7 @@ def main():
             worst_angle = max(worst_angle, abs(got - wd))
             if abs(got - wd) > 0.01:
                 fail(problems, f"node {v}: dihedral {a}→{b} {got:.4f}° in welds.json, {wd:.4f}° here")
+    fitted, clear_by = bolt_room(plates, by_id, doc.get("cores", []), args.bolt_clearance, problems)
     if problems:
         for p in problems[:20]:
             print(f"check_shop: FAILED: {folder}: {p}", file=sys.stderr)
@@ -205,7 +410,10 @@ def main():
     print(f"{folder}: ok ({len(plates)} plates on the gauge list, {holes_checked} holes, hole axes "
           f"within {worst_axis:.1e} mm, {pairs_checked} adjacent pairs, even gaps within "
           f"{worst_gap:.3f} mm of {args.weld_gap}, {uneven} node(s) reported, dihedral angles "
-          f"within {worst_angle:.1e}°)")
+          f"within {worst_angle:.1e}°; weld partners within their group, {cross} across; "
+          f"{passes_checked} plies passing the other group's node, clear by "
+          f"{'—' if passes_checked == 0 else f'{worst_pass:+.3f} mm over the gap + the welded ply'}; "
+          f"{fitted} bolts with room for washer, head, nut and socket)")
 
 
 main()

@@ -997,12 +997,14 @@ fn size<'py>(
 }
 
 /// A sizing as the Python side hands it over: the gauges per edge and the list (little-endian
-/// f64), the material as JSON, the assembly groups its seams were sized for.
+/// f64), the material as JSON, the assembly groups its seams were sized for, and per edge
+/// what a seam's bolts carry (JSON: null or six numbers).
 type SizingArg<'py> = (
     Bound<'py, PyBytes>,
     Bound<'py, PyBytes>,
     String,
     Option<usize>,
+    String,
 );
 
 /// Steel plates from node axes; with `out`, the command's files written into that folder.
@@ -1019,7 +1021,19 @@ fn plates<'py>(
     let mut o = Opts::new(&options, "plates");
     let mut opts = options::plates(&mut o)?;
     o.finish()?;
-    if let Some((per_edge, list, material, seam_groups)) = sizing {
+    if let Some((per_edge, list, material, seam_groups, seam_forces)) = sizing {
+        let seam_forces: Vec<Option<[f64; 6]>> = serde_json::from_str(&seam_forces)
+            .map_err(|e| error(format!("sizing: its edges' seam_forces: {e}")))?;
+        if seam_forces
+            .iter()
+            .flatten()
+            .flatten()
+            .any(|v| !(v.is_finite() && v.abs() < 1e15))
+        {
+            return Err(error(
+                "sizing: seam_forces must be six finite numbers (N, N·mm) per seam".into(),
+            ));
+        }
         opts.sizing = Some(stage::plates::Gauges {
             per_edge: f64s(per_edge.as_bytes(), "sizing: gauges")?,
             list: f64s(list.as_bytes(), "sizing: gauge_list")?,
@@ -1028,6 +1042,7 @@ fn plates<'py>(
                     .map_err(|e| error(format!("sizing: its material: {e}")))?,
             ),
             seam_groups,
+            seam_forces,
         });
     }
     let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;

@@ -262,6 +262,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "min_weld_angle",
             "groups",
             "bolt",
+            "bolt_clearance",
             "material",
         ],
         "nest" => &[
@@ -764,6 +765,10 @@ pub fn plates(o: &mut Opts) -> PyResult<stage::plates::Options> {
         min_weld_angle: o.f64("min_weld_angle")?,
         groups: o.usize("groups")?.unwrap_or(d.groups),
         bolt: o.parsed("bolt", lamina::rationalize::bolts::parse)?,
+        bolt_clearance: o.parsed(
+            "bolt_clearance",
+            lamina::rationalize::clearance::Socket::parse,
+        )?,
         material: material(o)?,
     })
 }

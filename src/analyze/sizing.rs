@@ -404,6 +404,21 @@ impl Sizing {
         &self.cases[self.first_combination - 1]
     }
 
+    /// What a seam's bolts carry: member `k`'s section forces in its local axes [N, V_y, V_z,
+    /// T, M_y, M_z], each the largest magnitude at either end over the ultimate combinations
+    /// (None for a member that is no seam).
+    pub fn seam_forces(&self, k: usize) -> Option<[f64; 6]> {
+        self.model.members[k].section.plies?;
+        let mut out = [0.0f64; 6];
+        for c in self.limit_cases(Limit::Ultimate) {
+            let f = &self.results[c].end_forces[k];
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = o.max(f[i].abs()).max(f[i + 6].abs());
+            }
+        }
+        Some(out)
+    }
+
     /// The case index of each combination for `limit`.
     pub fn limit_cases(&self, limit: Limit) -> Vec<usize> {
         limit_cases(&self.combinations, self.first_combination, limit)
@@ -1428,6 +1443,8 @@ struct GaugeFile {
 #[derive(serde::Deserialize)]
 struct GaugeEdge {
     gauge: f64,
+    #[serde(default)]
+    seam_forces: Option<[f64; 6]>,
 }
 
 /// A sizing file's gauges and steel.
@@ -1441,6 +1458,8 @@ pub struct SizedGauges {
     pub material: Option<Material>,
     /// The assembly groups its seams were sized for (None: no seams).
     pub seam_groups: Option<usize>,
+    /// Per edge, what a seam's bolts carry (None for other edges, and in files from before).
+    pub seam_forces: Vec<Option<[f64; 6]>>,
 }
 
 /// A sizing file's gauges and steel, for `plates --sizing`.
@@ -1467,6 +1486,15 @@ pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::
                 format!("gauge {} is not a thickness", e.gauge),
             ));
         }
+        if e.seam_forces
+            .is_some_and(|f| f.iter().any(|v| !(v.is_finite() && v.abs() < 1e15)))
+        {
+            return Err(ReadError::record(
+                path,
+                format!("edge {k}"),
+                "seam_forces must be six finite numbers (N, N·mm)",
+            ));
+        }
     }
     if let Some(m) = &file.material {
         if !(m.density > 0.1 && m.density <= 30.0) || m.name.trim().is_empty() || m.name.len() > 64
@@ -1482,6 +1510,7 @@ pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::
         list: file.gauges,
         material: file.material,
         seam_groups: file.seam_groups,
+        seam_forces: file.edges.iter().map(|e| e.seam_forces).collect(),
     })
 }
 

@@ -403,6 +403,7 @@ fn steel(out: &Path) -> Result<Entry> {
         ),
         min_weld_angle: None,
         bolt: None,
+        bolt_clearance: None,
         material: None,
         groups: 7,
         output: dir.join("plates"),

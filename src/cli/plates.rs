@@ -58,6 +58,11 @@ pub struct Args {
     /// [default: by the grip (Unwin's rule), smaller where a plate is too small]
     #[arg(long, value_parser = bolts::parse)]
     pub bolt: Option<BoltSize>,
+    /// The socket that tightens the bolts, RADIUS:REACH in mm (it must fit over every head and
+    /// nut without crossing a plate, as must the washers, head and nut themselves) [default:
+    /// one per size, the nut's corners and a 3 mm wall, 40 mm long]
+    #[arg(long, value_parser = lamina::rationalize::clearance::Socket::parse)]
+    pub bolt_clearance: Option<lamina::rationalize::clearance::Socket>,
     /// The steel: s235, s355, 1.4404 or a JSON file as `size` takes; its grade and density go
     /// into plates.json, the mass and the cut files [default: the sizing's with --sizing, else
     /// 1.4404]
@@ -87,15 +92,7 @@ fn parse_override(s: &str) -> Result<(EdgeSelector, f64), String> {
 pub fn execute(args: &Args) -> Result<plates::Plated> {
     let axes = read_axes(&args.input)?;
     let sizing = match &args.sizing {
-        Some(p) => {
-            let g = lamina::analyze::sizing::read_gauges(p)?;
-            Some(plates::Gauges {
-                per_edge: g.per_edge,
-                list: g.list,
-                material: g.material,
-                seam_groups: g.seam_groups,
-            })
-        }
+        Some(p) => Some(lamina::analyze::sizing::read_gauges(p)?.into()),
         None => None,
     };
     let opts = plates::Options {
@@ -109,6 +106,7 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         min_weld_angle: args.min_weld_angle,
         groups: args.groups,
         bolt: args.bolt,
+        bolt_clearance: args.bolt_clearance,
         material: args
             .material
             .as_deref()
@@ -179,7 +177,8 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Writes everything; false when a weld angle is below --min-weld-angle (exit 1).
+/// Writes everything; false when a weld angle is below --min-weld-angle or a bolt cannot be
+/// fitted or tightened (exit 1).
 pub fn run(args: Args) -> Result<bool> {
     let made = execute(&args)?;
     let weld = &made.welds.summary;
@@ -221,6 +220,44 @@ pub fn run(args: Args) -> Result<bool> {
             weld.pairs_120_135,
             weld.pairs_over_135,
         );
+        if sum.seams > 0 {
+            let class = made.options.bolt_grade.name;
+            match sum.max_bolt_utilisation {
+                Some(u) => outln!(
+                    "  bolts: {class}, {}; the most loaded at utilisation {:.3} under the sizing's ultimate forces (EN 1993-1-8 Table 3.4: shear, bearing, tension, punching)",
+                    lamina::rationalize::bolts::PRELOAD,
+                    u
+                ),
+                None => outln!(
+                    "  bolts: {class}, {}; not checked against forces: give --sizing (from `size --groups`) for the shear, bearing and tension checks",
+                    lamina::rationalize::bolts::PRELOAD
+                ),
+            }
+        }
+        if sum.bolts_moved > 0 {
+            outln!(
+                "  {} bolt(s) moved along their rows (at most {:.1} mm) to clear the plates for washer, head, nut and socket",
+                sum.bolts_moved,
+                sum.largest_bolt_move_mm
+            );
+        }
+        if sum.bolt_clashes > 0 {
+            let list: Vec<String> = made
+                .file
+                .plates
+                .iter()
+                .filter(|p| p.bolted_to.as_deref().is_some_and(|o| p.id.as_str() < o))
+                .filter_map(|p| p.bolt.as_ref().map(|b| (p, b)))
+                .flat_map(|(p, b)| b.clashes.iter().map(move |c| format!("{} {c}", p.id)))
+                .take(5)
+                .collect();
+            outln!(
+                "  {} bolt(s) cannot be fitted or tightened anywhere their row allows (plates.json bolt.clashes; --bolt-clearance for another socket): {}{}",
+                sum.bolt_clashes,
+                list.join("; "),
+                if sum.bolt_clashes > 5 { "; …" } else { "" }
+            );
+        }
         let uneven = &weld.nodes_needing_a_core;
         if !uneven.is_empty() {
             let list: Vec<String> = uneven.iter().take(10).map(|n| n.to_string()).collect();

@@ -36,14 +36,37 @@ pub struct PlateRecord {
     pub edge: Option<u32>,
 }
 
-/// The bolts through a seam's plies. Fields in the file's order.
+/// The bolts through a seam's plies. Fields in the file's order (those earlier files lack
+/// default).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BoltRecord {
+    /// The check that governs (EN 1993-1-8 Table 3.4), when checked against a sizing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<String>,
+    /// Every check's utilisation on the most loaded bolt, when checked.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checks: Option<std::collections::BTreeMap<String, f64>>,
+    /// Bolts that cannot be fitted or tightened: the hole, the envelope, what it crosses.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clashes: Vec<String>,
+    /// Property class (8.8, A4-70).
+    #[serde(default)]
+    pub class: String,
     pub d: f64,
     pub grip: f64,
     pub hole_diameter: f64,
     pub length: f64,
+    /// Holes whose nut goes on the stack's −z face (the plies' frame; the others' on +z),
+    /// where only that side has room for it and the socket.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub nut_below: Vec<usize>,
+    /// How they are installed.
+    #[serde(default)]
+    pub preload: String,
     pub size: String,
+    /// The governing check's utilisation, when checked against a sizing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub utilisation: Option<f64>,
 }
 
 /// A node core: a tube cut from tube stock, not a sheet part. Fields in the file's order.
@@ -324,10 +347,12 @@ fn records(
                     && b.d > 0.0
                     && b.d < b.hole_diameter
                     && b.length.is_finite()
-                    && b.grip.is_finite()) =>
+                    && b.grip.is_finite()
+                    && b.utilisation.is_none_or(|u| u.is_finite() && u >= 0.0)) =>
             {
                 return Err(bad(
-                    "the bolt needs a hole wider than its shank, both positive",
+                    "the bolt needs a hole wider than its shank, both positive (and a utilisation, \
+                     if any, a number from 0)",
                 ))
             }
             _ => {}
@@ -383,7 +408,8 @@ pub const WELDS_VERSION: u32 = 1;
 /// Two plates side by side at a node, as welds.json says.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 pub struct WeldPair {
-    /// Each side's plate tag (a bolted seam as `A+B`).
+    /// Each side's plate tag (of a seam, its ply welded at the node; files before seams welded
+    /// within their group named both, `A+B`).
     pub plates: [String; 2],
     pub dihedral_deg: f64,
     pub root_gap_mm: f64,

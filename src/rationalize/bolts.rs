@@ -24,38 +24,46 @@ pub struct BoltSize {
     pub nut: f64,
     /// Plain washer thickness (ISO 7089).
     pub washer: f64,
+    /// Plain washer outside diameter (ISO 7089).
+    pub washer_od: f64,
+    /// Tensile stress area A_s (ISO 898-1), mm².
+    pub area: f64,
+    /// Width across flats of the nut and head (ISO 4032, ISO 4017).
+    pub across_flats: f64,
+    /// Head height k (ISO 4017).
+    pub head: f64,
 }
 
-const fn size(
-    name: &'static str,
-    d: f64,
-    hole: f64,
-    pitch: f64,
-    nut: f64,
-    washer: f64,
-) -> BoltSize {
+/// (name, d, d0, thread pitch, nut m, washer h, washer OD, A_s, across flats s, head k).
+type Row = (&'static str, f64, f64, f64, f64, f64, f64, f64, f64, f64);
+
+const fn size(r: Row) -> BoltSize {
     BoltSize {
-        name,
-        d,
-        hole,
-        pitch,
-        nut,
-        washer,
+        name: r.0,
+        d: r.1,
+        hole: r.2,
+        pitch: r.3,
+        nut: r.4,
+        washer: r.5,
+        washer_od: r.6,
+        area: r.7,
+        across_flats: r.8,
+        head: r.9,
     }
 }
 
 /// The sizes offered, smallest first.
 pub const SIZES: [BoltSize; 10] = [
-    size("M6", 6.0, 6.6, 1.0, 5.2, 1.6),
-    size("M8", 8.0, 9.0, 1.25, 6.8, 1.6),
-    size("M10", 10.0, 11.0, 1.5, 8.4, 2.0),
-    size("M12", 12.0, 13.0, 1.75, 10.8, 2.5),
-    size("M16", 16.0, 18.0, 2.0, 14.8, 3.0),
-    size("M20", 20.0, 22.0, 2.5, 18.0, 3.0),
-    size("M22", 22.0, 24.0, 2.5, 19.4, 3.0),
-    size("M24", 24.0, 26.0, 3.0, 21.5, 4.0),
-    size("M27", 27.0, 30.0, 3.0, 23.8, 4.0),
-    size("M30", 30.0, 33.0, 3.5, 25.6, 4.0),
+    size(("M6", 6.0, 6.6, 1.0, 5.2, 1.6, 12.0, 20.1, 10.0, 4.0)),
+    size(("M8", 8.0, 9.0, 1.25, 6.8, 1.6, 16.0, 36.6, 13.0, 5.3)),
+    size(("M10", 10.0, 11.0, 1.5, 8.4, 2.0, 20.0, 58.0, 16.0, 6.4)),
+    size(("M12", 12.0, 13.0, 1.75, 10.8, 2.5, 24.0, 84.3, 18.0, 7.5)),
+    size(("M16", 16.0, 18.0, 2.0, 14.8, 3.0, 30.0, 157.0, 24.0, 10.0)),
+    size(("M20", 20.0, 22.0, 2.5, 18.0, 3.0, 37.0, 245.0, 30.0, 12.5)),
+    size(("M22", 22.0, 24.0, 2.5, 19.4, 3.0, 39.0, 303.0, 34.0, 14.0)),
+    size(("M24", 24.0, 26.0, 3.0, 21.5, 4.0, 44.0, 353.0, 36.0, 15.0)),
+    size(("M27", 27.0, 30.0, 3.0, 23.8, 4.0, 50.0, 459.0, 41.0, 17.0)),
+    size(("M30", 30.0, 33.0, 3.5, 25.6, 4.0, 56.0, 561.0, 46.0, 18.7)),
 ];
 
 /// Standard bolt lengths (ISO 4017/4014), mm.
@@ -112,9 +120,9 @@ pub fn max_pitch(t: f64) -> f64 {
 /// Hole centres along the line through `from` and `to` (the plate's mid-height line) inside the
 /// convex counter-clockwise `outline`, every centre at least e = 1.2 d0 from every edge: as
 /// many as the largest pitch needs and at least two (one bolt lets the plies turn about it),
-/// evenly spread over the part of the line that keeps e. None when no such row meets Table
-/// 3.3: too short for two at the least pitch, or too long for the pitch to stay between the
-/// least and the largest (a bolt whose 2.2 d0 is over 14 t never does).
+/// evenly spread over the part of the line that keeps e, or where that would bring them under
+/// the least pitch, one fewer at the largest pitch, centred on it. None when no row meets Table
+/// 3.3: too short for two at the least pitch, or a bolt whose 2.2 d0 is over 14 t.
 pub fn row(
     outline: &[DVec2],
     from: DVec2,
@@ -166,17 +174,216 @@ pub fn row_with_pitch(
     }
     let (a, b) = (from + dir * lo, from + dir * hi);
     let span = a.distance(b);
-    let most = (span / least).floor() as usize + 1;
-    let wanted = ((span / max_pitch(thinner)).ceil() as usize + 1).max(2);
-    if wanted > most {
+    let largest = max_pitch(thinner);
+    if span < least || least > largest {
         return None;
     }
-    let n = wanted;
+    // Over the whole span at a pitch within the limits; where the span falls between two
+    // counts (the even pitch of one gap more under the least), one gap fewer at the largest
+    // pitch, centred.
+    let mut gaps = ((span / largest).ceil() as usize).max(1);
+    let mut pitch = span / gaps as f64;
+    if pitch < least {
+        gaps -= 1;
+        pitch = largest;
+    }
+    let along = (b - a) / span;
+    let start = a + along * (0.5 * (span - pitch * gaps as f64));
     Some(
-        (0..n)
-            .map(|i| a + (b - a) * (i as f64 / (n - 1) as f64))
+        (0..=gaps)
+            .map(|i| start + along * (pitch * i as f64))
             .collect(),
     )
+}
+
+/// A bolt's property class: 8.8 with carbon steel plates, A4-70 with stainless.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoltGrade {
+    pub name: &'static str,
+    /// Ultimate strength f_ub, MPa.
+    pub fub: f64,
+    /// α_v of the shear resistance, the shear plane through the thread (Table 3.4).
+    pub alpha_v: f64,
+}
+
+/// 8.8 (f_ub 800 MPa, α_v 0.6) for carbon steel; A4-70 (f_ub 700 MPa, α_v 0.5 as EN
+/// 1993-1-4 §6.2 takes for stainless bolts) for stainless.
+pub fn grade(stainless: bool) -> BoltGrade {
+    if stainless {
+        BoltGrade {
+            name: "A4-70",
+            fub: 700.0,
+            alpha_v: 0.5,
+        }
+    } else {
+        BoltGrade {
+            name: "8.8",
+            fub: 800.0,
+            alpha_v: 0.6,
+        }
+    }
+}
+
+/// How the bolts are installed and what the check takes them as.
+pub const PRELOAD: &str = "non-preloaded, snug-tight: category A (bearing) in shear, D in \
+                           tension (EN 1993-1-8 §3.4)";
+
+/// What the plies' bolts must carry: the seam member's section forces in the plate's frame
+/// [N along x, V along y, V_z across, T about x, M_y about y, M_z about z] (N, N·mm), each the
+/// largest magnitude at either end over the ultimate combinations (an envelope: components
+/// of different combinations together, on the safe side).
+pub type SeamForces = [f64; 6];
+
+/// The plies' steel for bearing and punching: f_u (for stainless EN 1993-1-4 §6.2's reduced
+/// f_u,red = 0.5 f_y + 0.6 f_u ≤ f_u, given here), MPa, and γ_M2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlySteel {
+    pub fu: f64,
+    pub gamma_m2: f64,
+}
+
+/// A bolt row's checks by EN 1993-1-8 Table 3.4 on its most loaded bolt: utilisations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoltChecks {
+    /// F_v,Ed / F_v,Rd (one shear plane, through the thread).
+    pub shear: f64,
+    /// F_b,Ed / F_b,Rd on the thinner ply.
+    pub bearing: f64,
+    /// F_t,Ed / F_t,Rd.
+    pub tension: f64,
+    /// F_t,Ed / B_p,Rd (punching through the thinner ply).
+    pub punching: f64,
+    /// F_v,Ed / F_v,Rd + F_t,Ed / (1.4 F_t,Rd).
+    pub combined: f64,
+}
+
+/// The names of [`BoltChecks`]' fields, in order.
+pub const BOLT_CHECKS: [&str; 5] = [
+    "shear",
+    "bearing",
+    "tension",
+    "punching",
+    "shear and tension",
+];
+
+impl BoltChecks {
+    pub fn values(&self) -> [f64; 5] {
+        [
+            self.shear,
+            self.bearing,
+            self.tension,
+            self.punching,
+            self.combined,
+        ]
+    }
+
+    /// The largest utilisation and its check's name.
+    pub fn governing(&self) -> (f64, &'static str) {
+        self.values()
+            .into_iter()
+            .zip(BOLT_CHECKS)
+            .fold((0.0, BOLT_CHECKS[0]), |best, (u, n)| {
+                if u > best.0 {
+                    (u, n)
+                } else {
+                    best
+                }
+            })
+    }
+}
+
+/// The checks of `bolt`s of `grade` at `holes` through two plies, the thinner `thinner` mm,
+/// overlapping over the convex `outline` (plate frame: x along the member), under `forces`.
+///
+/// Shear: an elastic bolt group about the holes' centroid, N and V shared equally and M_z as
+/// forces ⊥ each bolt's arm, the worst bolt with every part's magnitude adding. Tension: V_z
+/// shared equally, and M_y and T each as a couple of bolt tension and contact pressure about
+/// the overlap's edge on the far side (bolt forces ∝ their distance from it, the worse edge),
+/// added on the worst bolt. Bearing (Table 3.4): k1 = min(2.8 e2/d0 − 1.7, 2.5), α_b =
+/// min(α_d, f_ub/f_u, 1), α_d = min(e1/3d0, p1/3d0 − 1/4), with e1 = e2 the least distance of
+/// a hole to the overlap's edge and p1 the least pitch (the force's direction taken as the
+/// worst). Punching with d_m the mean of the nut's across-flats and across-corners.
+pub fn check(
+    bolt: &BoltSize,
+    grade: &BoltGrade,
+    holes: &[DVec2],
+    outline: &[DVec2],
+    thinner: f64,
+    steel: &PlySteel,
+    forces: &SeamForces,
+) -> BoltChecks {
+    let n = holes.len().max(1) as f64;
+    let [fx, fy, fz, mx, my, mz] = forces.map(f64::abs);
+    let centre = holes.iter().copied().sum::<DVec2>() / n;
+    let polar: f64 = holes.iter().map(|h| (*h - centre).length_squared()).sum();
+    let shear = holes
+        .iter()
+        .map(|h| {
+            let r = (*h - centre).abs();
+            let twist = if polar > 0.0 { mz / polar } else { 0.0 };
+            (fx / n + twist * r.y).hypot(fy / n + twist * r.x)
+        })
+        .fold(0.0f64, f64::max);
+    // Tension: a moment about an axis in the plate, pivoting on the overlap's far edge.
+    let couple = |moment: f64, across: fn(DVec2) -> f64| -> f64 {
+        if moment == 0.0 {
+            return 0.0;
+        }
+        let (lo, hi) = outline
+            .iter()
+            .map(|p| across(*p))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
+        [lo, hi]
+            .into_iter()
+            .map(|edge| {
+                let arms: Vec<f64> = holes.iter().map(|h| (across(*h) - edge).abs()).collect();
+                let sum: f64 = arms.iter().map(|a| a * a).sum();
+                let far = arms.iter().copied().fold(0.0, f64::max);
+                if sum > 0.0 {
+                    moment * far / sum
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .fold(0.0, f64::max)
+    };
+    let tension = fz / n + couple(my, |p| p.x) + couple(mx, |p| p.y);
+    // Resistances, N.
+    let g = steel.gamma_m2;
+    let f_v = grade.alpha_v * grade.fub * bolt.area / g;
+    let f_t = 0.9 * grade.fub * bolt.area / g;
+    let d0 = bolt.hole;
+    let edge = holes
+        .iter()
+        .map(|h| {
+            (0..outline.len())
+                .map(|k| {
+                    let (p, q) = (outline[k], outline[(k + 1) % outline.len()]);
+                    (q - p).normalize_or_zero().perp_dot(*h - p)
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let pitch = holes
+        .windows(2)
+        .map(|w| w[0].distance(w[1]))
+        .fold(f64::INFINITY, f64::min);
+    let alpha_d = (edge / (3.0 * d0)).min(pitch / (3.0 * d0) - 0.25);
+    let alpha_b = alpha_d.min(grade.fub / steel.fu).min(1.0);
+    let k1 = (2.8 * edge / d0 - 1.7).min(2.5);
+    let f_b = (k1 * alpha_b * steel.fu * bolt.d * thinner / g).max(0.0);
+    let dm = 0.5 * bolt.across_flats * (1.0 + 2.0 / 3f64.sqrt());
+    let b_p = 0.6 * std::f64::consts::PI * dm * thinner * steel.fu / g;
+    let over = |f: f64, r: f64| if r > 0.0 { f / r } else { f64::INFINITY };
+    BoltChecks {
+        shear: over(shear, f_v),
+        bearing: over(shear, f_b),
+        tension: over(tension, f_t),
+        punching: over(tension, b_p),
+        combined: over(shear, f_v) + over(tension, 1.4 * f_t),
+    }
 }
 
 #[cfg(test)]
@@ -250,6 +457,20 @@ mod tests {
                 "{p}"
             );
         }
+        // M6 on 1.5 mm plies, a span of 41 − 2 × 7.92 = 25.16 mm: two gaps would be 12.6 mm,
+        // under 2.2 d0 = 14.52; so one gap at the largest pitch, 21 mm, centred.
+        let m6 = parse("M6").expect("listed");
+        let holes = row(
+            &rect(41.0, 100.0),
+            DVec2::new(0.0, 50.0),
+            DVec2::new(41.0, 50.0),
+            &m6,
+            1.5,
+        )
+        .expect("one gap fits");
+        assert_eq!(holes.len(), 2);
+        assert!((holes[1].x - holes[0].x - 21.0).abs() < 1e-9);
+        assert!((holes[0].x + holes[1].x - 41.0).abs() < 1e-9, "centred");
         // Too low for e2 on both sides: 2·15.6 > 30.
         let low = rect(300.0, 30.0);
         assert_eq!(

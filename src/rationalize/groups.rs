@@ -9,9 +9,10 @@
 //!    seed). A component no seed reached goes whole to the lightest group.
 //! 3. Refinement, keeping every group connected: first balance (while a group is outside ±15 %
 //!    of the mean weight, move the boundary node that narrows the gap between two neighbouring
-//!    groups and adds the fewest seams), then seams (a boundary node moves when that removes
-//!    seams and keeps both groups within the balance; passes repeat until nothing moves, at
-//!    most 50).
+//!    groups and adds the least seam cost), then seams (a boundary node moves when that lowers
+//!    the seam cost and keeps both groups within the balance; passes repeat until nothing
+//!    moves, at most 50). A seam costs (median edge length / its length)²: seams go to long
+//!    members, where the plies' overlap between their setbacks has room for a bolt row.
 //!
 //! A seam plate is split into two plates of half thickness, one tagged for each group, bolted
 //! face to face (Calyx's half-thickness group edges).
@@ -56,6 +57,10 @@ pub fn partition(
         return Err(GroupError::TooMany(k, used.len()));
     }
     let weight = |v: usize| adj[v].len() as f64 / 2.0;
+    let mut lengths: Vec<f64> = adj.iter().flatten().map(|&(_, l)| l).collect();
+    lengths.sort_by(f64::total_cmp);
+    let median = lengths.get(lengths.len() / 2).copied().unwrap_or(1.0);
+    let removed = |group: &[u32], v: usize, to: usize| seams_removed(&adj, group, v, to, median);
 
     // 1. Seeds: the node farthest from the first used node, then each time the node farthest
     // from all seeds so far (ties to the lower index).
@@ -141,7 +146,7 @@ pub fn partition(
         if !load.iter().any(|&l| outside(l)) {
             break;
         }
-        let mut best: Option<(i64, usize, usize)> = None; // (gain, node, to)
+        let mut best: Option<(Ordered, usize, usize)> = None; // (gain, node, to)
         for &v in &used {
             let from = group[v] as usize;
             let wv = weight(v);
@@ -153,7 +158,7 @@ pub fn partition(
                 if !helps {
                     continue;
                 }
-                let gain = seams_removed(&adj, &group, v, to);
+                let gain = Ordered(removed(&group, v, to));
                 if !best.is_some_and(|(g, bv, bt)| {
                     (gain, Reverse(v), Reverse(to)) <= (g, Reverse(bv), Reverse(bt))
                 }) {
@@ -177,14 +182,14 @@ pub fn partition(
         let mut moved = false;
         for &v in &used {
             let from = group[v] as usize;
-            let mut best: Option<(i64, usize)> = None;
+            let mut best: Option<(f64, usize)> = None;
             for &(w, _) in &adj[v] {
                 let to = group[w] as usize;
                 if to == from {
                     continue;
                 }
-                let gain = seams_removed(&adj, &group, v, to);
-                if gain > 0 && !best.is_some_and(|(g, t)| gain < g || (gain == g && to >= t)) {
+                let gain = removed(&group, v, to);
+                if gain > 1e-9 && !best.is_some_and(|(g, t)| gain < g || (gain == g && to >= t)) {
                     best = Some((gain, to));
                 }
             }
@@ -209,15 +214,27 @@ pub fn partition(
     Ok(group)
 }
 
-/// How many seams moving node `v` to group `to` removes (negative: adds).
-fn seams_removed(adj: &[Vec<(usize, f64)>], group: &[u32], v: usize, to: usize) -> i64 {
+/// What a seam on an edge `length` long costs when the median edge is `median` long: short
+/// members cost more, so seams go where a bolt row fits.
+fn seam_cost(median: f64, length: f64) -> f64 {
+    (median / length.max(1e-9)).powi(2)
+}
+
+/// How much seam cost moving node `v` to group `to` removes (negative: adds).
+fn seams_removed(
+    adj: &[Vec<(usize, f64)>],
+    group: &[u32],
+    v: usize,
+    to: usize,
+    median: f64,
+) -> f64 {
     let from = group[v];
     adj[v]
         .iter()
-        .map(|&(u, _)| match group[u] {
-            g if g as usize == to => 1,
-            g if g == from => -1,
-            _ => 0,
+        .map(|&(u, l)| match group[u] {
+            g if g as usize == to => seam_cost(median, l),
+            g if g == from => -seam_cost(median, l),
+            _ => 0.0,
         })
         .sum()
 }

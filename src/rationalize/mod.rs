@@ -5,6 +5,7 @@ pub mod audit;
 pub mod axes;
 pub mod bolts;
 pub mod cells;
+pub mod clearance;
 pub mod groups;
 pub mod panels;
 pub mod planarize;

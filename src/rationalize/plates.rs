@@ -11,9 +11,14 @@
 //! the plate's plane.
 //!
 //! Seam plates (between assembly groups) are two plates from the gauge list, the thinnest pair
-//! that adds up to the plate's thickness, bolted face to face through a row of holes that
-//! keeps EN 1993-1-8's end, edge and pitch distances (`bolts.rs`); the holes of both halves
-//! are the same in the plate's frame, so they coincide in 3D.
+//! that adds up to the plate's thickness, bolted face to face (the stack centred on the panel
+//! plane) through a row of holes that keeps EN 1993-1-8's end, edge and pitch distances
+//! (`bolts.rs`). Each ply is its node's group's: at that node it is the strip the others are
+//! set back to, and it welds only to that group's plates; at the other node it passes unwelded,
+//! set back until it is the weld gap plus its partner ply's thickness clear of everything
+//! welded there (the fillet on the face it lies on has a leg of 0.7 √2 t of the thinner plate,
+//! under that). The holes go where both plies are, the same in
+//! both plies' frames, so they coincide in 3D.
 //!
 //! Each plate is stored as a 2D outline in its own frame (origin at the first node, x along the
 //! edge, y toward the axis, z the plate normal) and the rigid transform placing it; the
@@ -23,7 +28,8 @@
 use glam::{DVec2, DVec3};
 
 use super::axes::Axes;
-use super::bolts::{self, BoltSize};
+use super::bolts::{self, BoltChecks, BoltGrade, BoltSize, PlySteel, SeamForces};
+use super::clearance::{self, Room, Socket};
 use super::planarize::Selector;
 use super::welds::{self, Strip};
 use crate::geom::clip_convex;
@@ -90,6 +96,14 @@ pub struct PlateOptions {
     pub bolt: Option<BoltSize>,
     /// A tube at every node whose gaps cannot be evened by setbacks alone.
     pub node_core: Option<CoreSize>,
+    /// The bolts' class and the plies' steel, for the checks of EN 1993-1-8 Table 3.4.
+    pub bolt_grade: BoltGrade,
+    pub ply_steel: PlySteel,
+    /// Per edge, what a seam's bolts carry (from a sizing): the size is the first that holds.
+    /// None: the bolts are not checked.
+    pub seam_forces: Option<Vec<Option<SeamForces>>>,
+    /// The socket that tightens the bolts (None: one for each size).
+    pub socket: Option<Socket>,
 }
 
 /// A node core's tube, mm.
@@ -137,6 +151,13 @@ impl Default for PlateOptions {
             groups: 1,
             bolt: None,
             node_core: None,
+            bolt_grade: bolts::grade(true),
+            ply_steel: PlySteel {
+                fu: 530.0,
+                gamma_m2: 1.25,
+            },
+            seam_forces: None,
+            socket: None,
         }
     }
 }
@@ -188,8 +209,10 @@ pub enum PlateError {
         t: f64,
         gauges: Vec<f64>,
     },
-    #[error("edge {edge} (nodes {} and {}): the seam takes no row of {bolt} bolts by EN 1993-1-8 Table 3.3 (at least two, {:.1} mm from every edge, pitch {:.1} to {:.1} mm on its {thinner} mm ply): {}", .nodes[0], .nodes[1], .edge_distance, .min_pitch, .max_pitch, if *.chosen { "give a smaller bolt= or thicker gauges" } else { "the smallest size is too big for it: give another groups= (the seams fall elsewhere) or thicker gauges" })]
+    #[error("edge {edge} (nodes {} and {}): the seam takes no row of {bolt} bolts by EN 1993-1-8 Table 3.3 (at least two, {:.1} mm from every edge, pitch {:.1} to {:.1} mm on its {thinner} mm ply) where its plies overlap, {:.1} mm along the member between their setbacks: {}", .nodes[0], .nodes[1], .edge_distance, .min_pitch, .max_pitch, .overlap, if *.chosen { "give a smaller bolt= or thicker gauges" } else { "the smallest size is too big for it: give another groups= (the seams fall elsewhere), a smaller node_core= (its radius sets the setbacks there) or thicker gauges" })]
     NoRoomForBolt {
+        /// Length of the plies' overlap along the member's mid-height line, mm.
+        overlap: f64,
         /// Whether the size was the caller's (bolt=) rather than the smallest tried.
         chosen: bool,
         edge: usize,
@@ -199,6 +222,20 @@ pub enum PlateError {
         min_pitch: f64,
         max_pitch: f64,
         thinner: f64,
+    },
+    #[error(
+        "edge {edge} (nodes {} and {}): the seam's bolts do not hold its forces from the sizing: \
+         {bolt} at best, utilisation {} ({check}, EN 1993-1-8 Table 3.4): {}",
+        .nodes[0], .nodes[1], crate::text::num((*utilisation * 1000.0).round() / 1000.0),
+        if *chosen { "give another bolt= or thicker gauges" } else { "give thicker gauges (size with a thicker list) or another groups=" }
+    )]
+    BoltsOverloaded {
+        chosen: bool,
+        edge: usize,
+        nodes: [u32; 2],
+        bolt: &'static str,
+        utilisation: f64,
+        check: &'static str,
     },
     #[error("node {0} has no usable axis or height")]
     Axis(u32),
@@ -212,6 +249,17 @@ pub enum PlateError {
     },
     #[error("edge {0}: its setbacks ({1:.1} and {2:.1} mm) leave nothing of the plate")]
     TooShort(usize, f64, f64),
+    #[error(
+        "edge {edge}: the seam's ply that passes node {node} cannot stop {} mm clear of the \
+         plates welded there within its length: give another groups= (the seams fall \
+         elsewhere)",
+        crate::text::num(*clearance)
+    )]
+    PlyTooShort {
+        edge: usize,
+        node: u32,
+        clearance: f64,
+    },
     #[error("edge {0}: its panel is twisted or self-crossing (the axes cross within the height)")]
     Twisted(usize),
     #[error(transparent)]
@@ -284,8 +332,9 @@ pub struct Plate {
     pub placement: Placement,
     /// Cut back from each node's axis, mm.
     pub setback: [f64; 2],
-    /// Plates (by index) welded to this one at each node: every other plate there except its
-    /// own other half; none where the node has a core.
+    /// Plates (by index) welded to this one at each node: every other plate of the node's
+    /// group there (a seam's ply only at its own group's node, to that group's plates); none
+    /// where the node has a core.
     pub partners: [Vec<usize>; 2],
     /// The core (index into `PlateSet::cores`) this plate welds to at each node, if any.
     pub core: [Option<usize>; 2],
@@ -302,6 +351,9 @@ pub struct Plate {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bolting {
     pub size: BoltSize,
+    pub grade: BoltGrade,
+    /// Under the sizing's forces (None without them).
+    pub checks: Option<BoltChecks>,
     /// Both halves together, mm.
     pub grip: f64,
     /// Standard length to order, mm.
@@ -642,15 +694,32 @@ pub struct WeldPair {
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeWelds {
     pub node: u32,
+    /// The node's assembly group: its plates, and of a seam the ply in this group, weld here.
+    pub group: u32,
     /// Edges meeting here.
     pub edges: Vec<usize>,
-    /// Setback of each of those edges' plates here, mm.
+    /// Setback here of the plate each of those edges welds with (a seam's ply of this group),
+    /// mm.
     pub setbacks: Vec<f64>,
+    /// The seams' other plies (by edge), which pass this node unwelded: their setback here and
+    /// their least distance from every plate welded here (and from the core), mm.
+    pub passing: Vec<Passing>,
     pub pairs: Vec<WeldPair>,
     /// Every adjacent pair's root gap within the tolerance.
     pub even: bool,
     /// Index into `PlateSet::cores`, when the node has one.
     pub core: Option<usize>,
+}
+
+/// A seam's ply at the node of the other group: set back until it clears every plate welded
+/// there (and the core) by the weld gap plus the thickness of its partner ply, which welds
+/// there (room for that fillet's leg, 0.7 √2 t of the thinner plate, under t).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Passing {
+    pub edge: usize,
+    pub setback: f64,
+    /// Its least distance from the plates welded at the node and the core, mm.
+    pub clearance: f64,
 }
 
 /// Everything `plates` makes.
@@ -662,6 +731,8 @@ pub struct PlateSet {
     /// Nodes where two or more plates meet.
     pub welds: Vec<NodeWelds>,
     pub cores: Vec<Core>,
+    /// Bolts moved along their rows for room to fit and tighten them, and those without.
+    pub room: Room,
 }
 
 impl PlateSet {
@@ -720,14 +791,24 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
             at[v as usize].push((k, end));
         }
     }
-    let mut setback = vec![[0.0f64; 2]; axes.edges.len()];
+    // Per edge and end: the setback of the plate welded there (a seam's ply of that node's
+    // group) and of a seam's other ply.
+    let mut welded = vec![[0.0f64; 2]; axes.edges.len()];
+    let mut passing = vec![[0.0f64; 2]; axes.edges.len()];
     let mut welds = Vec::new();
     let mut cores = Vec::new();
+    let sides = Sides {
+        t: &t,
+        plies: &plies,
+
+        dir: &dir,
+        group: &group,
+    };
     for (v, here) in at.iter().enumerate() {
         if here.len() < 2 {
             continue;
         }
-        let node = node_welds(axes, opts, v, here, &dir, &stack, &mut cores, &group)?;
+        let node = node_welds(axes, opts, v, here, &sides, &mut cores)?;
         // Plates that overlap cannot be built, whatever the report says about the node.
         if let Some(pair) = node.pairs.iter().find(|p| p.gap < -OVERLAP) {
             return Err(PlateError::Overlap {
@@ -737,57 +818,139 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
             });
         }
         for (&(k, end), s) in here.iter().zip(&node.setbacks) {
-            setback[k][end] = *s;
+            welded[k][end] = *s;
+            passing[k][end] = *s;
+        }
+        for p in &node.passing {
+            let end = usize::from(axes.edges[p.edge][0] as usize != v);
+            passing[p.edge][end] = p.setback;
         }
         welds.push(node);
     }
-    let mut whole = Vec::with_capacity(axes.edges.len());
+    let mut per_edge = Vec::with_capacity(axes.edges.len());
     for (k, ply) in plies.iter().enumerate() {
-        let (mut p, mid) = plate(axes, k, stack[k], setback[k])?;
-        if let Some((a, b)) = ply {
-            bolt_seam(&mut p, mid, opts.bolt, a.min(*b))?;
+        let Some((ta, tb)) = *ply else {
+            per_edge.push(vec![plate(axes, k, t[k], welded[k])?.0]);
+            continue;
+        };
+        // Each ply reaches its own group's node and stops short of the other's; the bolts go
+        // where both are.
+        let [w, p] = [welded[k], passing[k]];
+        let (mut both, mid) = plate(axes, k, stack[k], [w[0].max(p[0]), w[1].max(p[1])])?;
+        bolt_seam(&mut both, mid, opts, ta.min(tb))?;
+        let mut halves = Vec::with_capacity(2);
+        // Ply a (node a's group) on the −z side of the stack, ply b on the +z side.
+        for (thickness, setback, centre) in
+            [(ta, [w[0], p[1]], -0.5 * tb), (tb, [p[0], w[1]], 0.5 * ta)]
+        {
+            let (mut half, _) = plate(axes, k, thickness, setback)?;
+            half.placement.origin += half.placement.z * centre;
+            half.holes = both.holes.clone();
+            half.bolt = both.bolt;
+            halves.push(half);
         }
-        whole.push(p);
+        per_edge.push(halves);
     }
-    let (plates, by_edge) = split_and_tag(whole, &plies, &group);
+    let (plates, by_edge) = tag(per_edge, &group);
     let mut set = PlateSet {
         plates,
         by_edge,
         welds,
         cores,
+        room: Room::default(),
     };
     core_partners(&mut set);
+    set.room = clearance::make_room(&mut set, opts.socket);
+    // A moved bolt changes the row's checks.
+    let moved: std::collections::BTreeSet<[usize; 2]> =
+        set.room.moved.iter().map(|m| m.0).collect();
+    for [a, b] in moved {
+        let (Some(bolting), Some(forces)) = (
+            set.plates[a].bolt,
+            opts.seam_forces
+                .as_ref()
+                .and_then(|f| f.get(set.plates[a].edge).copied().flatten()),
+        ) else {
+            continue;
+        };
+        let overlap = clearance::overlap_outline(&set.plates[a].outline, &set.plates[b].outline);
+        let thinner = set.plates[a].thickness.min(set.plates[b].thickness);
+        let checks = bolts::check(
+            &bolting.size,
+            &opts.bolt_grade,
+            &set.plates[a].holes,
+            &overlap,
+            thinner,
+            &opts.ply_steel,
+            &forces,
+        );
+        let (u, what) = checks.governing();
+        if u > 1.0 {
+            let p = &set.plates[a];
+            return Err(PlateError::BoltsOverloaded {
+                chosen: opts.bolt.is_some(),
+                edge: p.edge,
+                nodes: p.nodes,
+                bolt: bolting.size.name,
+                utilisation: u,
+                check: what,
+            });
+        }
+        for i in [a, b] {
+            if let Some(bt) = set.plates[i].bolt.as_mut() {
+                bt.checks = Some(checks);
+            }
+        }
+    }
     Ok(set)
 }
 
+/// Per edge: what its plates are (for the strips at a node).
+struct Sides<'a> {
+    t: &'a [f64],
+    plies: &'a [Option<(f64, f64)>],
+    dir: &'a [[DVec3; 2]],
+    group: &'a [u32],
+}
+
 /// The setbacks, wedges and gaps at node `v`, with a core when it needs one and one is asked
-/// for.
-#[allow(clippy::too_many_arguments)]
+/// for. A seam's ply of this node's group is the strip that welds here; its other ply then
+/// stops clear of every plate welded here.
 fn node_welds(
     axes: &Axes,
     opts: &PlateOptions,
     v: usize,
     here: &[(usize, usize)],
-    dir: &[[DVec3; 2]],
-    stack: &[f64],
+    sides: &Sides,
     cores: &mut Vec<Core>,
-    group: &[u32],
 ) -> Result<NodeWelds, PlateError> {
     let d = axes.axes[v];
-    let e1 = dir[here[0].0][here[0].1];
+    let e1 = sides.dir[here[0].0][here[0].1];
     let e2 = d.cross(e1);
-    let strips: Vec<Strip> = here
-        .iter()
-        .map(|&(k, end)| {
-            let u = dir[k][end];
-            let [a, b] = axes.edges[k];
-            Strip {
-                u: DVec2::new(u.dot(e1), u.dot(e2)),
-                thickness: stack[k],
-                reach: axes.positions[a as usize].distance(axes.positions[b as usize]),
-            }
-        })
-        .collect();
+    // In the section, +u.perp() is the plate's −z at its first node and +z at its second: the
+    // ply of the first node's group is on −z, so either end's own ply sits half the other ply
+    // to +u.perp() of the plane.
+    let strip = |k: usize, end: usize, own: bool| {
+        let u = sides.dir[k][end];
+        let [a, b] = axes.edges[k];
+        let mut s = Strip::centred(
+            DVec2::new(u.dot(e1), u.dot(e2)),
+            sides.t[k],
+            axes.positions[a as usize].distance(axes.positions[b as usize]),
+        );
+        if let Some((ta, tb)) = sides.plies[k] {
+            let (mine, other) = if end == 0 { (ta, tb) } else { (tb, ta) };
+            let (t, offset) = if own {
+                (mine, 0.5 * other)
+            } else {
+                (other, -0.5 * mine)
+            };
+            s.thickness = t;
+            s.offset = offset;
+        }
+        s
+    };
+    let strips: Vec<Strip> = here.iter().map(|&(k, end)| strip(k, end, true)).collect();
     let cut =
         welds::even_gaps(&strips, opts.weld_gap, opts.weld_gap_tolerance).ok_or_else(|| {
             // Two plates leave the axis in the same direction: name the pair.
@@ -804,9 +967,9 @@ fn node_welds(
         setbacks = welds::core_setbacks(&strips, 0.5 * size.diameter, opts.weld_gap);
         core = Some(cores.len());
         cores.push(Core {
-            id: format!("{}-C{v}", group[v] + 1),
+            id: format!("{}-C{v}", sides.group[v] + 1),
             node: v as u32,
-            group: group[v],
+            group: sides.group[v],
             size,
             base: axes.positions[v],
             axis: d,
@@ -821,10 +984,47 @@ fn node_welds(
             gap: welds::root_gap(&strips[w.a], setbacks[w.a], &strips[w.b], setbacks[w.b]),
         })
         .collect();
+    // The other plies, one after another, each clear of the welded plates and those before it
+    // by the gap and its own ply's thickness (the ply it lies on welds here with a fillet
+    // whose leg, 0.7 √2 t of the thinner plate, is under that).
+    let radius = core.map(|_| 0.5 * opts.node_core.expect("a core was made").diameter);
+    let mut placed: Vec<(Strip, f64)> = Vec::new();
+    let mut passing = Vec::new();
+    for (i, &(k, end)) in here.iter().enumerate() {
+        if sides.plies[k].is_none() {
+            continue;
+        }
+        let other = strip(k, end, false);
+        let clearance = opts.weld_gap + strips[i].thickness;
+        let others: Vec<(Strip, f64)> = (0..here.len())
+            .filter(|&j| j != i)
+            .map(|j| (strips[j], setbacks[j]))
+            .chain(placed.iter().copied())
+            .collect();
+        let setback = welds::clearing_setback(&other, setbacks[i], &others, radius, clearance)
+            .ok_or(PlateError::PlyTooShort {
+                edge: k,
+                node: v as u32,
+                clearance,
+            })?;
+        let gap = others
+            .iter()
+            .map(|(o, so)| welds::root_gap(&other, setback, o, *so))
+            .chain(radius.map(|r| setback - r))
+            .fold(f64::INFINITY, f64::min);
+        placed.push((other, setback));
+        passing.push(Passing {
+            edge: k,
+            setback,
+            clearance: gap,
+        });
+    }
     Ok(NodeWelds {
         node: v as u32,
+        group: sides.group[v],
         edges: here.iter().map(|h| h.0).collect(),
         setbacks,
+        passing,
         pairs,
         even: cut.even,
         core,
@@ -845,31 +1045,36 @@ fn closest_pair(strips: &[Strip]) -> (usize, f64) {
     best
 }
 
-/// Holes along the seam plate's mid-height line `mid`, of the given size or the largest that
-/// fits from the grip's default down.
+/// Holes along the seam plate's mid-height line `mid`, of the given size or from the grip's
+/// default down (then up) the first whose row fits and, with the seam's forces, holds.
 fn bolt_seam(
     p: &mut Plate,
     mid: [DVec2; 2],
-    size: Option<BoltSize>,
+    opts: &PlateOptions,
     thinner: f64,
 ) -> Result<(), PlateError> {
     let grip = p.thickness;
-    let tried: Vec<BoltSize> = match size {
+    let forces = opts
+        .seam_forces
+        .as_ref()
+        .and_then(|f| f.get(p.edge).copied().flatten());
+    let tried: Vec<BoltSize> = match opts.bolt {
         Some(b) => vec![b],
         None => {
             let top = bolts::for_grip(grip);
-            bolts::SIZES
+            let down = bolts::SIZES.iter().rev().filter(|b| b.d <= top.d);
+            // Larger ones only when the forces ask for them.
+            let up = bolts::SIZES
                 .iter()
-                .rev()
-                .filter(|b| b.d <= top.d)
-                .copied()
-                .collect()
+                .filter(|b| b.d > top.d && forces.is_some());
+            down.chain(up).copied().collect()
         }
     };
+    let mut weakest: Option<(BoltSize, BoltChecks)> = None;
     for b in &tried {
         // Along the mid-height line; on a plate too short for that, up its middle across the
         // member (p2 ≥ 2.4 d0), which holds the plies against turning as well.
-        let centre = 0.5 * (mid[0] + mid[1]);
+        let centre = chord_middle(&p.outline, mid[0], mid[1]).unwrap_or(0.5 * (mid[0] + mid[1]));
         let up = (mid[1] - mid[0]).perp().normalize_or_zero() * 1e4;
         let holes = bolts::row(&p.outline, mid[0], mid[1], b, thinner).or_else(|| {
             bolts::row_with_pitch(
@@ -881,19 +1086,51 @@ fn bolt_seam(
                 bolts::min_pitch_across(b),
             )
         });
-        if let Some(holes) = holes {
-            p.holes = holes;
-            p.bolt = Some(Bolting {
-                size: *b,
-                grip,
-                length: bolts::length(b, grip).unwrap_or(f64::NAN),
-            });
-            return Ok(());
+        let Some(holes) = holes else { continue };
+        let checks = forces.map(|f| {
+            bolts::check(
+                b,
+                &opts.bolt_grade,
+                &holes,
+                &p.outline,
+                thinner,
+                &opts.ply_steel,
+                &f,
+            )
+        });
+        if let Some(c) = checks {
+            if c.governing().0 > 1.0 {
+                if weakest.is_none_or(|(_, w)| c.governing().0 < w.governing().0) {
+                    weakest = Some((*b, c));
+                }
+                continue;
+            }
         }
+        p.holes = holes;
+        p.bolt = Some(Bolting {
+            size: *b,
+            grade: opts.bolt_grade,
+            checks,
+            grip,
+            length: bolts::length(b, grip).unwrap_or(f64::NAN),
+        });
+        return Ok(());
+    }
+    if let Some((b, c)) = weakest {
+        let (u, what) = c.governing();
+        return Err(PlateError::BoltsOverloaded {
+            chosen: opts.bolt.is_some(),
+            edge: p.edge,
+            nodes: p.nodes,
+            bolt: b.name,
+            utilisation: u,
+            check: what,
+        });
     }
     let last = tried.last().expect("at least one size");
     Err(PlateError::NoRoomForBolt {
-        chosen: size.is_some(),
+        overlap: chord(&p.outline, mid[0], mid[1]).map_or(0.0, |(a, b)| a.distance(b)),
+        chosen: opts.bolt.is_some(),
         edge: p.edge,
         nodes: p.nodes,
         bolt: last.name,
@@ -904,38 +1141,47 @@ fn bolt_seam(
     })
 }
 
-/// Seam plates into two plies, one per group, face to face within the stack; then partners by
-/// plate and tags.
-fn split_and_tag(
-    per_edge: Vec<Plate>,
-    plies: &[Option<(f64, f64)>],
-    group: &[u32],
-) -> (Vec<Plate>, Vec<Vec<usize>>) {
+/// The middle of the part of the line through `from` and `to` inside the convex
+/// counter-clockwise `outline` (a seam's plies' overlap, which a setback may have moved off the
+/// panel's middle).
+fn chord_middle(outline: &[DVec2], from: DVec2, to: DVec2) -> Option<DVec2> {
+    chord(outline, from, to).map(|(a, b)| 0.5 * (a + b))
+}
+
+/// The part of the line through `from` and `to` inside the convex counter-clockwise `outline`.
+fn chord(outline: &[DVec2], from: DVec2, to: DVec2) -> Option<(DVec2, DVec2)> {
+    let dir = to - from;
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for k in 0..outline.len() {
+        let (p, q) = (outline[k], outline[(k + 1) % outline.len()]);
+        let inward = (q - p).perp();
+        // (from + λ dir − p)·inward ≥ 0
+        let (base, rate) = ((from - p).dot(inward), dir.dot(inward));
+        if rate > 0.0 {
+            lo = lo.max(-base / rate);
+        } else if rate < 0.0 {
+            hi = hi.min(-base / rate);
+        } else if base < 0.0 {
+            return None;
+        }
+    }
+    (lo.is_finite() && hi.is_finite() && lo <= hi).then(|| (from + dir * lo, from + dir * hi))
+}
+
+/// Groups, pairs and partners of the plates per edge (one, or a seam's two plies: node a's
+/// group's first), and tags `G-NNN` in edge order within each group.
+fn tag(per_edge: Vec<Vec<Plate>>, group: &[u32]) -> (Vec<Plate>, Vec<Vec<usize>>) {
     let mut out: Vec<Plate> = Vec::with_capacity(per_edge.len());
     let mut by_edge = Vec::with_capacity(per_edge.len());
-    for (mut p, ply) in per_edge.into_iter().zip(plies) {
-        let [ga, gb] = p.nodes.map(|v| group[v as usize]);
-        let Some((ta, tb)) = *ply else {
-            p.group = ga;
-            by_edge.push(vec![out.len()]);
-            out.push(p);
-            continue;
-        };
+    for plates in per_edge {
         let first = out.len();
-        let stack = p.thickness;
-        // Ply a on the −z side of the stack, ply b on the +z side.
-        for (g, t, centre, other) in [
-            (ga, ta, -0.5 * stack + 0.5 * ta, first + 1),
-            (gb, tb, 0.5 * stack - 0.5 * tb, first),
-        ] {
-            let mut half = p.clone();
-            half.thickness = t;
-            half.placement.origin += p.placement.z * centre;
-            half.group = g;
-            half.bolted_to = Some(other);
-            out.push(half);
+        let seam = plates.len() == 2;
+        for (i, mut p) in plates.into_iter().enumerate() {
+            p.group = group[p.nodes[i] as usize];
+            p.bolted_to = seam.then_some(first + 1 - i);
+            out.push(p);
         }
-        by_edge.push(vec![first, first + 1]);
+        by_edge.push((first..out.len()).collect());
     }
     let mut at: std::collections::HashMap<u32, Vec<usize>> = Default::default();
     for (i, p) in out.iter().enumerate() {
@@ -948,11 +1194,16 @@ fn split_and_tag(
         .iter()
         .enumerate()
         .map(|(i, p)| {
+            // Welded at a node only within its group: a ply passes the other group's node.
             let partners = p.nodes.map(|v| {
+                let g = group[v as usize];
+                if p.group != g {
+                    return Vec::new();
+                }
                 at[&v]
                     .iter()
                     .copied()
-                    .filter(|&j| j != i && Some(j) != p.bolted_to)
+                    .filter(|&j| j != i && out[j].group == g)
                     .collect::<Vec<_>>()
             });
             let n = count.entry(p.group).or_default();
@@ -967,7 +1218,8 @@ fn split_and_tag(
     (out, by_edge)
 }
 
-/// At a node with a core, every plate welds to the core rather than to the other plates.
+/// At a node with a core, every plate of its group welds to the core rather than to the other
+/// plates.
 fn core_partners(set: &mut PlateSet) {
     for w in &set.welds {
         if w.core.is_none() {
@@ -977,7 +1229,7 @@ fn core_partners(set: &mut PlateSet) {
             for &i in &set.by_edge[k] {
                 let p = &mut set.plates[i];
                 for end in 0..2 {
-                    if p.nodes[end] == w.node {
+                    if p.nodes[end] == w.node && p.group == w.group {
                         p.partners[end].clear();
                         p.core[end] = w.core;
                     }
@@ -1169,12 +1421,56 @@ mod tests {
             assert!(w[0].distance(w[1]) <= 14.0 * 2.0 + 1e-9);
         }
         assert!(!a.holes.is_empty() && a.holes == b.holes);
-        // Every hole 1.2 d0 inside every edge, neighbours 2.2 d0 apart.
+        // Every hole 1.2 d0 inside every edge of both plies, neighbours 2.2 d0 apart.
         let e = 1.2 * bolt.size.hole;
-        for h in &a.holes {
-            for k in 0..a.outline.len() {
-                let (p, q) = (a.outline[k], a.outline[(k + 1) % a.outline.len()]);
-                assert!((q - p).normalize().perp_dot(*h - p) >= e - 1e-9);
+        for ply in [a, b] {
+            for h in &ply.holes {
+                for k in 0..ply.outline.len() {
+                    let (p, q) = (ply.outline[k], ply.outline[(k + 1) % ply.outline.len()]);
+                    assert!((q - p).normalize().perp_dot(*h - p) >= e - 1e-9);
+                }
+            }
+        }
+        // Each ply welds at its own group's node, to that group's plates only, with the setback
+        // the weld report gives; at the other node it has no partners and stops clear.
+        assert_ne!(a.group, b.group);
+        for (end, (mine, other)) in [(a, b), (b, a)].into_iter().enumerate() {
+            let v = mine.nodes[end];
+            let node = set.welds.iter().find(|w| w.node == v).expect("a joint");
+            assert_eq!(node.group, mine.group);
+            assert!(!mine.partners[end].is_empty());
+            for &j in &mine.partners[end] {
+                assert_eq!(set.plates[j].group, mine.group);
+            }
+            assert!(other.partners[end].is_empty());
+            let i = node
+                .edges
+                .iter()
+                .position(|&k| k == mine.edge)
+                .expect("there");
+            assert!((node.setbacks[i] - mine.setback[end]).abs() < 1e-12);
+            let pass = node
+                .passing
+                .iter()
+                .find(|p| p.edge == mine.edge)
+                .expect("passes");
+            assert!((pass.setback - other.setback[end]).abs() < 1e-12);
+            assert!(pass.setback > mine.setback[end]);
+            assert!(
+                pass.clearance >= opts.weld_gap + mine.thickness - 1e-6,
+                "{pass:?}"
+            );
+            // The plates of the node's group meet the ply, not the stack: each plate's partners
+            // at v hold the ply and not its partner.
+            for &j in &mine.partners[end] {
+                let q = &set.plates[j];
+                let at = usize::from(q.nodes[0] != v);
+                assert!(q.partners[at].contains(
+                    &set.plates
+                        .iter()
+                        .position(|p| std::ptr::eq(p, mine))
+                        .expect("in the set")
+                ));
             }
         }
         for w in a.holes.windows(2) {

@@ -29,18 +29,45 @@ pub struct Strip {
     pub thickness: f64,
     /// How far the strip reaches from the axis, mm (the plate's length there).
     pub reach: f64,
+    /// From the plane through the axis along u to the strip's middle, along `u.perp()`, mm: 0
+    /// for a plate; for a seam's ply, half the other ply (the stack is centred on the plane).
+    pub offset: f64,
 }
 
 impl Strip {
+    /// A plate centred on the plane through the axis.
+    pub fn centred(u: DVec2, thickness: f64, reach: f64) -> Strip {
+        Strip {
+            u,
+            thickness,
+            reach,
+            offset: 0.0,
+        }
+    }
+
     fn corners(&self, s: f64) -> [DVec2; 4] {
-        let n = self.u.perp() * (0.5 * self.thickness);
+        let side = self.u.perp();
+        let (lo, hi) = (
+            side * (self.offset - 0.5 * self.thickness),
+            side * (self.offset + 0.5 * self.thickness),
+        );
         let far = self.reach.max(s + 1.0);
         [
-            self.u * s - n,
-            self.u * far - n,
-            self.u * far + n,
-            self.u * s + n,
+            self.u * s + lo,
+            self.u * far + lo,
+            self.u * far + hi,
+            self.u * s + hi,
         ]
+    }
+
+    /// Half its width as seen from the plane through the axis: the farther face.
+    fn half_width(&self) -> f64 {
+        0.5 * self.thickness + self.offset.abs()
+    }
+
+    /// The least distance from the axis of its end face across the plane through the axis.
+    fn off_axis(&self) -> f64 {
+        (self.offset.abs() - 0.5 * self.thickness).max(0.0)
     }
 }
 
@@ -118,7 +145,7 @@ pub fn bisector_setbacks(strips: &[Strip], gap: f64) -> Option<Vec<f64>> {
             if half.sin() < 1e-6 {
                 return None;
             }
-            let s = 0.5 * a.thickness / half.tan() + gap / (2.0 * half.sin());
+            let s = a.half_width() / half.tan() + gap / (2.0 * half.sin());
             out[k] = out[k].max(s);
         }
     }
@@ -387,10 +414,52 @@ fn orders(n: usize) -> impl Iterator<Item = Vec<usize>> {
     })
 }
 
-/// Setbacks against a node core of outer radius `radius`: every plate's centre line ends `gap`
-/// from the tube (a flat end against a round tube: the gap is least at the plate's middle).
+/// Setbacks against a node core of outer radius `radius`: every plate's end ends `gap` from the
+/// tube where it comes closest (a flat end against a round tube: at the plate's middle, or for
+/// a ply beside the plane through the axis, at its face nearer the plane).
 pub fn core_setbacks(strips: &[Strip], radius: f64, gap: f64) -> Vec<f64> {
-    vec![radius + gap; strips.len()]
+    strips
+        .iter()
+        .map(|s| {
+            ((radius + gap).powi(2) - s.off_axis().powi(2))
+                .max(0.0)
+                .sqrt()
+        })
+        .collect()
+}
+
+/// The least setback, at least `from`, at which `strip` stays `gap` from every strip of
+/// `others` (each at its setback) and, with a core of outer radius `core`, `gap` from the tube;
+/// None if it cannot within its reach. Bisection: the gap only grows with the setback.
+pub fn clearing_setback(
+    strip: &Strip,
+    from: f64,
+    others: &[(Strip, f64)],
+    core: Option<f64>,
+    gap: f64,
+) -> Option<f64> {
+    let clear = |s: f64| {
+        others
+            .iter()
+            .all(|(o, so)| root_gap(strip, s, o, *so) >= gap - 1e-9)
+            && core.is_none_or(|r| s.hypot(strip.off_axis()) >= r + gap - 1e-9)
+    };
+    if clear(from) {
+        return Some(from);
+    }
+    if !clear(strip.reach) {
+        return None;
+    }
+    let (mut lo, mut hi) = (from, strip.reach);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if clear(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    Some(hi)
 }
 
 #[cfg(test)]
@@ -398,11 +467,7 @@ mod tests {
     use super::*;
 
     fn strip(deg: f64, t: f64) -> Strip {
-        Strip {
-            u: DVec2::from_angle(deg.to_radians()),
-            thickness: t,
-            reach: 200.0,
-        }
+        Strip::centred(DVec2::from_angle(deg.to_radians()), t, 200.0)
     }
 
     fn gaps(strips: &[Strip], s: &[f64]) -> Vec<f64> {

@@ -956,6 +956,8 @@ pub fn bom_csv(out: &Nested) -> String {
             .zip(&p.end_cores)
             .map(|((node, with), core)| match core {
                 Some(c) => format!("\"node {node}: core {c}\""),
+                // A tip, or a seam's ply at the other group's node.
+                None if with.is_empty() => format!("\"node {node}: not welded\""),
                 None => format!("\"node {}: {}\"", node, with.join(" ")),
             })
             .collect();

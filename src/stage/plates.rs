@@ -69,6 +69,9 @@ pub struct Options {
     pub groups: usize,
     /// Bolts through the seam plates. Default: by the grip.
     pub bolt: Option<BoltSize>,
+    /// The socket that must fit over every bolt's head and nut (radius, reach). Default: one
+    /// for each size (the nut's corners and a 3 mm wall, 40 mm long).
+    pub bolt_clearance: Option<crate::rationalize::clearance::Socket>,
     /// The steel: its grade and density go into plates.json, the mass, the BOM and the cut
     /// files. Default: the sizing's, else 1.4404 (stainless 316L) with a note saying so.
     pub material: Option<Material>,
@@ -87,6 +90,7 @@ impl Default for Options {
             min_weld_angle: None,
             groups: 1,
             bolt: None,
+            bolt_clearance: None,
             material: None,
         }
     }
@@ -103,6 +107,21 @@ pub struct Gauges {
     pub material: Option<Material>,
     /// The assembly groups its seams were sized for, as stacks of two plies (None: no seams).
     pub seam_groups: Option<usize>,
+    /// Per edge, what a seam's bolts carry (see `bolts::SeamForces`); None for other edges.
+    pub seam_forces: Vec<Option<crate::rationalize::bolts::SeamForces>>,
+}
+
+impl From<crate::analyze::sizing::SizedGauges> for Gauges {
+    /// A sizing file's, as `analyze::sizing::read_gauges` reads it.
+    fn from(g: crate::analyze::sizing::SizedGauges) -> Gauges {
+        Gauges {
+            per_edge: g.per_edge,
+            list: g.list,
+            material: g.material,
+            seam_groups: g.seam_groups,
+            seam_forces: g.seam_forces,
+        }
+    }
 }
 
 impl Gauges {
@@ -113,6 +132,7 @@ impl Gauges {
             list: report.gauges.clone(),
             material: Some(report.material.clone()),
             seam_groups: report.seam_groups,
+            seam_forces: report.edges.iter().map(|e| e.seam_forces).collect(),
         }
     }
 }
@@ -147,7 +167,8 @@ pub struct Plated {
     /// Per plate: the part as its DXF draws it (in its own frame), and its tag's height (None
     /// when the part is too small for a tag).
     pub parts: Vec<(Drawn, Option<f64>)>,
-    /// No pair of plates meets below `min_weld_angle`.
+    /// No pair of plates meets below `min_weld_angle`, and every bolt can be fitted and
+    /// tightened.
     pub ok: bool,
     /// The steel.
     pub material: Material,
@@ -186,6 +207,14 @@ impl Plated {
                 .filter(|(i, p)| p.bolted_to.is_some_and(|o| o > *i))
                 .map(|(_, p)| p.holes.len())
                 .sum(),
+            bolts_moved: self.set.room.moved.len(),
+            largest_bolt_move_mm: self.set.room.moved.iter().map(|m| m.2).fold(0.0, f64::max),
+            bolt_clashes: self.set.room.clashes.len(),
+            max_bolt_utilisation: plates
+                .iter()
+                .filter_map(|p| p.bolt.and_then(|b| b.checks))
+                .map(|c| c.governing().0)
+                .reduce(f64::max),
             untagged: self.parts.iter().filter(|(_, t)| t.is_none()).count(),
             weld_nodes: weld.nodes,
             uneven_nodes: weld.nodes_needing_a_core.clone(),
@@ -213,6 +242,15 @@ pub struct Summary {
     pub seams: usize,
     /// Bolts through the seams.
     pub bolts: usize,
+    /// Bolts moved along their rows to make room to fit and tighten them.
+    pub bolts_moved: usize,
+    /// The farthest any moved, mm.
+    pub largest_bolt_move_mm: f64,
+    /// Bolts whose washer, head, nut or socket crosses a plate or core wherever the row allows.
+    pub bolt_clashes: usize,
+    /// The largest bolt utilisation (EN 1993-1-8 Table 3.4) under the sizing's forces; None
+    /// when not checked (no sizing).
+    pub max_bolt_utilisation: Option<f64>,
     /// Plates too small for their tag.
     pub untagged: usize,
     /// Nodes where plates are welded.
@@ -270,16 +308,6 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         (None, Some(g)) => g.list.clone(),
         (None, None) => vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
     };
-    let options = PlateOptions {
-        gauges,
-        thickness,
-        overrides: opts.edge_thickness.clone(),
-        weld_gap: opts.weld_gap,
-        weld_gap_tolerance: opts.weld_gap_tolerance,
-        groups: opts.groups,
-        bolt: opts.bolt,
-        node_core: opts.node_core,
-    };
     let mut notes = Vec::new();
     let material = match (
         &opts.material,
@@ -304,10 +332,33 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
             Material::get("1.4404").expect("a built-in material")
         }
     };
+    let options = PlateOptions {
+        gauges,
+        thickness,
+        overrides: opts.edge_thickness.clone(),
+        weld_gap: opts.weld_gap,
+        weld_gap_tolerance: opts.weld_gap_tolerance,
+        groups: opts.groups,
+        bolt: opts.bolt,
+        node_core: opts.node_core,
+        socket: opts.bolt_clearance,
+        bolt_grade: crate::rationalize::bolts::grade(material.is_stainless()),
+        ply_steel: crate::rationalize::bolts::PlySteel {
+            // EN 1993-1-4 §6.2: bearing and punching of stainless plies on f_u,red.
+            fu: if material.is_stainless() {
+                (0.5 * material.fy + 0.6 * material.fu).min(material.fu)
+            } else {
+                material.fu
+            },
+            gamma_m2: material.gamma_m2,
+        },
+        seam_forces: opts.sizing.as_ref().map(|g| g.seam_forces.clone()),
+    };
     let set = plates(axes, &options)?;
     let file = plates_doc(&set, &options, &material);
     let welds = welds(&set, &options, opts.min_weld_angle);
-    let ok = opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0;
+    let ok = (opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0)
+        && set.room.clashes.is_empty();
     let parts = set.plates.iter().map(drawn).collect();
     Ok(Plated {
         set,
@@ -361,14 +412,46 @@ fn plates_doc(set: &PlateSet, opts: &PlateOptions, material: &Material) -> Plate
         .collect();
     let docs = plates
         .iter()
-        .map(|p| PlateDoc {
+        .enumerate()
+        .map(|(i, p)| PlateDoc {
             area_mm2: p.area(),
             bolt: p.bolt.map(|b| BoltRecord {
+                clashes: set
+                    .room
+                    .clashes
+                    .iter()
+                    .filter(|c| c.plies.contains(&i))
+                    .map(|c| {
+                        let with = match c.with {
+                            Ok(j) => format!("plate {}", plates[j].id),
+                            Err(k) => format!("core {}", set.cores[k].id),
+                        };
+                        format!("hole {}: the {} crosses {with}", c.hole, c.envelope)
+                    })
+                    .collect(),
+                check: b.checks.map(|c| c.governing().1.to_string()),
+                checks: b.checks.map(|c| {
+                    crate::rationalize::bolts::BOLT_CHECKS
+                        .iter()
+                        .zip(c.values())
+                        .map(|(n, u)| (n.to_string(), u))
+                        .collect()
+                }),
+                class: b.grade.name.to_string(),
                 d: b.size.d,
                 grip: b.grip,
                 hole_diameter: b.size.hole,
                 length: b.length,
+                nut_below: set
+                    .room
+                    .nut_below
+                    .iter()
+                    .filter(|(plies, _)| plies.contains(&i))
+                    .map(|(_, h)| *h)
+                    .collect(),
+                preload: crate::rationalize::bolts::PRELOAD.to_string(),
                 size: b.size.name.to_string(),
+                utilisation: b.checks.map(|c| c.governing().0),
             }),
             bolted_to: p.bolted_to.map(|j| plates[j].id.clone()),
             edge: Some(p.edge as u32),
@@ -455,12 +538,27 @@ pub struct WeldNodeDoc {
     pub node: u32,
     /// Pairs of plates side by side at a node.
     pub pairs: Vec<WeldPairDoc>,
-    /// Plates.
+    /// The seams' plies of the other group, which pass the node unwelded.
+    pub passing: Vec<PassingDoc>,
+    /// The plate each edge welds with here (a seam's ply of the node's group).
     pub plates: Vec<String>,
     /// Each plate's setback from the node axis, mm.
     pub setbacks_mm: Vec<f64>,
     /// `even`, `needs a node core` or `core`.
     pub status: &'static str,
+}
+
+/// A seam's ply at the other group's node: not welded there, set back clear of the welds.
+#[derive(Clone, Debug, Serialize)]
+pub struct PassingDoc {
+    /// Its least distance from the plates welded at the node (and the core), mm.
+    pub clearance_mm: f64,
+    /// The seam's edge.
+    pub edge: usize,
+    /// The ply's tag.
+    pub plate: String,
+    /// Its setback from the node axis, mm.
+    pub setback_mm: f64,
 }
 
 /// A node's core as the weld report gives it.
@@ -538,12 +636,13 @@ fn weld_class(angle: f64) -> (usize, &'static str) {
 }
 
 fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
-    let ids = |k: usize| -> String {
-        let v: Vec<&str> = set.by_edge[k]
+    // The plate edge k welds with in group g: a seam's ply of that group.
+    let id = |k: usize, g: u32| -> String {
+        let mine = set.by_edge[k]
             .iter()
-            .map(|&i| set.plates[i].id.as_str())
-            .collect();
-        v.join("+")
+            .find(|&&i| set.plates[i].group == g)
+            .unwrap_or(&set.by_edge[k][0]);
+        set.plates[*mine].id.clone()
     };
     let mut sum = WeldSummary {
         smallest_dihedral_deg: f64::INFINITY,
@@ -582,7 +681,7 @@ fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
                 edges: p.edges,
                 gap_within_tolerance: (p.gap - opts.weld_gap).abs()
                     <= opts.weld_gap_tolerance + 1e-9,
-                plates: [ids(p.edges[0]), ids(p.edges[1])],
+                plates: [id(p.edges[0], w.group), id(p.edges[1], w.group)],
                 root_gap_mm: p.gap,
             });
         }
@@ -605,7 +704,22 @@ fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
             edges: w.edges.clone(),
             node: w.node,
             pairs,
-            plates: w.edges.iter().map(|&k| ids(k)).collect(),
+            passing: w
+                .passing
+                .iter()
+                .map(|p| PassingDoc {
+                    clearance_mm: p.clearance,
+                    edge: p.edge,
+                    plate: set.by_edge[p.edge]
+                        .iter()
+                        .map(|&i| &set.plates[i])
+                        .find(|q| q.group != w.group)
+                        .map(|q| q.id.clone())
+                        .unwrap_or_default(),
+                    setback_mm: p.setback,
+                })
+                .collect(),
+            plates: w.edges.iter().map(|&k| id(k, w.group)).collect(),
             setbacks_mm: w.setbacks.clone(),
             status,
         });
@@ -618,7 +732,7 @@ fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
         definitions: WeldDefinitions {
             access: "below 60°: no prequalified fillet weld; 60–120°: fillet (EN 1993-1-8 §4.3.2.1); 120–135°: fillet under AWS D1.1 only; over 135°: the plates meet end to end (butt weld)",
             dihedral_deg: "angle between the two plates about the node axis on the side where they are neighbours (the wedge a fillet weld fills)",
-            root_gap_mm: "distance between the two plates (a bolted seam as its stack of two plies) in the plane perpendicular to the node axis: the weld's root opening along the line where they meet",
+            root_gap_mm: "distance between the two plates (of a bolted seam, its ply in the node's group, which welds there) in the plane perpendicular to the node axis: the weld's root opening along the line where they meet",
         },
         format: crate::fabricate::plates_file::WELDS_FORMAT,
         min_weld_angle: min_angle,
@@ -870,7 +984,7 @@ tr.warn{{background:#ffe9c6}}</style>\n\
 <h1>Welds at the nodes</h1>\n\
 <p>{} nodes, {} pairs of plates side by side. Root gap target {} ± {} mm: {} nodes even, {} need a node core{}. \
 Smallest dihedral angle {:.2}°: {} pairs below 60°, {} at 60–120°, {} at 120–135°, {} over 135°.</p>\n\
-<dl><dt>Root gap</dt><dd>the distance between the two plates (a bolted seam counts as its two plies together) \
+<dl><dt>Root gap</dt><dd>the distance between the two plates (of a bolted seam, its ply of the node's group, which welds there; the other ply stops clear) \
 in the plane perpendicular to the node axis: the weld's root opening along the line where they meet, mm.</dd>\
 <dt>Dihedral angle</dt><dd>the angle between the two plates about the node axis on the side where they are \
 neighbours: the wedge a fillet weld fills. Below 60° there is no prequalified fillet weld; 60–120° is \

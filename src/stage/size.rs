@@ -360,6 +360,11 @@ pub struct EdgeRow {
     /// A bolted seam's two plies, mm (the first welded at node a, the second at node b;
     /// adding up to the gauge); None for a single plate.
     pub plies: Option<[f64; 2]>,
+    /// What a seam's bolts carry (`plates --sizing` checks them): in the local axes [N, V_y,
+    /// V_z, T, M_y, M_z] (N, N·mm), each the largest magnitude at either end over the ultimate
+    /// combinations; None for a single plate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seam_forces: Option<[f64; 6]>,
     /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
 }
@@ -481,6 +486,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                 length: l,
                 load: s.cases[c.case].name.clone(),
                 plies: m.section.plies,
+                seam_forces: s.seam_forces(k),
                 utilisation: c.utilisation,
             }
         })

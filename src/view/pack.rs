@@ -591,7 +591,7 @@ fn welds(
     let mut unplaced = 0;
     for n in nodes {
         for (k, pair) in n.pairs.iter().enumerate() {
-            // A bolted seam is named `A+B`: its first plate stands for it.
+            // Older weld reports name a seam `A+B`: its first ply stands for it.
             let seam = |tag: &str| {
                 let first = tag.split('+').next().unwrap_or(tag);
                 seam_of.get(&(first, n.node)).copied()

@@ -116,6 +116,11 @@ fn bad_gauges_and_missing_axes_exit_2_with_nothing_written() -> TestResult {
         ),
         (vec!["--groups", "1000"], "--groups 1000"),
         (vec!["--thickness", "0"], "--thickness"),
+        (vec!["--bolt-clearance", "0:40"], "--bolt-clearance"),
+        (vec!["--bolt-clearance", "16:-1"], "--bolt-clearance"),
+        (vec!["--bolt-clearance", "nan:40"], "--bolt-clearance"),
+        (vec!["--bolt-clearance", "16:1e9"], "--bolt-clearance"),
+        (vec!["--bolt-clearance", "16"], "--bolt-clearance"),
     ] {
         let mut all = vec!["plates", s(&axes), "-o", s(&out)];
         all.extend(args.iter().copied());
@@ -188,6 +193,23 @@ fn seven_groups_tag_every_plate_and_split_seams_in_half() -> TestResult {
             assert_eq!(q["bolted_to"].as_str(), Some(id(p).as_str()));
             assert_eq!(q["edge"], p["edge"]);
             assert_ne!(q["group"], p["group"]);
+            // Welded at one end only, its own group's node; it passes the other unwelded.
+            let welded = p["ends"]
+                .as_array()
+                .ok_or("ends")?
+                .iter()
+                .filter(|e| {
+                    e["welded_to"].as_array().is_some_and(|w| !w.is_empty()) || !e["core"].is_null()
+                })
+                .count();
+            assert_eq!(welded, 1, "{} is welded at {welded} ends", id(p));
+        }
+        // No weld joins two groups.
+        for e in p["ends"].as_array().ok_or("ends")? {
+            for w in e["welded_to"].as_array().ok_or("welded_to")? {
+                let q = plates.iter().find(|q| q["id"] == *w).ok_or("partner")?;
+                assert_eq!(q["group"], p["group"], "{} welded to {w}", id(p));
+            }
         }
     }
     assert_eq!(plates.len(), 273 + halves / 2);

@@ -99,6 +99,7 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         ),
         min_weld_angle: None,
         bolt: None,
+        bolt_clearance: None,
         material: None,
         groups: 7,
         output: dir.join("plates"),
