@@ -148,6 +148,52 @@ pub fn row_with_pitch(
     thinner: f64,
     least: f64,
 ) -> Option<Vec<DVec2>> {
+    denser_rows(outline, from, to, bolt, thinner, least).next()
+}
+
+/// The rows [`row_with_pitch`] allows, from the fewest bolts to the most (each over the whole
+/// span, down to the least pitch): more bolts share a seam's forces.
+pub fn denser_rows(
+    outline: &[DVec2],
+    from: DVec2,
+    to: DVec2,
+    bolt: &BoltSize,
+    thinner: f64,
+    least: f64,
+) -> impl Iterator<Item = Vec<DVec2>> {
+    let found = span_of(outline, from, to, bolt)
+        .filter(|(_, _, span)| *span >= least && least <= max_pitch(thinner));
+    let largest = max_pitch(thinner);
+    found.into_iter().flat_map(move |(a, b, span)| {
+        // Over the whole span at a pitch within the limits; where the span falls between two
+        // counts (the even pitch of one gap more under the least), one gap fewer at the
+        // largest pitch, centred. Then more gaps while the pitch keeps the least.
+        let gaps = ((span / largest).ceil() as usize).max(1);
+        let first = if span / gaps as f64 >= least {
+            gaps
+        } else {
+            gaps - 1
+        };
+        let most = ((span / least + 1e-9).floor() as usize).max(first);
+        let along = (b - a) / span;
+        (first..=most).map(move |g| {
+            let pitch = (span / g as f64).min(largest);
+            let start = a + along * (0.5 * (span - pitch * g as f64));
+            (0..=g)
+                .map(|i| start + along * (pitch * i as f64))
+                .collect()
+        })
+    })
+}
+
+/// The part of the line through `from` and `to` whose points keep the edge distance inside
+/// the convex outline: its ends and length.
+fn span_of(
+    outline: &[DVec2],
+    from: DVec2,
+    to: DVec2,
+    bolt: &BoltSize,
+) -> Option<(DVec2, DVec2, f64)> {
     let e = edge_distance(bolt);
     let dir = to - from;
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -173,27 +219,7 @@ pub fn row_with_pitch(
         return None;
     }
     let (a, b) = (from + dir * lo, from + dir * hi);
-    let span = a.distance(b);
-    let largest = max_pitch(thinner);
-    if span < least || least > largest {
-        return None;
-    }
-    // Over the whole span at a pitch within the limits; where the span falls between two
-    // counts (the even pitch of one gap more under the least), one gap fewer at the largest
-    // pitch, centred.
-    let mut gaps = ((span / largest).ceil() as usize).max(1);
-    let mut pitch = span / gaps as f64;
-    if pitch < least {
-        gaps -= 1;
-        pitch = largest;
-    }
-    let along = (b - a) / span;
-    let start = a + along * (0.5 * (span - pitch * gaps as f64));
-    Some(
-        (0..=gaps)
-            .map(|i| start + along * (pitch * i as f64))
-            .collect(),
-    )
+    Some((a, b, a.distance(b)))
 }
 
 /// A bolt's property class: 8.8 with carbon steel plates, A4-70 with stainless.

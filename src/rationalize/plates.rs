@@ -1076,8 +1076,11 @@ fn bolt_seam(
         // member (p2 ≥ 2.4 d0), which holds the plies against turning as well.
         let centre = chord_middle(&p.outline, mid[0], mid[1]).unwrap_or(0.5 * (mid[0] + mid[1]));
         let up = (mid[1] - mid[0]).perp().normalize_or_zero() * 1e4;
-        let holes = bolts::row(&p.outline, mid[0], mid[1], b, thinner).or_else(|| {
-            bolts::row_with_pitch(
+        let mut rows: Vec<Vec<DVec2>> =
+            bolts::denser_rows(&p.outline, mid[0], mid[1], b, thinner, bolts::min_pitch(b))
+                .collect();
+        if rows.is_empty() {
+            rows = bolts::denser_rows(
                 &p.outline,
                 centre - up,
                 centre + up,
@@ -1085,27 +1088,37 @@ fn bolt_seam(
                 thinner,
                 bolts::min_pitch_across(b),
             )
-        });
-        let Some(holes) = holes else { continue };
-        let checks = forces.map(|f| {
-            bolts::check(
-                b,
-                &opts.bolt_grade,
-                &holes,
-                &p.outline,
-                thinner,
-                &opts.ply_steel,
-                &f,
-            )
-        });
-        if let Some(c) = checks {
-            if c.governing().0 > 1.0 {
-                if weakest.is_none_or(|(_, w)| c.governing().0 < w.governing().0) {
-                    weakest = Some((*b, c));
+            .collect();
+        }
+        // The fewest bolts that hold (without forces, the fewest the pitch allows).
+        let mut chosen = None;
+        for holes in rows {
+            let checks = forces.map(|f| {
+                bolts::check(
+                    b,
+                    &opts.bolt_grade,
+                    &holes,
+                    &p.outline,
+                    thinner,
+                    &opts.ply_steel,
+                    &f,
+                )
+            });
+            match checks {
+                Some(c) if c.governing().0 > 1.0 => {
+                    if weakest.is_none_or(|(_, w)| c.governing().0 < w.governing().0) {
+                        weakest = Some((*b, c));
+                    }
                 }
-                continue;
+                _ => {
+                    chosen = Some((holes, checks));
+                    break;
+                }
             }
         }
+        let Some((holes, checks)) = chosen else {
+            continue;
+        };
         p.holes = holes;
         p.bolt = Some(Bolting {
             size: *b,
