@@ -480,7 +480,7 @@ def plates(axes: Any, *, sizing: Any = None, out: Optional[PathLike] = None,
 
         report = sizing["sizing"]
         gauges = (per_edge, listed, json.dumps(report["material"]), report.get("seam_groups"),
-                  json.dumps([e.get("seam_forces") for e in report["edges"]]))
+                  json.dumps([e.get("seam_forces") for e in rows(report["edges"])]))
     return _done(_lamina.plates(_axes_bytes(axes), gauges, opts,
                                 None if out is None else os.fspath(out)), "mm")
 

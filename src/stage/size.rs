@@ -363,7 +363,6 @@ pub struct EdgeRow {
     /// What a seam's bolts carry (`plates --sizing` checks them): in the local axes [N, V_y,
     /// V_z, T, M_y, M_z] (N, N·mm), each the largest magnitude at either end over the ultimate
     /// combinations; None for a single plate.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub seam_forces: Option<[f64; 6]>,
     /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
