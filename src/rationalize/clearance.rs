@@ -4,7 +4,8 @@
 //! plate or a node core. The nut goes on the +z face, or on the −z face where only that is
 //! clear; a bolt clear either way moves along its row to the nearest place that keeps EN
 //! 1993-1-8 Table 3.3 (the edge distances and both pitches to its neighbours) and is clear;
-//! where none is, the clash is reported.
+//! where none is, it is left out if the row keeps two bolts and its largest pitch without it
+//! (the seam's bolt checks are made again), else the clash is reported.
 //!
 //! Shapes are convex prisms compared by the separating axis theorem (face normals and the
 //! cross products of edge directions): exact for the plates (their outlines are convex; the
@@ -169,6 +170,9 @@ pub struct Room {
     pub moved: Vec<([usize; 2], usize, f64)>,
     /// Bolts whose nut goes on the stack's −z face (the plies' frame): the plies, the hole.
     pub nut_below: Vec<([usize; 2], usize)>,
+    /// Bolts left out (no room anywhere along the row, and the row holds Table 3.3 without
+    /// them): the plies, where the hole was.
+    pub dropped: Vec<([usize; 2], DVec2)>,
     pub clashes: Vec<Clash>,
 }
 
@@ -275,12 +279,14 @@ pub fn make_room(set: &mut PlateSet, socket: Option<Socket>) -> Room {
             }
         };
         let mut holes = set.plates[a].holes.clone();
-        for h in 0..holes.len() {
+        let mut h = 0;
+        while h < holes.len() {
             let first = match clash_at(holes[h]) {
                 Ok(below) => {
                     if below {
                         room.nut_below.push(([a, b], h));
                     }
+                    h += 1;
                     continue;
                 }
                 Err(first) => first,
@@ -293,6 +299,17 @@ pub fn make_room(set: &mut PlateSet, socket: Option<Socket>) -> Room {
                     }
                     holes[h] = to;
                 }
+                // Left out where the row keeps two bolts and its largest pitch without it.
+                None if holes.len() > 2
+                    && (h == 0
+                        || h + 1 == holes.len()
+                        || holes[h - 1].distance(holes[h + 1])
+                            <= bolts::max_pitch(thinner) + 1e-9) =>
+                {
+                    room.dropped.push(([a, b], holes[h]));
+                    holes.remove(h);
+                    continue;
+                }
                 None => room.clashes.push(Clash {
                     plies: [a, b],
                     hole: h,
@@ -300,6 +317,7 @@ pub fn make_room(set: &mut PlateSet, socket: Option<Socket>) -> Room {
                     with: first.1,
                 }),
             }
+            h += 1;
         }
         set.plates[a].holes = holes.clone();
         set.plates[b].holes = holes;

@@ -862,8 +862,9 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
     core_partners(&mut set);
     set.room = clearance::make_room(&mut set, opts.socket);
     // A moved bolt changes the row's checks.
-    let moved: std::collections::BTreeSet<[usize; 2]> =
-        set.room.moved.iter().map(|m| m.0).collect();
+    let moved: std::collections::BTreeSet<[usize; 2]> = (set.room.moved.iter().map(|m| m.0))
+        .chain(set.room.dropped.iter().map(|d| d.0))
+        .collect();
     for [a, b] in moved {
         let (Some(bolting), Some(forces)) = (
             set.plates[a].bolt,

@@ -1000,10 +1000,27 @@ pub fn bom_csv(out: &Nested) -> String {
         if other.as_str() < p.id.as_str() {
             continue;
         }
+        // The grade column holds the bolts' property class; the description their check.
+        let checked = match (b.utilisation, &b.check) {
+            (Some(u), Some(c)) => format!("; utilisation {u:.3} ({c}, EN 1993-1-8 Table 3.4)"),
+            _ => String::new(),
+        };
         let _ = writeln!(
             w,
-            "bolts,\"{}+{}\",{},,{},,,,,,,,,{},,\"{} x {}x{} with 2 washers and a nut, grip {} mm\",,",
-            p.id, other, p.group, b.grip, p.holes.len(), p.holes.len(), b.size, b.length, b.grip
+            "bolts,\"{}+{}\",{},\"{}\",{},,,,,,,,,{},,\"{} x {}x{} {} with 2 washers and a nut, grip {} mm, {}{}\",,",
+            p.id,
+            other,
+            p.group,
+            b.class,
+            b.grip,
+            p.holes.len(),
+            p.holes.len(),
+            b.size,
+            b.length,
+            b.class,
+            b.grip,
+            b.preload,
+            checked
         );
     }
     for c in &out.cores {

@@ -208,6 +208,7 @@ impl Plated {
                 .map(|(_, p)| p.holes.len())
                 .sum(),
             bolts_moved: self.set.room.moved.len(),
+            bolts_dropped: self.set.room.dropped.len(),
             largest_bolt_move_mm: self.set.room.moved.iter().map(|m| m.2).fold(0.0, f64::max),
             bolt_clashes: self.set.room.clashes.len(),
             max_bolt_utilisation: plates
@@ -246,6 +247,8 @@ pub struct Summary {
     pub bolts_moved: usize,
     /// The farthest any moved, mm.
     pub largest_bolt_move_mm: f64,
+    /// Bolts left out for want of room (their rows keep Table 3.3 without them).
+    pub bolts_dropped: usize,
     /// Bolts whose washer, head, nut or socket crosses a plate or core wherever the row allows.
     pub bolt_clashes: usize,
     /// The largest bolt utilisation (EN 1993-1-8 Table 3.4) under the sizing's forces; None
