@@ -161,7 +161,7 @@ pub fn denser_rows(
     thinner: f64,
     least: f64,
 ) -> impl Iterator<Item = Vec<DVec2>> {
-    let found = span_of(outline, from, to, bolt)
+    let found = chord(outline, from, to, edge_distance(bolt))
         .filter(|(_, _, span)| *span >= least && least <= max_pitch(thinner));
     let largest = max_pitch(thinner);
     found.into_iter().flat_map(move |(a, b, span)| {
@@ -186,15 +186,9 @@ pub fn denser_rows(
     })
 }
 
-/// The part of the line through `from` and `to` whose points keep the edge distance inside
-/// the convex outline: its ends and length.
-fn span_of(
-    outline: &[DVec2],
-    from: DVec2,
-    to: DVec2,
-    bolt: &BoltSize,
-) -> Option<(DVec2, DVec2, f64)> {
-    let e = edge_distance(bolt);
+/// The part of the line through `from` and `to` whose points stay `inset` or more inside the
+/// convex counter-clockwise `outline`: its ends and length (None where there is none).
+pub fn chord(outline: &[DVec2], from: DVec2, to: DVec2, inset: f64) -> Option<(DVec2, DVec2, f64)> {
     let dir = to - from;
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     for k in 0..outline.len() {
@@ -202,8 +196,8 @@ fn span_of(
         let Some(inward) = (q - p).perp().try_normalize() else {
             continue;
         };
-        // (from + λ dir − p)·inward ≥ e
-        let base = (from - p).dot(inward) - e;
+        // (from + λ dir − p)·inward ≥ inset
+        let base = (from - p).dot(inward) - inset;
         let rate = dir.dot(inward);
         if rate.abs() < 1e-15 {
             if base < 0.0 {
@@ -266,6 +260,20 @@ pub type SeamForces = [f64; 6];
 pub struct PlySteel {
     pub fu: f64,
     pub gamma_m2: f64,
+}
+
+impl PlySteel {
+    /// For plies of `material`: stainless on f_u,red (EN 1993-1-4 §6.2).
+    pub fn of(material: &crate::analyze::material::Material) -> PlySteel {
+        PlySteel {
+            fu: if material.is_stainless() {
+                (0.5 * material.fy + 0.6 * material.fu).min(material.fu)
+            } else {
+                material.fu
+            },
+            gamma_m2: material.gamma_m2,
+        }
+    }
 }
 
 /// A bolt row's checks by EN 1993-1-8 Table 3.4 on its most loaded bolt: utilisations.
@@ -485,7 +493,6 @@ mod tests {
         }
         // M6 on 1.5 mm plies, a span of 41 − 2 × 7.92 = 25.16 mm: two gaps would be 12.6 mm,
         // under 2.2 d0 = 14.52; so one gap at the largest pitch, 21 mm, centred.
-        let m6 = parse("M6").expect("listed");
         let holes = row(
             &rect(41.0, 100.0),
             DVec2::new(0.0, 50.0),

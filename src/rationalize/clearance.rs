@@ -222,6 +222,9 @@ fn envelopes(
 /// along its row where a place keeps Table 3.3 and is clear. `socket` None: one for each size
 /// ([`Socket::for_size`]).
 pub fn make_room(set: &mut PlateSet, socket: Option<Socket>) -> Room {
+    if set.plates.iter().all(|p| p.bolt.is_none()) {
+        return Room::default();
+    }
     let solids: Vec<Convex> = set
         .plates
         .iter()

@@ -152,10 +152,9 @@ impl Default for PlateOptions {
             bolt: None,
             node_core: None,
             bolt_grade: bolts::grade(true),
-            ply_steel: PlySteel {
-                fu: 530.0,
-                gamma_m2: 1.25,
-            },
+            ply_steel: PlySteel::of(
+                &crate::analyze::material::Material::get("1.4404").expect("a built-in steel"),
+            ),
             seam_forces: None,
             socket: None,
         }
@@ -866,36 +865,16 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
         .chain(set.room.dropped.iter().map(|d| d.0))
         .collect();
     for [a, b] in moved {
-        let (Some(bolting), Some(forces)) = (
-            set.plates[a].bolt,
-            opts.seam_forces
-                .as_ref()
-                .and_then(|f| f.get(set.plates[a].edge).copied().flatten()),
-        ) else {
+        let (pa, pb) = (&set.plates[a], &set.plates[b]);
+        let Some(bolting) = pa.bolt else { continue };
+        let overlap = clearance::overlap_outline(&pa.outline, &pb.outline);
+        let thinner = pa.thickness.min(pb.thickness);
+        let Some(checks) = opts.bolt_checks(pa.edge, &bolting.size, &pa.holes, &overlap, thinner)
+        else {
             continue;
         };
-        let overlap = clearance::overlap_outline(&set.plates[a].outline, &set.plates[b].outline);
-        let thinner = set.plates[a].thickness.min(set.plates[b].thickness);
-        let checks = bolts::check(
-            &bolting.size,
-            &opts.bolt_grade,
-            &set.plates[a].holes,
-            &overlap,
-            thinner,
-            &opts.ply_steel,
-            &forces,
-        );
-        let (u, what) = checks.governing();
-        if u > 1.0 {
-            let p = &set.plates[a];
-            return Err(PlateError::BoltsOverloaded {
-                chosen: opts.bolt.is_some(),
-                edge: p.edge,
-                nodes: p.nodes,
-                bolt: bolting.size.name,
-                utilisation: u,
-                check: what,
-            });
+        if checks.governing().0 > 1.0 {
+            return Err(overloaded(pa, &bolting.size, &checks, opts));
         }
         for i in [a, b] {
             if let Some(bt) = set.plates[i].bolt.as_mut() {
@@ -904,6 +883,50 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
         }
     }
     Ok(set)
+}
+
+impl PlateOptions {
+    /// What the seam on `edge` carries, from the sizing (None without one).
+    fn seam_forces(&self, edge: usize) -> Option<SeamForces> {
+        self.seam_forces
+            .as_ref()
+            .and_then(|f| f.get(edge).copied().flatten())
+    }
+
+    /// The Table 3.4 checks of `bolt`s at `holes` through the seam on `edge`, its plies
+    /// overlapping over `overlap`, under the sizing's forces (None without them).
+    fn bolt_checks(
+        &self,
+        edge: usize,
+        bolt: &BoltSize,
+        holes: &[DVec2],
+        overlap: &[DVec2],
+        thinner: f64,
+    ) -> Option<BoltChecks> {
+        let forces = self.seam_forces(edge)?;
+        Some(bolts::check(
+            bolt,
+            &self.bolt_grade,
+            holes,
+            overlap,
+            thinner,
+            &self.ply_steel,
+            &forces,
+        ))
+    }
+}
+
+/// The error for a seam of `p`'s whose `bolt`s do not hold.
+fn overloaded(p: &Plate, bolt: &BoltSize, checks: &BoltChecks, opts: &PlateOptions) -> PlateError {
+    let (utilisation, check) = checks.governing();
+    PlateError::BoltsOverloaded {
+        chosen: opts.bolt.is_some(),
+        edge: p.edge,
+        nodes: p.nodes,
+        bolt: bolt.name,
+        utilisation,
+        check,
+    }
 }
 
 /// Per edge: what its plates are (for the strips at a node).
@@ -988,7 +1011,7 @@ fn node_welds(
     // The other plies, one after another, each clear of the welded plates and those before it
     // by the gap and its own ply's thickness (the ply it lies on welds here with a fillet
     // whose leg, 0.7 √2 t of the thinner plate, is under that).
-    let radius = core.map(|_| 0.5 * opts.node_core.expect("a core was made").diameter);
+    let radius = core.map(|c| 0.5 * cores[c].size.diameter);
     let mut placed: Vec<(Strip, f64)> = Vec::new();
     let mut passing = Vec::new();
     for (i, &(k, end)) in here.iter().enumerate() {
@@ -1055,10 +1078,7 @@ fn bolt_seam(
     thinner: f64,
 ) -> Result<(), PlateError> {
     let grip = p.thickness;
-    let forces = opts
-        .seam_forces
-        .as_ref()
-        .and_then(|f| f.get(p.edge).copied().flatten());
+    let forces = opts.seam_forces(p.edge);
     let tried: Vec<BoltSize> = match opts.bolt {
         Some(b) => vec![b],
         None => {
@@ -1075,7 +1095,10 @@ fn bolt_seam(
     for b in &tried {
         // Along the mid-height line; on a plate too short for that, up its middle across the
         // member (p2 ≥ 2.4 d0), which holds the plies against turning as well.
-        let centre = chord_middle(&p.outline, mid[0], mid[1]).unwrap_or(0.5 * (mid[0] + mid[1]));
+        // Through the middle of the plies' overlap, which a setback may have moved off the
+        // panel's middle.
+        let centre = bolts::chord(&p.outline, mid[0], mid[1], 0.0)
+            .map_or(0.5 * (mid[0] + mid[1]), |(a, b, _)| 0.5 * (a + b));
         let up = (mid[1] - mid[0]).perp().normalize_or_zero() * 1e4;
         let mut rows: Vec<Vec<DVec2>> =
             bolts::denser_rows(&p.outline, mid[0], mid[1], b, thinner, bolts::min_pitch(b))
@@ -1094,17 +1117,7 @@ fn bolt_seam(
         // The fewest bolts that hold (without forces, the fewest the pitch allows).
         let mut chosen = None;
         for holes in rows {
-            let checks = forces.map(|f| {
-                bolts::check(
-                    b,
-                    &opts.bolt_grade,
-                    &holes,
-                    &p.outline,
-                    thinner,
-                    &opts.ply_steel,
-                    &f,
-                )
-            });
+            let checks = opts.bolt_checks(p.edge, b, &holes, &p.outline, thinner);
             match checks {
                 Some(c) if c.governing().0 > 1.0 => {
                     if weakest.is_none_or(|(_, w)| c.governing().0 < w.governing().0) {
@@ -1131,19 +1144,11 @@ fn bolt_seam(
         return Ok(());
     }
     if let Some((b, c)) = weakest {
-        let (u, what) = c.governing();
-        return Err(PlateError::BoltsOverloaded {
-            chosen: opts.bolt.is_some(),
-            edge: p.edge,
-            nodes: p.nodes,
-            bolt: b.name,
-            utilisation: u,
-            check: what,
-        });
+        return Err(overloaded(p, &b, &c, opts));
     }
     let last = tried.last().expect("at least one size");
     Err(PlateError::NoRoomForBolt {
-        overlap: chord(&p.outline, mid[0], mid[1]).map_or(0.0, |(a, b)| a.distance(b)),
+        overlap: bolts::chord(&p.outline, mid[0], mid[1], 0.0).map_or(0.0, |c| c.2),
         chosen: opts.bolt.is_some(),
         edge: p.edge,
         nodes: p.nodes,
@@ -1153,33 +1158,6 @@ fn bolt_seam(
         max_pitch: bolts::max_pitch(thinner),
         thinner,
     })
-}
-
-/// The middle of the part of the line through `from` and `to` inside the convex
-/// counter-clockwise `outline` (a seam's plies' overlap, which a setback may have moved off the
-/// panel's middle).
-fn chord_middle(outline: &[DVec2], from: DVec2, to: DVec2) -> Option<DVec2> {
-    chord(outline, from, to).map(|(a, b)| 0.5 * (a + b))
-}
-
-/// The part of the line through `from` and `to` inside the convex counter-clockwise `outline`.
-fn chord(outline: &[DVec2], from: DVec2, to: DVec2) -> Option<(DVec2, DVec2)> {
-    let dir = to - from;
-    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
-    for k in 0..outline.len() {
-        let (p, q) = (outline[k], outline[(k + 1) % outline.len()]);
-        let inward = (q - p).perp();
-        // (from + λ dir − p)·inward ≥ 0
-        let (base, rate) = ((from - p).dot(inward), dir.dot(inward));
-        if rate > 0.0 {
-            lo = lo.max(-base / rate);
-        } else if rate < 0.0 {
-            hi = hi.min(-base / rate);
-        } else if base < 0.0 {
-            return None;
-        }
-    }
-    (lo.is_finite() && hi.is_finite() && lo <= hi).then(|| (from + dir * lo, from + dir * hi))
 }
 
 /// Groups, pairs and partners of the plates per edge (one, or a seam's two plies: node a's

@@ -346,15 +346,7 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         node_core: opts.node_core,
         socket: opts.bolt_clearance,
         bolt_grade: crate::rationalize::bolts::grade(material.is_stainless()),
-        ply_steel: crate::rationalize::bolts::PlySteel {
-            // EN 1993-1-4 §6.2: bearing and punching of stainless plies on f_u,red.
-            fu: if material.is_stainless() {
-                (0.5 * material.fy + 0.6 * material.fu).min(material.fu)
-            } else {
-                material.fu
-            },
-            gamma_m2: material.gamma_m2,
-        },
+        ply_steel: crate::rationalize::bolts::PlySteel::of(&material),
         seam_forces: opts.sizing.as_ref().map(|g| g.seam_forces.clone()),
     };
     let set = plates(axes, &options)?;
