@@ -11,7 +11,9 @@ a b³ (1/3 − 0.21 (b/a)(1 − b⁴/(12 a⁴))); shear areas 5/6 A.
 
 Loads, read from sizing.json's case names and applied together (the sum of the loads):
 - `self-weight[:F]`: each panel's area (the quad of its node axes) × gauge × density × g × F,
-  spread uniformly along its member, down;
+  spread uniformly along its member, down; where sizing.json gives `joints` (the plates
+  weighed as cut), each member's `mass_kg` and `bolts_kg` instead, and each node's `core_kg`
+  on its node (--plates checks those masses against plates.json);
 - `wind:KPA:DX,DY,DZ`: pressure × panel area × |local z · direction|, uniform along the member,
   along the direction;
 - `point:SEL:FX,FY,FZ`: on the mid-height node of every axis whose base point the selector
@@ -34,7 +36,9 @@ node's weld (EN 1993-1-8 4.5.3.3) — each must equal sizing.json's to 1e-6 and 
 throats below 3 mm named; the largest SLS displacement as reported.
 
 With --plates (after --checks), every edge cut as analysed (a seam as its sized plies, one per
-group), the grade the sizing's, the mass; and every seam's bolts by EN 1993-1-8 Table 3.4
+group), the grade the sizing's, the mass (each edge's plates from plates.json's areas, each
+seam's bolt sets from nominal ISO 4017/4032/7089 sizes, the node cores as tubes: equal to
+sizing.json's per edge and in total, the total within 0.1 %); and every seam's bolts by EN 1993-1-8 Table 3.4
 recomputed here: the seam's section forces (each component's largest magnitude at either end
 over the ULS combinations OpenSees solved, which must equal sizing.json's `seam_forces`), an
 elastic bolt group on the holes (N and V shared, M_z ⊥ each arm; V_z shared, M_y and T as
@@ -167,7 +171,15 @@ class Frame:
             quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
             area = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[1]))
             self.panel.append(area)
-            self.weight.append(area * e["gauge"] * rho * G_ACC / length)
+            if s.get("joints") is not None:
+                # Weighed as cut: the member's plates and bolt sets (--plates checks them
+                # against plates.json).
+                steel = e["mass_kg"] + (e.get("bolts_kg") or 0.0)
+                self.weight.append(steel * G_ACC / length)
+            else:
+                self.weight.append(area * e["gauge"] * rho * G_ACC / length)
+        # Node cores' weight at their nodes (weighed as cut).
+        self.cores = [(i, n["core_kg"]) for i, n in enumerate(s["nodes"]) if n.get("core_kg")]
         self.held = []
         for text in s["supports"]:
             sel, kind = text.rsplit(":", 1)
@@ -213,6 +225,9 @@ class Frame:
                 ops.eleLoad("-ele", k + 1, "-type", "-beamUniform",
                             float(w[k] @ y), float(w[k] @ z), float(w[k] @ x))
         for kind, value, factor in loads:
+            if kind == "self-weight":
+                for i, kg in self.cores:
+                    ops.load(i + 1, 0.0, 0.0, -kg * G_ACC * value * factor, 0.0, 0.0, 0.0)
             if kind == "point":
                 pick, f = value
                 for i in range(len(self.mid)):
@@ -545,14 +560,54 @@ def built_as_sized(s, doc, name):
             abs(doc["material"]["density"] - s["material"]["density"]) > 1e-12:
         fail(f"{name}: {doc['material']} is not the sizing's {s['material']['name']}")
     rho = s["material"]["density"] * 1e-6
-    built = sum(p["area_mm2"] * p["thickness"] for p in doc["plates"]) * rho
+    if s.get("joints") is None:
+        fail(f"{name}: the sizing weighed the uncut panels ({s['totals']['self_weight']})")
+    plates_kg = bolts_kg = 0.0
+    for k, e in enumerate(s["edges"]):
+        cut = by_edge.get(k, [])
+        steel = sum(p["area_mm2"] * p["thickness"] for p in cut) * rho
+        bolts = bolt_sets_kg(cut[0], rho) if len(cut) == 2 else 0.0
+        if abs(steel - e["mass_kg"]) > 1e-9 * max(steel, 1e-3):
+            fail(f"edge {k}: its plates weigh {steel} kg, the analysis {e['mass_kg']} kg")
+        if abs(bolts - (e.get("bolts_kg") or 0.0)) > 1e-9 * max(bolts, 1e-3):
+            fail(f"edge {k}: its bolt sets weigh {bolts} kg, the analysis {e.get('bolts_kg')} kg")
+        plates_kg += steel
+        bolts_kg += bolts
+    cores_kg = sum(math.pi / 4 * (c["outer_diameter"] ** 2 - (c["outer_diameter"] - 2 * c["wall"]) ** 2)
+                   * c["length"] for c in doc.get("cores", [])) * rho
+    sized_cores = sum(n.get("core_kg") or 0.0 for n in s["nodes"])
+    if abs(cores_kg - sized_cores) > 1e-9 * max(cores_kg, 1e-3):
+        fail(f"{name}: node cores {cores_kg} kg, the analysis {sized_cores} kg")
+    built = plates_kg + bolts_kg + cores_kg
     analysed = s["totals"]["mass_kg"]
-    if built > analysed * (1 + 1e-9):
-        fail(f"{name}: built {built:.3f} kg, more than the {analysed:.3f} kg analysed")
+    if abs(built / analysed - 1.0) > 1e-3:
+        fail(f"{name}: built {built:.3f} kg, analysed {analysed:.3f} kg: more than 0.1 % apart")
     print(f"{name}: built as analysed ({len(s['edges'])} edges, {seams} seams as their sized "
-          f"plies; {doc['material']['grade']}; plates {built:.3f} kg against {analysed:.3f} kg "
-          f"analysed on the uncut panels: {100 * (built / analysed - 1):+.2f} %, the setbacks at "
-          f"the nodes and the bolt holes)")
+          f"plies; {doc['material']['grade']}; built {built:.3f} kg (plates {plates_kg:.3f}, bolt "
+          f"sets {bolts_kg:.3f}, node cores {cores_kg:.3f}) against {analysed:.3f} kg analysed: "
+          f"{100 * (built / analysed - 1):+.1e} %)")
+
+
+# Nominal bolt sets: head k (ISO 4017), nut m (ISO 4032), washer h and outside diameter
+# (ISO 7089), across flats s; with BOLTS' d and d0.
+SET_SIZES = {"M6": (4, 5.2, 1.6, 12, 10), "M8": (5.3, 6.8, 1.6, 16, 13),
+             "M10": (6.4, 8.4, 2, 20, 16), "M12": (7.5, 10.8, 2.5, 24, 18),
+             "M16": (10, 14.8, 3, 30, 24), "M20": (12.5, 18, 3, 37, 30),
+             "M22": (14, 19.4, 3, 39, 34), "M24": (15, 21.5, 4, 44, 36),
+             "M27": (17, 23.8, 4, 50, 41), "M30": (18.7, 25.6, 4, 56, 46)}
+
+
+def bolt_sets_kg(ply, rho):
+    """The bolt sets through a seam ply's holes, kg: shank (d × ordered length), head and nut
+    as hexagon prisms (the nut less the shank), two washers as rings from d0."""
+    bolt = ply["bolt"]
+    d, d0 = BOLTS[bolt["size"]][:2]
+    k, m, h, od, flats = SET_SIZES[bolt["size"]]
+    hexagon = math.sqrt(3) / 2 * flats ** 2
+    shank = math.pi / 4 * d ** 2
+    ring = math.pi / 4 * (od ** 2 - d0 ** 2)
+    each = shank * bolt["length"] + hexagon * k + (hexagon - shank) * m + 2 * ring * h
+    return each * len(ply["holes"]) * rho
 
 
 main()

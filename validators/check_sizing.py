@@ -2,7 +2,9 @@
 
 - every gauge is on the sizing's gauge list (a seam's two plies each), every utilisation at most 1;
 - equilibrium: the reactions balance the applied loads, recomputed here from the axes file —
-  self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down;
+  self-weight as each panel's area (the quad from its node axes) × gauge × density × g, down
+  (or, where sizing.json says `joints`, each member's `mass_kg` as cut — never more than the
+  uncut panel — and its `bolts_kg`, and each node's `core_kg` at the node);
   point loads on the nodes given; wind as the pressure on each panel's area projected across
   the wind (area × |normal · direction|, the normal from the quad's diagonals), along it —
   in force and in moment about the origin, to 1e-9 of the load (plus 1e-6 of the wind: the
@@ -69,11 +71,28 @@ def main():
     warp_moment = 0.0
     if args.self_weight:
         rho = s["material"]["density"] * 1e-6  # kg/mm³
+        # Weighed as cut (`joints` given): each member's plates, its bolt sets along it, node
+        # cores at their nodes.
+        as_cut = s.get("joints") is not None
+        for i, n in enumerate(s["nodes"]):
+            if as_cut and n.get("core_kg"):
+                f = np.array([0.0, 0.0, -n["core_kg"] * G])
+                force += f
+                moment += np.cross(mid[i], f)
         for k, e in enumerate(edges):
             a, b = e["a"], e["b"]
             quad = [p[a], p[b], p[b] + d[b] * h[b], p[a] + d[a] * h[a]]
             area = 0.5 * np.linalg.norm(np.cross(quad[2] - quad[0], quad[3] - quad[1]))
-            weight = area * s["edges"][k]["gauge"] * rho * G
+            uncut = area * s["edges"][k]["gauge"] * rho
+            if as_cut:
+                # The plates as cut (check_opensees --plates checks them against plates.json):
+                # never more steel than the uncut panel, then the seam's bolt sets.
+                steel = s["edges"][k]["mass_kg"]
+                if not 0.0 < steel <= uncut * (1.0 + 1e-9):
+                    fail(f"edge {k}: {steel} kg as cut, the uncut panel {uncut} kg")
+                weight = (steel + (s["edges"][k].get("bolts_kg") or 0.0)) * G
+            else:
+                weight = uncut * G
             f = np.array([0.0, 0.0, -weight])
             if shells:
                 # The panel's own weight: its resultant at the quad's centroid (two triangles).

@@ -454,8 +454,11 @@ def size(axes: Any, *, support: Any = (), load: Any = (), progress: Progress = N
          **options: Any) -> dict:
     """Frame analysis of the plate network and the gauges it needs. ``axes``: the result of
     :func:`planarize` (or an axes file path); ``support`` and ``load`` as the command takes
-    them (``"z<1"``, ``"self-weight"``; lists for several). Returns ``sizing`` (the sizing
-    report; ``edges`` and ``nodes`` as columns), ``gauges`` (per edge), ``within``."""
+    them (``"z<1"``, ``"self-weight"``; lists for several). The self-weight is the plates as
+    :func:`plates` cuts them with ``weld_gap``, ``weld_gap_tolerance``, ``node_core``, ``bolt``
+    and ``bolt_clearance`` (give :func:`plates` the same), their bolts and node cores. Returns
+    ``sizing`` (the sizing report; ``edges`` and ``nodes`` as columns), ``gauges`` (per edge),
+    ``within``."""
     opts = check_options("size", options)
     opts["support"] = [support] if isinstance(support, str) else list(support)
     opts["load"] = [load] if isinstance(load, str) else list(load)
@@ -480,7 +483,8 @@ def plates(axes: Any, *, sizing: Any = None, out: Optional[PathLike] = None,
 
         report = sizing["sizing"]
         gauges = (per_edge, listed, json.dumps(report["material"]), report.get("seam_groups"),
-                  json.dumps([e.get("seam_forces") for e in rows(report["edges"])]))
+                  json.dumps([e.get("seam_forces") for e in rows(report["edges"])]),
+                  json.dumps(report.get("joints")))
     return _done(_lamina.plates(_axes_bytes(axes), gauges, opts,
                                 None if out is None else os.fspath(out)), "mm")
 

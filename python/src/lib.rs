@@ -998,12 +998,14 @@ fn size<'py>(
 
 /// A sizing as the Python side hands it over: the gauges per edge and the list (little-endian
 /// f64), the material as JSON, the assembly groups its seams were sized for, and per edge
-/// what a seam's bolts carry (JSON: null or six numbers).
+/// what a seam's bolts carry (JSON: null or six numbers), and the joints it weighed the plates
+/// with (JSON: sizing.json's `joints`, null when it weighed the uncut panels).
 type SizingArg<'py> = (
     Bound<'py, PyBytes>,
     Bound<'py, PyBytes>,
     String,
     Option<usize>,
+    String,
     String,
 );
 
@@ -1021,7 +1023,9 @@ fn plates<'py>(
     let mut o = Opts::new(&options, "plates");
     let mut opts = options::plates(&mut o)?;
     o.finish()?;
-    if let Some((per_edge, list, material, seam_groups, seam_forces)) = sizing {
+    if let Some((per_edge, list, material, seam_groups, seam_forces, joints)) = sizing {
+        let joints = lamina::analyze::sizing::joints_from_json(&joints)
+            .map_err(|e| error(format!("sizing: its joints: {e}")))?;
         let seam_forces: Vec<Option<[f64; 6]>> = serde_json::from_str(&seam_forces)
             .map_err(|e| error(format!("sizing: its edges' seam_forces: {e}")))?;
         if seam_forces
@@ -1043,6 +1047,7 @@ fn plates<'py>(
             ),
             seam_groups,
             seam_forces,
+            joints,
         });
     }
     let made = run::run(py, None, |_| stage::plates::run(&axes, &opts))?;

@@ -250,6 +250,11 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "throat",
             "max_rounds",
             "shells",
+            "weld_gap",
+            "weld_gap_tolerance",
+            "node_core",
+            "bolt",
+            "bolt_clearance",
             "name",
         ],
         "plates" => &[
@@ -726,6 +731,18 @@ pub fn size(o: &mut Opts) -> PyResult<stage::size::Options> {
         throat: o.f64("throat")?.unwrap_or(d.throat),
         max_rounds: o.usize("max_rounds")?.unwrap_or(d.max_rounds),
         shells: o.usize("shells")?,
+        joints: stage::plates::Joints {
+            weld_gap: o.f64("weld_gap")?.unwrap_or(d.joints.weld_gap),
+            weld_gap_tolerance: o
+                .f64("weld_gap_tolerance")?
+                .unwrap_or(d.joints.weld_gap_tolerance),
+            node_core: o.parsed("node_core", lamina::rationalize::plates::CoreSize::parse)?,
+            bolt: o.parsed("bolt", lamina::rationalize::bolts::parse)?,
+            bolt_clearance: o.parsed(
+                "bolt_clearance",
+                lamina::rationalize::clearance::Socket::parse,
+            )?,
+        },
         name: o.string("name")?.unwrap_or(d.name),
     })
 }

@@ -353,6 +353,19 @@ def test_plates_equal_cli(steel):
     assert plates["assembly"]["faces"].shape[1] == 3
 
 
+def test_the_plates_weigh_what_the_sizing_analysed_with_its_joints(steel, solved):
+    _, sizing, plates, _ = steel
+    edges = lamina.rows(sizing["sizing"]["edges"])
+    rho = sizing["sizing"]["material"]["density"] * 1e-6
+    cut = [0.0] * len(edges)
+    for p in plates["plates"]["plates"]:
+        cut[p["edge"]] += p["area_mm2"] * p["thickness"] * rho
+    assert all(abs(e["mass_kg"] - c) <= 1e-9 * c for e, c in zip(edges, cut))
+    # Joints other than the sizing weighed are refused, naming the option.
+    with pytest.raises(lamina.LaminaError, match=r"^weld_gap= is 2 but the sizing"):
+        lamina.plates(solved, sizing=sizing, groups=7, weld_gap=2)
+
+
 def test_nest_equals_cli(steel):
     tmp, _, _, cut = steel
     same_report(cut["nest"], tmp / "cut" / "nest.json", tables=("placements",))

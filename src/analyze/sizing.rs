@@ -45,9 +45,10 @@ use super::frame::{self, CaseResult, Elastic, FrameError, LoadCase, Member, Mode
 use super::material::Material;
 use super::shell;
 use crate::rationalize::axes::Axes;
+use crate::rationalize::clearance::Socket;
 use crate::rationalize::groups::{partition, GroupError};
 use crate::rationalize::planarize::Selector;
-use crate::rationalize::plates::seam_gauges;
+use crate::rationalize::plates::{seam_gauges, CoreSize, Joints};
 
 pub use super::frame::Support;
 
@@ -227,6 +228,25 @@ pub struct SizingOptions {
     /// The assembly groups `plates` will cut (`plates --groups K`): a member between two
     /// groups is a bolted seam of two plies, sized as such from the sums of two gauges.
     pub seam_groups: Option<usize>,
+    /// The steel as cut (from `plates`): what the self-weight and the mass are made of. None:
+    /// the uncut panels.
+    pub built: Option<BuiltSteel>,
+    /// Per member, the least gauge (a seam's stack) it may take, mm: what the joints ask of it
+    /// (a seam whose bolts need thicker plies). Empty: none.
+    pub floor: Vec<f64>,
+}
+
+/// The steel of the plates as cut: per edge the area of each ply left after the setbacks at
+/// the nodes and the bolt holes (a single plate's in the first), and the steel at the nodes
+/// (node cores), kg.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuiltSteel {
+    /// Per edge, mm²: `[ply a, ply b]` of a seam, `[plate, 0]` of a single plate.
+    pub areas: Vec<[f64; 2]>,
+    /// Per node with a core, its mass, kg.
+    pub nodes: Vec<(usize, f64)>,
+    /// Per edge, the mass of a seam's bolt sets (bolts, nuts, washers), kg; 0 elsewhere.
+    pub fasteners: Vec<f64>,
 }
 
 #[derive(Debug, Error)]
@@ -387,7 +407,10 @@ pub struct Sizing {
     /// The limit in mm, when one is set.
     pub deflection_limit: Option<f64>,
     pub span: f64,
+    /// The steel analysed, kg: the members', the seams' bolt sets and the node cores'.
     pub mass_kg: f64,
+    /// Per member, its steel, kg (a seam's two plies together).
+    pub member_kg: Vec<f64>,
     /// Elements up each panel when the panels were analysed as shells; None for the frame.
     pub shells: Option<usize>,
 }
@@ -533,6 +556,30 @@ fn panel_areas(axes: &Axes) -> Vec<f64> {
         .collect()
 }
 
+/// The steel of member `k` with `section`, kg: its plates as cut when they are known (a seam's
+/// plies each by its own area), else its uncut panel (`areas`, mm²).
+fn steel_kg(areas: &[f64], opts: &SizingOptions, k: usize, section: &Section) -> f64 {
+    let volume = match (&opts.built, section.plies) {
+        (Some(b), Some([ta, tb])) => b.areas[k][0] * ta + b.areas[k][1] * tb,
+        (Some(b), None) => b.areas[k][0] * section.thickness,
+        (None, _) => areas[k] * section.thickness,
+    };
+    volume * opts.material.density * 1e-6
+}
+
+/// The bolt sets through member `k`, kg (0 when the plates are not known).
+fn fastener_kg(opts: &SizingOptions, k: usize) -> f64 {
+    opts.built.as_ref().map_or(0.0, |b| b.fasteners[k])
+}
+
+/// The steel at the nodes (cores), kg.
+fn node_steel_kg(opts: &SizingOptions) -> f64 {
+    opts.built
+        .iter()
+        .flat_map(|b| &b.nodes)
+        .fold(0.0, |s, n| s + n.1)
+}
+
 /// The load cases: one per load, their sum (when there are several), then the combinations of
 /// [`combinations`] in their order.
 pub fn cases(
@@ -554,13 +601,13 @@ pub fn cases(
             LoadSpec::SelfWeight { factor } => {
                 for (k, m) in model.members.iter().enumerate() {
                     let l = model.nodes[m.a].distance(model.nodes[m.b]);
-                    let newtons = areas[k]
-                        * m.section.thickness
-                        * opts.material.density
-                        * 1e-6
-                        * GRAVITY
-                        * factor;
+                    let kg = steel_kg(&areas, opts, k, &m.section) + fastener_kg(opts, k);
+                    let newtons = kg * GRAVITY * factor;
                     case.member.push((k, DVec3::new(0.0, 0.0, -newtons / l)));
+                }
+                for &(i, kg) in opts.built.iter().flat_map(|b| &b.nodes) {
+                    let newtons = kg * GRAVITY * factor;
+                    case.nodal.push((i, [0.0, 0.0, -newtons, 0.0, 0.0, 0.0]));
                 }
             }
             LoadSpec::Point { nodes, force } => {
@@ -1121,6 +1168,15 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
     let choices = choices(axes, opts)?;
     let tops: Vec<usize> = choices.iter().map(|c| c.len() - 1).collect();
     let uls = uls_cases(opts);
+    // What the joints ask of each member (a seam's bolts): the first choice that thick.
+    let floor: Vec<usize> = (0..axes.edges.len())
+        .map(|k| match opts.floor.get(k) {
+            Some(&t) => (choices[k].iter())
+                .position(|c| c.0 >= t - 1e-9)
+                .unwrap_or(tops[k]),
+            None => 0,
+        })
+        .collect();
     let mut level = vec![0usize; axes.edges.len()];
     let sections_of = |level: &[usize]| {
         level
@@ -1168,7 +1224,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
                     ) <= 1.0
                 })
                 .unwrap_or(tops[k]);
-            want[gk] = want[gk].max(need).max(weld_floor[k]);
+            want[gk] = want[gk].max(need).max(weld_floor[k]).max(floor[k]);
         }
         let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
         if next == level {
@@ -1191,92 +1247,104 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         Limit::Serviceability,
     );
     let mut deflection_rounds = 0;
-    if let Some(limit) = limit {
-        while deflection_rounds < 200 {
-            let c = deflection_case(&now.results, &sls);
-            let (node, worst) = max_displacement(&now.results[c]);
-            if worst <= limit {
-                break;
-            }
-            let shares = stiffening(axes, opts, &now.model, &now.cases[c], &now.results[c], node)?;
-            let mut per_group = vec![0.0; n_groups];
-            for (k, s) in shares.iter().enumerate() {
-                per_group[group[k]] += s;
-            }
-            let mut order: Vec<usize> = (0..n_groups)
-                .filter(|&gk| per_group[gk] > 0.0 && has_room(&group, &level, &tops, gk))
-                .collect();
-            if order.is_empty() {
-                break;
-            }
-            order.sort_by(|&a, &b| per_group[b].total_cmp(&per_group[a]).then(a.cmp(&b)));
-            let take = (order.len() / 10).max(1);
-            for &gk in &order[..take] {
-                for (k, lv) in level.iter_mut().enumerate() {
-                    if group[k] == gk {
-                        *lv = (*lv + 1).min(tops[k]);
+    // Stiffen, smooth and hold again until the deflection holds after all three (smoothing
+    // and holding add weight), or nothing can be raised.
+    loop {
+        let before = level.clone();
+        if let Some(limit) = limit {
+            while deflection_rounds < 200 {
+                let c = deflection_case(&now.results, &sls);
+                let (node, worst) = max_displacement(&now.results[c]);
+                if worst <= limit {
+                    break;
+                }
+                let shares =
+                    stiffening(axes, opts, &now.model, &now.cases[c], &now.results[c], node)?;
+                let mut per_group = vec![0.0; n_groups];
+                for (k, s) in shares.iter().enumerate() {
+                    per_group[group[k]] += s;
+                }
+                let mut order: Vec<usize> = (0..n_groups)
+                    .filter(|&gk| per_group[gk] > 0.0 && has_room(&group, &level, &tops, gk))
+                    .collect();
+                if order.is_empty() {
+                    break;
+                }
+                order.sort_by(|&a, &b| per_group[b].total_cmp(&per_group[a]).then(a.cmp(&b)));
+                let take = (order.len() / 10).max(1);
+                for &gk in &order[..take] {
+                    for (k, lv) in level.iter_mut().enumerate() {
+                        if group[k] == gk {
+                            *lv = (*lv + 1).min(tops[k]);
+                        }
                     }
                 }
-            }
-            now = analyse(axes, &sections_of(&level), opts)?;
-            deflection_rounds += 1;
-            // A raise adds weight: keep the stresses within the gauges too.
-            for (k, c) in now.checks.iter().enumerate() {
-                if c.utilisation > 1.0 && level[k] < tops[k] {
-                    let gk = group[k];
-                    for (j, lv) in level.iter_mut().enumerate() {
-                        if group[j] == gk {
-                            *lv = (*lv + 1).min(tops[j]);
+                now = analyse(axes, &sections_of(&level), opts)?;
+                deflection_rounds += 1;
+                // A raise adds weight: keep the stresses within the gauges too.
+                for (k, c) in now.checks.iter().enumerate() {
+                    if c.utilisation > 1.0 && level[k] < tops[k] {
+                        let gk = group[k];
+                        for (j, lv) in level.iter_mut().enumerate() {
+                            if group[j] == gk {
+                                *lv = (*lv + 1).min(tops[j]);
+                            }
                         }
                     }
                 }
             }
         }
-    }
-    if opts.smooth {
-        // Neighbours within one step: raise the thinner until it holds everywhere.
-        let mut at: Vec<Vec<usize>> = vec![Vec::new(); now.model.nodes.len()];
-        for (k, m) in now.model.members.iter().enumerate() {
-            at[m.a].push(k);
-            at[m.b].push(k);
-        }
-        let mut changed = true;
-        while changed {
-            changed = false;
-            for list in &at {
-                let high = list.iter().map(|&k| level[k]).max().unwrap_or(0);
-                for &k in list {
-                    if level[k] + 1 < high {
-                        level[k] = high - 1;
-                        changed = true;
+        if opts.smooth {
+            // Neighbours within one step: raise the thinner until it holds everywhere.
+            let mut at: Vec<Vec<usize>> = vec![Vec::new(); now.model.nodes.len()];
+            for (k, m) in now.model.members.iter().enumerate() {
+                at[m.a].push(k);
+                at[m.b].push(k);
+            }
+            let mut changed = true;
+            while changed {
+                changed = false;
+                for list in &at {
+                    let high = list.iter().map(|&k| level[k]).max().unwrap_or(0);
+                    for &k in list {
+                        if level[k] + 1 < high {
+                            level[k] = high - 1;
+                            changed = true;
+                        }
                     }
                 }
             }
         }
-    }
-    // The raises for deflection and smoothness move forces: hold members and welds again,
-    // raising only.
-    let mut holding_rounds = 0;
-    loop {
-        now = analyse(axes, &sections_of(&level), opts)?;
-        let for_welds = weld_levels(&now.model, &now.welds, &now.throats, &choices, opts);
-        let mut want = vec![0usize; n_groups];
-        for (k, &gk) in group.iter().enumerate() {
-            let member = if now.checks[k].utilisation > 1.0 {
-                level[k] + 1
-            } else {
-                level[k]
-            };
-            want[gk] = want[gk].max(member.max(for_welds[k]).min(tops[k]));
+        // The raises for deflection and smoothness move forces: hold members and welds again,
+        // raising only.
+        let mut holding_rounds = 0;
+        loop {
+            now = analyse(axes, &sections_of(&level), opts)?;
+            let for_welds = weld_levels(&now.model, &now.welds, &now.throats, &choices, opts);
+            let mut want = vec![0usize; n_groups];
+            for (k, &gk) in group.iter().enumerate() {
+                let member = if now.checks[k].utilisation > 1.0 {
+                    level[k] + 1
+                } else {
+                    level[k]
+                };
+                want[gk] = want[gk].max(member.max(for_welds[k]).max(floor[k]).min(tops[k]));
+            }
+            let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
+            if next == level || holding_rounds >= opts.max_rounds {
+                break;
+            }
+            level = next;
+            holding_rounds += 1;
         }
-        let next: Vec<usize> = group.iter().map(|&gk| want[gk]).collect();
-        if next == level || holding_rounds >= opts.max_rounds {
+        rounds += holding_rounds;
+        let met = limit.is_none_or(|l| {
+            max_displacement(&now.results[deflection_case(&now.results, &sls)]).1 <= l
+        });
+        if met || level == before || deflection_rounds >= 200 {
             break;
         }
-        level = next;
-        holding_rounds += 1;
     }
-    rounds += holding_rounds;
     let Analysis {
         model,
         cases,
@@ -1306,12 +1374,11 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         }
     }
     let areas = panel_areas(axes);
-    let mass_kg = model
-        .members
-        .iter()
-        .zip(&areas)
-        .map(|(m, a)| a * m.section.thickness * opts.material.density * 1e-6)
-        .sum();
+    let member_kg: Vec<f64> = (model.members.iter().enumerate())
+        .map(|(k, m)| steel_kg(&areas, opts, k, &m.section))
+        .collect();
+    let fasteners: f64 = (0..member_kg.len()).map(|k| fastener_kg(opts, k)).sum();
+    let mass_kg = member_kg.iter().sum::<f64>() + fasteners + node_steel_kg(opts);
     let combinations = combinations(&opts.loads);
     Ok(Sizing {
         gauges: sections_of(&level).iter().map(|c| c.0).collect(),
@@ -1330,6 +1397,7 @@ pub fn size(axes: &Axes, opts: &SizingOptions) -> Result<Sizing, SizingError> {
         deflection_limit: limit,
         span,
         mass_kg,
+        member_kg,
         shells: opts.shells,
     })
 }
@@ -1438,6 +1506,73 @@ struct GaugeFile {
     edges: Vec<GaugeEdge>,
     material: Option<Material>,
     seam_groups: Option<usize>,
+    #[serde(default)]
+    joints: Option<JointsFile>,
+}
+
+/// The joints a sizing weighed the plates with (`stage::size::JointsRow` writes them).
+#[derive(serde::Deserialize)]
+struct JointsFile {
+    weld_gap: f64,
+    weld_gap_tolerance: f64,
+    node_core: Option<CoreFile>,
+    bolt: Option<String>,
+    bolt_clearance: Option<SocketFile>,
+}
+
+#[derive(serde::Deserialize)]
+struct CoreFile {
+    diameter: f64,
+    wall: f64,
+}
+
+#[derive(serde::Deserialize)]
+struct SocketFile {
+    radius: f64,
+    reach: f64,
+}
+
+impl JointsFile {
+    /// The joints, each figure in the range its option allows.
+    fn joints(&self) -> Result<Joints, String> {
+        let length = |what: &str, v: f64| {
+            (v.is_finite() && (0.0..=1000.0).contains(&v))
+                .then_some(v)
+                .ok_or_else(|| format!("joints: {what} {v} is not a length from 0 to 1000 mm"))
+        };
+        let node_core = match &self.node_core {
+            Some(c) => Some(
+                CoreSize::parse(&format!("tube:{},{}", c.diameter, c.wall))
+                    .map_err(|e| format!("joints: node_core {e}"))?,
+            ),
+            None => None,
+        };
+        let bolt_clearance = match &self.bolt_clearance {
+            Some(b) => Some(
+                Socket::parse(&format!("{}:{}", b.radius, b.reach))
+                    .map_err(|e| format!("joints: bolt_clearance {e}"))?,
+            ),
+            None => None,
+        };
+        Ok(Joints {
+            weld_gap: length("weld_gap", self.weld_gap)?,
+            weld_gap_tolerance: length("weld_gap_tolerance", self.weld_gap_tolerance)?,
+            node_core,
+            bolt: match &self.bolt {
+                Some(b) => Some(
+                    crate::rationalize::bolts::parse(b).map_err(|e| format!("joints: bolt {e}"))?,
+                ),
+                None => None,
+            },
+            bolt_clearance,
+        })
+    }
+}
+
+/// The joints of a sizing file's `joints` as JSON text (`null`: none).
+pub fn joints_from_json(text: &str) -> Result<Option<Joints>, String> {
+    let file: Option<JointsFile> = serde_json::from_str(text).map_err(|e| e.to_string())?;
+    file.map(|j| j.joints()).transpose()
 }
 
 #[derive(serde::Deserialize)]
@@ -1460,6 +1595,9 @@ pub struct SizedGauges {
     pub seam_groups: Option<usize>,
     /// Per edge, what a seam's bolts carry (None for other edges, and in files from before).
     pub seam_forces: Vec<Option<[f64; 6]>>,
+    /// The joints the plates were weighed with as cut (None in files from before, and when
+    /// the sizing weighed the uncut panels).
+    pub joints: Option<Joints>,
 }
 
 /// A sizing file's gauges and steel, for `plates --sizing`.
@@ -1505,7 +1643,12 @@ pub fn read_gauges(path: &std::path::Path) -> Result<SizedGauges, crate::files::
             ));
         }
     }
+    let joints = match &file.joints {
+        Some(j) => Some(j.joints().map_err(|e| ReadError::file(path, e))?),
+        None => None,
+    };
     Ok(SizedGauges {
+        joints,
         per_edge: file.edges.iter().map(|e| e.gauge).collect(),
         list: file.gauges,
         material: file.material,
@@ -1589,6 +1732,8 @@ mod tests {
             max_rounds: 20,
             shells: None,
             seam_groups: None,
+            built: None,
+            floor: Vec::new(),
         }
     }
 
@@ -1679,6 +1824,46 @@ mod tests {
         assert!((got.interaction - expect).abs() < 1e-9 * expect);
         assert!(got.interaction > got.stress);
         assert_eq!(got.governing().1, "lateral-torsional");
+    }
+
+    #[test]
+    fn the_self_weight_is_the_steel_as_cut_with_its_bolts_and_cores() {
+        // The 1000 × 200 panel uncut, then a third of it cut away, bolts on the member and a
+        // core at the free end: the reaction carries exactly what is left.
+        let axes = cantilever(1000.0);
+        let uncut = size(&axes, &options(&["self-weight"], &[2.0], 0.7)).unwrap();
+        let kg = |a: f64| a * 2.0 * 7.85e-6;
+        assert!((uncut.mass_kg - kg(200_000.0)).abs() < 1e-12);
+        let mut opts = options(&["self-weight"], &[2.0], 0.7);
+        opts.built = Some(BuiltSteel {
+            areas: vec![[133_000.0, 0.0]],
+            nodes: vec![(1, 0.25)],
+            fasteners: vec![0.5],
+        });
+        let cut = size(&axes, &opts).unwrap();
+        let mass = kg(133_000.0) + 0.25 + 0.5;
+        assert!((cut.mass_kg - mass).abs() < 1e-12, "{}", cut.mass_kg);
+        assert!((cut.member_kg[0] - kg(133_000.0)).abs() < 1e-12);
+        let up: f64 = cut.total().reactions.iter().map(|(_, r)| r[2]).sum();
+        assert!((up - mass * GRAVITY).abs() < 1e-9 * up, "{up}");
+        // The core hangs at the tip: the moment at the support grows by its whole lever.
+        let moment = |s: &Sizing| s.total().reactions[0].1[4].abs();
+        let spread = (mass - 0.25) * GRAVITY * 500.0;
+        let tip = 0.25 * GRAVITY * 1000.0;
+        assert!(
+            (moment(&cut) - spread - tip).abs() < 1e-6 * moment(&cut),
+            "{}",
+            moment(&cut)
+        );
+    }
+
+    #[test]
+    fn a_floor_under_a_member_keeps_it_at_least_that_thick() {
+        let axes = cantilever(150.0);
+        let mut opts = options(&["self-weight"], &[1.5, 2.0, 3.0, 4.0], 0.7);
+        assert_eq!(size(&axes, &opts).unwrap().gauges, vec![1.5]);
+        opts.floor = vec![2.5];
+        assert_eq!(size(&axes, &opts).unwrap().gauges, vec![3.0]);
     }
 
     #[test]

@@ -368,6 +368,13 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
 /// by vein radius), nested on 3000 × 1500 sheets per thickness.
 fn steel(out: &Path) -> Result<Entry> {
     let dir = out.join("calyx");
+    let joints = super::plates::JointArgs {
+        node_core: Some(
+            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4")
+                .map_err(anyhow::Error::msg)?,
+        ),
+        ..Default::default()
+    };
     let sized = super::size::execute(&super::size::Args {
         input: dir.join("lbfgs-axes.json"),
         output: dir.join("sizing.json"),
@@ -385,6 +392,7 @@ fn steel(out: &Path) -> Result<Entry> {
         throat: 0.7,
         max_rounds: 20,
         shells: None,
+        joints: joints.clone(),
         html: Some(dir.join("sizing.html")),
         export_ccx: Some(dir.join("sizing.inp")),
         json: false,
@@ -395,15 +403,8 @@ fn steel(out: &Path) -> Result<Entry> {
         sizing: Some(dir.join("sizing.json")),
         thickness: None,
         edge_thickness: vec![],
-        weld_gap: 1.0,
-        weld_gap_tolerance: 0.5,
-        node_core: Some(
-            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4")
-                .map_err(anyhow::Error::msg)?,
-        ),
+        joints,
         min_weld_angle: None,
-        bolt: None,
-        bolt_clearance: None,
         material: None,
         groups: 7,
         output: dir.join("plates"),
@@ -515,7 +516,7 @@ fn steel(out: &Path) -> Result<Entry> {
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
     Ok(Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
-        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7`, seams as their two plies: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
+        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

@@ -12,7 +12,8 @@ use lamina::files::write_atomic;
 use lamina::mesh::io::write_mesh;
 use lamina::rationalize::axes::read_axes;
 use lamina::rationalize::bolts;
-use lamina::stage::plates::{self, BoltSize, CoreSize, EdgeSelector};
+use lamina::rationalize::clearance::Socket;
+use lamina::stage::plates::{self, BoltSize, CoreSize, EdgeSelector, Joints};
 use lamina::view::scene::{scene, Input};
 
 #[derive(ClapArgs)]
@@ -35,17 +36,8 @@ pub struct Args {
     /// e.g. `z<1:6` for a 6 mm base ring; repeatable, a later match wins
     #[arg(long, value_parser = parse_override)]
     pub edge_thickness: Vec<(EdgeSelector, f64)>,
-    /// Root gap between plates meeting at a node, for the weld, mm (above 0; 0 only with
-    /// --node-core)
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    pub weld_gap: f64,
-    /// How far a root gap may be from --weld-gap, mm (at most --weld-gap)
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    pub weld_gap_tolerance: f64,
-    /// Nodes whose gaps setbacks cannot even get a tube on their axis the plates weld to:
-    /// `tube:DIAMETER,WALL` in mm [default: such nodes are only reported]
-    #[arg(long, value_parser = CoreSize::parse)]
-    pub node_core: Option<CoreSize>,
+    #[command(flatten)]
+    pub joints: JointArgs,
     /// Exit 1 when two plates at a node meet at less than this dihedral angle, degrees (weld
     /// access; prequalified fillet welds need 60°)
     #[arg(long, allow_negative_numbers = true)]
@@ -54,15 +46,6 @@ pub struct Args {
     /// plates from the gauge list bolted face to face
     #[arg(long, default_value_t = 1)]
     pub groups: usize,
-    /// Bolts through the seam plates: M6, M8, M10, M12, M16, M20, M22, M24, M27, M30
-    /// [default: by the grip (Unwin's rule), smaller where a plate is too small]
-    #[arg(long, value_parser = bolts::parse)]
-    pub bolt: Option<BoltSize>,
-    /// The socket that tightens the bolts, RADIUS:REACH in mm (it must fit over every head and
-    /// nut without crossing a plate, as must the washers, head and nut themselves) [default:
-    /// one per size, the nut's corners and a 3 mm wall, 40 mm long]
-    #[arg(long, value_parser = lamina::rationalize::clearance::Socket::parse)]
-    pub bolt_clearance: Option<lamina::rationalize::clearance::Socket>,
     /// The steel: s235, s355, 1.4404 or a JSON file as `size` takes; its grade and density go
     /// into plates.json, the mass and the cut files [default: the sizing's with --sizing, else
     /// 1.4404]
@@ -75,6 +58,59 @@ pub struct Args {
     /// Print a machine-readable summary on stdout
     #[arg(long)]
     pub json: bool,
+}
+
+/// How the plates are joined: `plates` cuts with these, and `size` weighs the plates as cut
+/// with them.
+#[derive(ClapArgs, Clone, Debug)]
+pub struct JointArgs {
+    /// Root gap between plates meeting at a node, for the weld, mm (above 0; 0 only with
+    /// --node-core)
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub weld_gap: f64,
+    /// How far a root gap may be from --weld-gap, mm (at most --weld-gap)
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
+    pub weld_gap_tolerance: f64,
+    /// Nodes whose gaps setbacks cannot even get a tube on their axis the plates weld to:
+    /// `tube:DIAMETER,WALL` in mm [default: such nodes are only reported]
+    #[arg(long, value_parser = CoreSize::parse)]
+    pub node_core: Option<CoreSize>,
+    /// Bolts through the seam plates: M6, M8, M10, M12, M16, M20, M22, M24, M27, M30
+    /// [default: by the grip (Unwin's rule), smaller where a plate is too small, the first
+    /// whose row holds the seam's forces]
+    #[arg(long, value_parser = bolts::parse)]
+    pub bolt: Option<BoltSize>,
+    /// The socket that tightens the bolts, RADIUS:REACH in mm (it must fit over every head and
+    /// nut without crossing a plate, as must the washers, head and nut themselves) [default:
+    /// one per size, the nut's corners and a 3 mm wall, 40 mm long]
+    #[arg(long, value_parser = Socket::parse)]
+    pub bolt_clearance: Option<Socket>,
+}
+
+impl JointArgs {
+    /// The joints these flags give.
+    pub fn joints(&self) -> Joints {
+        Joints {
+            weld_gap: self.weld_gap,
+            weld_gap_tolerance: self.weld_gap_tolerance,
+            node_core: self.node_core,
+            bolt: self.bolt,
+            bolt_clearance: self.bolt_clearance,
+        }
+    }
+}
+
+impl Default for JointArgs {
+    fn default() -> Self {
+        let j = Joints::default();
+        JointArgs {
+            weld_gap: j.weld_gap,
+            weld_gap_tolerance: j.weld_gap_tolerance,
+            node_core: j.node_core,
+            bolt: j.bolt,
+            bolt_clearance: j.bolt_clearance,
+        }
+    }
 }
 
 fn parse_override(s: &str) -> Result<(EdgeSelector, f64), String> {
@@ -100,13 +136,13 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         thickness: args.thickness,
         sizing,
         edge_thickness: args.edge_thickness.clone(),
-        weld_gap: args.weld_gap,
-        weld_gap_tolerance: args.weld_gap_tolerance,
-        node_core: args.node_core,
+        weld_gap: args.joints.weld_gap,
+        weld_gap_tolerance: args.joints.weld_gap_tolerance,
+        node_core: args.joints.node_core,
         min_weld_angle: args.min_weld_angle,
         groups: args.groups,
-        bolt: args.bolt,
-        bolt_clearance: args.bolt_clearance,
+        bolt: args.joints.bolt,
+        bolt_clearance: args.joints.bolt_clearance,
         material: args
             .material
             .as_deref()
@@ -190,7 +226,7 @@ pub fn run(args: Args) -> Result<bool> {
         outln!("{value}");
     } else {
         outln!(
-            "{}: {} plates in {} group(s), {} seam(s) as bolted pairs ({} bolts), {:.3} m² of plate, {:.1} kg of {} ({} g/cm³); panels flattened by at most {:.4} mm",
+            "{}: {} plates in {} group(s), {} seam(s) as bolted pairs ({} bolts), {:.3} m² of plate, {:.1} kg of {} ({} g/cm³){}; panels flattened by at most {:.4} mm",
             args.output.display(),
             sum.plates,
             sum.groups,
@@ -200,14 +236,26 @@ pub fn run(args: Args) -> Result<bool> {
             sum.volume_mm3 * made.material.density * 1e-6,
             made.material.name,
             made.material.density,
+            match (sum.bolt_sets_kg > 0.0, sum.cores_kg > 0.0) {
+                (false, false) => String::new(),
+                (b, c) => format!(
+                    ", with {}{}{} {:.1} kg",
+                    if b { "bolt sets" } else { "" },
+                    if b && c { " and " } else { "" },
+                    if c { "node cores" } else { "" },
+                    sum.volume_mm3 * made.material.density * 1e-6
+                        + sum.bolt_sets_kg
+                        + sum.cores_kg
+                ),
+            },
             sum.max_flattening_mm
         );
         outln!(
             "  welds: {} node(s), {} pair(s); root gap {} ± {} mm at {} node(s){}; dihedral angles from {:.1}°: {} below 60°, {} 60–120°, {} 120–135°, {} over 135° (welds.html)",
             weld.nodes,
             weld.pairs,
-            args.weld_gap,
-            args.weld_gap_tolerance,
+            args.joints.weld_gap,
+            args.joints.weld_gap_tolerance,
             weld.even_nodes,
             if weld.cores > 0 {
                 format!(", {} with a node core", weld.cores)

@@ -78,6 +78,14 @@ pub struct Args {
     /// Print a machine-readable summary on stdout
     #[arg(long)]
     pub json: bool,
+    /// The joints `plates` will cut with (the same flags and defaults): the self-weight and
+    /// mass are the plates as cut (setbacks at the nodes, bolt holes, bolt sets, node cores),
+    /// and `plates --sizing` refuses other joints
+    #[command(
+        flatten,
+        next_help_heading = "Joints, as `plates` will cut them (the self-weight is the plates as cut; `plates --sizing` refuses other joints)"
+    )]
+    pub joints: super::plates::JointArgs,
 }
 
 /// The input's file name: outputs stay the same bytes wherever the input sits.
@@ -103,6 +111,7 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         throat: args.throat,
         max_rounds: args.max_rounds,
         shells: args.shells,
+        joints: args.joints.joints(),
         name: source_name(&args.input),
     };
     let axes = read_axes(&args.input)?;

@@ -106,6 +106,23 @@ pub struct PlateOptions {
     pub socket: Option<Socket>,
 }
 
+/// How the plates are joined, which decides how much steel is cut away at the nodes and for
+/// the bolts: `size` weighs the plates as `plates` cuts them with these, and `plates` refuses
+/// a sizing made with others.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Joints {
+    /// Root gap between plates at a node, mm.
+    pub weld_gap: f64,
+    /// How far a root gap may be from `weld_gap`, mm.
+    pub weld_gap_tolerance: f64,
+    /// A tube at nodes whose gaps setbacks cannot even.
+    pub node_core: Option<CoreSize>,
+    /// Bolts through the seams (None: by the grip).
+    pub bolt: Option<BoltSize>,
+    /// The socket that tightens the bolts (None: one for each size).
+    pub bolt_clearance: Option<Socket>,
+}
+
 /// A node core's tube, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CoreSize {
@@ -676,6 +693,15 @@ pub struct Core {
     pub base: DVec3,
     pub axis: DVec3,
     pub length: f64,
+}
+
+impl Core {
+    /// The tube's mass, kg, for a steel of `density` kg/dm³.
+    pub fn mass_kg(&self, density: f64) -> f64 {
+        let (d, w) = (self.size.diameter, self.size.wall);
+        let inner = d - 2.0 * w;
+        std::f64::consts::FRAC_PI_4 * (d * d - inner * inner) * self.length * density * 1e-6
+    }
 }
 
 /// Two plates side by side at a node and the wedge between them (see `welds::Wedge`).

@@ -39,7 +39,7 @@ pub use crate::rationalize::bolts::BoltSize;
 use crate::rationalize::plates::{
     plates, Core, Plate, PlateError, PlateOptions, PlateSet, Thickness, HOLE_SEGMENTS,
 };
-pub use crate::rationalize::plates::{CoreSize, EdgeSelector};
+pub use crate::rationalize::plates::{CoreSize, EdgeSelector, Joints};
 use crate::stage::OptionError;
 use crate::TriMesh;
 
@@ -96,6 +96,65 @@ impl Default for Options {
     }
 }
 
+impl Default for Joints {
+    fn default() -> Self {
+        Joints::of(&Options::default())
+    }
+}
+
+impl Joints {
+    /// The joints of `opts`.
+    pub fn of(opts: &Options) -> Joints {
+        Joints {
+            weld_gap: opts.weld_gap,
+            weld_gap_tolerance: opts.weld_gap_tolerance,
+            node_core: opts.node_core,
+            bolt: opts.bolt,
+            bolt_clearance: opts.bolt_clearance,
+        }
+    }
+
+    /// Plate options with these joints over `opts`'s.
+    pub fn apply(&self, opts: &mut Options) {
+        opts.weld_gap = self.weld_gap;
+        opts.weld_gap_tolerance = self.weld_gap_tolerance;
+        opts.node_core = self.node_core;
+        opts.bolt = self.bolt;
+        opts.bolt_clearance = self.bolt_clearance;
+    }
+
+    /// The first option of `other` that differs from these, its name and both values as the
+    /// command line writes them.
+    fn differs(&self, other: &Joints) -> Option<(&'static str, String, String)> {
+        let num = |v: f64| crate::text::num(v);
+        let core = |c: Option<CoreSize>| match c {
+            Some(c) => format!("tube:{},{}", num(c.diameter), num(c.wall)),
+            None => "none".into(),
+        };
+        let bolt = |b: Option<BoltSize>| b.map_or("by the grip".into(), |b| b.name.to_string());
+        let socket = |s: Option<crate::rationalize::clearance::Socket>| match s {
+            Some(s) => format!("{}:{}", num(s.radius), num(s.height)),
+            None => "one for each size".into(),
+        };
+        let both = [
+            ("weld_gap", num(self.weld_gap), num(other.weld_gap)),
+            (
+                "weld_gap_tolerance",
+                num(self.weld_gap_tolerance),
+                num(other.weld_gap_tolerance),
+            ),
+            ("node_core", core(self.node_core), core(other.node_core)),
+            ("bolt", bolt(self.bolt), bolt(other.bolt)),
+            (
+                "bolt_clearance",
+                socket(self.bolt_clearance),
+                socket(other.bolt_clearance),
+            ),
+        ];
+        both.into_iter().find(|(_, a, b)| a != b)
+    }
+}
+
 /// A sizing's gauges: one per edge, and the list they were chosen from.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gauges {
@@ -109,6 +168,9 @@ pub struct Gauges {
     pub seam_groups: Option<usize>,
     /// Per edge, what a seam's bolts carry (see `bolts::SeamForces`); None for other edges.
     pub seam_forces: Vec<Option<crate::rationalize::bolts::SeamForces>>,
+    /// The joints the sizing weighed the plates with (None: files from before, or a sizing
+    /// of the uncut panels).
+    pub joints: Option<Joints>,
 }
 
 impl From<crate::analyze::sizing::SizedGauges> for Gauges {
@@ -120,6 +182,7 @@ impl From<crate::analyze::sizing::SizedGauges> for Gauges {
             material: g.material,
             seam_groups: g.seam_groups,
             seam_forces: g.seam_forces,
+            joints: g.joints,
         }
     }
 }
@@ -133,6 +196,7 @@ impl Gauges {
             material: Some(report.material.clone()),
             seam_groups: report.seam_groups,
             seam_forces: report.edges.iter().map(|e| e.seam_forces).collect(),
+            joints: report.joints.as_ref().map(|j| j.joints),
         }
     }
 }
@@ -194,10 +258,17 @@ impl Plated {
     pub fn summary(&self) -> Summary {
         let plates = &self.set.plates;
         let weld = &self.welds.summary;
+        let density = self.material.density;
         Summary {
             plates: plates.len(),
             area_mm2: plates.iter().map(|p| p.area()).sum(),
             volume_mm3: plates.iter().map(|p| p.area() * p.thickness).sum(),
+            bolt_sets_kg: (plates.iter().enumerate())
+                .filter(|(i, p)| p.bolted_to.is_some_and(|o| o > *i))
+                .filter_map(|(_, p)| p.bolt.map(|b| (b, p.holes.len())))
+                .map(|(b, n)| crate::rationalize::bolts::set_volume(&b.size, b.length) * n as f64)
+                .fold(0.0, |s, v| s + v * density * 1e-6),
+            cores_kg: (self.set.cores.iter()).fold(0.0, |s, c| s + c.mass_kg(density)),
             max_flattening_mm: plates.iter().map(|p| p.flattening).fold(0.0, f64::max),
             groups: plates.iter().map(|p| p.group + 1).max().unwrap_or(0),
             seams: plates.iter().filter(|p| p.bolted_to.is_some()).count() / 2,
@@ -235,6 +306,10 @@ pub struct Summary {
     pub area_mm2: f64,
     /// Plate volume, mm³.
     pub volume_mm3: f64,
+    /// The seams' bolt sets (bolt, nut, two washers; nominal), kg.
+    pub bolt_sets_kg: f64,
+    /// The node cores, kg.
+    pub cores_kg: f64,
     /// The most any panel was moved to make it flat, mm.
     pub max_flattening_mm: f64,
     /// Assembly groups.
@@ -270,6 +345,31 @@ pub struct Summary {
 
 /// Makes the plates of `axes`.
 pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
+    let (options, material, notes) = plate_options(axes, opts)?;
+    let set = plates(axes, &options)?;
+    let file = plates_doc(&set, &options, &material);
+    let welds = welds(&set, &options, opts.min_weld_angle);
+    let ok = (opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0)
+        && set.room.clashes.is_empty();
+    let parts = set.plates.iter().map(drawn).collect();
+    Ok(Plated {
+        set,
+        options,
+        file,
+        welds,
+        parts,
+        ok,
+        material,
+        notes,
+    })
+}
+
+/// The options of `opts` checked and resolved: what `rationalize::plates::plates` takes, the
+/// steel, and the notes on defaults taken.
+pub fn plate_options(
+    axes: &Axes,
+    opts: &Options,
+) -> Result<(PlateOptions, Material, Vec<String>), Error> {
     if let Some(a) = opts.min_weld_angle {
         if !(0.0..=180.0).contains(&a) {
             return Err(OptionError::new(
@@ -280,6 +380,16 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         }
     }
     if let Some(g) = &opts.sizing {
+        if let Some((name, sized, here)) = g.joints.and_then(|j| j.differs(&Joints::of(opts))) {
+            return Err(OptionError::new(
+                name,
+                format!(
+                    "is {here} but the sizing weighed the plates as cut with {sized}: give \
+                     {name}= {sized}, or size again with {name}= {here}"
+                ),
+            )
+            .into());
+        }
         let sized_for = g.seam_groups.unwrap_or(1);
         if sized_for != opts.groups {
             return Err(OptionError::new(
@@ -349,22 +459,7 @@ pub fn run(axes: &Axes, opts: &Options) -> Result<Plated, Error> {
         ply_steel: crate::rationalize::bolts::PlySteel::of(&material),
         seam_forces: opts.sizing.as_ref().map(|g| g.seam_forces.clone()),
     };
-    let set = plates(axes, &options)?;
-    let file = plates_doc(&set, &options, &material);
-    let welds = welds(&set, &options, opts.min_weld_angle);
-    let ok = (opts.min_weld_angle.is_none() || welds.summary.pairs_below_min_weld_angle == 0)
-        && set.room.clashes.is_empty();
-    let parts = set.plates.iter().map(drawn).collect();
-    Ok(Plated {
-        set,
-        options,
-        file,
-        welds,
-        parts,
-        ok,
-        material,
-        notes,
-    })
+    Ok((options, material, notes))
 }
 
 /// A part as its DXF draws it, in the plate's own frame, and its tag's height.

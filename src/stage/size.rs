@@ -24,10 +24,14 @@ use serde::Serialize;
 use crate::analyze::frame::local_frame;
 pub use crate::analyze::frame::Support;
 pub use crate::analyze::material::Material;
-use crate::analyze::sizing::{size, Limit, LoadSpec, Sizing, SizingError, SizingOptions};
+use crate::analyze::sizing::{
+    size, BuiltSteel, Limit, LoadSpec, Sizing, SizingError, SizingOptions,
+};
 pub use crate::analyze::sizing::{DeflectionLimit, GroupBy};
 use crate::rationalize::axes::Axes;
 use crate::rationalize::planarize::Selector;
+use crate::rationalize::plates::{PlateError, PlateSet};
+use crate::stage::plates::{self as plate_stage, Joints};
 use crate::stage::{checkpoint, Cancelled, OptionError, Progress};
 
 /// What to analyse and how. `Default` is the command's defaults; give at least one support
@@ -60,6 +64,10 @@ pub struct Options {
     /// Analyse the panels as shells, this many elements up each (even, 4 to 32). Default:
     /// the frame.
     pub shells: Option<usize>,
+    /// How `plates` will join the plates (weld gap, node cores, bolts): the self-weight and
+    /// the mass are the plates' as `plates` cuts them with these, and a seam whose bolts need
+    /// thicker plies gets them. Default: plates' defaults.
+    pub joints: Joints,
     /// The axes' name in the report. Default "axes.json".
     pub name: String,
 }
@@ -78,6 +86,7 @@ impl Default for Options {
             throat: 0.7,
             max_rounds: 20,
             shells: None,
+            joints: Joints::default(),
             name: "axes.json".into(),
         }
     }
@@ -131,6 +140,10 @@ pub enum Error {
     #[error(transparent)]
     /// The caller stopped the stage.
     Cancelled(#[from] Cancelled),
+    #[error("the plates as cut: {0}")]
+    /// The joints cannot be made: an option of theirs, or a seam's bolts even on the thickest
+    /// plies.
+    Joints(#[source] plate_stage::Error),
 }
 
 impl Options {
@@ -224,6 +237,8 @@ impl Options {
             throat_factor: self.throat,
             max_rounds: self.max_rounds,
             shells: self.shells,
+            built: None,
+            floor: Vec::new(),
         })
     }
 }
@@ -241,19 +256,222 @@ pub fn run(axes: &Axes, opts: &Options, progress: &dyn Progress) -> Result<Sized
     }
     progress.begin("sizing", None);
     checkpoint(progress)?;
-    let sizing = size(axes, &sizing_opts)?;
+    let (sizing, sizing_opts, weighed) = size_as_cut(axes, opts, sizing_opts, progress)?;
+    notes.extend(weighed.note.clone());
     checkpoint(progress)?;
     let (max_u, max_w) = (sizing.max_utilisation(), sizing.max_weld_utilisation());
     let (_, max_d) = sizing.max_displacement();
     let deflection_ok = sizing.deflection_limit.is_none_or(|l| max_d <= l);
     let ok = max_u <= 1.0 && max_w <= 1.0 && deflection_ok;
-    let report = report(&sizing, &sizing_opts, opts);
+    let report = report(&sizing, &sizing_opts, opts, &weighed);
     Ok(Sized {
         sizing,
         ok,
         report,
         notes,
     })
+}
+
+/// Rounds of sizing and cutting at most before the steel as cut is taken as it stands.
+const CUT_ROUNDS: usize = 12;
+
+/// The round from which the gauges only rise (see [`size_as_cut`]).
+const SETTLE_FROM: usize = 4;
+
+/// How the steel was weighed: the plates as cut, or why the uncut panels.
+#[derive(Clone, Debug)]
+pub struct Weighed {
+    /// The plates as `plates` cuts them with the joints (false: the uncut panels).
+    pub as_cut: bool,
+    /// Rounds of sizing, each followed by a cut.
+    pub rounds: usize,
+    /// The plates cut from the final gauges, kg, against the analysis's (equal when settled).
+    pub cut_kg: Option<f64>,
+    /// A line for the user when the steel is not the plates as cut, or did not settle.
+    pub note: Option<String>,
+}
+
+/// Sizes, cuts the plates from the gauges as `plates` will, and sizes again on the steel as
+/// cut (setbacks at the nodes, bolt holes, node cores) until the cut is the steel analysed;
+/// a seam whose bolts do not hold (or fit) goes up to thicker plies.
+fn size_as_cut(
+    axes: &Axes,
+    opts: &Options,
+    mut sizing_opts: SizingOptions,
+    progress: &dyn Progress,
+) -> Result<(Sizing, SizingOptions, Weighed), Error> {
+    let mut sizing = size(axes, &sizing_opts)?;
+    let mut weighed = Weighed {
+        as_cut: false,
+        rounds: 1,
+        cut_kg: None,
+        note: None,
+    };
+    let density = sizing_opts.material.density;
+    loop {
+        checkpoint(progress)?;
+        match cut(axes, opts, &sizing_opts, &sizing) {
+            Ok(set) => {
+                let built = built_steel(&set, &sizing, density);
+                weighed.cut_kg = Some(
+                    set.mass_kg(density)
+                        + built.nodes.iter().fold(0.0, |s, n| s + n.1)
+                        + built.fasteners.iter().sum::<f64>(),
+                );
+                if sizing_opts
+                    .built
+                    .as_ref()
+                    .is_some_and(|b| same_steel(b, &built))
+                {
+                    weighed.as_cut = true;
+                    break;
+                }
+                if weighed.rounds >= CUT_ROUNDS {
+                    weighed.as_cut = sizing_opts.built.is_some();
+                    weighed.note = Some(format!(
+                        "the steel as cut did not settle in {CUT_ROUNDS} rounds of sizing and \
+                         cutting: the plates cut from these gauges weigh {:.3} kg, the analysis \
+                         {:.3} kg",
+                        weighed.cut_kg.unwrap_or(0.0),
+                        sizing.mass_kg
+                    ));
+                    break;
+                }
+                sizing_opts.built = Some(built);
+                if weighed.rounds >= SETTLE_FROM {
+                    // Gauges that go back and forth between two cuts: from here they only
+                    // rise, so the rounds settle.
+                    let floor = &mut sizing_opts.floor;
+                    floor.resize(sizing.gauges.len(), 0.0);
+                    for (f, g) in floor.iter_mut().zip(&sizing.gauges) {
+                        *f = f.max(*g);
+                    }
+                }
+            }
+            Err(plate_stage::Error::Plates(
+                PlateError::BoltsOverloaded { edge, .. } | PlateError::NoRoomForBolt { edge, .. },
+            )) if raise_floor(&mut sizing_opts, &sizing, edge) => {}
+            Err(
+                e @ plate_stage::Error::Plates(
+                    PlateError::BoltsOverloaded { .. } | PlateError::NoRoomForBolt { .. },
+                ),
+            )
+            | Err(e @ plate_stage::Error::Option(_)) => return Err(Error::Joints(e)),
+            Err(e) => {
+                // Axes `plates` cannot cut: the uncut panels, said.
+                weighed.note = Some(format!(
+                    "the self-weight is the uncut panels' (setbacks and bolt holes not taken \
+                     off): the plates cannot be cut from these axes ({e})"
+                ));
+                if sizing_opts.built.take().is_some() {
+                    sizing = size(axes, &sizing_opts)?;
+                }
+                break;
+            }
+        }
+        sizing = size(axes, &sizing_opts)?;
+        weighed.rounds += 1;
+    }
+    Ok((sizing, sizing_opts, weighed))
+}
+
+/// Whether two weighings of the steel agree (to a millionth of a mm² per ply).
+fn same_steel(a: &BuiltSteel, b: &BuiltSteel) -> bool {
+    let near = |x: f64, y: f64| (x - y).abs() <= 1e-6 * x.abs().max(1.0);
+    a.nodes.len() == b.nodes.len()
+        && (a.nodes.iter().zip(&b.nodes)).all(|(x, y)| x.0 == y.0 && near(x.1, y.1))
+        && (a.fasteners.iter().zip(&b.fasteners)).all(|(x, y)| near(*x, *y))
+        && a.areas.len() == b.areas.len()
+        && (a.areas.iter().zip(&b.areas)).all(|(x, y)| near(x[0], y[0]) && near(x[1], y[1]))
+}
+
+/// Puts a floor under member `edge` one stack above its gauge in `sizing` (its bolts need
+/// thicker plies); false when it is on the thickest already.
+fn raise_floor(sizing_opts: &mut SizingOptions, sizing: &Sizing, edge: usize) -> bool {
+    let now = sizing.gauges[edge];
+    let Some(next) = crate::analyze::sizing::stacks(&sizing_opts.gauges)
+        .into_iter()
+        .map(|c| c.0)
+        .find(|&t| t > now + 1e-9)
+    else {
+        return false;
+    };
+    if sizing_opts.floor.is_empty() {
+        sizing_opts.floor = vec![0.0; sizing.gauges.len()];
+    }
+    sizing_opts.floor[edge] = next;
+    true
+}
+
+/// The plates `plates` cuts from `sizing` with the joints of `opts`.
+fn cut(
+    axes: &Axes,
+    opts: &Options,
+    sizing_opts: &SizingOptions,
+    sizing: &Sizing,
+) -> Result<PlateSet, plate_stage::Error> {
+    let mut p = plate_stage::Options {
+        sizing: Some(plate_stage::Gauges {
+            per_edge: sizing.gauges.clone(),
+            list: sizing_opts.gauges.clone(),
+            material: Some(sizing_opts.material.clone()),
+            seam_groups: sizing_opts.seam_groups,
+            seam_forces: (0..sizing.gauges.len())
+                .map(|k| sizing.seam_forces(k))
+                .collect(),
+            joints: None,
+        }),
+        groups: sizing_opts.seam_groups.unwrap_or(1),
+        material: Some(sizing_opts.material.clone()),
+        ..Default::default()
+    };
+    opts.joints.apply(&mut p);
+    let (options, _, _) = plate_stage::plate_options(axes, &p)?;
+    Ok(crate::rationalize::plates::plates(axes, &options)?)
+}
+
+/// The steel of `set`: each edge's plates' areas (a seam's by the sizing's plies) and the
+/// node cores' masses.
+fn built_steel(set: &PlateSet, sizing: &Sizing, density: f64) -> BuiltSteel {
+    let areas = (set.by_edge.iter().enumerate())
+        .map(|(k, list)| match list.as_slice() {
+            [one] => [set.plates[*one].area(), 0.0],
+            [a, b] => {
+                let (pa, pb) = (&set.plates[*a], &set.plates[*b]);
+                // The sizing's first ply is the one welded at the member's first node.
+                let first = sizing.model.members[k]
+                    .section
+                    .plies
+                    .map_or(pa.thickness, |p| p[0]);
+                if (pa.thickness - first).abs() < 1e-9 {
+                    [pa.area(), pb.area()]
+                } else {
+                    [pb.area(), pa.area()]
+                }
+            }
+            _ => [0.0, 0.0],
+        })
+        .collect();
+    // A seam's bolts: its first ply's holes, each a set of the length ordered.
+    let fasteners = (set.by_edge.iter())
+        .map(|list| match list.as_slice() {
+            [a, _] => {
+                let p = &set.plates[*a];
+                p.bolt.map_or(0.0, |b| {
+                    let each = crate::rationalize::bolts::set_volume(&b.size, b.length);
+                    each * p.holes.len() as f64 * density * 1e-6
+                })
+            }
+            _ => 0.0,
+        })
+        .collect();
+    BuiltSteel {
+        areas,
+        fasteners,
+        nodes: (set.cores.iter())
+            .map(|c| (c.node as usize, c.mass_kg(density)))
+            .collect(),
+    }
 }
 
 /// The sizing file (`lamina-sizing`): every member's gauge and check, every node's
@@ -280,6 +498,9 @@ pub struct Report {
     pub gauges: Vec<f64>,
     /// How members are sized together.
     pub group_by: serde_json::Value,
+    /// The joints the plates were weighed with as `plates` cuts them; None when the self-weight
+    /// is the uncut panels' (`totals.self_weight` says why).
+    pub joints: Option<JointsRow>,
     /// The steel.
     pub material: Material,
     /// Nodes.
@@ -302,6 +523,61 @@ pub struct Report {
     pub units: BTreeMap<&'static str, &'static str>,
     /// The format's version.
     pub version: u32,
+}
+
+/// The joints `plates` must be given to cut what was analysed.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointsRow {
+    /// The joints.
+    #[serde(skip)]
+    pub joints: Joints,
+    /// The bolt size asked for; None: by the grip.
+    pub bolt: Option<&'static str>,
+    /// The socket asked for, mm; None: one for each size.
+    pub bolt_clearance: Option<SocketRow>,
+    /// The node core's tube, mm; None: none.
+    pub node_core: Option<CoreRow>,
+    /// Root gap at the nodes, mm.
+    pub weld_gap: f64,
+    /// How far a root gap may be from it, mm.
+    pub weld_gap_tolerance: f64,
+}
+
+/// A socket, mm.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct SocketRow {
+    /// Its radius.
+    pub radius: f64,
+    /// How far it reaches from the washer.
+    pub reach: f64,
+}
+
+/// A node core's tube, mm.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct CoreRow {
+    /// Outer diameter.
+    pub diameter: f64,
+    /// Wall.
+    pub wall: f64,
+}
+
+impl JointsRow {
+    fn of(j: &Joints) -> JointsRow {
+        JointsRow {
+            joints: *j,
+            bolt: j.bolt.map(|b| b.name),
+            bolt_clearance: j.bolt_clearance.map(|s| SocketRow {
+                radius: s.radius,
+                reach: s.height,
+            }),
+            node_core: j.node_core.map(|c| CoreRow {
+                diameter: c.diameter,
+                wall: c.wall,
+            }),
+            weld_gap: j.weld_gap,
+            weld_gap_tolerance: j.weld_gap_tolerance,
+        }
+    }
 }
 
 /// One combination of the loads.
@@ -357,6 +633,12 @@ pub struct EdgeRow {
     pub length: f64,
     /// The load case governing it.
     pub load: String,
+    /// A seam's bolt sets (bolts, nuts, two washers each), kg, in its self-weight; None for a
+    /// single plate (and when `joints` is None).
+    pub bolts_kg: Option<f64>,
+    /// Its steel in the analysis (self-weight and mass), kg: its plates as cut, a seam's two
+    /// plies together (the uncut panel when `joints` is None).
+    pub mass_kg: f64,
     /// A bolted seam's two plies, mm (the first welded at node a, the second at node b;
     /// adding up to the gauge); None for a single plate.
     pub plies: Option<[f64; 2]>,
@@ -391,6 +673,8 @@ pub struct LocalAxes {
 /// One node.
 #[derive(Clone, Debug, Serialize)]
 pub struct NodeRow {
+    /// The node core's mass, kg, in the self-weight at this node; None without a core.
+    pub core_kg: Option<f64>,
     /// Displacement, mm.
     pub displacement: [f64; 3],
     /// Position, mm.
@@ -421,9 +705,14 @@ pub struct Reaction {
 /// The whole structure's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct Totals {
+    /// The seams' bolt sets in `mass_kg`, kg.
+    pub bolts_kg: f64,
+    /// The node cores in `mass_kg`, kg.
+    pub cores_kg: f64,
     /// The deflection limit, mm.
     pub deflection_limit: Option<f64>,
-    /// Mass, kg.
+    /// The steel analysed, kg: the plates (as cut, unless `joints` is None), the seams' bolt
+    /// sets and the node cores.
     pub mass_kg: f64,
     /// Largest displacement under the serviceability combinations, mm.
     pub max_displacement: f64,
@@ -437,6 +726,8 @@ pub struct Totals {
     pub max_weld_utilisation: f64,
     /// Largest out-of-balance force over the largest load.
     pub residual: f64,
+    /// What the self-weight is made of.
+    pub self_weight: String,
     /// The structure's largest horizontal extent, mm.
     pub span: f64,
     /// Nodes whose weld throat is below 3 mm (EN 1993-1-8 §4.5.2(2)): welded by a
@@ -444,7 +735,12 @@ pub struct Totals {
     pub thin_sheet_welds: Vec<usize>,
 }
 
-fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
+fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options, weighed: &Weighed) -> Report {
+    let core_kg = |i: usize| {
+        (sizing.built.iter().flat_map(|b| &b.nodes))
+            .find(|n| n.0 == i)
+            .map(|n| n.1)
+    };
     use crate::analyze::report as words;
     let total = s.total();
     let (dnode, dmax) = s.max_displacement();
@@ -465,6 +761,9 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                     z: v3(z),
                 },
                 b: m.b,
+                bolts_kg: (sizing.built.as_ref())
+                    .map(|b| b.fasteners[k])
+                    .filter(|_| m.section.plies.is_some()),
                 check: c.check,
                 checks: crate::analyze::sizing::CHECK_NAMES
                     .into_iter()
@@ -484,6 +783,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
                 gauge: s.gauges[k],
                 length: l,
                 load: s.cases[c.case].name.clone(),
+                mass_kg: s.member_kg[k],
                 plies: m.section.plies,
                 seam_forces: s.seam_forces(k),
                 utilisation: c.utilisation,
@@ -499,6 +799,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
             let d = total.displacements[i];
             let weld = s.welds[i].as_ref();
             NodeRow {
+                core_kg: core_kg(i),
                 displacement: [d[0], d[1], d[2]],
                 position: v3(*p),
                 rotation: [d[3], d[4], d[5]],
@@ -566,6 +867,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
             GroupBy::Chain => serde_json::json!("chain"),
             GroupBy::Assembly(k) => serde_json::json!({ "assembly": k }),
         },
+        joints: weighed.as_cut.then(|| JointsRow::of(&opts.joints)),
         material: sizing.material.clone(),
         nodes,
         reactions,
@@ -581,6 +883,29 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options) -> Report {
         totals: Totals {
             deflection_limit: s.deflection_limit,
             mass_kg: s.mass_kg,
+            bolts_kg: (sizing.built.iter().flat_map(|b| &b.fasteners)).fold(0.0, |s, x| s + x),
+            cores_kg: (sizing.built.iter().flat_map(|b| &b.nodes)).fold(0.0, |s, n| s + n.1),
+            self_weight: match (weighed.as_cut, &weighed.note) {
+                (true, None) => format!(
+                    "the plates as `plates` cuts them from these gauges with the joints \
+                     (setbacks at the nodes and bolt holes taken off), each seam's bolt sets \
+                     (bolt, nut, two washers: nominal cylinders, hexagon prisms and rings) along \
+                     it, each node core at its node: {} round(s) of sizing and cutting, the last \
+                     cut's steel the steel analysed{}",
+                    weighed.rounds,
+                    if weighed.rounds > SETTLE_FROM {
+                        format!(
+                            " (from round {SETTLE_FROM} on each round's gauges were the next's \
+                             least, so that the rounds settle: the figures of rounds and \
+                             stiffening are the last round's)"
+                        )
+                    } else {
+                        String::new()
+                    }
+                ),
+                (_, Some(note)) => note.clone(),
+                (false, None) => "the uncut panels".into(),
+            },
             max_displacement: dmax,
             max_displacement_load: s.cases[s.deflection_case()].name.clone(),
             max_displacement_node: dnode,

@@ -355,3 +355,120 @@ fn calyx_as_shells_balances_and_deflects_like_the_frame() -> TestResult {
     );
     Ok(())
 }
+
+#[test]
+fn the_steel_analysed_is_the_steel_cut_with_the_joints_the_sizing_names() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path())?;
+    let sizing = dir.path().join("sizing.json");
+    let o = lamina(&[
+        "size",
+        s(&axes),
+        "-o",
+        s(&sizing),
+        "--support",
+        "z<1",
+        "--load",
+        "self-weight",
+        "--load",
+        "wind:0.8:1,0.5,0",
+        "--material",
+        "s355",
+        "--groups",
+        "7",
+        "--weld-gap",
+        "1.5",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&sizing)?;
+    let doc: serde_json::Value = serde_json::from_str(&text)?;
+    assert_eq!(doc["joints"]["weld_gap"], 1.5);
+    // Other joints than the sizing weighed are refused, naming the flag; nothing written.
+    let out = dir.path().join("plates");
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&sizing),
+        "--groups",
+        "7",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--weld-gap"), "{}", stderr(&o));
+    assert!(!out.exists());
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&sizing),
+        "--groups",
+        "7",
+        "--weld-gap",
+        "1.5",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Each edge's plates weigh what the analysis carried; the total adds the bolt sets.
+    let plates: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plates.json"))?)?;
+    let edges = doc["edges"].as_array().ok_or("edges")?;
+    let mut cut = vec![0.0f64; edges.len()];
+    for p in plates["plates"].as_array().ok_or("plates")? {
+        let k = p["edge"].as_u64().ok_or("edge")? as usize;
+        let volume = p["area_mm2"].as_f64().ok_or("area")? * p["thickness"].as_f64().ok_or("t")?;
+        cut[k] += volume * 7.85e-6;
+    }
+    let mut total = 0.0;
+    let mut bolts = 0.0;
+    for (k, e) in edges.iter().enumerate() {
+        let analysed = e["mass_kg"].as_f64().ok_or("mass_kg")?;
+        assert!(
+            (analysed - cut[k]).abs() <= 1e-9 * cut[k],
+            "edge {k}: {analysed} against {}",
+            cut[k]
+        );
+        total += analysed;
+        bolts += e["bolts_kg"].as_f64().unwrap_or(0.0);
+    }
+    assert!(bolts > 0.0, "the seams' bolts are weighed");
+    let mass = doc["totals"]["mass_kg"].as_f64().ok_or("mass")?;
+    assert!(
+        (mass - total - bolts).abs() < 1e-9 * mass,
+        "{mass} against {total} + {bolts}"
+    );
+    // A seam whose bolts cannot hold the sizing's forces: plates stops (exit 2), naming it.
+    let mut heavy: serde_json::Value = serde_json::from_str(&text)?;
+    for e in heavy["edges"].as_array_mut().ok_or("edges")? {
+        if let Some(f) = e["seam_forces"].as_array_mut() {
+            for v in f.iter_mut() {
+                *v = serde_json::json!(v.as_f64().unwrap_or(0.0) * 1e4 + 1e5);
+            }
+        }
+    }
+    let heavy_path = dir.path().join("heavy.json");
+    std::fs::write(&heavy_path, serde_json::to_string(&heavy)?)?;
+    let out = dir.path().join("heavy");
+    let o = lamina(&[
+        "plates",
+        s(&axes),
+        "--sizing",
+        s(&heavy_path),
+        "--groups",
+        "7",
+        "--weld-gap",
+        "1.5",
+        "-o",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("bolts do not hold its forces"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    Ok(())
+}

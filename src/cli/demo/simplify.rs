@@ -91,15 +91,14 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         sizing: None,
         thickness: Some(6.0),
         edge_thickness: vec![],
-        weld_gap: 1.0,
-        weld_gap_tolerance: 0.5,
-        node_core: Some(
-            lamina::rationalize::plates::CoreSize::parse("tube:60.3,4")
-                .map_err(anyhow::Error::msg)?,
-        ),
+        joints: crate::cli::plates::JointArgs {
+            node_core: Some(
+                lamina::rationalize::plates::CoreSize::parse("tube:60.3,4")
+                    .map_err(anyhow::Error::msg)?,
+            ),
+            ..Default::default()
+        },
         min_weld_angle: None,
-        bolt: None,
-        bolt_clearance: None,
         material: None,
         groups: 7,
         output: dir.join("plates"),
