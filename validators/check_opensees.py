@@ -47,7 +47,8 @@ on the thinner ply (k1 = min(2.8 e/d0 − 1.7, 2.5), α_d = min(e/3d0, p/3d0 −
 hole-to-edge distance of the overlap by shapely, p the least pitch; stainless plies on
 f_u,red = 0.5 f_y + 0.6 f_u), tension, punching (d_m the mean of the nut's flats and corners)
 and shear with tension; class 8.8 (f_ub 800, α_v 0.6) with carbon steel, A4-70 (700, 0.5) with
-stainless. Each must equal plates.json's to 1e-6 and be at most 1.
+stainless. Each must equal plates.json's to 1e-6 and be at most 1, and sizing.json's `bolts`
+(size, count, class, utilisation) and `totals.max_bolt_utilisation` must name the same.
 
     check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks] [--plates plates.json]
 """
@@ -533,10 +534,21 @@ def bolts_hold(s, doc, envelope, name):
             fail(f"edge {k}: bolt utilisation {bolt.get('utilisation')}, its largest check {top:.6g}")
         if top > 1.0:
             fail(f"edge {k}: {bolt['size']} bolts at utilisation {top:.3f}")
+        # The sizing names the same row and the same utilisation.
+        sized = s["edges"][k].get("bolts") or {}
+        if (sized.get("size"), sized.get("count"), sized.get("class")) != \
+                (bolt["size"], len(a["holes"]), bolt["class"]) or \
+                abs((sized.get("utilisation") or -1.0) - top) > 1e-6 * max(1.0, top):
+            fail(f"edge {k}: the sizing's bolts {sized}, {len(a['holes'])} × {bolt['size']} "
+                 f"{bolt['class']} at {top:.6g} here")
         worst = max(worst, top)
         count += 1
+    sized_worst = s["totals"].get("max_bolt_utilisation")
+    if count and (sized_worst is None or abs(sized_worst - worst) > 1e-6):
+        fail(f"the sizing's largest bolt utilisation {sized_worst}, {worst:.6g} here")
     print(f"{name}: bolts ok ({count} seams' rows recomputed by EN 1993-1-8 Table 3.4 under "
-          f"OpenSees' ULS forces to {diff:.1e}; largest utilisation {worst:.3f})")
+          f"OpenSees' ULS forces to {diff:.1e}, each as sizing.json and plates.json give it; "
+          f"largest utilisation {worst:.3f})")
 
 
 def built_as_sized(s, doc, name):

@@ -239,13 +239,13 @@ pub fn run(args: Args) -> Result<bool> {
             match (sum.bolt_sets_kg > 0.0, sum.cores_kg > 0.0) {
                 (false, false) => String::new(),
                 (b, c) => format!(
-                    ", with {}{}{} {:.1} kg",
+                    ", {:.1} kg with the {}{}{}",
+                    sum.volume_mm3 * made.material.density * 1e-6
+                        + sum.bolt_sets_kg
+                        + sum.cores_kg,
                     if b { "bolt sets" } else { "" },
                     if b && c { " and " } else { "" },
                     if c { "node cores" } else { "" },
-                    sum.volume_mm3 * made.material.density * 1e-6
-                        + sum.bolt_sets_kg
-                        + sum.cores_kg
                 ),
             },
             sum.max_flattening_mm

@@ -207,6 +207,35 @@ pub fn run(args: Args) -> Result<bool> {
             None => String::new(),
         }
     );
+    let totals = &out.report.totals;
+    if out.report.joints.is_some() {
+        let seams = out
+            .report
+            .edges
+            .iter()
+            .filter(|e| e.bolts.is_some())
+            .count();
+        outln!(
+            "  the self-weight is the plates as `plates` cuts them ({:.1} kg){}{}{}",
+            s.mass_kg - totals.bolts_kg - totals.cores_kg,
+            if seams > 0 {
+                format!(", the bolt sets of {seams} seam(s) ({:.1} kg)", totals.bolts_kg)
+            } else {
+                String::new()
+            },
+            if totals.cores_kg > 0.0 {
+                format!(", the node cores ({:.1} kg)", totals.cores_kg)
+            } else {
+                String::new()
+            },
+            match totals.max_bolt_utilisation {
+                Some(u) => format!(
+                    "; bolts at most {u:.3} utilised (EN 1993-1-8 Table 3.4, sizing.json edges' bolts)"
+                ),
+                None => String::new(),
+            }
+        );
+    }
     let thin = &out.report.totals.thin_sheet_welds;
     if !thin.is_empty() {
         outln!(

@@ -289,6 +289,8 @@ pub struct Weighed {
     pub cut_kg: Option<f64>,
     /// A line for the user when the steel is not the plates as cut, or did not settle.
     pub note: Option<String>,
+    /// Per edge, a seam's bolts as the last cut made them (what `plates` makes of this sizing).
+    pub bolts: Vec<Option<BoltsRow>>,
 }
 
 /// Sizes, cuts the plates from the gauges as `plates` will, and sizes again on the steel as
@@ -306,6 +308,7 @@ fn size_as_cut(
         rounds: 1,
         cut_kg: None,
         note: None,
+        bolts: Vec::new(),
     };
     let density = sizing_opts.material.density;
     loop {
@@ -313,6 +316,7 @@ fn size_as_cut(
         match cut(axes, opts, &sizing_opts, &sizing) {
             Ok(set) => {
                 let built = built_steel(&set, &sizing, density);
+                weighed.bolts = seam_bolts(&set);
                 weighed.cut_kg = Some(
                     set.mass_kg(density)
                         + built.nodes.iter().fold(0.0, |s, n| s + n.1)
@@ -363,6 +367,7 @@ fn size_as_cut(
                     "the self-weight is the uncut panels' (setbacks and bolt holes not taken \
                      off): the plates cannot be cut from these axes ({e})"
                 ));
+                weighed.bolts.clear();
                 if sizing_opts.built.take().is_some() {
                     sizing = size(axes, &sizing_opts)?;
                 }
@@ -373,6 +378,27 @@ fn size_as_cut(
         weighed.rounds += 1;
     }
     Ok((sizing, sizing_opts, weighed))
+}
+
+/// Per edge of `set`, a seam's bolts: size, class, count and their Table 3.4 checks.
+fn seam_bolts(set: &PlateSet) -> Vec<Option<BoltsRow>> {
+    (set.by_edge.iter())
+        .map(|list| match list.as_slice() {
+            [a, _] => {
+                let p = &set.plates[*a];
+                let b = p.bolt?;
+                let (utilisation, check) = b.checks.map(|c| c.governing()).unzip();
+                Some(BoltsRow {
+                    check,
+                    class: b.grade.name,
+                    count: p.holes.len(),
+                    size: b.size.name,
+                    utilisation,
+                })
+            }
+            _ => None,
+        })
+        .collect()
 }
 
 /// Whether two weighings of the steel agree (to a millionth of a mm² per ply).
@@ -633,6 +659,9 @@ pub struct EdgeRow {
     pub length: f64,
     /// The load case governing it.
     pub load: String,
+    /// A seam's bolts as `plates` cuts them from this sizing, and their EN 1993-1-8 Table 3.4
+    /// checks under `seam_forces`; None for a single plate (and when `joints` is None).
+    pub bolts: Option<BoltsRow>,
     /// A seam's bolt sets (bolts, nuts, two washers each), kg, in its self-weight; None for a
     /// single plate (and when `joints` is None).
     pub bolts_kg: Option<f64>,
@@ -648,6 +677,22 @@ pub struct EdgeRow {
     pub seam_forces: Option<[f64; 6]>,
     /// Utilisation: the governing check's figure over its limit.
     pub utilisation: f64,
+}
+
+/// A seam's bolts.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoltsRow {
+    /// The Table 3.4 check that governs (None: not checked).
+    pub check: Option<&'static str>,
+    /// Property class (8.8 with carbon steel, A4-70 with stainless).
+    pub class: &'static str,
+    /// Bolts in the row.
+    pub count: usize,
+    /// M6 … M30.
+    pub size: &'static str,
+    /// The most loaded bolt's governing utilisation (shear, bearing, tension, punching, shear
+    /// with tension).
+    pub utilisation: Option<f64>,
 }
 
 /// One check of a member.
@@ -720,6 +765,8 @@ pub struct Totals {
     pub max_displacement_load: String,
     /// The node that moves most.
     pub max_displacement_node: usize,
+    /// The largest bolt utilisation over the seams (EN 1993-1-8 Table 3.4); None without seams.
+    pub max_bolt_utilisation: Option<f64>,
     /// Largest member utilisation.
     pub max_utilisation: f64,
     /// Largest weld utilisation.
@@ -761,6 +808,7 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options, weighed: &Weighed)
                     z: v3(z),
                 },
                 b: m.b,
+                bolts: weighed.bolts.get(k).cloned().flatten(),
                 bolts_kg: (sizing.built.as_ref())
                     .map(|b| b.fasteners[k])
                     .filter(|_| m.section.plies.is_some()),
@@ -883,6 +931,9 @@ fn report(s: &Sizing, sizing: &SizingOptions, opts: &Options, weighed: &Weighed)
         totals: Totals {
             deflection_limit: s.deflection_limit,
             mass_kg: s.mass_kg,
+            max_bolt_utilisation: (weighed.bolts.iter().flatten())
+                .filter_map(|b| b.utilisation)
+                .reduce(f64::max),
             bolts_kg: (sizing.built.iter().flat_map(|b| &b.fasteners)).fold(0.0, |s, x| s + x),
             cores_kg: (sizing.built.iter().flat_map(|b| &b.nodes)).fold(0.0, |s, n| s + n.1),
             self_weight: match (weighed.as_cut, &weighed.note) {
