@@ -123,6 +123,29 @@ pub struct Joints {
     pub bolt_clearance: Option<Socket>,
 }
 
+impl Joints {
+    /// The weld gap and its tolerance in range: a gap above 0 (0 only with a node core), a
+    /// tolerance at most the gap.
+    pub fn check(&self) -> Result<(), PlateError> {
+        if !(self.weld_gap >= 0.0 && self.weld_gap <= 100.0) {
+            return Err(PlateError::WeldGap(self.weld_gap));
+        }
+        if self.weld_gap == 0.0 && self.node_core.is_none() {
+            return Err(PlateError::WeldGapZero);
+        }
+        if !(self.weld_gap_tolerance >= 0.0 && self.weld_gap_tolerance <= 100.0) {
+            return Err(PlateError::WeldGapTolerance(self.weld_gap_tolerance));
+        }
+        if self.weld_gap_tolerance > self.weld_gap {
+            return Err(PlateError::ToleranceOverGap {
+                gap: self.weld_gap,
+                tolerance: self.weld_gap_tolerance,
+            });
+        }
+        Ok(())
+    }
+}
+
 /// A node core's tube, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CoreSize {
@@ -555,21 +578,14 @@ fn check(axes: &Axes, opts: &PlateOptions) -> Result<(), PlateError> {
             }
         }
     }
-    if !(opts.weld_gap >= 0.0 && opts.weld_gap <= 100.0) {
-        return Err(PlateError::WeldGap(opts.weld_gap));
+    Joints {
+        weld_gap: opts.weld_gap,
+        weld_gap_tolerance: opts.weld_gap_tolerance,
+        node_core: opts.node_core,
+        bolt: opts.bolt,
+        bolt_clearance: opts.socket,
     }
-    if opts.weld_gap == 0.0 && opts.node_core.is_none() {
-        return Err(PlateError::WeldGapZero);
-    }
-    if !(opts.weld_gap_tolerance >= 0.0 && opts.weld_gap_tolerance <= 100.0) {
-        return Err(PlateError::WeldGapTolerance(opts.weld_gap_tolerance));
-    }
-    if opts.weld_gap_tolerance > opts.weld_gap {
-        return Err(PlateError::ToleranceOverGap {
-            gap: opts.weld_gap,
-            tolerance: opts.weld_gap_tolerance,
-        });
-    }
+    .check()?;
     let on_list = |t: f64| opts.gauges.iter().any(|g| (g - t).abs() < 1e-9);
     let off = |what: &'static str, t: f64| PlateError::OffGauge {
         what,

@@ -140,7 +140,7 @@ pub enum Error {
     #[error(transparent)]
     /// The caller stopped the stage.
     Cancelled(#[from] Cancelled),
-    #[error("the plates as cut: {0}")]
+    #[error("{0}")]
     /// The joints cannot be made: an option of theirs, or a seam's bolts even on the thickest
     /// plies.
     Joints(#[source] plate_stage::Error),
@@ -247,6 +247,7 @@ impl Options {
 /// analysis runs to its end: the rounds are not yet interruptible inside).
 pub fn run(axes: &Axes, opts: &Options, progress: &dyn Progress) -> Result<Sized, Error> {
     let sizing_opts = opts.sizing()?;
+    (opts.joints.check()).map_err(|e| Error::Joints(plate_stage::Error::Plates(e)))?;
     let mut notes = Vec::new();
     if opts.material.is_none() {
         notes.push(format!(

@@ -251,6 +251,35 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
             ],
             "even number",
         ),
+        (
+            vec!["--support", "z<1", "--load", "self-weight", "--weld-gap", "0"],
+            "--weld-gap 0: the plates at a node would meet with no root gap",
+        ),
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--weld-gap-tolerance",
+                "nan",
+            ],
+            "--weld-gap-tolerance must be from 0 to 100 mm",
+        ),
+        // A bolt no row takes even on the thickest plies.
+        (
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--groups",
+                "7",
+                "--bolt",
+                "M30",
+            ],
+            "give a smaller --bolt or thicker gauges",
+        ),
     ];
     for (extra, want) in cases {
         let mut args = vec!["size", s(&axes), "-o", s(&out)];
