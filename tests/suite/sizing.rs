@@ -252,7 +252,14 @@ fn bad_sizing_input_exits_2_with_the_reason() -> TestResult {
             "even number",
         ),
         (
-            vec!["--support", "z<1", "--load", "self-weight", "--weld-gap", "0"],
+            vec![
+                "--support",
+                "z<1",
+                "--load",
+                "self-weight",
+                "--weld-gap",
+                "0",
+            ],
             "--weld-gap 0: the plates at a node would meet with no root gap",
         ),
         (
