@@ -26,6 +26,7 @@
 //! panel deviation planarize reported, and is recorded as `flattening`).
 
 use glam::{DVec2, DVec3};
+use rayon::prelude::*;
 
 use super::axes::Axes;
 use super::bolts::{self, BoltChecks, BoltGrade, BoltSize, PlySteel, SeamForces};
@@ -845,11 +846,18 @@ pub fn plates(axes: &Axes, opts: &PlateOptions) -> Result<PlateSet, PlateError> 
         dir: &dir,
         group: &group,
     };
-    for (v, here) in at.iter().enumerate() {
-        if here.len() < 2 {
-            continue;
+    // The nodes side by side (each solves its own setbacks), then in order: the first error
+    // and the cores' numbering as one after another would give.
+    let solved: Vec<_> = (at.par_iter().enumerate())
+        .filter(|(_, here)| here.len() >= 2)
+        .map(|(v, here)| (v, here, node_welds(axes, opts, v, here, &sides)))
+        .collect();
+    for (v, here, solved) in solved {
+        let (mut node, core) = solved?;
+        if let Some(c) = core {
+            node.core = Some(cores.len());
+            cores.push(c);
         }
-        let node = node_welds(axes, opts, v, here, &sides, &mut cores)?;
         // Plates that overlap cannot be built, whatever the report says about the node.
         if let Some(pair) = node.pairs.iter().find(|p| p.gap < -OVERLAP) {
             return Err(PlateError::Overlap {
@@ -980,16 +988,16 @@ struct Sides<'a> {
 }
 
 /// The setbacks, wedges and gaps at node `v`, with a core when it needs one and one is asked
-/// for. A seam's ply of this node's group is the strip that welds here; its other ply then
-/// stops clear of every plate welded here.
+/// for (the caller numbers it: `NodeWelds::core` is left None). A seam's ply of this node's
+/// group is the strip that welds here; its other ply then stops clear of every plate welded
+/// here.
 fn node_welds(
     axes: &Axes,
     opts: &PlateOptions,
     v: usize,
     here: &[(usize, usize)],
     sides: &Sides,
-    cores: &mut Vec<Core>,
-) -> Result<NodeWelds, PlateError> {
+) -> Result<(NodeWelds, Option<Core>), PlateError> {
     let d = axes.axes[v];
     let e1 = sides.dir[here[0].0][here[0].1];
     let e2 = d.cross(e1);
@@ -1031,8 +1039,7 @@ fn node_welds(
     let mut core = None;
     if let (false, Some(size)) = (cut.even, opts.node_core) {
         setbacks = welds::core_setbacks(&strips, 0.5 * size.diameter, opts.weld_gap);
-        core = Some(cores.len());
-        cores.push(Core {
+        core = Some(Core {
             id: format!("{}-C{v}", sides.group[v] + 1),
             node: v as u32,
             group: sides.group[v],
@@ -1053,7 +1060,7 @@ fn node_welds(
     // The other plies, one after another, each clear of the welded plates and those before it
     // by the gap and its own ply's thickness (the ply it lies on welds here with a fillet
     // whose leg, 0.7 √2 t of the thinner plate, is under that).
-    let radius = core.map(|c| 0.5 * cores[c].size.diameter);
+    let radius = core.as_ref().map(|c| 0.5 * c.size.diameter);
     let mut placed: Vec<(Strip, f64)> = Vec::new();
     let mut passing = Vec::new();
     for (i, &(k, end)) in here.iter().enumerate() {
@@ -1085,7 +1092,7 @@ fn node_welds(
             clearance: gap,
         });
     }
-    Ok(NodeWelds {
+    let welds = NodeWelds {
         node: v as u32,
         group: sides.group[v],
         edges: here.iter().map(|h| h.0).collect(),
@@ -1093,8 +1100,9 @@ fn node_welds(
         passing,
         pairs,
         even: cut.even,
-        core,
-    })
+        core: None,
+    };
+    Ok((welds, core))
 }
 
 /// A strip of the two whose directions are closest, and their angle.
