@@ -50,7 +50,13 @@ and shear with tension; class 8.8 (f_ub 800, α_v 0.6) with carbon steel, A4-70 
 stainless. Each must equal plates.json's to 1e-6 and be at most 1, and sizing.json's `bolts`
 (size, count, class, utilisation) and `totals.max_bolt_utilisation` must name the same.
 
-    check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks] [--plates plates.json]
+With --bom (after --plates), nest's bom.csv of those plates: every plate row's weld partners in
+its own group, the sizing's grade, each seam's bolt row with plates.json's class and
+utilisation, and all rows' masses (plates, bolt sets, tubes) adding up to the mass analysed
+within 0.1 % (each row is written to 0.1 g).
+
+    check_opensees.py axes.json sizing.json [--tolerance 0.01] [--checks] [--plates plates.json
+                      [--bom bom.csv]]
 """
 import argparse
 import json
@@ -421,6 +427,8 @@ def main():
     ap.add_argument("--tolerance", type=float, default=0.01)
     ap.add_argument("--checks", action="store_true",
                     help="also recompute the EN 1990 combinations and EN 1993 checks")
+    ap.add_argument("--bom", metavar="BOM_CSV",
+                    help="with --plates: nest's bom.csv of those plates, checked against both")
     ap.add_argument("--plates", metavar="PLATES_JSON",
                     help="the plates cut from this sizing: built as analysed")
     args = ap.parse_args()
@@ -457,6 +465,8 @@ def main():
         built_as_sized(s, doc, args.plates)
         if envelope is not None:
             bolts_hold(s, doc, envelope, args.plates)
+        if args.bom:
+            bom_as_built(s, doc, args.bom)
 
 
 # Bolt: d, d0, tensile stress area A_s (ISO 898-1), nut across flats s (ISO 4032).
@@ -598,6 +608,45 @@ def built_as_sized(s, doc, name):
           f"plies; {doc['material']['grade']}; built {built:.3f} kg (plates {plates_kg:.3f}, bolt "
           f"sets {bolts_kg:.3f}, node cores {cores_kg:.3f}) against {analysed:.3f} kg analysed: "
           f"{100 * (built / analysed - 1):+.1e} %)")
+
+
+def bom_as_built(s, doc, path):
+    """The BOM a fabricator orders and weighs from: every plate row's weld partners in its own
+    group (a seam's ply is welded only within its group), the sizing's grade, each seam's bolts
+    with plates.json's utilisation, and the rows' masses adding up to the mass analysed."""
+    import csv
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    plates = {p["id"]: p for p in doc["plates"]}
+    total = 0.0
+    kinds = {}
+    for r in rows:
+        total += float(r["mass_kg"] or 0.0)
+        kinds[r["kind"]] = kinds.get(r["kind"], 0) + 1
+        if r["kind"] == "plate":
+            if r["grade"] != s["material"]["name"]:
+                fail(f"{path}: {r['id']} in {r['grade']}, the sizing's steel is {s['material']['name']}")
+            group = r["id"].split("-")[0]
+            for end in ("welded_at_a", "welded_at_b"):
+                _, partners = r[end].split(":", 1)
+                for q in partners.split():
+                    if q in ("not", "welded", "core") or "-C" in q:
+                        continue
+                    if q.split("-")[0] != group:
+                        fail(f"{path}: {r['id']} is welded to {q} of another group ({r[end]})")
+        elif r["kind"] == "bolts":
+            a = plates[r["id"].split("+")[0]]["bolt"]
+            want = f"utilisation {a['utilisation']:.3f}"
+            if want not in r["bolts"] or r["grade"] != a["class"]:
+                fail(f"{path}: {r['id']}: {r['grade']} {r['bolts']!r}, plates.json {a['class']} {want}")
+    analysed = s["totals"]["mass_kg"]
+    # Each row's mass is written to 0.1 g.
+    if abs(total - analysed) > 1e-3 * analysed:
+        fail(f"{path}: the rows weigh {total:.4f} kg, the analysis {analysed:.4f} kg")
+    print(f"{path}: ok ({kinds.get('plate', 0)} plates welded within their groups, "
+          f"{kinds.get('bolts', 0)} bolt rows with plates.json's utilisation, {kinds.get('tube', 0)} "
+          f"tubes; {total:.3f} kg in all against {analysed:.3f} kg analysed: "
+          f"{100 * (total / analysed - 1):+.4f} %)")
 
 
 # Nominal bolt sets: head k (ISO 4017), nut m (ISO 4032), washer h and outside diameter

@@ -940,8 +940,8 @@ impl NestDoc {
     }
 }
 
-/// bom.csv: a row per plate (kind `plate`), per bolted seam (kind `bolts`) and per node core
-/// (kind `tube`). A plate's position is the lower-left corner of its bounding box on the
+/// bom.csv: a row per plate (kind `plate`), per bolted seam (kind `bolts`, its bolt sets'
+/// mass) and per node core (kind `tube`). A plate's position is the lower-left corner of its bounding box on the
 /// sheet (`bbox_x_mm`, `bbox_y_mm`), its rotation the turn from its own frame.
 pub fn bom_csv(out: &Nested) -> String {
     let mut w = String::from(
@@ -1005,14 +1005,22 @@ pub fn bom_csv(out: &Nested) -> String {
             (Some(u), Some(c)) => format!("; utilisation {u:.3} ({c}, EN 1993-1-8 Table 3.4)"),
             _ => String::new(),
         };
+        // Their steel: bolt, nut and two washers each, nominal (what `size` weighed).
+        let mass = crate::rationalize::bolts::parse(&b.size).map_or(0.0, |size| {
+            crate::rationalize::bolts::set_volume(&size, b.length)
+                * p.holes.len() as f64
+                * out.material.density
+                * 1e-6
+        });
         let _ = writeln!(
             w,
-            "bolts,\"{}+{}\",{},\"{}\",{},,,,,,,,,{},,\"{} x {}x{} {} with 2 washers and a nut, grip {} mm, {}{}\",,",
+            "bolts,\"{}+{}\",{},\"{}\",{},,,,{:.4},,,,,{},,\"{} x {}x{} {} with 2 washers and a nut, grip {} mm, {}{}\",,",
             p.id,
             other,
             p.group,
             b.class,
             b.grip,
+            mass,
             p.holes.len(),
             p.holes.len(),
             b.size,
