@@ -314,3 +314,28 @@ fn mesh_entities_the_dxf_crate_drops_are_said_as_not_read() -> TestResult {
     assert_eq!(skipped["TEXT"], 1, "{skipped}");
     Ok(())
 }
+
+#[test]
+fn round_holes_drawn_as_two_bulged_vertices_are_whole_circles() -> TestResult {
+    // AutoCAD's DONUT (a closed LWPOLYLINE of two vertices, bulges 1), a two-arc hole as a
+    // closed 2D POLYLINE, and a slot: three loops, their lengths those of the circles (less
+    // the chords' shortfall at the default tolerance).
+    let v = info(&[&path("networks/ezdxf_round_holes.dxf")?])?;
+    assert_eq!(v["components"], 3);
+    assert_eq!(v["cycles"], 3);
+    let pi = std::f64::consts::PI;
+    let exact = 10.0 * pi + 8.0 * pi + (40.0 + 10.0 * pi);
+    let total = v["lengths"]["total"].as_f64().ok_or("total")?;
+    assert!(total <= exact && total > 0.995 * exact, "{total} of {exact}");
+    assert!(close(&v["bbox"]["min"][1], -5.0, 1e-9), "{}", v["bbox"]);
+    assert!(close(&v["bbox"]["max"][1], 10.0, 1e-9), "{}", v["bbox"]);
+    // One vertex closed on itself is no loop: refused by name.
+    let o = lamina(&["info", &path("bad/one_vertex_loop.dxf")?]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("LWPOLYLINE, handle") && stderr(&o).contains("one vertex"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}

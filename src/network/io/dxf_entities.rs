@@ -421,8 +421,15 @@ fn bulged(vertices: &[(DVec2, f64)], closed: bool, tol: f64) -> Result<Vec<DVec2
     let Some(&(first, _)) = vertices.first() else {
         return Ok(Vec::new());
     };
+    if closed && vertices.len() == 1 {
+        return Err("a closed polyline of one vertex is a point, not a loop".into());
+    }
     let mut pts = vec![first];
-    let segments = if closed && vertices.len() > 2 {
+    // Closed, the last vertex starts a segment back to the first: with two vertices that is
+    // the second half of a round hole (AutoCAD's DONUT) when it is an arc, and the same line
+    // again when it is straight (then left out).
+    let closing = closed && (vertices.len() > 2 || vertices[vertices.len() - 1].1 != 0.0);
+    let segments = if closing {
         vertices.len()
     } else {
         vertices.len() - 1
