@@ -233,3 +233,81 @@ mod tests {
         Ok(())
     }
 }
+
+/// The name of the threads that run another crate's decoder on a file's bytes (PNG): a value it
+/// cannot take may make it panic; [`guarded`] turns the panic into the file's error, and the
+/// CLI's panic hook keeps quiet for threads of this name.
+pub const DECODER_THREAD: &str = "lamina-decoder";
+
+/// Runs `decode` on a decoder thread: its result, or its panic's message as an error.
+pub fn guarded<T: Send>(decode: impl FnOnce() -> T + Send) -> Result<T, String> {
+    std::thread::scope(|scope| {
+        let handle = std::thread::Builder::new()
+            .name(DECODER_THREAD.into())
+            .spawn_scoped(scope, decode)
+            .map_err(|e| format!("cannot start the decoder: {e}"))?;
+        handle.join().map_err(|panic| {
+            let what = (panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "no message".into());
+            format!("the decoder failed on it ({})", printable(&what))
+        })
+    })
+}
+
+/// What is wrong with a PNG's palette, if anything: a PLTE chunk must hold whole RGB entries,
+/// 1 to 256 of them (decoders index past a partial one). Chunks are walked by their lengths;
+/// a truncated file is left to the decoder.
+pub fn png_palette_problem(bytes: &[u8]) -> Option<String> {
+    let mut at = 8usize;
+    if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        return None;
+    }
+    while at + 8 <= bytes.len() {
+        let len = u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+        let kind = &bytes[at + 4..at + 8];
+        if kind == b"PLTE" && (len == 0 || !len.is_multiple_of(3) || len > 768) {
+            return Some(format!(
+                "its palette (PLTE) is {len} bytes: it must be 1 to 256 RGB entries of 3 bytes"
+            ));
+        }
+        if kind == b"IEND" {
+            break;
+        }
+        at = at.saturating_add(12).saturating_add(len as usize);
+    }
+    None
+}
+
+#[cfg(test)]
+mod decoder_tests {
+    use super::*;
+
+    #[test]
+    fn a_decoder_panic_is_an_error_with_its_message() {
+        assert_eq!(guarded(|| 7), Ok(7));
+        let e = guarded(|| -> u8 { panic!("index 3 out of range") }).unwrap_err();
+        assert!(e.contains("index 3 out of range"), "{e}");
+    }
+
+    #[test]
+    fn a_palette_of_partial_entries_is_named() {
+        let chunk = |kind: &[u8], data: &[u8]| {
+            let mut c = (data.len() as u32).to_be_bytes().to_vec();
+            c.extend_from_slice(kind);
+            c.extend_from_slice(data);
+            c.extend_from_slice(&[0; 4]);
+            c
+        };
+        let png = |palette: &[u8]| {
+            let mut b = b"\x89PNG\r\n\x1a\n".to_vec();
+            b.extend(chunk(b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 3, 0, 0, 0]));
+            b.extend(chunk(b"PLTE", palette));
+            b.extend(chunk(b"IEND", &[]));
+            b
+        };
+        assert!(png_palette_problem(&png(&[1, 2, 3, 4])).is_some_and(|m| m.contains("4 bytes")));
+        assert_eq!(png_palette_problem(&png(&[1, 2, 3])), None);
+        assert!(png_palette_problem(&png(&[])).is_some());
+    }
+}

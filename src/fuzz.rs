@@ -108,6 +108,7 @@ pub const TARGETS: &[Target] = &[
             "fixtures/networks/ezdxf_veins.dxf",
             "fixtures/networks/ezdxf_curves_in.dxf",
             "fixtures/networks/ezdxf_crossings.dxf",
+            "fixtures/networks/ezdxf_round_holes.dxf",
             "fixtures/outlines/oak.dxf",
             "fixtures/fuzz/P7_dxf_julian_date/in.dxf",
         ],

@@ -7,11 +7,18 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
-    // The DXF parser's panics on values it cannot take are caught and reported as the file's
-    // error; print nothing for them here. Every other panic is a bug and prints as usual.
+    // The DXF parser's and the PNG decoders' panics on values they cannot take are caught and
+    // reported as the file's error; print nothing for them here. Every other panic is a bug and prints as usual.
     let default_hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
-        if std::thread::current().name() != Some(lamina::network::io::dxf::PARSER_THREAD) {
+        let quiet = [
+            lamina::network::io::dxf::PARSER_THREAD,
+            lamina::files::DECODER_THREAD,
+        ];
+        if !quiet
+            .iter()
+            .any(|q| std::thread::current().name() == Some(q))
+        {
             default_hook(info);
         }
     }));

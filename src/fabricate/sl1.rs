@@ -275,6 +275,13 @@ fn ini(bytes: &[u8]) -> BTreeMap<String, String> {
 /// A layer image as grey bytes: Err(problem) when it is a PNG of the wrong size or kind,
 /// Err of the outer result when it is no PNG at all.
 fn decode(bytes: &[u8], px: u32, py: u32) -> Result<Result<Vec<u8>, String>, String> {
+    if let Some(problem) = crate::files::png_palette_problem(bytes) {
+        return Ok(Err(problem));
+    }
+    crate::files::guarded(|| decode_png(bytes, px, py))?
+}
+
+fn decode_png(bytes: &[u8], px: u32, py: u32) -> Result<Result<Vec<u8>, String>, String> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
     decoder.set_limits(png::Limits {

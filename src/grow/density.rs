@@ -66,7 +66,11 @@ impl DensityMap {
                 ));
             }
         }
-        let pixmap = tiny_skia::Pixmap::decode_png(bytes).map_err(|e| e.to_string())?;
+        if let Some(problem) = crate::files::png_palette_problem(bytes) {
+            return Err(problem);
+        }
+        let pixmap = crate::files::guarded(|| tiny_skia::Pixmap::decode_png(bytes))?
+            .map_err(|e| e.to_string())?;
         let (width, height) = (pixmap.width() as usize, pixmap.height() as usize);
         let pixels = pixmap.pixels();
         let transparent = pixels.iter().any(|p| p.alpha() < 255);

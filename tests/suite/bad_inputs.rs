@@ -39,6 +39,10 @@ const EXPECTED: &[(&str, &[&str])] = &[
         &["expands to more than", "is the default for a file of"],
     ),
     (
+        "one_vertex_loop.dxf",
+        &["entity 0 (LWPOLYLINE", "a closed polyline of one vertex"],
+    ),
+    (
         "huge_bulge.dxf",
         &[
             "entity 0 (LWPOLYLINE",
@@ -151,6 +155,8 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
     let plates = plates.to_str().ok_or("path")?;
     let torus = fixture("surfaces/torus.obj");
     let torus = torus.to_str().ok_or("path")?;
+    let palette = fixture("../fuzz/corpus/png/palette_plte4.png");
+    let palette = palette.to_str().ok_or("path")?;
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec![
@@ -173,6 +179,28 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
                 "1e-300".into(),
             ],
             "--cell",
+        ),
+        (
+            vec![
+                "solid".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("s.stl"),
+                "--cell".into(),
+                "1e308".into(),
+            ],
+            "--cell 1e308 mm is more than 1000000 mm",
+        ),
+        // A palette PNG whose PLTE is 4 bytes: the png crate indexed past it and panicked.
+        (
+            vec![
+                "venation".into(),
+                "--density".into(),
+                palette.into(),
+                "-o".into(),
+                out("v.json"),
+            ],
+            "its palette (PLTE) is 4 bytes",
         ),
         (
             vec![

@@ -326,7 +326,10 @@ fn round_holes_drawn_as_two_bulged_vertices_are_whole_circles() -> TestResult {
     let pi = std::f64::consts::PI;
     let exact = 10.0 * pi + 8.0 * pi + (40.0 + 10.0 * pi);
     let total = v["lengths"]["total"].as_f64().ok_or("total")?;
-    assert!(total <= exact && total > 0.995 * exact, "{total} of {exact}");
+    assert!(
+        total <= exact && total > 0.995 * exact,
+        "{total} of {exact}"
+    );
     assert!(close(&v["bbox"]["min"][1], -5.0, 1e-9), "{}", v["bbox"]);
     assert!(close(&v["bbox"]["max"][1], 10.0, 1e-9), "{}", v["bbox"]);
     // One vertex closed on itself is no loop: refused by name.

@@ -153,6 +153,11 @@ pub enum SolidError {
     #[error("{what} must be a positive number of mm, got {value}")]
     NotPositive { what: &'static str, value: f64 },
     #[error(
+        "cell= {} mm is more than {} mm: give a grid cell below the veins' radius",
+        crate::text::num(*.0), crate::text::num(MAX_CELL)
+    )]
+    CellTooLarge(f64),
+    #[error(
         "lamina= needs the blade outline, which venation stores in meta.parameters.outline; \
          this network has {0}"
     )]
@@ -248,9 +253,17 @@ impl Shapes {
     }
 }
 
+/// The largest grid cell, mm: a kilometre, far past any vein (the solid would vanish) and
+/// within the grid arithmetic.
+pub const MAX_CELL: f64 = 1e6;
+
 /// Checks the network and the options and builds the pieces of its solid.
 pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> {
     positive("cell=", opts.cell)?;
+    // Bounded before any grid is sized from it (1e308 overflowed the grid arithmetic).
+    if opts.cell > MAX_CELL {
+        return Err(SolidError::CellTooLarge(opts.cell));
+    }
     for (what, v) in [
         ("lamina=", opts.lamina),
         ("fit=", opts.fit),
