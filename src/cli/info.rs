@@ -120,8 +120,8 @@ fn human(s: &Value) -> String {
                 &mut out,
                 "welded",
                 format!(
-                    "{} of {} points merged (tolerance {:e} mm), {} zero-length and {} repeated segments dropped",
-                    w["merged"], w["points"], num(&w["tolerance"]),
+                    "{} of {} points merged (tolerance {} mm), {} zero-length and {} repeated segments dropped",
+                    w["merged"], w["points"], tolerance(num(&w["tolerance"])),
                     w["zero_length_segments"], w["duplicate_segments"]
                 ),
             );
@@ -162,9 +162,9 @@ fn human(s: &Value) -> String {
                 &mut out,
                 "welded",
                 format!(
-                    "{} vertices merged (tolerance {:e} mm), {} triangles collapsed",
+                    "{} vertices merged (tolerance {} mm), {} triangles collapsed",
                     w["merged"],
-                    num(&w["tolerance"]),
+                    tolerance(num(&w["tolerance"])),
                     w["collapsed_triangles"]
                 ),
             );
@@ -212,4 +212,13 @@ fn fmt3(v: &Value) -> String {
         .map(|a| a.iter().map(|x| format!("{:.4}", num(x))).collect())
         .unwrap_or_default();
     a.join(", ")
+}
+
+/// A weld tolerance as `{:e}` writes it, 0 as 0.
+fn tolerance(t: f64) -> String {
+    if t == 0.0 {
+        "0".into()
+    } else {
+        format!("{t:e}")
+    }
 }

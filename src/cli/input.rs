@@ -136,15 +136,18 @@ impl ReadArgs {
 
     /// With `--split-crossings`, nodes a flat network (and says what it did).
     fn split(&self, path: &Path, imported: &mut Imported, quiet: bool) -> Result<()> {
-        if !self.split_crossings {
+        // Nothing to node without edges (a drawing of one POINT): the next step says what is
+        // missing.
+        if !self.split_crossings || imported.network.edges.is_empty() {
             return Ok(());
         }
         let tol = imported.point_tolerance();
         let (net, stats) = split_crossings(&imported.network, tol).with_context(|| {
             format!(
-                "{}: --split-crossings: the network does not lie in one plane (within {tol:e} mm), \
+                "{}: --split-crossings: the network does not lie in one plane (within {} mm), \
                  so its edges cannot cross",
-                path.display()
+                path.display(),
+                lamina::text::num(tol)
             )
         })?;
         imported.network = net;

@@ -159,20 +159,8 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
     for n in &made.notes {
         errln!("lamina: {n}");
     }
-    if args.output.exists() && !args.output.is_dir() {
-        bail!("{}: exists and is not a folder", args.output.display());
-    }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
-    let dir = &args.output;
-    let text = made.file.text();
-    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
-    write_mesh(&plates::assembly(&made.set), &dir.join("assembly.stl"), 0)?;
-    plates::write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
-    plates::write_parts(&made, dir)?;
-    let text = made.welds.json();
-    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
-    // The plates and their welds in the viewer, with the axes (and sizing) they came from.
+    // The plates and their welds in the viewer, with the axes (and sizing) they came from:
+    // made before any file is written, so a model too large for it leaves nothing behind.
     let (summary_axes, summary) = lamina::rationalize::axes::read_axes_and_summary(&args.input)?;
     let tolerance = summary["tolerance"].as_f64().filter(|t| *t > 0.0);
     let mut inputs = vec![
@@ -197,12 +185,29 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
         let checks = lamina::analyze::sizing::read_checks(s)?;
         inputs.push((file_name(s), Input::Sizing(checks)));
     }
-    let scene = scene(&inputs, Some("plates and welds".to_string()))?;
-    let html = plates::welds_html(
-        &made,
-        &lamina::view::embed(&scene, "70vh"),
-        args.sizing.is_some(),
-    );
+    // A model too large for the viewer still gets its files; its page goes without the 3D view.
+    let viewer = match scene(&inputs, Some("plates and welds".to_string())) {
+        Ok(scene) => lamina::view::embed(&scene, "70vh"),
+        Err(e @ lamina::view::pack::ViewError::TooLarge { .. }) => {
+            errln!("lamina: welds.html without its 3D view: {e}");
+            format!("<p>No 3D view: {}.</p>", lamina::text::html(&e.to_string()))
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let html = plates::welds_html(&made, &viewer, args.sizing.is_some());
+    if args.output.exists() && !args.output.is_dir() {
+        bail!("{}: exists and is not a folder", args.output.display());
+    }
+    std::fs::create_dir_all(&args.output)
+        .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
+    let dir = &args.output;
+    let text = made.file.text();
+    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
+    write_mesh(&plates::assembly(&made.set), &dir.join("assembly.stl"), 0)?;
+    plates::write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
+    plates::write_parts(&made, dir)?;
+    let text = made.welds.json();
+    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
     write_atomic(&dir.join("welds.html"), |w| w.write_all(html.as_bytes()))?;
     Ok(made)
 }

@@ -448,10 +448,11 @@ pub(super) fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(
 /// Peele Fig. 1: one leaf per r, side by side.
 fn sweep(args: &Args, outline: &Outline, opts: &venation::Options) -> Result<()> {
     let dir = &args.output;
+    let render = RenderOptions { size: args.size };
+    // Grown first: a refused option leaves no folder behind.
+    let leaves = venation::sweep(outline, opts, &args.sweep_r, &Bar::new())?;
     std::fs::create_dir_all(dir)
         .with_context(|| format!("-o {}: cannot create the folder", dir.display()))?;
-    let render = RenderOptions { size: args.size };
-    let leaves = venation::sweep(outline, opts, &args.sweep_r, &Bar::new())?;
     let mut rows = Vec::new();
     for swept in &leaves {
         let (r, leaf) = (swept.r, &swept.grown.leaf);

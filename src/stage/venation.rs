@@ -255,18 +255,32 @@ impl Options {
 
 /// The blade rate that makes Peele's r = D / (speed of the farthest margin point).
 fn blade_rate_for(r: f64, step: f64, outline: &Outline, root: DVec2) -> Result<f64, OptionError> {
-    if !(r.is_finite() && r > 0.0) {
-        return Err(OptionError::new(
-            "r",
-            format!("must be a positive ratio, got {r}"),
-        ));
-    }
+    check_r("r", r)?;
     let reach = outline
         .points()
         .iter()
         .map(|p| p.distance(root))
         .fold(0.0, f64::max);
     Ok(step / (r * reach))
+}
+
+/// The largest vein-to-blade growth ratio: Peele's leaves span 0.5 to 5.5; at 1000 the blade
+/// all but stands still while the veins fill it.
+pub const MAX_R: f64 = 1000.0;
+
+/// `r` (as option `name`) a ratio above 0 and at most [`MAX_R`].
+fn check_r(name: &'static str, r: f64) -> Result<(), OptionError> {
+    if r.is_finite() && r > 0.0 && r <= MAX_R {
+        return Ok(());
+    }
+    Err(OptionError::new(
+        name,
+        format!(
+            "must be a ratio above 0 and at most {}, got {}",
+            crate::text::num(MAX_R),
+            crate::text::num(r)
+        ),
+    ))
 }
 
 /// Grows venation in `outline`. `frames` sees the growth every few steps; `progress` can stop
@@ -339,6 +353,13 @@ pub fn sweep(
     rs: &[f64],
     progress: &dyn Progress,
 ) -> Result<Vec<SweptLeaf>, Error> {
+    // Every ratio checked before the first leaf grows.
+    if rs.is_empty() {
+        return Err(OptionError::new("sweep_r", "needs at least one ratio").into());
+    }
+    for &r in rs {
+        check_r("sweep_r", r)?;
+    }
     let (base, roots) = opts.leaf(outline, true)?;
     let mut out = Vec::with_capacity(rs.len());
     for &r in rs {

@@ -20,7 +20,10 @@ pub enum ViewError {
     Read(#[from] ReadError),
     #[error(transparent)]
     Sl1(#[from] crate::fabricate::sl1::Sl1Error),
-    #[error("{what}: {count} {unit}, more than the viewer takes ({limit}); {hint}")]
+    #[error(
+        "{what}: {count} {unit}, more than the viewer takes ({limit}){}",
+        if hint.is_empty() { String::new() } else { format!("; {hint}") }
+    )]
     TooLarge {
         what: String,
         count: usize,

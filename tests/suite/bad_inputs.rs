@@ -29,6 +29,11 @@ const EXPECTED: &[(&str, &[&str])] = &[
         "edge_out_of_range.json",
         &["edge 0", "joins nodes 0 and 3", "1 nodes"],
     ),
+    (
+        "huge_radius.json",
+        &["edge 0", "radius 1e308 mm is larger than 1000000 mm"],
+    ),
+    ("inf_colour.obj", &["vertex 0", "colour is not finite"]),
     ("unsupported_only.dxf", &["no LINE", "2 3DFACE", "1 TEXT"]),
     (
         "block_cycle.dxf",
@@ -190,6 +195,17 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
                 "1e308".into(),
             ],
             "--cell 1e308 mm is more than 1000000 mm",
+        ),
+        // A ratio refused before the sweep's folder is made.
+        (
+            vec![
+                "venation".into(),
+                "--sweep-r".into(),
+                "0.5,1e308".into(),
+                "-o".into(),
+                out("sweep"),
+            ],
+            "--sweep-r must be a ratio above 0 and at most 1000, got 1e308",
         ),
         // A palette PNG whose PLTE is 4 bytes: the png crate indexed past it and panicked.
         (

@@ -81,6 +81,13 @@ fn read_with(
             "coordinate is not finite",
         ));
     }
+    if let Some(v) = (mesh.colors.iter().flatten()).position(|c| c.iter().any(|x| !x.is_finite())) {
+        return Err(ReadError::record(
+            path,
+            format!("vertex {v}"),
+            "colour is not finite",
+        ));
+    }
     Ok(mesh)
 }
 

@@ -123,6 +123,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Imported, ReadError> {
                 "normal is not finite",
             ));
         }
+        check_radius(path, || format!("node {i}"), n.radius)?;
         nodes.push(Node {
             p,
             normal,
@@ -143,6 +144,7 @@ fn parse(bytes: &[u8], path: &Path) -> Result<Imported, ReadError> {
                 ),
             ));
         }
+        check_radius(path, || format!("edge {k}"), e.radius)?;
         edges.push(Edge {
             a: e.a,
             b: e.b,
@@ -224,4 +226,24 @@ fn write_list<T, R: Serialize>(
         write!(w, "\n  ")?;
     }
     write!(w, "]")
+}
+
+/// The largest vein radius a network file may give, mm: a kilometre.
+pub const MAX_RADIUS: f64 = 1e6;
+
+/// A radius of at most [`MAX_RADIUS`] in size (1e308 overflowed the drawings made from it; a
+/// negative one is read, and `validate` names it).
+fn check_radius(path: &Path, record: impl Fn() -> String, r: f64) -> Result<(), ReadError> {
+    if r.abs() <= MAX_RADIUS {
+        return Ok(());
+    }
+    Err(ReadError::record(
+        path,
+        record(),
+        format!(
+            "radius {} mm is larger than {} mm",
+            crate::text::num(r),
+            crate::text::num(MAX_RADIUS)
+        ),
+    ))
 }
