@@ -342,3 +342,33 @@ fn round_holes_drawn_as_two_bulged_vertices_are_whole_circles() -> TestResult {
     );
     Ok(())
 }
+
+#[test]
+fn an_obj_with_faces_and_loose_edges_is_read_as_its_polylines() -> TestResult {
+    // Blender's export of a square face with a three-edge polyline leaving it: the polyline is
+    // the network, the face is skipped and said; --strict refuses it; faces alone stay a mesh.
+    let obj = path("networks/blender_loose_edges.obj")?;
+    let v = info(&[&obj])?;
+    assert_eq!(v["nodes"], 4);
+    assert_eq!(v["edges"], 3);
+    assert_eq!(v["import"]["skipped"]["f (faces)"], 1);
+    let want = 1.0 + 2f64.sqrt() + 1.25f64.sqrt();
+    assert!(
+        close(&v["lengths"]["total"], want, 1e-9),
+        "{}",
+        v["lengths"]
+    );
+    let o = lamina(&["info", "--strict", &obj]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("1 f (faces)"), "{}", stderr(&o));
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("net.json");
+    let o = lamina(&[
+        "convert",
+        &path("surfaces/rhino_box.obj")?,
+        &out.to_string_lossy(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("a mesh"), "{}", stderr(&o));
+    Ok(())
+}

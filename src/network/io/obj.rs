@@ -5,8 +5,9 @@
 //! `p` points, `\` line continuations, and free-form curves as Rhino exports them (`cstype
 //! [rat] bspline`, `deg`, `curv u0 u1 i j ...`, `parm u ...`, `end`), flattened within the chord
 //! tolerance (degree 1: the control polygon). Groups, objects, materials (an empty `usemtl`
-//! too), normals, texture coordinates and surfaces are skipped and counted. A face record is an
-//! error: that file is a mesh, not a network.
+//! too), normals, texture coordinates and surfaces are skipped and counted. Faces beside
+//! polylines (a mesh with loose edges) are skipped and counted; faces alone are an error: that
+//! file is a mesh, not a network.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Write;
@@ -28,10 +29,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
     let mut weights: Vec<f64> = Vec::new();
     let mut free = FreeForm::default();
-    // Vertices that curves use as control points: not nodes unless a polyline uses them too.
+    // Vertices that curves use as control points, and faces' corners: not nodes unless a
+    // polyline uses them too.
     let mut control: BTreeSet<u32> = BTreeSet::new();
     // Flattened curves, added after every `v` is read so that vertex numbers stay the file's.
     let mut curve_points: Vec<Vec<DVec3>> = Vec::new();
+    // Faces beside polylines (Blender's loose edges in a mesh): the polylines are the network
+    // and the faces are skipped; faces alone make the file a mesh (an error at the first).
+    let mut first_face: Option<usize> = None;
     let tol = opts.chord_tolerance / opts.units.map_or(1.0, |u| u.mm());
     for (line_no, line) in logical_lines(&text) {
         let mut words = line.split_whitespace();
@@ -103,12 +108,12 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
                 }
             }
             "f" | "fo" => {
-                return Err(ReadError::line(
-                    path,
-                    line_no,
-                    "face record: this OBJ is a mesh, not a network of `v` + `l` polylines \
-                     (use it as a surface)",
-                ))
+                first_face.get_or_insert(line_no);
+                *skipped.entry("f (faces)".to_string()).or_default() += 1;
+                // Their corners are no nodes unless a polyline uses them.
+                for w in words {
+                    control.extend(vertex_ref(path, line_no, w, points.len()).ok());
+                }
             }
             "vn" | "vt" | "o" | "g" | "s" | "mtllib" | "usemtl" => {
                 *skipped.entry(keyword.to_string()).or_default() += 1;
@@ -125,6 +130,14 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Imported, ReadError> {
                 ))
             }
         }
+    }
+    if let (Some(line), true) = (first_face, segments.is_empty() && curve_points.is_empty()) {
+        return Err(ReadError::line(
+            path,
+            line,
+            "face record: this OBJ is a mesh, not a network of `v` + `l` polylines \
+             (use it as a surface)",
+        ));
     }
     if let Some(line) = free.open_curve() {
         return Err(ReadError::line(
