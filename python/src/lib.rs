@@ -1081,42 +1081,13 @@ fn write_plates(
     axes: &Axes,
     dir: &Path,
 ) -> Result<Vec<String>, Box<dyn std::error::Error + Send + Sync>> {
-    use lamina::files::write_atomic;
-    use lamina::view::scene::{scene, Input};
-    use std::io::Write as _;
-    std::fs::create_dir_all(dir)?;
-    let text = made.file.text();
-    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
-    write_mesh_file(
-        &stage::plates::assembly(&made.set),
-        &dir.join("assembly.stl"),
-        0,
-    )?;
-    stage::plates::write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
-    stage::plates::write_parts(made, dir)?;
-    let text = made.welds.json();
-    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
-    let inputs = vec![
-        (
-            "plates.json".to_string(),
-            Input::Plates(made.records(), made.core_records()),
-        ),
-        (
-            "welds.json".to_string(),
-            Input::Welds(
-                made.welds.weld_gap,
-                made.welds.weld_gap_tolerance,
-                made.welds.nodes(),
-            ),
-        ),
-        (
-            "axes".to_string(),
-            Input::Axes(Box::new(axes.clone()), None),
-        ),
-    ];
-    let page = scene(&inputs, Some("plates and welds".to_string()))?;
-    let html = stage::plates::welds_html(made, &lamina::view::embed(&page, "70vh"), false);
-    write_atomic(&dir.join("welds.html"), |w| w.write_all(html.as_bytes()))?;
+    use lamina::view::scene::Input;
+    let inputs = vec![(
+        "axes".to_string(),
+        Input::Axes(Box::new(axes.clone()), None),
+    )];
+    let (page, _) = stage::plates::weld_page(made, inputs, false)?;
+    stage::plates::write_folder(made, dir, &page)?;
     let mut files: Vec<String> = ["plates.json", "assembly.stl", "assembly.obj", "welds.json"]
         .iter()
         .map(|s| s.to_string())

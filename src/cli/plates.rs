@@ -1,20 +1,17 @@
 //! `lamina plates axes.json -o DIR`: steel plates from node axes (plates.json, assembly.stl).
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::Args as ClapArgs;
 use serde_json::json;
 
 use lamina::fabricate::tags::{TAG_HEIGHT, TAG_MARGIN};
-use lamina::files::write_atomic;
-use lamina::mesh::io::write_mesh;
 use lamina::rationalize::axes::read_axes;
 use lamina::rationalize::bolts;
 use lamina::rationalize::clearance::Socket;
 use lamina::stage::plates::{self, BoltSize, CoreSize, EdgeSelector, Joints};
-use lamina::view::scene::{scene, Input};
+use lamina::view::scene::Input;
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -159,56 +156,22 @@ pub fn execute(args: &Args) -> Result<plates::Plated> {
     for n in &made.notes {
         errln!("lamina: {n}");
     }
-    // The plates and their welds in the viewer, with the axes (and sizing) they came from:
-    // made before any file is written, so a model too large for it leaves nothing behind.
+    // The page before any file: a model too large for the viewer gets its files all the same.
     let (summary_axes, summary) = lamina::rationalize::axes::read_axes_and_summary(&args.input)?;
     let tolerance = summary["tolerance"].as_f64().filter(|t| *t > 0.0);
-    let mut inputs = vec![
-        (
-            "plates.json".to_string(),
-            Input::Plates(made.records(), made.core_records()),
-        ),
-        (
-            "welds.json".to_string(),
-            Input::Welds(
-                made.welds.weld_gap,
-                made.welds.weld_gap_tolerance,
-                made.welds.nodes(),
-            ),
-        ),
-        (
-            file_name(&args.input),
-            Input::Axes(Box::new(summary_axes), tolerance),
-        ),
-    ];
+    let mut inputs = vec![(
+        file_name(&args.input),
+        Input::Axes(Box::new(summary_axes), tolerance),
+    )];
     if let Some(s) = &args.sizing {
         let checks = lamina::analyze::sizing::read_checks(s)?;
         inputs.push((file_name(s), Input::Sizing(checks)));
     }
-    // A model too large for the viewer still gets its files; its page goes without the 3D view.
-    let viewer = match scene(&inputs, Some("plates and welds".to_string())) {
-        Ok(scene) => lamina::view::embed(&scene, "70vh"),
-        Err(e @ lamina::view::pack::ViewError::TooLarge { .. }) => {
-            errln!("lamina: welds.html without its 3D view: {e}");
-            format!("<p>No 3D view: {}.</p>", lamina::text::html(&e.to_string()))
-        }
-        Err(e) => return Err(e.into()),
-    };
-    let html = plates::welds_html(&made, &viewer, args.sizing.is_some());
-    if args.output.exists() && !args.output.is_dir() {
-        bail!("{}: exists and is not a folder", args.output.display());
+    let (page, note) = plates::weld_page(&made, inputs, args.sizing.is_some())?;
+    if let Some(n) = note {
+        errln!("lamina: {n}");
     }
-    std::fs::create_dir_all(&args.output)
-        .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
-    let dir = &args.output;
-    let text = made.file.text();
-    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
-    write_mesh(&plates::assembly(&made.set), &dir.join("assembly.stl"), 0)?;
-    plates::write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
-    plates::write_parts(&made, dir)?;
-    let text = made.welds.json();
-    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
-    write_atomic(&dir.join("welds.html"), |w| w.write_all(html.as_bytes()))?;
+    plates::write_folder(&made, &args.output, &page)?;
     Ok(made)
 }
 
@@ -238,16 +201,14 @@ pub fn run(args: Args) -> Result<bool> {
             sum.seams,
             sum.bolts,
             sum.area_mm2 * 1e-6,
-            sum.volume_mm3 * made.material.density * 1e-6,
+            sum.mass_kg,
             made.material.name,
             made.material.density,
             match (sum.bolt_sets_kg > 0.0, sum.cores_kg > 0.0) {
                 (false, false) => String::new(),
                 (b, c) => format!(
                     ", {:.1} kg with the {}{}{}",
-                    sum.volume_mm3 * made.material.density * 1e-6
-                        + sum.bolt_sets_kg
-                        + sum.cores_kg,
+                    sum.mass_kg + sum.bolt_sets_kg + sum.cores_kg,
                     if b { "bolt sets" } else { "" },
                     if b && c { " and " } else { "" },
                     if c { "node cores" } else { "" },

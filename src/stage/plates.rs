@@ -269,6 +269,7 @@ impl Plated {
                 .map(|(b, n)| crate::rationalize::bolts::set_volume(&b.size, b.length) * n as f64)
                 .fold(0.0, |s, v| s + v * density * 1e-6),
             cores_kg: (self.set.cores.iter()).fold(0.0, |s, c| s + c.mass_kg(density)),
+            mass_kg: self.set.mass_kg(density),
             max_flattening_mm: plates.iter().map(|p| p.flattening).fold(0.0, f64::max),
             groups: plates.iter().map(|p| p.group + 1).max().unwrap_or(0),
             seams: plates.iter().filter(|p| p.bolted_to.is_some()).count() / 2,
@@ -310,6 +311,8 @@ pub struct Summary {
     pub bolt_sets_kg: f64,
     /// The node cores, kg.
     pub cores_kg: f64,
+    /// The plates, kg.
+    pub mass_kg: f64,
     /// The most any panel was moved to make it flat, mm.
     pub max_flattening_mm: f64,
     /// Assembly groups.
@@ -1038,6 +1041,63 @@ fn scad_bolts(set: &PlateSet) -> Vec<ScadBolt> {
         }
     }
     out
+}
+
+/// The weld page (see [`welds_html`]) with the plates and welds in the viewer beside `inputs`
+/// (the axes, a sizing); a model too large for the viewer gets the page without its 3D view,
+/// and the second value says so.
+pub fn weld_page(
+    made: &Plated,
+    inputs: Vec<(String, crate::view::scene::Input)>,
+    with_sizing: bool,
+) -> Result<(String, Option<String>), crate::view::pack::ViewError> {
+    use crate::view::scene::{scene, Input};
+    let mut all = vec![
+        (
+            "plates.json".to_string(),
+            Input::Plates(made.records(), made.core_records()),
+        ),
+        (
+            "welds.json".to_string(),
+            Input::Welds(
+                made.welds.weld_gap,
+                made.welds.weld_gap_tolerance,
+                made.welds.nodes(),
+            ),
+        ),
+    ];
+    all.extend(inputs);
+    let (viewer, note) = match scene(&all, Some("plates and welds".to_string())) {
+        Ok(scene) => (crate::view::embed(&scene, "70vh"), None),
+        Err(e @ crate::view::pack::ViewError::TooLarge { .. }) => (
+            format!("<p>No 3D view: {}.</p>", crate::text::html(&e.to_string())),
+            Some(format!("welds.html without its 3D view: {e}")),
+        ),
+        Err(e) => return Err(e),
+    };
+    Ok((welds_html(made, &viewer, with_sizing), note))
+}
+
+/// The files `plates` writes, by name, into `dir` (made if missing): plates.json, assembly.stl,
+/// assembly.obj, welds.json, welds.html (`page`, from [`weld_page`]), parts/ID.dxf and
+/// assembly.scad (see [`write_parts`]).
+pub fn write_folder(made: &Plated, dir: &Path, page: &str) -> Result<(), WriteError> {
+    let folder_error = |msg: String| WriteError::Content {
+        path: dir.to_path_buf(),
+        msg,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(folder_error("exists and is not a folder".into()));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| folder_error(format!("cannot create folder: {e}")))?;
+    let text = made.file.text();
+    write_atomic(&dir.join("plates.json"), |w| w.write_all(text.as_bytes()))?;
+    crate::mesh::io::write_mesh(&assembly(&made.set), &dir.join("assembly.stl"), 0)?;
+    write_assembly_obj(&made.set, &dir.join("assembly.obj"))?;
+    write_parts(made, dir)?;
+    let text = made.welds.json();
+    write_atomic(&dir.join("welds.json"), |w| w.write_all(text.as_bytes()))?;
+    write_atomic(&dir.join("welds.html"), |w| w.write_all(page.as_bytes()))
 }
 
 /// welds.html: the summary, the definitions, the viewer (`viewer`: an embedded scene of the
