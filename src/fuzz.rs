@@ -22,7 +22,8 @@ fn network(path: &Path) -> Result<(), String> {
         crate::network::io::read_network(path, &Default::default()).map_err(|e| e.to_string())?;
     let _ = imported.network.validate();
     let tol = imported.point_tolerance();
-    let _ = crate::network::arrangement::defects(&imported.network, tol);
+    let _ = crate::network::arrangement::defects(&imported.network, tol, 1000);
+    let _ = crate::network::arrangement::split_crossings(&imported.network, tol);
     Ok(())
 }
 
@@ -109,6 +110,7 @@ pub const TARGETS: &[Target] = &[
             "fixtures/networks/ezdxf_curves_in.dxf",
             "fixtures/networks/ezdxf_crossings.dxf",
             "fixtures/networks/ezdxf_round_holes.dxf",
+            "fixtures/networks/ezdxf_overlaps.dxf",
             "fixtures/outlines/oak.dxf",
             "fixtures/fuzz/P7_dxf_julian_date/in.dxf",
         ],
@@ -117,7 +119,10 @@ pub const TARGETS: &[Target] = &[
     Target {
         name: "obj_network",
         ext: "obj",
-        seeds: &["fixtures/networks/rhino_curves.obj"],
+        seeds: &[
+            "fixtures/networks/rhino_curves.obj",
+            "fixtures/networks/blender_loose_edges.obj",
+        ],
         run: network,
     },
     Target {
@@ -147,7 +152,10 @@ pub const TARGETS: &[Target] = &[
     Target {
         name: "json_network",
         ext: "json",
-        seeds: &["fixtures/networks/small_loop.json"],
+        seeds: &[
+            "fixtures/networks/small_loop.json",
+            "fuzz/corpus/network",
+        ],
         run: network,
     },
     Target {

@@ -142,14 +142,8 @@ impl ReadArgs {
             return Ok(());
         }
         let tol = imported.point_tolerance();
-        let (net, stats) = split_crossings(&imported.network, tol).with_context(|| {
-            format!(
-                "{}: --split-crossings: the network does not lie in one plane (within {} mm), \
-                 so its edges cannot cross",
-                path.display(),
-                lamina::text::num(tol)
-            )
-        })?;
+        let (net, stats) = split_crossings(&imported.network, tol)
+            .map_err(|e| anyhow::anyhow!("{}: --split-crossings: {e}", path.display()))?;
         imported.network = net;
         if !quiet {
             errln!(

@@ -54,14 +54,30 @@ pub struct SplitStats {
     pub nodes_added: usize,
     /// Edges after noding, less edges before.
     pub edges_added: usize,
-    /// Edges that became repeats of another once noded (overlapping collinear lines), dropped.
+    /// Edges that repeat another once noded (overlapping collinear lines, or a line drawn
+    /// twice), dropped.
     pub overlaps_dropped: usize,
 }
 
 /// The plane a network lies in, as an origin and two axes, if every node is within `tol` of it.
+///
+/// A drawing in a coordinate plane (every z, or every y or x, within `tol` of the first node's)
+/// keeps its own coordinates, so lines drawn exactly collinear stay exactly collinear.
 fn plane(net: &Network, tol: f64) -> Option<(DVec3, DVec3, DVec3)> {
     let p: Vec<DVec3> = net.nodes.iter().map(|n| n.p).collect();
     let o = *p.first()?;
+    for axis in [2, 1, 0] {
+        if p.iter().all(|q| (q[axis] - o[axis]).abs() <= tol) {
+            let mut origin = DVec3::ZERO;
+            origin[axis] = o[axis];
+            let (u, v) = match axis {
+                2 => (DVec3::X, DVec3::Y),
+                1 => (DVec3::X, DVec3::Z),
+                _ => (DVec3::Y, DVec3::Z),
+            };
+            return Some((origin, u, v));
+        }
+    }
     let far = *p
         .iter()
         .max_by(|a, b| a.distance_squared(o).total_cmp(&b.distance_squared(o)))?;
@@ -96,10 +112,70 @@ impl Flat {
     }
 }
 
+/// The crossings and T-junctions of a flat drawing: how many, and the first ones in edge order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Defects {
+    /// The first defects in edge order (each edge's T-junctions by node, then its crossings
+    /// with later edges), at most as many as asked for.
+    pub listed: Vec<Defect>,
+    /// Proper crossings counted.
+    pub crossings: usize,
+    /// T-junctions counted.
+    pub t_junctions: usize,
+    /// False when the search stopped at [`COUNT_CEILING`]: the counts are then lower bounds.
+    pub counted_all: bool,
+    /// Edges left out of the search because they repeat an earlier edge's two nodes.
+    pub repeated_edges: usize,
+}
+
+impl Defects {
+    /// Crossings and T-junctions together.
+    pub fn total(&self) -> usize {
+        self.crossings + self.t_junctions
+    }
+
+    /// "1,234 crossings and 5 T-junctions", with "at least" when the count stopped early.
+    pub fn counted(&self) -> String {
+        format!(
+            "{}{} crossings and {} T-junctions",
+            if self.counted_all { "" } else { "at least " },
+            self.crossings,
+            self.t_junctions
+        )
+    }
+}
+
+/// The search stops counting once it has found this many crossings and T-junctions (a drawing
+/// with more is not a drawing anyone will node); the counts are then lower bounds.
+pub const COUNT_CEILING: usize = 10_000_000;
+
+/// The most crossings and T-junctions [`split_crossings`] makes nodes of.
+pub const SPLIT_LIMIT: usize = 1_000_000;
+
+/// Why a drawing could not be noded.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SplitError {
+    #[error(
+        "the network does not lie in one plane (within {tol} mm), so its edges cannot cross",
+        tol = crate::text::num(*tol)
+    )]
+    NotFlat { tol: f64 },
+    #[error(
+        "the drawing has {counted}, more than the {limit} lamina makes nodes of: its edges \
+         cross almost everywhere (a scribble, or edges between random nodes)"
+    )]
+    TooMany { counted: String, limit: usize },
+}
+
 /// Every crossing and T-junction of a flat network (none for a network that is not flat), in
-/// edge order. `tol` in mm: points closer than this are one point.
-pub fn defects(net: &Network, tol: f64) -> Vec<Defect> {
-    find(net, tol).map(|(d, _)| d).unwrap_or_default()
+/// edge order, listing at most `keep`. `tol` in mm: points closer than this are one point.
+/// Edges repeating an earlier edge's two nodes are searched once. Time is O(E log E) plus the
+/// candidate pairs, and the count stops at [`COUNT_CEILING`].
+pub fn defects(net: &Network, tol: f64, keep: usize) -> Defects {
+    find(net, tol, keep).map(|f| f.defects).unwrap_or(Defects {
+        counted_all: true,
+        ..Default::default()
+    })
 }
 
 /// A crossing or T-junction with its parameter along each edge it splits.
@@ -113,13 +189,33 @@ struct Cut {
 
 /// Edges per parallel task in the crossing search.
 const EDGE_CHUNK: usize = 4096;
+/// Tasks searched before the count is checked against the ceiling (fixed, so every machine
+/// stops at the same place).
+const WAVE: usize = 4;
 
-/// A node on an edge's interior: (edge, node, parameter along the edge).
-type OnEdge = (u32, u32, f64);
-/// A proper crossing: (edge, later edge, parameter on each, the point).
-type Crossing = (u32, u32, f64, f64, DVec3);
+/// A defect as the search finds it: a node on an edge's interior (edge, node, parameter), or a
+/// proper crossing (edge, later edge, parameter on each, the point).
+enum Raw {
+    On(u32, u32, f64),
+    Cross(u32, u32, f64, f64, DVec3),
+}
 
-fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
+/// What one task found among its edges: defects in edge order (at most the room it was given)
+/// and how many it counted.
+struct ChunkFound {
+    raw: Vec<Raw>,
+    crossings: usize,
+    t_junctions: usize,
+}
+
+struct Found {
+    defects: Defects,
+    cuts: Vec<Cut>,
+    /// Per edge: whether it was searched (false for loops and repeats of an earlier edge).
+    searched: Vec<bool>,
+}
+
+fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
     let (o, u, v) = plane(net, tol)?;
     let flat = Flat {
         pts: net
@@ -129,11 +225,25 @@ fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
             .collect(),
     };
     let to3 = |q: DVec2| o + u * q.x + v * q.y;
+    // Each pair of nodes is searched once: a drawing with 50,000 copies of 72 lines costs what
+    // 72 lines cost.
+    let mut searched = vec![true; net.edges.len()];
+    let mut seen: HashSet<(u32, u32)> = HashSet::with_capacity(net.edges.len());
+    let mut repeated_edges = 0;
+    for (k, e) in net.edges.iter().enumerate() {
+        if e.a == e.b {
+            searched[k] = false;
+        } else if !seen.insert((e.a.min(e.b), e.a.max(e.b))) {
+            searched[k] = false;
+            repeated_edges += 1;
+        }
+    }
+    drop(seen);
     let boxes: Vec<Boxed> = net
         .edges
         .iter()
         .enumerate()
-        .filter(|(_, e)| e.a != e.b)
+        .filter(|(k, _)| searched[*k])
         .map(|(k, e)| {
             let (a, b) = flat.seg(e);
             let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
@@ -143,129 +253,134 @@ fn find(net: &Network, tol: f64) -> Option<(Vec<Defect>, Vec<Cut>)> {
             )
         })
         .collect();
-    // Nodes no edge ends at can still lie on an edge: they get an index of their own (most
-    // drawings have none). Every other node on an edge is the end of an edge whose box meets it.
-    let mut ends = vec![false; net.nodes.len()];
-    for e in net.edges.iter().filter(|e| e.a != e.b) {
-        ends[e.a as usize] = true;
-        ends[e.b as usize] = true;
-    }
-    let lonely: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
-        .filter(|&i| !ends[i])
+    let points: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
         .map(|i| GeomWithData::new(flat.pts[i].to_array(), i as u32))
         .collect();
-    let lonely = RTree::bulk_load(lonely);
+    let points = RTree::bulk_load(points);
     let tree = RTree::bulk_load(boxes);
-    // Each edge against the later edges whose boxes meet its own, in parallel a chunk of edges
-    // at a time: both edges' ends on the other (T-junctions) and proper crossings.
-    let per_chunk: Vec<(Vec<OnEdge>, Vec<Crossing>)> = net
-        .edges
-        .par_chunks(EDGE_CHUNK)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let mut on = Vec::new();
-            let mut crossings = Vec::new();
-            let mut others: Vec<u32> = Vec::new();
-            for (i, e) in chunk.iter().enumerate() {
-                if e.a == e.b {
+    // Each edge finds the nodes on its interior (its T-junctions) and its proper crossings
+    // with later edges whose boxes meet its own, so every defect is found once, by the task
+    // holding the edge, in edge order. Tasks run in parallel a wave at a time; each keeps at
+    // most the room left in the list and counts the rest.
+    let search = |c: usize, room: usize| -> ChunkFound {
+        let mut out = ChunkFound {
+            raw: Vec::new(),
+            crossings: 0,
+            t_junctions: 0,
+        };
+        let first = c * EDGE_CHUNK;
+        let last = (first + EDGE_CHUNK).min(net.edges.len());
+        let mut on: Vec<(u32, f64)> = Vec::new();
+        let mut others: Vec<u32> = Vec::new();
+        let edges = net.edges[first..last].iter().zip(&searched[first..last]);
+        for (k, (e, _)) in (first..).zip(edges).filter(|(_, (_, s))| **s) {
+            let k = k as u32;
+            let (a, b) = flat.seg(e);
+            let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
+            let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
+            on.clear();
+            on.extend(points.locate_in_envelope(&env).filter_map(|p| {
+                let n = p.data;
+                if n == e.a || n == e.b {
+                    return None;
+                }
+                interior_param(a, b, flat.pts[n as usize], tol).map(|t| (n, t))
+            }));
+            on.sort_unstable_by_key(|&(n, _)| n);
+            for &(node, t) in &on {
+                out.t_junctions += 1;
+                if out.raw.len() < room {
+                    out.raw.push(Raw::On(k, node, t));
+                }
+            }
+            others.clear();
+            others.extend(
+                tree.locate_in_envelope_intersecting(&env)
+                    .map(|g| g.data)
+                    .filter(|&j| j > k),
+            );
+            others.sort_unstable();
+            for &j in &others {
+                let f = &net.edges[j as usize];
+                if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
                     continue;
                 }
-                let k = (c * EDGE_CHUNK + i) as u32;
-                let (a, b) = flat.seg(e);
-                let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
-                let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
-                for p in lonely.locate_in_envelope(&env) {
-                    if let Some(t) = interior_param(a, b, flat.pts[p.data as usize], tol) {
-                        on.push((k, p.data, t));
-                    }
+                let (c, d) = flat.seg(f);
+                let Some((t, s)) = crossing(a, b, c, d, tol) else {
+                    continue;
+                };
+                out.crossings += 1;
+                if out.raw.len() < room {
+                    out.raw.push(Raw::Cross(k, j, t, s, to3(a + (b - a) * t)));
                 }
-                others.clear();
-                others.extend(
-                    tree.locate_in_envelope_intersecting(&env)
-                        .map(|g| g.data)
-                        .filter(|&j| j > k),
-                );
-                others.sort_unstable();
-                for &j in &others {
-                    let f = &net.edges[j as usize];
-                    let (c, d) = flat.seg(f);
-                    for n in [f.a, f.b] {
-                        if n != e.a && n != e.b {
-                            if let Some(t) = interior_param(a, b, flat.pts[n as usize], tol) {
-                                on.push((k, n, t));
-                            }
-                        }
+            }
+        }
+        out
+    };
+    let chunks = net.edges.len().div_ceil(EDGE_CHUNK);
+    let mut found = Found {
+        defects: Defects {
+            counted_all: true,
+            repeated_edges,
+            ..Default::default()
+        },
+        cuts: Vec::new(),
+        searched: Vec::new(),
+    };
+    let mut c = 0;
+    while c < chunks {
+        if found.defects.total() >= COUNT_CEILING {
+            found.defects.counted_all = false;
+            break;
+        }
+        let wave = c..(c + WAVE).min(chunks);
+        c = wave.end;
+        let room = keep.saturating_sub(found.defects.listed.len());
+        let parts: Vec<ChunkFound> = wave.into_par_iter().map(|c| search(c, room)).collect();
+        for part in parts {
+            found.defects.crossings += part.crossings;
+            found.defects.t_junctions += part.t_junctions;
+            let room = keep - found.defects.listed.len();
+            for raw in part.raw.into_iter().take(room) {
+                match raw {
+                    Raw::On(edge, node, t) => {
+                        let at = net.nodes[node as usize].p;
+                        found.defects.listed.push(Defect::TJunction {
+                            node,
+                            edge,
+                            at: at.to_array(),
+                        });
+                        found.cuts.push(Cut {
+                            edge,
+                            t,
+                            node: Some(node),
+                            at,
+                        });
                     }
-                    for n in [e.a, e.b] {
-                        if n != f.a && n != f.b {
-                            if let Some(t) = interior_param(c, d, flat.pts[n as usize], tol) {
-                                on.push((j, n, t));
-                            }
-                        }
-                    }
-                    if [f.a, f.b].iter().any(|x| *x == e.a || *x == e.b) {
-                        continue;
-                    }
-                    if let Some((t, s)) = crossing(a, b, c, d, tol) {
-                        crossings.push((k, j, t, s, to3(a + (b - a) * t)));
+                    Raw::Cross(k, j, t, s, at) => {
+                        found.defects.listed.push(Defect::Crossing {
+                            edges: [k, j],
+                            at: at.to_array(),
+                        });
+                        found.cuts.push(Cut {
+                            edge: k,
+                            t,
+                            node: None,
+                            at,
+                        });
+                        found.cuts.push(Cut {
+                            edge: j,
+                            t: s,
+                            node: None,
+                            at,
+                        });
                     }
                 }
             }
-            (on, crossings)
-        })
-        .collect();
-    let mut on: Vec<OnEdge> = Vec::new();
-    let mut crossings: Vec<Crossing> = Vec::new();
-    for (o, c) in per_chunk {
-        on.extend(o);
-        crossings.extend(c);
-    }
-    // A node on an edge is found once per edge ending at it: once is enough.
-    on.sort_unstable_by_key(|&(edge, node, _)| (edge, node));
-    on.dedup_by_key(|&mut (edge, node, _)| (edge, node));
-    // In edge order: each edge's T-junctions (by node), then its crossings with later edges.
-    let mut defects = Vec::new();
-    let mut cuts = Vec::new();
-    let (mut i, mut j) = (0, 0);
-    while i < on.len() || j < crossings.len() {
-        let take_on = j == crossings.len() || (i < on.len() && on[i].0 <= crossings[j].0);
-        if take_on {
-            let (edge, node, t) = on[i];
-            let at = net.nodes[node as usize].p;
-            defects.push(Defect::TJunction {
-                node,
-                edge,
-                at: at.to_array(),
-            });
-            cuts.push(Cut {
-                edge,
-                t,
-                node: Some(node),
-                at,
-            });
-            i += 1;
-        } else {
-            let (k, other, t, s, at) = crossings[j];
-            defects.push(Defect::Crossing {
-                edges: [k, other],
-                at: at.to_array(),
-            });
-            cuts.push(Cut {
-                edge: k,
-                t,
-                node: None,
-                at,
-            });
-            cuts.push(Cut {
-                edge: other,
-                t: s,
-                node: None,
-                at,
-            });
-            j += 1;
         }
     }
-    Some((defects, cuts))
+    found.searched = searched;
+    Some(found)
 }
 
 /// Where along a-b (0..1, away from both ends by more than `tol`) the point q lies, if within
@@ -283,9 +398,19 @@ fn interior_param(a: DVec2, b: DVec2, q: DVec2, tol: f64) -> Option<f64> {
 }
 
 /// Parameters (t on a-b, s on c-d) of a proper crossing, away from every end by more than
-/// `tol` (a crossing near an end is a T-junction, found as a node on the other edge).
+/// `tol` (a crossing near an end is a T-junction, found as a node on the other edge). Segments
+/// that lie along each other within `tol` (overlapping collinear lines) do not cross: where
+/// they overlap, each one's ends lie on the other and are found as T-junctions.
 fn crossing(a: DVec2, b: DVec2, c: DVec2, d: DVec2, tol: f64) -> Option<(f64, f64)> {
     let (r, s) = (b - a, d - c);
+    let off_line = |p: DVec2, q: DVec2, x: DVec2| {
+        let len = (q - p).length();
+        len > 0.0 && ((x - p).perp_dot(q - p) / len).abs() > tol
+    };
+    let along = |p, q, x, y| !off_line(p, q, x) && !off_line(p, q, y);
+    if along(a, b, c, d) || along(c, d, a, b) {
+        return None;
+    }
     let denom = r.perp_dot(s);
     if denom == 0.0 {
         return None;
@@ -300,25 +425,36 @@ fn crossing(a: DVec2, b: DVec2, c: DVec2, d: DVec2, tol: f64) -> Option<(f64, f6
     (!near_end).then_some((t, u))
 }
 
-/// The network with every crossing and T-junction made a node, edges split there; `None` when
-/// the network is not flat. New nodes take the radius of the edge they split; sub-edges keep
-/// their edge's radius. Crossings within `tol` of each other share a node.
-pub fn split_crossings(net: &Network, tol: f64) -> Option<(Network, SplitStats)> {
-    let (defects, cuts) = find(net, tol)?;
+/// The network with every crossing and T-junction made a node, edges split there. New nodes
+/// take the radius of the edge they split; sub-edges keep their edge's radius. Crossings within
+/// `tol` of each other share a node; edges that become repeats of another (overlapping
+/// collinear lines, or lines drawn twice) are dropped and counted. Refused when the network is
+/// not flat, or has more than [`SPLIT_LIMIT`] crossings and T-junctions.
+pub fn split_crossings(net: &Network, tol: f64) -> Result<(Network, SplitStats), SplitError> {
+    split_within(net, tol, SPLIT_LIMIT)
+}
+
+fn split_within(
+    net: &Network,
+    tol: f64,
+    limit: usize,
+) -> Result<(Network, SplitStats), SplitError> {
+    let Found {
+        defects,
+        cuts,
+        searched,
+    } = find(net, tol, limit).ok_or(SplitError::NotFlat { tol })?;
+    if defects.total() > limit {
+        return Err(SplitError::TooMany {
+            counted: defects.counted(),
+            limit,
+        });
+    }
     let mut stats = SplitStats {
-        crossings: defects
-            .iter()
-            .filter(|d| matches!(d, Defect::Crossing { .. }))
-            .count(),
-        t_junctions: defects
-            .iter()
-            .filter(|d| matches!(d, Defect::TJunction { .. }))
-            .count(),
+        crossings: defects.crossings,
+        t_junctions: defects.t_junctions,
         ..Default::default()
     };
-    if cuts.is_empty() {
-        return Some((net.clone(), stats));
-    }
     // New points welded among themselves and onto existing nodes.
     let fresh: Vec<DVec3> = cuts
         .iter()
@@ -367,6 +503,15 @@ pub fn split_crossings(net: &Network, tol: f64) -> Option<(Network, SplitStats)>
     let mut edges = Vec::with_capacity(net.edges.len() + cuts.len());
     let mut seen: HashSet<(u32, u32)> = HashSet::new();
     for (k, e) in net.edges.iter().enumerate() {
+        if e.a == e.b {
+            edges.push(*e);
+            continue;
+        }
+        if !searched[k] {
+            // A repeat of an earlier edge, which carries the pieces.
+            stats.overlaps_dropped += 1;
+            continue;
+        }
         let mut chain = std::mem::take(&mut per_edge[k]);
         chain.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
         let mut ids = vec![e.a];
@@ -387,7 +532,7 @@ pub fn split_crossings(net: &Network, tol: f64) -> Option<(Network, SplitStats)>
         }
     }
     stats.edges_added = edges.len().saturating_sub(net.edges.len());
-    Some((
+    Ok((
         Network {
             nodes,
             edges,
@@ -418,13 +563,13 @@ mod tests {
             &[[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]],
             &[[0, 1], [2, 3]],
         );
-        let d = defects(&n, 1e-9);
+        let d = defects(&n, 1e-9, usize::MAX).listed;
         assert_eq!(d.len(), 1);
         assert!(matches!(d[0], Defect::Crossing { edges: [0, 1], .. }));
         let (s, stats) = split_crossings(&n, 1e-9).expect("flat");
         assert_eq!((s.nodes.len(), s.edges.len()), (5, 4));
         assert_eq!(stats.nodes_added, 1);
-        assert!(defects(&s, 1e-9).is_empty());
+        assert!(defects(&s, 1e-9, usize::MAX).listed.is_empty());
     }
 
     #[test]
@@ -433,7 +578,7 @@ mod tests {
             &[[0.0, 0.0], [2.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
             &[[0, 1], [2, 3]],
         );
-        let d = defects(&n, 1e-9);
+        let d = defects(&n, 1e-9, usize::MAX).listed;
         assert!(matches!(
             d[..],
             [Defect::TJunction {
@@ -477,6 +622,78 @@ mod tests {
         assert_eq!(stats.overlaps_dropped, 1);
     }
 
+    /// Three collinear lines overlapping along x = 0 and a line ending on them: nodes only
+    /// where lines end, however the drawing's plane is turned.
+    #[test]
+    fn overlapping_collinear_lines_are_noded_where_they_end() {
+        let pts = [
+            [0.0, 287.0],
+            [20.0, 287.0],
+            [0.0, 15.0],
+            [0.0, 0.0],
+            [0.0, 10.0],
+            [185.0, 22.0],
+            [0.0, 22.0],
+        ];
+        let flat = net(&pts, &[[0, 1], [2, 3], [2, 4], [3, 0], [5, 6]]);
+        let tilt = glam::DQuat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 0.2);
+        let mut tilted = flat.clone();
+        for n in &mut tilted.nodes {
+            n.p = tilt * n.p + DVec3::new(5.0, -3.0, 7.0);
+        }
+        for n in [flat, tilted] {
+            let (s, stats) = split_crossings(&n, 1e-6).expect("flat");
+            assert_eq!(stats.crossings, 0);
+            assert_eq!(stats.nodes_added, 0);
+            // (0,0)-(0,10)-(0,15)-(0,22)-(0,287), the top line and the one from (185, 22).
+            assert_eq!(s.edges.len(), 6, "{:?}", s.edges);
+            assert_eq!(stats.overlaps_dropped, 3);
+            assert!(defects(&s, 1e-6, usize::MAX).listed.is_empty());
+            let total: f64 = s.edges.iter().map(|e| s.edge_length(e)).sum();
+            assert!((total - (287.0 + 20.0 + 185.0)).abs() < 1e-9, "{total}");
+        }
+    }
+
+    /// A 5 × 5 grid of lines drawn three times over: the repeats are searched once, the
+    /// 25 crossings counted once, and noding keeps one copy of each piece.
+    #[test]
+    fn lines_drawn_over_and_over_are_searched_once() {
+        let mut pts = Vec::new();
+        let mut edges = Vec::new();
+        for k in 0..5 {
+            let c = k as f64 + 0.5;
+            pts.extend([[c, 0.0], [c, 5.0], [0.0, c], [5.0, c]]);
+            let n = 4 * k as u32;
+            edges.extend([[n, n + 1], [n + 2, n + 3]]);
+        }
+        let once = edges.len();
+        for copy in 0..2 {
+            for k in 0..once {
+                let [a, b] = edges[k];
+                edges.push(if copy == 0 { [b, a] } else { [a, b] });
+            }
+        }
+        let n = net(&pts, &edges);
+        let d = defects(&n, 1e-9, 3);
+        assert_eq!((d.crossings, d.t_junctions), (25, 0));
+        assert_eq!(d.repeated_edges, 20);
+        assert!(d.counted_all);
+        assert_eq!(d.listed.len(), 3, "listing stops where asked");
+        let (s, stats) = split_crossings(&n, 1e-9).expect("flat");
+        // Each of the 10 lines in 6 pieces, once.
+        assert_eq!(s.edges.len(), 60);
+        assert_eq!(stats.nodes_added, 25);
+        assert_eq!(stats.overlaps_dropped, 20);
+        // Past the limit: refused with the count, nothing noded.
+        let e = split_within(&n, 1e-9, 24).expect_err("25 crossings > 24");
+        assert_eq!(
+            e.to_string(),
+            "the drawing has 25 crossings and 0 T-junctions, more than the 24 lamina makes \
+             nodes of: its edges cross almost everywhere (a scribble, or edges between random \
+             nodes)"
+        );
+    }
+
     #[test]
     fn networks_off_a_plane_have_no_crossings() {
         let mut n = net(
@@ -484,7 +701,7 @@ mod tests {
             &[[0, 1], [2, 3]],
         );
         n.nodes[3].p.z = 1.0;
-        assert!(defects(&n, 1e-9).is_empty());
-        assert!(split_crossings(&n, 1e-9).is_none());
+        assert!(defects(&n, 1e-9, usize::MAX).listed.is_empty());
+        assert!(split_crossings(&n, 1e-9).is_err());
     }
 }

@@ -183,6 +183,29 @@ pub fn read_axes_and_summary(path: &Path) -> Result<(Axes, serde_json::Value), R
             ));
         }
     }
+    // A member drawn twice, or from a node to itself, has no plate of its own: said here, by
+    // record, rather than as two plates 0° apart at a node.
+    let mut first: std::collections::HashMap<(u32, u32), usize> =
+        std::collections::HashMap::with_capacity(rec.edges.len());
+    for (k, e) in rec.edges.iter().enumerate() {
+        if e.a == e.b {
+            return Err(ReadError::record(
+                path,
+                format!("edge {k}"),
+                format!("joins node {} to itself", e.a),
+            ));
+        }
+        if let Some(j) = first.insert((e.a.min(e.b), e.a.max(e.b)), k) {
+            return Err(ReadError::record(
+                path,
+                format!("edge {k}"),
+                format!(
+                    "repeats edge {j} (nodes {} and {}): a member drawn twice",
+                    e.a, e.b
+                ),
+            ));
+        }
+    }
     if let Some(k) = rec
         .edges
         .iter()

@@ -135,13 +135,17 @@ pub enum Error {
 /// χ to check against (else each component is taken as a disk).
 pub fn run(net: &Network, surface: Option<&TriMesh>, opts: &Options) -> Result<Found, Error> {
     let tol = opts.point_tolerance.unwrap_or(1e-9 * net.bbox().diagonal());
-    let found = defects(net, tol);
-    if let Some(first) = found.first() {
+    let found = defects(net, tol, 1);
+    if let Some(first) = found.listed.first() {
         return Err(Error::NotNoded {
             first: first.to_string(),
-            more: match found.len() {
+            more: match found.total() {
                 1 => String::new(),
-                n => format!(" (and {} more crossings or T-junctions)", n - 1),
+                n => format!(
+                    " (and {}{} more crossings or T-junctions)",
+                    if found.counted_all { "" } else { "at least " },
+                    n - 1
+                ),
             },
         });
     }

@@ -85,6 +85,9 @@ pub struct NetworkInfo {
     pub units: String,
 }
 
+/// Crossings and T-junctions listed one by one among the problems; the rest are counted.
+pub const LISTED_DEFECTS: usize = 10_000;
+
 /// The summary of `net` (named `file`); `imported` says what reading its file did, and
 /// crossings and T-junctions closer than `point_tolerance` (mm) are not problems.
 pub fn network(
@@ -107,11 +110,26 @@ pub fn network(
         .map(|p| with_message(serde_json::to_value(p), p.to_string()))
         .collect();
     // A flat drawing that is not noded: crossings and T-junctions are problems too.
+    let found = defects(net, point_tolerance, LISTED_DEFECTS);
     problems.extend(
-        defects(net, point_tolerance)
+        found
+            .listed
             .iter()
             .map(|d| with_message(serde_json::to_value(d), d.to_string())),
     );
+    if found.total() > found.listed.len() {
+        let more = found.total() - found.listed.len();
+        problems.push(serde_json::json!({
+            "kind": "unlisted_defects",
+            "count": more,
+            "counted_all": found.counted_all,
+            "message": format!(
+                "{}{more} more crossings or T-junctions not listed ({} in all)",
+                if found.counted_all { "" } else { "at least " },
+                found.counted()
+            ),
+        }));
+    }
     NetworkInfo {
         bbox: bbox(&net.bbox()),
         components: v.components,

@@ -17,6 +17,7 @@ use std::time::Instant;
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::network::Problem;
 use crate::rationalize::axes::Axes;
 use crate::rationalize::planarize::{planarize_with, Input, PlanarizeError, PlanarizeOptions};
 pub use crate::rationalize::planarize::{Method, Selector, Solution};
@@ -128,6 +129,9 @@ pub enum Error {
     #[error(transparent)]
     /// The solver failed.
     Solve(#[from] PlanarizeError),
+    #[error("{0}: a member drawn twice, or from a node to itself, has no panel of its own")]
+    /// An edge repeating another, or a loop.
+    Member(Problem),
 }
 
 impl Error {
@@ -185,6 +189,14 @@ pub fn run(
     opts: &Options,
     progress: &dyn Progress,
 ) -> Result<Planarized, Error> {
+    if let Some(p) = net
+        .validate()
+        .problems
+        .into_iter()
+        .find(|p| matches!(p, Problem::RepeatedEdge { .. } | Problem::SelfLoop { .. }))
+    {
+        return Err(Error::Member(p));
+    }
     let solver = opts.solver();
     let reference = reference_normals(net, surface)?;
     let input = Input {

@@ -10,6 +10,7 @@ mod cli;
 mod fuzz_cases;
 mod fuzz_replay;
 mod lsystem;
+mod pathological;
 mod planarize;
 mod plates;
 mod print;

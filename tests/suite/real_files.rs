@@ -344,6 +344,28 @@ fn round_holes_drawn_as_two_bulged_vertices_are_whole_circles() -> TestResult {
 }
 
 #[test]
+fn strokes_drawn_over_each_other_are_noded_only_where_they_end() -> TestResult {
+    // Three collinear strokes along x = 0 and a line ending on them; a frame drawn in
+    // overlapping pieces; a square turned 30° the same way. Noded, each line is drawn once:
+    // 492 + 380 + 200 + 50√2 mm, no node where nothing ends, no problem left, four faces.
+    let v = info(&["--split-crossings", &path("networks/ezdxf_overlaps.dxf")?])?;
+    let split = &v["import"]["split_crossings"];
+    assert_eq!(split["crossings"], 0, "{split}");
+    assert_eq!(split["nodes_added"], 0, "{split}");
+    assert_eq!(v["nodes"], 33);
+    assert_eq!(v["edges"], 34);
+    assert_eq!(v["cycles"], 4);
+    assert_eq!(v["problems"].as_array().map(Vec::len), Some(0));
+    let want = 492.0 + 380.0 + 200.0 + 50.0 * 2f64.sqrt();
+    assert!(
+        close(&v["lengths"]["total"], want, 1e-9),
+        "{}",
+        v["lengths"]
+    );
+    Ok(())
+}
+
+#[test]
 fn an_obj_with_faces_and_loose_edges_is_read_as_its_polylines() -> TestResult {
     // Blender's export of a square face with a three-edge polyline leaving it: the polyline is
     // the network, the face is skipped and said; --strict refuses it; faces alone stay a mesh.

@@ -173,13 +173,43 @@ pub struct Growth<'p> {
     /// Rounds in a row in which the form did not change (no division, hole or split) and no
     /// bud slept.
     idle: u64,
+    /// Commands run in those rounds.
+    idle_commands: u64,
+    /// Commands run since the start.
+    commands: u64,
 }
 
 /// Rounds without a change to the form (and nobody asleep) after which a program is taken to
 /// never grow: buds that only create buds, forever.
 pub const MAX_IDLE_ROUNDS: u64 = 10_000;
 
+/// Commands run without a change to the form after which a program is taken to never grow
+/// (long chains of `create` make each idle round long).
+pub const MAX_IDLE_COMMANDS: u64 = 10_000_000;
+
 const START_COLOUR: [f32; 3] = [0.85, 0.82, 0.76];
+
+/// Whether any bud type the first one can lead to (through `create`) divides a cell: a
+/// program without one would run until the idle limits refuse it.
+fn grows(program: &Program) -> bool {
+    let mut seen = vec![false; program.types.len()];
+    let mut stack = vec![0usize];
+    seen[0] = true;
+    while let Some(k) = stack.pop() {
+        for c in &program.types[k].commands {
+            match *c {
+                Command::Grow(n) | Command::Blob(n) if n > 0 => return true,
+                Command::Split => return true,
+                Command::Create { bud, .. } if bud < seen.len() && !seen[bud] => {
+                    seen[bud] = true;
+                    stack.push(bud);
+                }
+                _ => {}
+            }
+        }
+    }
+    false
+}
 
 impl<'p> Growth<'p> {
     pub fn new(
@@ -194,6 +224,13 @@ impl<'p> Growth<'p> {
             return Err(BudError::Options(format!(
                 "clearance {} is outside (0, 3) cell sizes",
                 options.clearance
+            )));
+        }
+        if !grows(program) {
+            return Err(BudError::Options(format!(
+                "no bud type that {} can lead to divides a cell (grow, blob or split): the \
+                 program never grows",
+                program.types[0].name
             )));
         }
         if options.max_cells < 4 {
@@ -233,6 +270,8 @@ impl<'p> Growth<'p> {
             timeline: Vec::new(),
             stopped_by: None,
             idle: 0,
+            idle_commands: 0,
+            commands: 0,
         };
         g.add_bud(0, 0, None);
         g.sample();
@@ -270,6 +309,7 @@ impl<'p> Growth<'p> {
         }
         let n = self.buds.len();
         let before = (self.graph.len(), self.divisions, self.holes);
+        let commands = self.commands;
         let mut slept = false;
         for b in 0..n {
             if self.graph.len() >= self.options.max_cells {
@@ -283,15 +323,22 @@ impl<'p> Growth<'p> {
         self.rounds += 1;
         if (self.graph.len(), self.divisions, self.holes) == before && !slept {
             self.idle += 1;
-            if self.idle >= MAX_IDLE_ROUNDS {
+            self.idle_commands += self.commands - commands;
+            // One idle round can be the one in which every bud is between its creates and
+            // the buds it made have yet to grow: the command limit needs two in a row.
+            let busy = self.idle >= 2 && self.idle_commands >= MAX_IDLE_COMMANDS;
+            if self.idle >= MAX_IDLE_ROUNDS || busy {
                 return Err(BudError::Options(format!(
-                    "{} live buds ran {MAX_IDLE_ROUNDS} rounds without dividing a cell: the \
+                    "{} live buds ran {} rounds ({} commands) without dividing a cell: the \
                      program never grows (a bud that only creates buds?)",
-                    self.live_buds()
+                    self.live_buds(),
+                    self.idle,
+                    self.idle_commands
                 )));
             }
         } else {
             self.idle = 0;
+            self.idle_commands = 0;
         }
         if self.graph.len() >= self.last_global + self.last_global / GLOBAL_EVERY {
             self.relax_all(1);
@@ -430,6 +477,7 @@ impl<'p> Growth<'p> {
                 return Ok(());
             };
             bud.pc += 1;
+            self.commands += 1;
             match command {
                 Command::Colour(c) => bud.colour = c,
                 Command::Texture(t) => bud.texture = t,
@@ -786,4 +834,33 @@ pub fn grow(program: &Program, options: GrowthOptions, seed: u64) -> Result<Form
     let mut g = Growth::new(program, options, seed)?;
     while g.round()? {}
     Ok(g.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grow::buds::{parse_program, ProgramError};
+
+    #[test]
+    fn a_program_grows_only_if_a_bud_it_can_reach_divides() -> Result<(), ProgramError> {
+        let grows_ = |text: &str| parse_program(text, "t").map(|p| grows(&p));
+        assert!(grows_(super::super::program::FIGURE_8)?);
+        // Creates only, however many: refused before the first round.
+        assert!(!grows_(&format!(
+            "Base:\n{}",
+            "create Base\n".repeat(1000)
+        ))?);
+        // A type that grows, but that nothing creates.
+        assert!(!grows_("Base:\tNever:\ncreate Base\tgrow 5\n")?);
+        // Reached through a chain of creates; grow 0 divides nothing.
+        assert!(grows_("Base:\tA:\tB:\ncreate A\tcreate B\tsplit\n")?);
+        assert!(!grows_("Base:\tA:\ncreate A\tgrow 0\n")?);
+        let p = parse_program("Base:\ncreate Base\n", "t")?;
+        let e = Growth::new(&p, GrowthOptions::default(), 1).err();
+        assert!(
+            e.is_some_and(|e| e.to_string().contains("no bud type that Base can lead to")),
+            "refused up front"
+        );
+        Ok(())
+    }
 }
