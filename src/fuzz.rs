@@ -152,10 +152,7 @@ pub const TARGETS: &[Target] = &[
     Target {
         name: "json_network",
         ext: "json",
-        seeds: &[
-            "fixtures/networks/small_loop.json",
-            "fuzz/corpus/network",
-        ],
+        seeds: &["fixtures/networks/small_loop.json", "fuzz/corpus/network"],
         run: network,
     },
     Target {

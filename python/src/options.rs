@@ -320,6 +320,8 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "name",
             "keep_position",
             "scale",
+            "weld",
+            "weld_rel",
         ],
         "print" => &[
             "printer",
@@ -981,6 +983,17 @@ pub fn slice(o: &mut Opts) -> PyResult<stage::slice::Options> {
         keep_position: o.bool("keep_position")?,
         units: None,
         scale: o.f64("scale")?,
+        weld: match (o.f64("weld")?, o.f64("weld_rel")?) {
+            (Some(_), Some(_)) => {
+                return Err(crate::error(
+                    "weld and weld_rel: give one (a distance in mm, or a fraction of the diagonal)"
+                        .into(),
+                ))
+            }
+            (Some(mm), None) => Some(lamina::network::Weld::Absolute(mm)),
+            (None, Some(f)) => Some(lamina::network::Weld::Relative(f)),
+            (None, None) => None,
+        },
     })
 }
 

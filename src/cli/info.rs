@@ -152,9 +152,25 @@ fn human(s: &Value) -> String {
             ),
         );
         line(&mut out, "components", t["components"].to_string());
-        line(&mut out, "genus", t["genus"].to_string());
+        line(
+            &mut out,
+            "genus",
+            match t["genus"].as_i64() {
+                Some(g) => g.to_string(),
+                None => "none: not a 2-manifold (see problems)".into(),
+            },
+        );
         if let Some(b) = s["import"]["bodies"].as_u64() {
             line(&mut out, "bodies (solids)", b.to_string());
+        }
+        let not_read: Vec<&str> = s["import"]["not_read"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|v| v.as_str())
+            .collect();
+        if !not_read.is_empty() {
+            line(&mut out, "not read", not_read.join(", "));
         }
         let w = &s["import"]["weld"];
         if w.is_object() {

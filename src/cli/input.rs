@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 
 use lamina::files::extension;
-use lamina::mesh::io::{read_mesh, stl_bodies};
+use lamina::mesh::io::{read_mesh_noted, stl_bodies};
 use lamina::mesh::MeshWeld;
 use lamina::network::arrangement::split_crossings;
 use lamina::network::io::units::LengthUnit;
@@ -239,13 +239,17 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
                 path.display()
             );
         }
-        let mut mesh = read_mesh(path)?;
+        let (mut mesh, not_read) = read_mesh_noted(path)?;
+        if !quiet {
+            say_not_read(path, &not_read);
+        }
         let weld = match (args.weld, args.weld_rel) {
             (None, None) => None,
             _ => Some(weld_mesh(path, &mut mesh, opts.weld, quiet)),
         };
         let notes = MeshNotes {
             bodies: stl_bodies(path),
+            not_read,
             weld,
         };
         Loaded::Mesh(mesh, notes)
@@ -259,6 +263,24 @@ pub fn load(path: &Path, args: &ReadArgs, quiet: bool) -> Result<Loaded> {
         args.split(path, &mut imported, quiet)?;
         Loaded::Network(Box::new(imported))
     })
+}
+
+/// Reads a mesh and says on stderr what it left unread.
+pub fn mesh_file(path: &Path) -> Result<TriMesh> {
+    let (mesh, not_read) = read_mesh_noted(path)?;
+    say_not_read(path, &not_read);
+    Ok(mesh)
+}
+
+/// One line on stderr for what a mesh file held that was not read.
+pub fn say_not_read(path: &Path, not_read: &[String]) {
+    if !not_read.is_empty() {
+        errln!(
+            "lamina: {}: not read as the mesh: {}",
+            path.display(),
+            not_read.join(", ")
+        );
+    }
 }
 
 /// Welds a mesh read from `path` and says what it joined (unless `quiet`).

@@ -10,7 +10,6 @@ use glam::DVec3;
 use serde_json::json;
 
 use lamina::files::write_atomic;
-use lamina::mesh::io::read_mesh;
 use lamina::rationalize::audit::read_panels;
 use lamina::rationalize::axes::{write_axes, write_panels_obj};
 use lamina::rationalize::planarize::{Method, Selector};
@@ -175,7 +174,7 @@ pub fn execute(args: &Args) -> Result<planarize::Planarized> {
 /// A guide surface, if given, with its path in any error.
 pub fn read_surface(path: Option<&Path>) -> Result<Option<TriMesh>> {
     let Some(path) = path else { return Ok(None) };
-    let mesh = read_mesh(path)?;
+    let mesh = super::input::mesh_file(path)?;
     if mesh.triangles.is_empty() {
         bail!("--surface {}: has no triangles", path.display());
     }

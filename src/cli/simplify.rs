@@ -7,7 +7,6 @@ use anyhow::{bail, Result};
 use clap::Args as ClapArgs;
 
 use lamina::files::write_atomic;
-use lamina::mesh::io::read_mesh;
 use lamina::network::io::{write_network, NetworkFormat, RenderOptions};
 use lamina::stage::simplify::{self, Figures, Report, Simplified};
 
@@ -69,7 +68,11 @@ pub fn execute(args: &Args) -> Result<(Simplified, Vec<String>)> {
         min_angle: args.min_angle,
         prune_order: args.prune_order,
     };
-    let surface = args.surface.as_ref().map(|p| read_mesh(p)).transpose()?;
+    let surface = args
+        .surface
+        .as_ref()
+        .map(|p| super::input::mesh_file(p))
+        .transpose()?;
     let done = simplify::run(&imported.network, surface.as_ref(), &opts).map_err(|e| match e {
         simplify::Error::EmptySurface => anyhow::anyhow!(
             "--surface {}: has no triangles",

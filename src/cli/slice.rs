@@ -35,6 +35,8 @@ pub struct Args {
     /// The unit the models are in (mm, cm, m, in, ft): taken to mm before slicing [default: mm]
     #[arg(long, value_name = "UNIT")]
     pub units: Option<String>,
+    #[command(flatten)]
+    pub weld: super::surface::SurfaceWeld,
 }
 
 /// The printer, the plate and the report: what `slice` and `print` share.
@@ -241,9 +243,11 @@ pub fn run(args: Args) -> Result<()> {
         .models
         .iter()
         .map(|path| {
+            let (mesh, not_read) = read_triangles(path)?;
+            super::input::say_not_read(path, &not_read);
             Ok(Model {
                 path: path.clone(),
-                mesh: read_triangles(path)?,
+                mesh,
             })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -253,6 +257,7 @@ pub fn run(args: Args) -> Result<()> {
         keep_position: args.keep_position,
         units: units(&args)?,
         scale: args.scale,
+        weld: args.weld.weld()?,
     };
     let sliced = write_job(
         &args.output,

@@ -15,7 +15,7 @@ use lamina::files::extension;
 use lamina::grow::frames::surface_strokes;
 use lamina::grow::surface::Root;
 use lamina::grow::venation::Frame;
-use lamina::mesh::io::{network_strokes, read_mesh, render_png_bytes_with, write_png_with_strokes};
+use lamina::mesh::io::{network_strokes, render_png_bytes_with, write_png_with_strokes};
 use lamina::network::io::{write_network, RenderOptions};
 use lamina::network::{Network, Weld};
 use lamina::stage::venation::{self, Frames};
@@ -51,7 +51,7 @@ pub fn parse_root(s: &str) -> Result<Root> {
 /// query can use.
 pub fn read_surface(path: &Path, weld: &SurfaceWeld) -> Result<TriMesh> {
     let tolerance = weld.weld()?;
-    let mut mesh = read_mesh(path)?;
+    let mut mesh = super::input::mesh_file(path)?;
     if let Some(w) = tolerance {
         weld_mesh(path, &mut mesh, w, false);
     }

@@ -33,6 +33,14 @@ pub enum MeshProblem {
         a: u32,
         b: u32,
     },
+    /// A vertex where separate fans of triangles meet at one point (two bodies touching at a
+    /// corner, a cone pinched to a point): the surface is not a manifold there.
+    PinchedVertex {
+        vertex: u32,
+        /// Fans of triangles (groups joined across edges at the vertex) that meet there.
+        fans: usize,
+        at: [f64; 3],
+    },
 }
 
 impl fmt::Display for MeshProblem {
@@ -59,6 +67,12 @@ impl fmt::Display for MeshProblem {
                 f,
                 "edge {a}-{b}: its two triangles are oriented inconsistently"
             ),
+            MeshProblem::PinchedVertex { vertex, fans, at } => write!(
+                f,
+                "vertex {vertex} at ({:.4}, {:.4}, {:.4}): {fans} fans of triangles meet only \
+                 at this point (pinched: not a manifold)",
+                at[0], at[1], at[2]
+            ),
         }
     }
 }
@@ -74,7 +88,8 @@ pub struct Topology {
     pub components: usize,
     /// V − E + F.
     pub euler: i64,
-    /// Every edge has exactly two triangles, consistently oriented.
+    /// Every edge has exactly two triangles, consistently oriented (bodies touching at a
+    /// pinched vertex included).
     pub closed: bool,
     /// Sum over components of (2 − χ − b) / 2; `None` unless the mesh is an oriented manifold.
     pub genus: Option<i64>,
@@ -176,6 +191,16 @@ impl TriMesh {
             }
             s = e;
         }
+        // Every edge with two triangles, consistently turned: closed, with a volume, even where
+        // bodies touch at a point; a genus only for a manifold, pinches included.
+        let edge_manifold = problems.is_empty();
+        problems.extend(pinched(&good, nv).into_iter().map(|(vertex, fans)| {
+            MeshProblem::PinchedVertex {
+                vertex,
+                fans,
+                at: self.positions[vertex as usize].to_array(),
+            }
+        }));
         let vertices = used.iter().filter(|&&u| u).count();
         // Per component root: (V − E + F, boundary loops).
         let mut comp_euler: BTreeMap<u32, (i64, i64)> = BTreeMap::new();
@@ -210,7 +235,7 @@ impl TriMesh {
         }
         let euler = vertices as i64 - edge_count as i64 + good.len() as i64;
         let manifold = problems.is_empty();
-        let closed = manifold && boundary_edges == 0 && !good.is_empty();
+        let closed = edge_manifold && boundary_edges == 0 && !good.is_empty();
         let genus = manifold.then(|| {
             comp_euler
                 .values()
@@ -246,6 +271,62 @@ impl TriMesh {
             problems,
         }
     }
+}
+
+/// Vertices where the triangles around them fall into more than one fan (groups of triangles
+/// joined across the edges that meet at the vertex), with the number of fans, in vertex order.
+/// Each vertex's triangles are grouped on their own, in parallel: O(F log d) for degree d.
+fn pinched(triangles: &[[u32; 3]], nv: usize) -> Vec<(u32, usize)> {
+    // The triangles at each vertex (CSR).
+    let mut start = vec![0u32; nv + 1];
+    for t in triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut at = vec![0u32; 3 * triangles.len()];
+    for (k, t) in triangles.iter().enumerate() {
+        for &v in t {
+            at[fill[v as usize] as usize] = k as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    drop(fill);
+    (0..nv as u32)
+        .into_par_iter()
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(ends, parent): &mut (Vec<(u32, u32)>, Vec<u32>), v| {
+                let around = &at[start[v as usize] as usize..start[v as usize + 1] as usize];
+                if around.len() < 2 {
+                    return None;
+                }
+                // Each triangle's two other corners: triangles sharing one share an edge at v.
+                ends.clear();
+                for (i, &k) in around.iter().enumerate() {
+                    let t = triangles[k as usize];
+                    ends.extend(t.iter().filter(|&&w| w != v).map(|&w| (w, i as u32)));
+                }
+                ends.sort_unstable();
+                parent.clear();
+                parent.extend(0..around.len() as u32);
+                for pair in ends.windows(2) {
+                    if pair[0].0 == pair[1].0 {
+                        union(parent, pair[0].1, pair[1].1);
+                    }
+                }
+                let fans = (0..around.len() as u32)
+                    .filter(|&i| find(parent, i) == i)
+                    .count();
+                (fans > 1).then_some((v, fans))
+            },
+        )
+        .flatten()
+        .collect()
 }
 
 /// Union-find over vertex indices: the root of `v`, halving the path on the way.
@@ -287,6 +368,47 @@ mod tests {
         assert_eq!(t.genus, Some(0));
         assert!(t.closed);
         assert!((t.volume.unwrap_or(0.0) - 1.0 / 6.0).abs() < 1e-12);
+    }
+
+    /// Two tetrahedra sharing one vertex (χ = 3): every edge has two triangles (closed, with a
+    /// volume), but the shared vertex is pinched, so no genus is claimed.
+    #[test]
+    fn two_tetrahedra_touching_at_a_corner_are_pinched() {
+        let mut m = tetra();
+        // The first one mirrored through the origin (vertex 0): 4, 5, 6 at −X, −Y, −Z.
+        m.positions.extend([-DVec3::X, -DVec3::Y, -DVec3::Z]);
+        m.triangles
+            .extend([[0, 4, 5], [0, 6, 4], [4, 6, 5], [0, 5, 6]]);
+        let t = m.check_manifold();
+        assert_eq!(t.euler, 3);
+        assert_eq!(t.boundary_edges, 0);
+        assert_eq!(
+            t.problems,
+            vec![MeshProblem::PinchedVertex {
+                vertex: 0,
+                fans: 2,
+                at: [0.0; 3]
+            }]
+        );
+        assert_eq!(t.genus, None);
+        assert!(t.closed, "every edge has its two triangles");
+        assert!((t.volume.unwrap_or(0.0) - 2.0 / 6.0).abs() < 1e-12);
+        // One tetrahedron alone has no pinch, and a bow-tie of two triangles does.
+        assert!(tetra().check_manifold().problems.is_empty());
+        let bowtie = TriMesh {
+            positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y, -DVec3::X, -DVec3::Y],
+            triangles: vec![[0, 1, 2], [0, 3, 4]],
+            colors: None,
+        };
+        let t = bowtie.check_manifold();
+        assert!(matches!(
+            t.problems[..],
+            [MeshProblem::PinchedVertex {
+                vertex: 0,
+                fans: 2,
+                ..
+            }]
+        ));
     }
 
     #[test]

@@ -194,6 +194,9 @@ pub struct Topology {
 pub struct MeshImport {
     /// `solid` blocks of an ASCII STL.
     pub bodies: Option<usize>,
+    /// What the file held that is not read as the mesh (`l` records, bytes after a binary
+    /// STL's triangles), one phrase each.
+    pub not_read: Vec<String>,
     /// What welding near corners did, when asked.
     pub weld: Option<MeshWeld>,
 }

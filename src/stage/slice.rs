@@ -184,6 +184,9 @@ pub struct Options {
     pub units: Option<crate::network::io::units::LengthUnit>,
     /// Every model is scaled by this after `units`. Default 1.
     pub scale: Option<f64>,
+    /// Weld each model's corners within this before slicing (CAD STLs whose shared corners
+    /// differ in the last bits). Default none: only equal corners are one point.
+    pub weld: Option<crate::network::Weld>,
 }
 
 /// A sliced job: print.json and the estimate (the archive went to the writer).
@@ -300,11 +303,52 @@ pub fn run(
         )
         .into());
     }
+    if let Some(w) = opts.weld {
+        let (t, field) = match w {
+            crate::network::Weld::Absolute(t) => (t, "weld"),
+            crate::network::Weld::Relative(t) => (t, "weld_rel"),
+        };
+        if !(t.is_finite() && t >= 0.0) || (field == "weld_rel" && t > 0.5) {
+            return Err(OptionError::new(
+                field,
+                format!(
+                    "must be a finite tolerance ≥ 0 (a fraction at most 0.5), got {}",
+                    crate::text::num(t)
+                ),
+            )
+            .into());
+        }
+    }
     let scale = scale * opts.units.map_or(1.0, |u| u.mm());
     let mut notes = Vec::new();
     let mut scaled = Vec::with_capacity(models.len());
     for m in models {
         let mut mesh = m.mesh.clone();
+        if let Some(weld) = opts.weld {
+            let w = mesh.weld(weld.tolerance_for(&mesh.bbox()));
+            notes.push(format!(
+                "{}: welded {} corners within {} mm, {} triangles collapsed and dropped",
+                m.path.display(),
+                w.merged,
+                crate::text::num(w.tolerance),
+                w.collapsed_triangles
+            ));
+        }
+        // Triangles with two corners at one point (−0 and 0 are one value) bound nothing and
+        // would leave their edges unmatched: dropped, and said.
+        let before = mesh.triangles.len();
+        let positions = &mesh.positions;
+        mesh.triangles.retain(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            a != b && b != c && a != c
+        });
+        let dropped = before - mesh.triangles.len();
+        if dropped > 0 {
+            notes.push(format!(
+                "{}: {dropped} triangles with two corners at one point dropped",
+                m.path.display()
+            ));
+        }
         if scale != 1.0 {
             for p in &mut mesh.positions {
                 *p *= scale;

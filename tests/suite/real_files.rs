@@ -394,3 +394,80 @@ fn an_obj_with_faces_and_loose_edges_is_read_as_its_polylines() -> TestResult {
     assert!(stderr(&o).contains("a mesh"), "{}", stderr(&o));
     Ok(())
 }
+
+#[test]
+fn a_binary_stl_with_a_solid_header_and_a_stray_byte_is_read_as_binary() -> TestResult {
+    // numpy-stl style: "solid" in the 80-byte header, one byte after the 12 triangles.
+    let v = info(&[&path("surfaces/solid_header_trailing.stl")?])?;
+    assert_eq!(v["triangles"], 12);
+    assert_eq!(v["topology"]["closed"], true);
+    assert_eq!(v["topology"]["genus"], 0);
+    assert_eq!(
+        v["import"]["not_read"],
+        serde_json::json!(["1 byte(s) after the binary STL's 12 triangles"])
+    );
+    Ok(())
+}
+
+#[test]
+fn slice_drops_triangles_that_collapse_when_minus_zero_is_zero() -> TestResult {
+    // A closed cube and 200 slivers whose corners differ only in the sign of zero: sliced,
+    // with the slivers dropped and counted; --weld joins near corners as info's does.
+    let stl = path("surfaces/signed_zero_slivers.stl")?;
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("z.sl1");
+    let out = out.to_str().ok_or("path")?;
+    let small = ["--layer", "1", "--pixel", "0.1", "--resolution", "400x300"];
+    let slice = |file: &str, more: &[&str]| {
+        let mut args = vec!["slice", file, "-o", out];
+        args.extend_from_slice(&small);
+        args.extend_from_slice(more);
+        lamina(&args)
+    };
+    let o = slice(&stl, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("200 triangles with two corners at one point dropped"),
+        "{}",
+        stderr(&o)
+    );
+    let o = slice(&stl, &["--weld", "0.001"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("200 triangles collapsed and dropped"),
+        "{}",
+        stderr(&o)
+    );
+    let o = slice(&stl, &["--weld=-1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--weld"), "{}", stderr(&o));
+    // An OBJ of faces and loose edges read as a mesh names the edges it leaves out.
+    let obj = path("networks/blender_loose_edges.obj")?;
+    let o = slice(&obj, &[]);
+    assert!(
+        stderr(&o).contains("not read as the mesh: 3 l (polylines)"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}
+
+#[test]
+fn bodies_touching_at_a_corner_are_closed_but_claim_no_genus() -> TestResult {
+    // trimesh: two cubes sharing the corner (10, 10, 10), vertices merged: V − E + F = 3, every
+    // edge with two triangles, and a pinched vertex reported with its position.
+    let v = info(&[&path("surfaces/touching_cubes.stl")?])?;
+    let t = &v["topology"];
+    assert_eq!(t["euler"], 3);
+    assert_eq!(t["closed"], true);
+    assert_eq!(t["genus"], Value::Null);
+    assert!(close(&t["volume"], 2000.0, 1e-9), "{t}");
+    let problems = v["problems"].as_array().ok_or("problems")?;
+    assert_eq!(problems.len(), 1, "{problems:?}");
+    let p = problems[0].as_str().ok_or("problem text")?;
+    assert!(
+        p.contains("at (10.0000, 10.0000, 10.0000): 2 fans of triangles meet only at this point"),
+        "{p}"
+    );
+    Ok(())
+}

@@ -47,23 +47,40 @@ pub fn stl_bodies(path: &Path) -> Option<usize> {
 /// Reads a mesh, choosing the format by extension. The result has in-range indices and finite
 /// coordinates; whether it is a manifold is for `check_manifold` to say.
 pub fn read_mesh(path: &Path) -> Result<TriMesh, ReadError> {
+    read_with(path, stl::read).map(|(mesh, _)| mesh)
+}
+
+/// Like `read_mesh`, with what the file held that was not read, one phrase each ("2 l
+/// (polylines)", "1 byte after the binary STL's 12 triangles"), for the caller to say.
+pub fn read_mesh_noted(path: &Path) -> Result<(TriMesh, Vec<String>), ReadError> {
     read_with(path, stl::read)
 }
 
-/// Like `read_mesh`, but a binary STL's corners are not welded: three vertices per triangle,
-/// in file order. For callers that only need the triangles (the slicer): reading is then
-/// little more than parsing.
-pub fn read_triangles(path: &Path) -> Result<TriMesh, ReadError> {
+/// Like `read_mesh_noted`, but a binary STL's corners are not welded: three vertices per
+/// triangle, in file order. For callers that only need the triangles (the slicer): reading is
+/// then little more than parsing.
+pub fn read_triangles(path: &Path) -> Result<(TriMesh, Vec<String>), ReadError> {
     read_with(path, stl::read_soup)
 }
 
 fn read_with(
     path: &Path,
     read_stl: fn(&Path) -> Result<TriMesh, ReadError>,
-) -> Result<TriMesh, ReadError> {
+) -> Result<(TriMesh, Vec<String>), ReadError> {
+    let mut not_read = Vec::new();
     let mesh = match MeshFormat::from_path(path) {
-        Some(MeshFormat::Obj) => obj::read(path)?,
-        Some(MeshFormat::Stl) => read_stl(path)?,
+        Some(MeshFormat::Obj) => {
+            let (mesh, skipped) = obj::read_noted(path)?;
+            not_read.extend(skipped.iter().map(|(what, n)| format!("{n} {what}")));
+            mesh
+        }
+        Some(MeshFormat::Stl) => {
+            let mesh = read_stl(path)?;
+            if let Some((n, t)) = stl::trailing_bytes(path) {
+                not_read.push(format!("{t} byte(s) after the binary STL's {n} triangles"));
+            }
+            mesh
+        }
         _ => {
             return Err(ReadError::file(
                 path,
@@ -88,7 +105,7 @@ fn read_with(
             "colour is not finite",
         ));
     }
-    Ok(mesh)
+    Ok((mesh, not_read))
 }
 
 /// Writes a mesh, choosing the format by extension (`size` is the PNG render's longer side).

@@ -13,8 +13,25 @@ use glam::DVec3;
 use crate::files::{read_nonempty, utf8_text, write_atomic, ReadError, WriteError};
 use crate::mesh::TriMesh;
 
-pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
+/// Records a mesh does not use, counted by kind ("l (polylines)", 3).
+pub type Skipped = Vec<(&'static str, usize)>;
+
+/// The mesh, and the records a mesh does not use that the file holds (`l` polylines, `p`
+/// points).
+pub fn read_noted(path: &Path) -> Result<(TriMesh, Skipped), ReadError> {
     let text = prepare(&utf8_text(path, read_nonempty(path)?)?);
+    let (mut lines, mut points) = (0, 0);
+    for l in text.lines() {
+        match l.split_whitespace().next() {
+            Some("l") => lines += 1,
+            Some("p") => points += 1,
+            _ => {}
+        }
+    }
+    let skipped: Skipped = [("l (polylines)", lines), ("p (points)", points)]
+        .into_iter()
+        .filter(|&(_, n)| n > 0)
+        .collect();
     // tobj drops a face of fewer than three corners without a word.
     if let Some(line) = text.lines().position(|l| {
         let mut w = l.split_whitespace();
@@ -72,7 +89,7 @@ pub fn read(path: &Path) -> Result<TriMesh, ReadError> {
     if with_colors {
         mesh.colors = Some(colors);
     }
-    Ok(mesh)
+    Ok((mesh, skipped))
 }
 
 /// The text with `\` continuations joined onto their first line (the lines they took left

@@ -1,5 +1,6 @@
-//! STL through stl_io. Binary is recognised by its size (84 + 50 × triangle count bytes), since
-//! some binary files also start with "solid"; ASCII otherwise. Written as binary.
+//! STL through stl_io. Binary is recognised by its size (84 + 50 × triangle count bytes, a
+//! stray byte or a few after the triangles tolerated), since some binary files also start with
+//! "solid"; ASCII otherwise. Written as binary.
 
 use std::path::Path;
 
@@ -23,11 +24,14 @@ pub fn read_soup(path: &Path) -> Result<TriMesh, ReadError> {
 fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
     let bytes = read_nonempty(path)?;
     let len = bytes.len() as u64;
-    let is_binary = len >= 84 && {
-        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
-        84 + 50 * n == len
-    };
-    if !is_binary && !bytes.starts_with(b"solid") {
+    if binary_layout(&bytes[..bytes.len().min(HEAD)], len).is_some() {
+        return Ok(if weld {
+            read_binary(&bytes)
+        } else {
+            soup(&bytes)
+        });
+    }
+    if !bytes.starts_with(b"solid") {
         let detail = if len >= 84 {
             let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
             format!(
@@ -43,14 +47,38 @@ fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
             format!("not an STL file: no ASCII \"solid\" start, and {detail}"),
         ));
     }
-    if is_binary {
-        return Ok(if weld {
-            read_binary(&bytes)
-        } else {
-            soup(&bytes)
-        });
-    }
     read_ascii(path, &bytes)
+}
+
+/// Bytes of a file's start that decide its layout: the 84-byte header and 1 KiB after it.
+const HEAD: usize = 84 + 1024;
+
+/// Whether a file of `len` bytes starting with `head` (its first [`HEAD`] bytes, or all of
+/// it) is a binary STL, by size arithmetic before any "solid" prefix (numpy-stl and others
+/// write "solid" into a binary header): the triangle count and the bytes after the
+/// triangles. 84 + 50 n bytes exactly is binary; up to 49 bytes more (less than a record) are
+/// tolerated unless the file reads as ASCII STL (starts with "solid" and has no NUL byte,
+/// where a binary file's attribute words are almost always 0).
+fn binary_layout(head: &[u8], len: u64) -> Option<(u64, u64)> {
+    let count = head.get(80..84)?;
+    let n = u32::from_le_bytes([count[0], count[1], count[2], count[3]]) as u64;
+    let trailing = len.checked_sub(84 + 50 * n)?;
+    if trailing == 0 {
+        return Some((n, 0));
+    }
+    let text = head.starts_with(b"solid") && !head[84..].contains(&0);
+    (n > 0 && trailing < 50 && !text).then_some((n, trailing))
+}
+
+/// Bytes after a binary STL's triangles, left unread (a writer's padding or stray byte); `None`
+/// when there are none, or the file is not a binary STL or cannot be read.
+pub fn trailing_bytes(path: &Path) -> Option<(u64, u64)> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).ok()?;
+    let len = file.metadata().ok()?.len();
+    let mut head = Vec::with_capacity(HEAD);
+    file.take(HEAD as u64).read_to_end(&mut head).ok()?;
+    binary_layout(&head, len).filter(|&(_, t)| t > 0)
 }
 
 /// An ASCII STL: every `solid … endsolid` block (CAD programs write one per body), corners at
@@ -123,8 +151,7 @@ pub fn ascii_solids(bytes: &[u8]) -> Option<usize> {
     if !bytes.starts_with(b"solid") {
         return None;
     }
-    let n = u32::from_le_bytes(bytes.get(80..84)?.try_into().ok()?) as u64;
-    if bytes.len() as u64 == 84 + 50 * n {
+    if binary_layout(&bytes[..bytes.len().min(HEAD)], bytes.len() as u64).is_some() {
         return None;
     }
     let text = String::from_utf8_lossy(bytes);
