@@ -111,6 +111,7 @@ pub const TARGETS: &[Target] = &[
             "fixtures/networks/ezdxf_crossings.dxf",
             "fixtures/networks/ezdxf_round_holes.dxf",
             "fixtures/networks/ezdxf_overlaps.dxf",
+            "fixtures/networks/ezdxf_unread_entities.dxf",
             "fixtures/outlines/oak.dxf",
             "fixtures/fuzz/P7_dxf_julian_date/in.dxf",
         ],
@@ -170,7 +171,10 @@ pub const TARGETS: &[Target] = &[
     Target {
         name: "panels_dxf",
         ext: "dxf",
-        seeds: &["fixtures/panels/ezdxf_panels.dxf"],
+        seeds: &[
+            "fixtures/panels/ezdxf_panels.dxf",
+            "fixtures/panels/ezdxf_polyface_block.dxf",
+        ],
         run: panels,
     },
     Target {

@@ -35,6 +35,11 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ),
     ("inf_colour.obj", &["vertex 0", "colour is not finite"]),
     ("unsupported_only.dxf", &["no LINE", "2 3DFACE", "1 TEXT"]),
+    ("hatch_only.dxf", &["no LINE", "found: 1 HATCH"]),
+    (
+        "faces_only.dxf",
+        &["found: 2 3DFACE", "a mesh of faces", "`lamina audit` reads"],
+    ),
     (
         "block_cycle.dxf",
         &["entity 0 (INSERT", "block \"LOOP\" inserts itself"],

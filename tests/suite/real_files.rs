@@ -471,3 +471,46 @@ fn bodies_touching_at_a_corner_are_closed_but_claim_no_genus() -> TestResult {
     );
     Ok(())
 }
+
+#[test]
+fn entities_the_parser_drops_are_named_and_refused_under_strict() -> TestResult {
+    // ezdxf: a LINE, a HATCH, a MULTILEADER, three DIMENSIONs and a block holding a LINE and a
+    // HATCH, inserted once. The dxf crate drops HATCH and MULTILEADER without a trace; the
+    // file's own records are counted so each one is named.
+    let dxf = path("networks/ezdxf_unread_entities.dxf")?;
+    let v = info(&[&dxf])?;
+    let skipped = &v["import"]["skipped"];
+    assert_eq!(skipped["HATCH"], 1, "{skipped}");
+    assert_eq!(skipped["MULTILEADER"], 1, "{skipped}");
+    assert_eq!(skipped["DIMENSION"], 3, "{skipped}");
+    assert_eq!(skipped["HATCH (in block definitions)"], 1, "{skipped}");
+    assert_eq!(v["edges"], 2);
+    let o = lamina(&["info", "--strict", &dxf]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("1 HATCH") && stderr(&o).contains("1 MULTILEADER"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}
+
+#[test]
+fn audit_expands_blocks_of_panels() -> TestResult {
+    // A polyface of two quads (one with a corner 2 mm off) in a block inserted twice: four
+    // panels, two of them warped, named through their INSERT.
+    let dxf = path("panels/ezdxf_polyface_block.dxf")?;
+    let o = lamina(&["audit", &dxf, "--tolerance", "0.1", "--json"]);
+    // Exit 1: panels above the tolerance.
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout)?;
+    assert_eq!(v["panels"], 4, "{v}");
+    assert_eq!(v["above_tolerance"], 2, "{v}");
+    assert!(close(&v["max_corner"], 2.0, 1e-12), "{v}");
+    assert!(
+        stderr(&o).contains("2 block insertions expanded"),
+        "{}",
+        stderr(&o)
+    );
+    Ok(())
+}

@@ -6,7 +6,7 @@
 //! edge, one LWPOLYLINE per chain that lies at one height, one 3D POLYLINE per other chain, one
 //! POINT per isolated node.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use dxf::entities::{Entity, EntityType, Line, LwPolyline, ModelPoint, Polyline, Vertex};
@@ -15,10 +15,10 @@ use dxf::tables::Layer;
 use dxf::{Drawing, DxfError, LwPolylineVertex, Point};
 use glam::DVec3;
 
-pub(crate) use super::dxf_entities::type_name;
 use super::dxf_entities::{
     collect, default_max_points, from_ocs, ocs_axes, Collected, Context, MAX_POINTS,
 };
+pub(crate) use super::dxf_entities::{placements, type_name};
 use super::dxf_split::Part;
 use super::units::{dxf_units, scale_to_mm};
 use super::{Imported, ReadOptions};
@@ -55,12 +55,14 @@ pub(super) fn read_bytes(
         .unwrap_or_else(|| default_max_points(bytes.len()))
         .min(MAX_POINTS);
     let tol = opts.chord_tolerance / units.scale_to_mm;
-    let pieces = parse_and_collect(path, &parts, tol, budget)?;
+    let (pieces, block_parsed) = parse_and_collect(path, &parts, tol, budget)?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
     let mut inserts = 0;
     let mut base = 0usize;
+    let mut parsed: BTreeMap<String, usize> = BTreeMap::new();
+    let mut expanded: BTreeSet<String> = BTreeSet::new();
     let total: usize = pieces.iter().map(|p| p.points.len()).sum();
     if pieces.iter().any(|p| p.over_budget) || total > budget {
         return Err(ReadError::file(
@@ -99,11 +101,33 @@ pub(super) fn read_bytes(
         }
         inserts += piece.inserts;
         base += piece.entities;
+        for (k, n) in piece.parsed {
+            *parsed.entry(k).or_default() += n;
+        }
+        expanded.extend(piece.expanded);
     }
-    // Entities the dxf crate drops without a trace: counted from the text itself.
-    let meshes = mesh_entity_count(bytes);
-    if meshes > 0 {
-        *skipped.entry("MESH".into()).or_default() += meshes;
+    // Entities the dxf crate drops without a trace (HATCH, MULTILEADER, MESH, ARC_DIMENSION,
+    // some DIMENSION subtypes…): the file's own count of each name, less what was parsed, in
+    // model space and in the blocks the drawing inserts.
+    let census = entity_census(bytes);
+    for (name, n) in &census.model {
+        let dropped = n.saturating_sub(parsed.get(name).copied().unwrap_or(0));
+        if dropped > 0 {
+            *skipped.entry(name.clone()).or_default() += dropped;
+        }
+    }
+    for block in &expanded {
+        let (Some(held), Some(read)) = (census.blocks.get(block), block_parsed.get(block)) else {
+            continue;
+        };
+        for (name, n) in held {
+            let dropped = n.saturating_sub(read.get(name).copied().unwrap_or(0));
+            if dropped > 0 {
+                *skipped
+                    .entry(format!("{name} (in block definitions)"))
+                    .or_default() += dropped;
+            }
+        }
     }
     if points.is_empty() {
         let found = if skipped.is_empty() {
@@ -115,11 +139,18 @@ pub(super) fn read_bytes(
                 .collect::<Vec<_>>()
                 .join(", ")
         };
+        let faces = ["3DFACE", "POLYLINE (mesh)", "MESH"];
+        let only_faces = !skipped.is_empty() && skipped.keys().all(|k| faces.contains(&k.as_str()));
+        let hint = if only_faces {
+            ": it is a mesh of faces, not a network of lines; `lamina audit` reads its panels"
+        } else {
+            ""
+        };
         return Err(ReadError::file(
             path,
             format!(
                 "no LINE, POLYLINE, ARC, CIRCLE, ELLIPSE, SPLINE, POINT or block geometry in \
-                 model space to read (found: {found})"
+                 model space to read (found: {found}){hint}"
             ),
         ));
     }
@@ -143,29 +174,77 @@ pub(super) fn read_bytes(
     })
 }
 
-/// How many MESH entities (AcDbSubDMesh) the ENTITIES section of an ASCII DXF holds: the
-/// `dxf` crate skips them unread. Only files that name the class are scanned.
-pub(crate) fn mesh_entity_count(bytes: &[u8]) -> usize {
-    if memchr::memmem::find(bytes, b"AcDbSubDMesh").is_none() {
-        return 0;
+/// Entity names (group code 0) in the ENTITIES section of an ASCII DXF, counted, and in each
+/// block definition of the BLOCKS section: what the file holds, whatever the parser reads.
+/// Lines are split on `\n` with surrounding whitespace (and `\r`) trimmed.
+pub(crate) struct EntityCensus {
+    pub model: BTreeMap<String, usize>,
+    /// Per block name (upper case): its entities' names, counted.
+    pub blocks: BTreeMap<String, BTreeMap<String, usize>>,
+}
+
+pub(crate) fn entity_census(bytes: &[u8]) -> EntityCensus {
+    let mut census = EntityCensus {
+        model: BTreeMap::new(),
+        blocks: BTreeMap::new(),
+    };
+    let mut lines = bytes.split(|&b| b == b'\n').map(|l| l.trim_ascii());
+    #[derive(PartialEq)]
+    enum At {
+        Other,
+        Entities,
+        Blocks,
     }
-    let text = String::from_utf8_lossy(bytes);
-    let mut lines = text.lines();
-    let (mut in_entities, mut after_section, mut count) = (false, false, 0);
+    let mut at = At::Other;
+    let mut after_section = false;
+    // Inside BLOCKS: the block being defined, and whether its name (code 2) is still to come.
+    let mut block: Option<String> = None;
+    let mut naming = false;
     while let (Some(code), Some(value)) = (lines.next(), lines.next()) {
-        let (code, value) = (code.trim(), value.trim());
-        match (code, value) {
-            ("0", "SECTION") => after_section = true,
-            ("0", "ENDSEC") => in_entities = false,
-            ("2", name) if after_section => {
-                in_entities = name == "ENTITIES";
-                after_section = false;
+        if code == b"0" {
+            after_section = value == b"SECTION";
+            match value {
+                b"ENDSEC" => at = At::Other,
+                b"BLOCK" if at == At::Blocks => {
+                    naming = true;
+                    block = None;
+                }
+                b"ENDBLK" if at == At::Blocks => block = None,
+                // Records that belong to the entity before them, as the parser folds them.
+                b"VERTEX" | b"SEQEND" | b"ATTRIB" => {}
+                name => {
+                    let name = String::from_utf8_lossy(name).into_owned();
+                    match at {
+                        At::Entities => *census.model.entry(name).or_default() += 1,
+                        At::Blocks => {
+                            if let Some(b) = &block {
+                                *census
+                                    .blocks
+                                    .entry(b.clone())
+                                    .or_default()
+                                    .entry(name)
+                                    .or_default() += 1;
+                            }
+                        }
+                        At::Other => {}
+                    }
+                }
             }
-            ("0", "MESH") if in_entities => count += 1,
-            _ => after_section = false,
+        } else if code == b"2" {
+            if after_section {
+                at = match value {
+                    b"ENTITIES" => At::Entities,
+                    b"BLOCKS" => At::Blocks,
+                    _ => At::Other,
+                };
+                after_section = false;
+            } else if naming {
+                block = Some(String::from_utf8_lossy(value).to_ascii_uppercase());
+                naming = false;
+            }
         }
     }
-    count
+    census
 }
 
 /// Parses the first part (the header and the blocks: the whole file, or its skeleton), then
@@ -177,7 +256,7 @@ fn parse_and_collect(
     parts: &[Part],
     chord_tolerance: f64,
     budget: usize,
-) -> Result<Vec<Collected>, ReadError> {
+) -> Result<(Vec<Collected>, BlockCounts), ReadError> {
     let first = match parse_part(path, &parts[0]) {
         Ok(d) => d,
         // An error after the entities can be later in the file than one inside them.
@@ -190,6 +269,17 @@ fn parse_and_collect(
         }
     };
     let ctx = Context::new(&first, chord_tolerance);
+    let blocks: BlockCounts = ctx
+        .blocks
+        .iter()
+        .map(|(name, b)| {
+            let mut counts = BTreeMap::new();
+            for e in &b.entities {
+                *counts.entry(type_name(&e.specific)).or_default() += 1;
+            }
+            (name.clone(), counts)
+        })
+        .collect();
     let rest: Vec<Result<Collected, (Option<usize>, ReadError)>> = std::thread::scope(|scope| {
         let handles: Vec<_> = parts[1..]
             .iter()
@@ -212,8 +302,11 @@ fn parse_and_collect(
     }
     let mut pieces = vec![collect(&first, &ctx, budget)];
     pieces.extend(rest.into_iter().flatten());
-    Ok(pieces)
+    Ok((pieces, blocks))
 }
+
+/// Entity names counted per block definition (upper-case block names).
+type BlockCounts = BTreeMap<String, BTreeMap<String, usize>>;
 
 /// Parses one part on a parser thread, the crate's panics turned into errors.
 fn parse_part(path: &Path, part: &Part) -> Result<Drawing, (Option<usize>, ReadError)> {

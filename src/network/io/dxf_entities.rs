@@ -4,7 +4,7 @@
 //! object coordinate system (OCS) to world coordinates. Anything else, and paper space, is
 //! counted by its DXF name and skipped.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use dxf::entities::{Entity, EntityType, Insert, LwPolyline, Polyline, Spline, Vertex};
 use dxf::{Block, Drawing, Point};
@@ -58,6 +58,10 @@ pub(super) struct Collected {
     /// Blocks expanded (INSERT and each MINSERT cell, nested ones included).
     pub inserts: usize,
     pub entities: usize,
+    /// The piece's top-level entities as the parser read them, by DXF name.
+    pub parsed: BTreeMap<String, usize>,
+    /// Blocks inserted (upper-case names), nested ones included.
+    pub expanded: BTreeSet<String>,
     /// The first entity that cannot be read; the rest of the piece is not collected.
     pub bad: Option<BadEntity>,
     /// The piece went over its budget of points and was not collected further.
@@ -78,6 +82,8 @@ pub(super) fn collect(drawing: &Drawing, ctx: &Context, budget: usize) -> Collec
         skipped: BTreeMap::new(),
         inserts: 0,
         entities: 0,
+        parsed: BTreeMap::new(),
+        expanded: BTreeSet::new(),
         bad: None,
         over_budget: false,
     };
@@ -88,6 +94,13 @@ pub(super) fn collect(drawing: &Drawing, ctx: &Context, budget: usize) -> Collec
         stack: Vec::new(),
     };
     let mut failure = None;
+    for entity in drawing.entities() {
+        *walk
+            .out
+            .parsed
+            .entry(type_name(&entity.specific))
+            .or_default() += 1;
+    }
     for (index, entity) in drawing.entities().enumerate() {
         walk.out.entities = index + 1;
         if entity.common.is_in_paper_space {
@@ -260,6 +273,9 @@ impl Walk<'_, '_> {
             .get(&ins.name.to_ascii_uppercase())
             .ok_or_else(|| format!("block \"{}\" is not defined", ins.name.escape_debug()))?;
         let name = block.name.to_ascii_uppercase();
+        if !self.out.expanded.contains(&name) {
+            self.out.expanded.insert(name.clone());
+        }
         if self.stack.contains(&name) {
             return Err(format!(
                 "block \"{}\" inserts itself (through {})",
@@ -271,62 +287,74 @@ impl Walk<'_, '_> {
         if depth >= MAX_NESTING {
             return Err(format!("blocks nest deeper than {MAX_NESTING} levels").into());
         }
-        let base = wcs(&block.base_point);
-        let scale = DVec3::new(ins.x_scale_factor, ins.y_scale_factor, ins.z_scale_factor);
-        let values = [scale.x, scale.y, scale.z, ins.rotation];
-        if values.iter().any(|v| !v.is_finite()) || !wcs(&ins.location).is_finite() {
-            return Err("INSERT: a non-finite location, scale or rotation".into());
-        }
-        let axes = ocs_axes(&ins.extrusion_direction)?;
-        let ocs = DAffine3::from_mat3(DMat3::from_cols(axes[0], axes[1], axes[2]));
-        let rotation = DAffine3::from_rotation_z(ins.rotation.to_radians());
-        let local = DAffine3::from_scale(scale) * DAffine3::from_translation(-base);
-        let (rows, cols) = (ins.row_count.max(1), ins.column_count.max(1));
+        let (cells, places) = placements(ins, block)?;
         // Each cell costs at least one unit of the budget: refuse a huge array before looping.
-        if i64::from(rows) * i64::from(cols) > self.budget as i64 {
+        if cells > self.budget as u64 {
             return Err(Stop::OverBudget);
         }
         self.stack.push(name);
-        for r in 0..rows {
-            for c in 0..cols {
-                let cell = DVec3::new(
-                    f64::from(c) * ins.column_spacing,
-                    f64::from(r) * ins.row_spacing,
-                    0.0,
-                );
-                let place = ocs
-                    * DAffine3::from_translation(wcs(&ins.location))
-                    * rotation
-                    * DAffine3::from_translation(cell)
-                    * local;
-                let world = *xf * place;
-                self.out.inserts += 1;
-                // An empty block costs nothing but time; count each cell against the budget.
-                if self.budget == 0 {
-                    return Err(Stop::OverBudget);
-                }
-                self.budget -= 1;
-                for (k, e) in block.entities.iter().enumerate() {
-                    // The innermost failure names the chain of blocks it sits in, once.
-                    self.entity(e, &world, depth + 1)
-                        .map_err(|stop| match stop {
-                            Stop::Bad(msg) if !msg.starts_with("in block ") => Stop::Bad(format!(
-                                "in block {}, entity {k} ({}): {msg}",
-                                self.stack
-                                    .iter()
-                                    .map(|b| format!("\"{}\"", b.escape_debug()))
-                                    .collect::<Vec<_>>()
-                                    .join(" → "),
-                                describe(e)
-                            )),
-                            other => other,
-                        })?;
-                }
+        for place in places {
+            let world = *xf * place;
+            self.out.inserts += 1;
+            // An empty block costs nothing but time; count each cell against the budget.
+            if self.budget == 0 {
+                return Err(Stop::OverBudget);
+            }
+            self.budget -= 1;
+            for (k, e) in block.entities.iter().enumerate() {
+                // The innermost failure names the chain of blocks it sits in, once.
+                self.entity(e, &world, depth + 1)
+                    .map_err(|stop| match stop {
+                        Stop::Bad(msg) if !msg.starts_with("in block ") => Stop::Bad(format!(
+                            "in block {}, entity {k} ({}): {msg}",
+                            self.stack
+                                .iter()
+                                .map(|b| format!("\"{}\"", b.escape_debug()))
+                                .collect::<Vec<_>>()
+                                .join(" → "),
+                            describe(e)
+                        )),
+                        other => other,
+                    })?;
             }
         }
         self.stack.pop();
         Ok(())
     }
+}
+
+/// Where an INSERT puts its block: the number of cells (1, or a MINSERT's rows × columns) and
+/// each cell's transform from block coordinates to the coordinates the INSERT is drawn in.
+pub(crate) fn placements<'a>(
+    ins: &'a Insert,
+    block: &Block,
+) -> Result<(u64, impl Iterator<Item = DAffine3> + 'a), String> {
+    let base = wcs(&block.base_point);
+    let scale = DVec3::new(ins.x_scale_factor, ins.y_scale_factor, ins.z_scale_factor);
+    let values = [scale.x, scale.y, scale.z, ins.rotation];
+    if values.iter().any(|v| !v.is_finite()) || !wcs(&ins.location).is_finite() {
+        return Err("INSERT: a non-finite location, scale or rotation".into());
+    }
+    let axes = ocs_axes(&ins.extrusion_direction)?;
+    let ocs = DAffine3::from_mat3(DMat3::from_cols(axes[0], axes[1], axes[2]));
+    let rotation = DAffine3::from_rotation_z(ins.rotation.to_radians());
+    let local = DAffine3::from_scale(scale) * DAffine3::from_translation(-base);
+    let (rows, cols) = (ins.row_count.max(1), ins.column_count.max(1));
+    let cells = rows as u64 * cols as u64;
+    let places = (0..rows).flat_map(move |r| {
+        (0..cols).map(move |c| {
+            let cell = DVec3::new(
+                f64::from(c) * ins.column_spacing,
+                f64::from(r) * ins.row_spacing,
+                0.0,
+            );
+            ocs * DAffine3::from_translation(wcs(&ins.location))
+                * rotation
+                * DAffine3::from_translation(cell)
+                * local
+        })
+    });
+    Ok((cells, places))
 }
 
 /// The largest factor by which `xf` can lengthen a vector (σ_max of its linear part), bounded

@@ -13,14 +13,14 @@ use std::path::Path;
 
 use dxf::entities::EntityType;
 use dxf::Drawing;
-use glam::{DVec3, DVec4};
+use glam::{DAffine3, DVec3, DVec4};
 use rayon::prelude::*;
 
 use super::axes::{read_axes, FORMAT as AXES_FORMAT};
 use super::panels::{polygon_metrics, QuadMetrics};
 use crate::fabricate::plates_file::{read_plates, FORMAT as PLATES_FORMAT};
 use crate::files::{extension, json_format, read_nonempty, utf8_text, ReadError};
-use crate::network::io::dxf::{load_drawing, lw_polyline, polyline, type_name};
+use crate::network::io::dxf::{load_drawing, lw_polyline, placements, polyline, type_name};
 use crate::network::io::units::dxf_units;
 
 /// Polygons up to this many corners get their exact size (all pairs).
@@ -140,23 +140,82 @@ fn read_dxf(path: &Path) -> Result<Panels, ReadError> {
     Ok(read)
 }
 
+/// Panels an audit takes from blocks at most (the network reader's own limit on points).
+const MAX_BLOCK_PANELS: usize = 20_000_000;
+
+/// Walks model space, expanding INSERTs (MINSERT arrays and nested blocks too) as the network
+/// reader does: each panel's corners in world coordinates.
+struct Walk<'a> {
+    path: &'a Path,
+    blocks: std::collections::HashMap<String, &'a dxf::Block>,
+    out: Vec<Panel>,
+    skipped: BTreeMap<String, usize>,
+    paper: usize,
+    inserts: usize,
+    stack: Vec<String>,
+}
+
 fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Panels, ReadError> {
-    let v = |p: &dxf::Point| DVec3::new(p.x, p.y, p.z);
-    let mut out = Vec::new();
-    let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
-    let mut paper = 0;
+    let mut walk = Walk {
+        path,
+        blocks: drawing
+            .blocks()
+            .map(|b| (b.name.to_ascii_uppercase(), b))
+            .collect(),
+        out: Vec::new(),
+        skipped: BTreeMap::new(),
+        paper: 0,
+        inserts: 0,
+        stack: Vec::new(),
+    };
     for e in drawing.entities() {
+        walk.entity(e, &DAffine3::IDENTITY, None)?;
+    }
+    let mut notes = Vec::new();
+    if !walk.skipped.is_empty() {
+        let list: Vec<String> = walk
+            .skipped
+            .iter()
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect();
+        notes.push(format!(
+            "read but not audited (not a panel): {}",
+            list.join(", ")
+        ));
+    }
+    if walk.inserts > 0 {
+        notes.push(format!(
+            "{} block insertions expanded (panels named by the INSERT's handle, then the \
+             entity's)",
+            walk.inserts
+        ));
+    }
+    if walk.paper > 0 {
+        notes.push(format!(
+            "{} panels in paper space not audited (model space only)",
+            walk.paper
+        ));
+    }
+    Ok(Panels {
+        panels: walk.out,
+        notes,
+    })
+}
+
+impl Walk<'_> {
+    /// One entity drawn with `xf`; `within` names the INSERT it came through (its handle).
+    fn entity(
+        &mut self,
+        e: &dxf::entities::Entity,
+        xf: &DAffine3,
+        within: Option<&str>,
+    ) -> Result<(), ReadError> {
+        let path = self.path;
+        let v = |p: &dxf::Point| DVec3::new(p.x, p.y, p.z);
         let layer = Some(e.common.layer.clone());
-        let handle = e.common.handle.0;
-        let mut push = |corners, face: Option<usize>| {
-            out.push(Panel {
-                layer: layer.clone(),
-                name: Some(match face {
-                    Some(f) => format!("{handle:X}/{f}"),
-                    None => format!("{handle:X}"),
-                }),
-                ..Panel::new(corners)
-            })
+        let handle = match within {
+            Some(outer) => format!("{outer}>{:X}", e.common.handle.0),
+            None => format!("{:X}", e.common.handle.0),
         };
         let is_panel = match &e.specific {
             EntityType::Face3D(_) => true,
@@ -165,9 +224,10 @@ fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Panels, ReadError> {
             _ => false,
         };
         if is_panel && e.common.is_in_paper_space {
-            paper += 1;
-            continue;
+            self.paper += 1;
+            return Ok(());
         }
+        let mut faces: Vec<(Vec<DVec3>, Option<usize>)> = Vec::new();
         match &e.specific {
             EntityType::Face3D(f) => {
                 let mut c = vec![
@@ -180,44 +240,106 @@ fn read_drawing(path: &Path, drawing: &Drawing) -> Result<Panels, ReadError> {
                 if c[3] == c[2] {
                     c.pop();
                 }
-                push(c, None);
+                faces.push((c, None));
             }
             EntityType::Polyline(pl) if pl.is_polyface_mesh() => {
                 for (f, face) in polyface_faces(path, e, pl)?.into_iter().enumerate() {
-                    push(face, Some(f));
+                    faces.push((face, Some(f)));
                 }
             }
             EntityType::Polyline(pl) if pl.is_closed() => {
-                push(closed_loop(path, e, polyline(pl))?, None);
+                faces.push((closed_loop(path, e, polyline(pl))?, None));
             }
             EntityType::LwPolyline(pl) if pl.is_closed() => {
-                push(
+                faces.push((
                     closed_loop(path, e, lw_polyline(pl, e.common.elevation))?,
                     None,
-                );
+                ));
             }
             EntityType::Polyline(_) | EntityType::LwPolyline(_) => {
-                *skipped
+                *self
+                    .skipped
                     .entry(format!("open {}", type_name(&e.specific)))
                     .or_default() += 1;
             }
-            other => *skipped.entry(type_name(other)).or_default() += 1,
+            EntityType::Insert(ins) if !e.common.is_in_paper_space => {
+                return self.insert(e, ins, xf, &handle);
+            }
+            other => *self.skipped.entry(type_name(other)).or_default() += 1,
         }
+        for (corners, face) in faces {
+            if self.out.len() >= MAX_BLOCK_PANELS {
+                return Err(ReadError::file(
+                    path,
+                    format!("the drawing expands to more than {MAX_BLOCK_PANELS} panels"),
+                ));
+            }
+            let corners = corners
+                .into_iter()
+                .map(|c| xf.transform_point3(c))
+                .collect();
+            self.out.push(Panel {
+                layer: layer.clone(),
+                name: Some(match face {
+                    Some(f) => format!("{handle}/{f}"),
+                    None => handle.clone(),
+                }),
+                ..Panel::new(corners)
+            });
+        }
+        Ok(())
     }
-    let mut notes = Vec::new();
-    if !skipped.is_empty() {
-        let list: Vec<String> = skipped.iter().map(|(k, n)| format!("{n} {k}")).collect();
-        notes.push(format!(
-            "read but not audited (not a panel; blocks are not expanded): {}",
-            list.join(", ")
-        ));
+
+    fn insert(
+        &mut self,
+        e: &dxf::entities::Entity,
+        ins: &dxf::entities::Insert,
+        xf: &DAffine3,
+        handle: &str,
+    ) -> Result<(), ReadError> {
+        let bad = |msg: String| {
+            ReadError::record(
+                self.path,
+                format!("entity {handle} ({})", type_name(&e.specific)),
+                msg,
+            )
+        };
+        let name = ins.name.to_ascii_uppercase();
+        let Some(block) = self.blocks.get(&name).copied() else {
+            return Err(bad(format!(
+                "block \"{}\" is not defined",
+                ins.name.escape_debug()
+            )));
+        };
+        if self.stack.contains(&name) || self.stack.len() >= 32 {
+            return Err(bad(format!(
+                "block \"{}\" inserts itself, or blocks nest deeper than 32",
+                ins.name.escape_debug()
+            )));
+        }
+        let (cells, places) = placements(ins, block).map_err(bad)?;
+        if cells > MAX_BLOCK_PANELS as u64 {
+            return Err(bad(format!(
+                "an array of {cells} cells, more than {MAX_BLOCK_PANELS}"
+            )));
+        }
+        self.stack.push(name);
+        for place in places {
+            self.inserts += 1;
+            // Nested arrays of empty blocks produce no panel but cost a loop each.
+            if self.inserts > MAX_BLOCK_PANELS {
+                return Err(bad(format!(
+                    "the drawing inserts blocks more than {MAX_BLOCK_PANELS} times"
+                )));
+            }
+            let world = *xf * place;
+            for inner in &block.entities {
+                self.entity(inner, &world, Some(handle))?;
+            }
+        }
+        self.stack.pop();
+        Ok(())
     }
-    if paper > 0 {
-        notes.push(format!(
-            "{paper} panels in paper space not audited (model space only)"
-        ));
-    }
-    Ok(Panels { panels: out, notes })
 }
 
 /// The faces of a polyface mesh (a POLYLINE with flag 64): vertex records (flags 64 + 128)
