@@ -828,3 +828,18 @@ def test_type_stubs_match_the_package(tmp_path):
     env = dict(os.environ, TMPDIR=str(tmp_path), MYPY_CACHE_DIR=str(tmp_path / "mypy-cache"))
     p = subprocess.run(argv, capture_output=True, text=True, env=env, cwd=tmp_path)
     assert p.returncode == 0, p.stdout + p.stderr
+
+
+def test_slice_drops_collapsed_triangles_and_welds_on_request():
+    # A cube and 200 slivers whose corners differ only in the sign of zero (binary STL).
+    mesh = lamina.read_mesh(ROOT / "fixtures" / "surfaces" / "signed_zero_slivers.stl")
+    small = dict(layer=1.0, pixel=0.1, resolution=(400, 300))
+    done = lamina.slice(mesh, **small)
+    assert any("200 triangles with two corners at one point dropped" in n for n in done["notes"])
+    welded = lamina.slice(mesh, weld=0.001, **small)
+    assert any("200 triangles collapsed and dropped" in n for n in welded["notes"])
+    assert welded["sl1"] == done["sl1"]
+    with pytest.raises(lamina.LaminaError, match="weld and weld_rel: give one"):
+        lamina.slice(mesh, weld=0.001, weld_rel=1e-6, **small)
+    with pytest.raises(lamina.LaminaError, match="weld_rel= must be"):
+        lamina.slice(mesh, weld_rel=0.9, **small)
