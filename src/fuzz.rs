@@ -23,7 +23,6 @@ fn network(path: &Path) -> Result<(), String> {
     let _ = imported.network.validate();
     let tol = imported.point_tolerance();
     let _ = crate::network::arrangement::defects(&imported.network, tol, 1000);
-    let _ = crate::network::arrangement::split_crossings(&imported.network, tol);
     Ok(())
 }
 

@@ -60,24 +60,9 @@ pub struct SplitStats {
 }
 
 /// The plane a network lies in, as an origin and two axes, if every node is within `tol` of it.
-///
-/// A drawing in a coordinate plane (every z, or every y or x, within `tol` of the first node's)
-/// keeps its own coordinates, so lines drawn exactly collinear stay exactly collinear.
 fn plane(net: &Network, tol: f64) -> Option<(DVec3, DVec3, DVec3)> {
     let p: Vec<DVec3> = net.nodes.iter().map(|n| n.p).collect();
     let o = *p.first()?;
-    for axis in [2, 1, 0] {
-        if p.iter().all(|q| (q[axis] - o[axis]).abs() <= tol) {
-            let mut origin = DVec3::ZERO;
-            origin[axis] = o[axis];
-            let (u, v) = match axis {
-                2 => (DVec3::X, DVec3::Y),
-                1 => (DVec3::X, DVec3::Z),
-                _ => (DVec3::Y, DVec3::Z),
-            };
-            return Some((origin, u, v));
-        }
-    }
     let far = *p
         .iter()
         .max_by(|a, b| a.distance_squared(o).total_cmp(&b.distance_squared(o)))?;
@@ -423,14 +408,6 @@ fn interior_param(a: DVec2, b: DVec2, q: DVec2, tol: f64) -> Option<f64> {
 /// they overlap, each one's ends lie on the other and are found as T-junctions.
 fn crossing(a: DVec2, b: DVec2, c: DVec2, d: DVec2, tol: f64) -> Option<(f64, f64)> {
     let (r, s) = (b - a, d - c);
-    let off_line = |p: DVec2, q: DVec2, x: DVec2| {
-        let len = (q - p).length();
-        len > 0.0 && ((x - p).perp_dot(q - p) / len).abs() > tol
-    };
-    let along = |p, q, x, y| !off_line(p, q, x) && !off_line(p, q, y);
-    if along(a, b, c, d) || along(c, d, a, b) {
-        return None;
-    }
     let denom = r.perp_dot(s);
     if denom == 0.0 {
         return None;
@@ -438,6 +415,14 @@ fn crossing(a: DVec2, b: DVec2, c: DVec2, d: DVec2, tol: f64) -> Option<(f64, f6
     let t = (c - a).perp_dot(s) / denom;
     let u = (c - a).perp_dot(r) / denom;
     if !(0.0..=1.0).contains(&t) || !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let off_line = |p: DVec2, q: DVec2, x: DVec2| {
+        let len = (q - p).length();
+        len > 0.0 && ((x - p).perp_dot(q - p) / len).abs() > tol
+    };
+    let along = |p, q, x, y| !off_line(p, q, x) && !off_line(p, q, y);
+    if along(a, b, c, d) || along(c, d, a, b) {
         return None;
     }
     let x = a + r * t;
