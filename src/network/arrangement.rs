@@ -174,11 +174,9 @@ struct Cut {
 
 /// Edges per parallel task in the crossing search.
 const EDGE_CHUNK: usize = 4096;
-/// Defects a wave of tasks may hold at once (each task keeps up to the room left in the list):
-/// waves are as wide as this allows, from 4 tasks when a million are kept to 64 when few are.
-/// The count is checked against the ceiling between waves; the width depends only on what is
-/// kept, so every machine stops at the same place.
-const WAVE_HOLDS: usize = 4_000_000;
+/// Tasks searched before the count is checked against the ceiling (fixed, so every machine
+/// stops at the same place; each task keeps at most the room left in the list).
+const WAVE: usize = 4;
 
 /// A defect as the search finds it: a node on an edge's interior (edge, node, parameter), or a
 /// proper crossing (edge, later edge, parameter on each, the point).
@@ -240,18 +238,11 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
             )
         })
         .collect();
-    // A node on an edge is the end of an edge whose box meets it, or a node no edge ends at
-    // (most drawings have none): those get an index of their own.
-    let mut ends = vec![false; net.nodes.len()];
-    for e in net.edges.iter().filter(|e| e.a != e.b) {
-        ends[e.a as usize] = true;
-        ends[e.b as usize] = true;
-    }
-    let lonely: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
-        .filter(|&i| !ends[i])
+    // Every node, to find the ones on each edge's interior (its T-junctions).
+    let points: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
         .map(|i| GeomWithData::new(flat.pts[i].to_array(), i as u32))
         .collect();
-    let lonely = RTree::bulk_load(lonely);
+    let points = RTree::bulk_load(points);
     let tree = RTree::bulk_load(boxes);
     // Each edge finds the nodes on its interior (its T-junctions) and its proper crossings
     // with later edges whose boxes meet its own, so every defect is found once, by the task
@@ -273,36 +264,29 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
             let (a, b) = flat.seg(e);
             let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
             let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
-            // Every edge whose box meets this one: their ends on its interior are its
-            // T-junctions (each found once, here), the later ones its candidate crossings.
-            others.clear();
-            others.extend(
-                tree.locate_in_envelope_intersecting(&env)
-                    .map(|g| g.data)
-                    .filter(|&j| j != k),
-            );
+            // The nodes on its interior (its T-junctions, each found once, here), then its
+            // proper crossings with the later edges whose boxes meet its own.
             on.clear();
-            let ends_of = others.iter().flat_map(|&j| {
-                let f = &net.edges[j as usize];
-                [f.a, f.b]
-            });
-            let lonely_here = lonely.locate_in_envelope(&env).map(|p| p.data);
-            for n in ends_of.chain(lonely_here) {
-                if n != e.a && n != e.b {
-                    if let Some(t) = interior_param(a, b, flat.pts[n as usize], tol) {
-                        on.push((n, t));
-                    }
+            on.extend(points.locate_in_envelope(&env).filter_map(|p| {
+                let n = p.data;
+                if n == e.a || n == e.b {
+                    return None;
                 }
-            }
+                interior_param(a, b, flat.pts[n as usize], tol).map(|t| (n, t))
+            }));
             on.sort_unstable_by_key(|&(n, _)| n);
-            on.dedup_by_key(|&mut (n, _)| n);
             for &(node, t) in &on {
                 out.t_junctions += 1;
                 if out.raw.len() < room {
                     out.raw.push(Raw::On(k, node, t));
                 }
             }
-            others.retain(|&j| j > k);
+            others.clear();
+            others.extend(
+                tree.locate_in_envelope_intersecting(&env)
+                    .map(|g| g.data)
+                    .filter(|&j| j > k),
+            );
             others.sort_unstable();
             for &j in &others {
                 let f = &net.edges[j as usize];
@@ -337,8 +321,7 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
             found.defects.counted_all = false;
             break;
         }
-        let width = (WAVE_HOLDS / keep.max(1)).clamp(4, 64);
-        let wave = c..(c + width).min(chunks);
+        let wave = c..(c + WAVE).min(chunks);
         c = wave.end;
         let room = keep.saturating_sub(found.defects.listed.len());
         let parts: Vec<ChunkFound> = wave.into_par_iter().map(|c| search(c, room)).collect();
