@@ -196,6 +196,23 @@ def test_venation_on_surface_equals_cli(tmp_path):
     same_network(py["network"], tmp_path / "venation.json")
 
 
+def test_venation_on_two_bodies_names_the_one_without_a_root():
+    mesh = lamina.read_mesh(ROOT / "fixtures" / "surfaces" / "two_bodies.stl")
+    with pytest.warns(lamina.LaminaWarning) as said:
+        one = lamina.venation_on_surface(mesh, root=(0.0, 0.0, -5.0), sources=200)
+    assert [str(w.message).split(":")[0] for w in said] == [
+        "1 of its 2 bodies have no root, so growth cannot reach them (94 sources there left out); "
+        "give a root= on each body to grow on it", "body 1"]
+    u = one["report"]["quality"]["unrooted"]
+    assert (u["bodies"], u["bodies_without_root"]) == (2, 1)
+    assert u["without_root"][0]["lowest_vertex"] == 10
+    assert any(n.startswith("body 1: 12 triangles") for n in one["notes"])
+    with pytest.warns(lamina.LaminaWarning, match="each grow from their lowest vertex"):
+        each = lamina.venation_on_surface(mesh, sources=200)
+    assert each["report"]["quality"]["unrooted"]["bodies_without_root"] == 0
+    assert each["report"]["quality"]["components"] == 2
+
+
 def test_veins_equals_cli(tmp_path):
     mesh = lamina.read_mesh(TORUS)
     py = lamina.veins(mesh["vertices"], mesh["faces"], sources=60, seed=5)

@@ -131,7 +131,7 @@ pub fn dispatch(command: Command) -> anyhow::Result<bool> {
         Command::Info(args) => info::run(args).map(|()| true),
         Command::Convert(args) => convert::run(args).map(|()| true),
         Command::Render(args) => render::run(args).map(|()| true),
-        Command::Venation(args) => venation::run(*args).map(|()| true),
+        Command::Venation(args) => venation::run(*args),
         Command::Veins(args) => veins::run(*args).map(|()| true),
         Command::Lsystem(args) => lsystem::run(*args).map(|()| true),
         Command::Bifurcate(args) => bifurcate::run(*args).map(|()| true),

@@ -108,8 +108,8 @@ impl SurfaceWeld {
     }
 }
 
-/// `lamina venation --surface MESH`.
-pub fn venation(args: &Args, path: &Path) -> Result<()> {
+/// `lamina venation --surface MESH`: Ok(false) (outputs written) when a body has no root.
+pub fn venation(args: &Args, path: &Path) -> Result<bool> {
     let mesh = read_surface(path, &args.surface_weld)?;
     let roots: Vec<Root> = args
         .root
@@ -189,7 +189,7 @@ pub fn venation(args: &Args, path: &Path) -> Result<()> {
             outln!("  {line}");
         }
     }
-    Ok(())
+    Ok(report.quality.unrooted.bodies_without_root == 0)
 }
 
 /// The network to `output` (a .png output is the render on the surface), plus the extra

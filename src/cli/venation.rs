@@ -113,7 +113,7 @@ pub struct Args {
     pub outline: Option<PathBuf>,
     /// Root node (repeat for several): X,Y in mm in a blade; on a surface a vertex index V, a
     /// triangle tT (its centroid) or a point X,Y,Z (snapped) [default: the petiole at the base;
-    /// on a surface the lowest vertex]
+    /// on a surface the lowest vertex of each body]
     #[arg(long, value_name = "X,Y|V|tT|X,Y,Z")]
     pub root: Vec<String>,
     /// Open venation grows trees; closed venation joins veins into loops
@@ -303,7 +303,8 @@ fn blade(args: &Args) -> Result<Outline> {
     })
 }
 
-pub fn run(args: Args) -> Result<()> {
+/// Ok(false) when growth on a surface left a body without a root (outputs written).
+pub fn run(args: Args) -> Result<bool> {
     if let Some(mesh) = &args.surface {
         return super::surface::venation(&args, mesh);
     }
@@ -311,7 +312,7 @@ pub fn run(args: Args) -> Result<()> {
     let opts = options(&args)?;
     let outline = blade(&args)?;
     if !args.sweep_r.is_empty() {
-        return sweep(&args, &outline, &opts);
+        return sweep(&args, &outline, &opts).map(|()| true);
     }
     let mut grown = grow_with_frames(&args, &outline, &opts)?;
     let render = RenderOptions { size: args.size };
@@ -328,7 +329,7 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         print_summary(&args.output, &grown.leaf);
     }
-    Ok(())
+    Ok(true)
 }
 
 /// The folder `--frames` names, made after checking `--every` and `--frame-size`; none

@@ -221,6 +221,11 @@ pub struct Surface<'a> {
     reach: f64,
     touch: f64,
     edge_tolerance: f64,
+    /// The body (connected piece of triangles sharing vertices) of each triangle.
+    body: Vec<u32>,
+    bodies: usize,
+    /// The bodies growth may use (those with a root); every body until the roots are placed.
+    rooted: Option<Vec<bool>>,
 }
 
 impl<'a> Surface<'a> {
@@ -253,6 +258,7 @@ impl<'a> Surface<'a> {
                 total
             })
             .collect();
+        let (body, bodies) = triangle_bodies(mesh);
         Ok(Surface {
             mesh,
             index: SurfaceIndex::new(mesh),
@@ -262,6 +268,9 @@ impl<'a> Surface<'a> {
             reach: f64::INFINITY,
             touch: 0.0,
             edge_tolerance: f64::INFINITY,
+            body,
+            bodies,
+            rooted: None,
         })
     }
 
@@ -323,6 +332,17 @@ impl<'a> Surface<'a> {
         let c = self.index.closest(p)?;
         Some((c.point, self.index.normal(&c), c.distance))
     }
+
+    /// The body of the surface point closest to `p`.
+    fn body_of(&self, p: DVec3) -> Option<u32> {
+        let c = self.index.closest(p)?;
+        Some(self.body[c.triangle as usize])
+    }
+
+    /// Whether growth may use body `b` (it has a root).
+    fn live(&self, b: u32) -> bool {
+        self.rooted.as_ref().is_none_or(|r| r[b as usize])
+    }
 }
 
 impl Domain for Surface<'_> {
@@ -332,15 +352,20 @@ impl Domain for Surface<'_> {
         self.reach
     }
 
+    /// A step snapped onto another body (one passing close by) is not taken: growth stays on
+    /// the body it started on.
     fn step(&self, from: DVec3, dir: DVec3, len: f64) -> Option<DVec3> {
-        let (_, n, _) = self.snap(from)?;
+        let here = self.index.closest(from)?;
+        let n = self.index.normal(&here);
         let tangent = (dir - n * dir.dot(n)).try_normalize()?;
-        let (at, _, _) = self.snap(from + tangent * len)?;
-        (self.chord_gap(from, at, 1) <= self.edge_tolerance).then_some(at)
+        let there = self.index.closest(from + tangent * len)?;
+        let at = there.point;
+        let same_body = self.body[here.triangle as usize] == self.body[there.triangle as usize];
+        (same_body && self.chord_gap(from, at, 1) <= self.edge_tolerance).then_some(at)
     }
 
     fn holds_edge(&self, a: DVec3, b: DVec3) -> bool {
-        self.chord_gap(a, b, 3) <= self.edge_tolerance
+        self.chord_gap(a, b, 3) <= self.edge_tolerance && self.body_of(a) == self.body_of(b)
     }
 
     fn touch(&self, a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> bool {
@@ -349,7 +374,8 @@ impl Domain for Surface<'_> {
 
     fn dart<R: Rng + ?Sized>(&self, rng: &mut R) -> Option<(DVec3, f64)> {
         let (t, bary, p) = self.sample(rng);
-        Some((p, self.birth_at(t, bary)))
+        self.live(self.body[t as usize])
+            .then(|| (p, self.birth_at(t, bary)))
     }
 
     fn birth_max(&self) -> f64 {
@@ -422,25 +448,24 @@ pub fn grow_on_surface(
     opts: &SurfaceOptions,
     observer: Option<Observer<DVec3>>,
 ) -> Result<SurfaceVeins, SurfaceError> {
-    let surface = Surface::for_growth(mesh, opts)?;
+    let mut surface = Surface::for_growth(mesh, opts)?;
     check(mesh, opts)?;
     let roots = root_points(mesh, &surface, roots)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let sources = poisson(&surface, &mut rng);
+    let placed = poisson(&surface, &mut rng);
     // Growth stays on the body it starts on: sources on a body without a root are left out.
-    let bodies = Bodies::new(mesh);
-    let rooted: std::collections::BTreeSet<u32> =
-        roots.iter().filter_map(|p| bodies.of(*p)).collect();
-    let before = sources.len();
-    let sources: Vec<DVec3> = sources
-        .into_iter()
-        .filter(|p| bodies.of(*p).is_some_and(|b| rooted.contains(&b)))
+    let mut rooted = vec![false; surface.bodies];
+    for &(_, b) in &roots {
+        rooted[b as usize] = true;
+    }
+    let roots: Vec<DVec3> = roots.iter().map(|r| r.0).collect();
+    let unrooted = Unrooted::of(mesh, &surface, &rooted, &placed);
+    let sources: Vec<DVec3> = placed
+        .iter()
+        .filter(|(_, t)| rooted[surface.body[*t as usize] as usize])
+        .map(|(p, _)| *p)
         .collect();
-    let unrooted = Unrooted {
-        bodies: bodies.count,
-        bodies_without_root: bodies.count - rooted.len(),
-        sources_left_out: before - sources.len(),
-    };
+    surface.rooted = Some(rooted);
     let (growth, surface) =
         venation::grow_in(surface, &roots, &sources, &opts.growth, &mut rng, observer)?;
     let size = mesh.bbox().diagonal();
@@ -571,82 +596,131 @@ pub fn lowest_vertex(mesh: &TriMesh) -> Option<u32> {
         .map(|v| v as u32)
 }
 
+/// How many bodies of growth can not reach, as a count. At most this many are named.
+pub const BODIES_NAMED: usize = 100;
+
 /// The mesh's bodies and the sources placed on bodies no root is on (growth cannot reach them).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Unrooted {
     pub bodies: usize,
     pub bodies_without_root: usize,
     pub sources_left_out: usize,
+    /// The first `BODIES_NAMED` bodies without a root, in body order.
+    pub without_root: Vec<Body>,
 }
 
-/// The body (connected piece of triangles) of each used vertex, and a point's body by its
-/// nearest vertex.
-struct Bodies {
-    label: Vec<u32>,
-    count: usize,
-    tree: rstar::RTree<rstar::primitives::GeomWithData<[f64; 3], u32>>,
+/// A body (connected piece of triangles) of a mesh, as a user can find it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Body {
+    /// Bodies are numbered from 0 in the order of their first triangle.
+    pub body: u32,
+    pub triangles: usize,
+    /// Its lowest vertex (least z, then y, then x): the root it would get by default.
+    pub lowest_vertex: u32,
+    pub at: [f64; 3],
+    /// Sources placed on it (left out when it has no root).
+    pub sources: usize,
 }
 
-impl Bodies {
-    fn new(mesh: &TriMesh) -> Self {
-        let n = mesh.positions.len();
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        for t in &mesh.triangles {
-            crate::mesh::union(&mut parent, t[0], t[1]);
-            crate::mesh::union(&mut parent, t[0], t[2]);
+impl Unrooted {
+    fn of(mesh: &TriMesh, surface: &Surface, rooted: &[bool], placed: &[(DVec3, u32)]) -> Self {
+        let mut sources = vec![0usize; surface.bodies];
+        for (_, t) in placed {
+            sources[surface.body[*t as usize] as usize] += 1;
         }
-        let used = used_vertices(mesh);
-        let mut label = vec![u32::MAX; n];
-        let mut count = 0usize;
-        let mut root_label = std::collections::HashMap::new();
-        for v in 0..n {
-            if used[v] {
-                let r = crate::mesh::find(&mut parent, v as u32);
-                label[v] = *root_label.entry(r).or_insert_with(|| {
-                    count += 1;
-                    count as u32 - 1
-                });
-            }
-        }
-        let tree = rstar::RTree::bulk_load(
-            (0..n)
-                .filter(|&v| used[v])
-                .map(|v| {
-                    rstar::primitives::GeomWithData::new(mesh.positions[v].to_array(), v as u32)
+        let lacking: Vec<u32> = (0..surface.bodies as u32)
+            .filter(|&b| !rooted[b as usize])
+            .collect();
+        let named: Vec<u32> = lacking.iter().copied().take(BODIES_NAMED).collect();
+        let bodies = bodies(mesh, &surface.body, surface.bodies);
+        Unrooted {
+            bodies: surface.bodies,
+            bodies_without_root: lacking.len(),
+            sources_left_out: lacking.iter().map(|&b| sources[b as usize]).sum(),
+            without_root: named
+                .iter()
+                .map(|&b| Body {
+                    sources: sources[b as usize],
+                    ..bodies[b as usize].clone()
                 })
                 .collect(),
-        );
-        Bodies { label, count, tree }
-    }
-
-    fn of(&self, p: DVec3) -> Option<u32> {
-        if !p.is_finite() {
-            return None;
         }
-        self.tree
-            .nearest_neighbor(&p.to_array())
-            .map(|g| self.label[g.data as usize])
     }
 }
 
-/// Root positions on the surface; the lowest vertex on a triangle when none are given.
+/// The body of each triangle (union of triangles sharing a vertex, numbered in the order of
+/// their first triangle) and the number of bodies.
+fn triangle_bodies(mesh: &TriMesh) -> (Vec<u32>, usize) {
+    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    for t in &mesh.triangles {
+        crate::mesh::union(&mut parent, t[0], t[1]);
+        crate::mesh::union(&mut parent, t[0], t[2]);
+    }
+    let mut number = std::collections::HashMap::new();
+    let body = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let r = crate::mesh::find(&mut parent, t[0]);
+            let next = number.len() as u32;
+            *number.entry(r).or_insert(next)
+        })
+        .collect();
+    (body, number.len())
+}
+
+/// Each body's triangle count and lowest vertex (`sources` left at 0).
+fn bodies(mesh: &TriMesh, body: &[u32], count: usize) -> Vec<Body> {
+    let key = |v: u32| {
+        let p = mesh.positions[v as usize];
+        (p.z, p.y, p.x)
+    };
+    let mut out: Vec<Option<Body>> = vec![None; count];
+    for (t, &b) in mesh.triangles.iter().zip(body) {
+        let entry = out[b as usize].get_or_insert(Body {
+            body: b,
+            triangles: 0,
+            lowest_vertex: t[0],
+            at: mesh.positions[t[0] as usize].to_array(),
+            sources: 0,
+        });
+        entry.triangles += 1;
+        for &v in t {
+            if key(v) < key(entry.lowest_vertex) {
+                entry.lowest_vertex = v;
+                entry.at = mesh.positions[v as usize].to_array();
+            }
+        }
+    }
+    out.into_iter().flatten().collect()
+}
+
+/// Root positions on the surface and their bodies; the lowest vertex of each body when none
+/// are given.
 fn root_points(
     mesh: &TriMesh,
     surface: &Surface,
     roots: &[Root],
-) -> Result<Vec<DVec3>, SurfaceError> {
+) -> Result<Vec<(DVec3, u32)>, SurfaceError> {
     if roots.is_empty() {
-        let lowest = lowest_vertex(mesh).ok_or(SurfaceError::NoTriangles)?;
-        return Ok(vec![mesh.positions[lowest as usize]]);
+        return Ok(bodies(mesh, &surface.body, surface.bodies)
+            .iter()
+            .map(|b| (DVec3::from_array(b.at), b.body))
+            .collect());
     }
-    let used = used_vertices(mesh);
+    let mut vertex_body = vec![u32::MAX; mesh.positions.len()];
+    for (t, &b) in mesh.triangles.iter().zip(&surface.body) {
+        for &v in t {
+            vertex_body[v as usize] = b;
+        }
+    }
     roots
         .iter()
         .map(|r| match *r {
-            Root::Vertex(v) => match used.get(v as usize) {
+            Root::Vertex(v) => match vertex_body.get(v as usize) {
                 None => Err(SurfaceError::RootVertex(v, mesh.positions.len())),
-                Some(false) => Err(SurfaceError::LooseVertex(v)),
-                Some(true) => Ok(mesh.positions[v as usize]),
+                Some(&u32::MAX) => Err(SurfaceError::LooseVertex(v)),
+                Some(&b) => Ok((mesh.positions[v as usize], b)),
             },
             Root::Triangle(t) => {
                 let tri = mesh
@@ -654,10 +728,13 @@ fn root_points(
                     .get(t as usize)
                     .ok_or(SurfaceError::RootTriangle(t, mesh.triangles.len()))?;
                 let [a, b, c] = mesh.corners(tri);
-                Ok((a + b + c) / 3.0)
+                Ok(((a + b + c) / 3.0, surface.body[t as usize]))
             }
             Root::Point(p) if !p.is_finite() => Err(SurfaceError::RootPoint(p)),
-            Root::Point(p) => Ok(surface.snap(p).ok_or(SurfaceError::NoTriangles)?.0),
+            Root::Point(p) => {
+                let c = surface.index.closest(p).ok_or(SurfaceError::NoTriangles)?;
+                Ok((c.point, surface.body[c.triangle as usize]))
+            }
         })
         .collect()
 }
@@ -672,12 +749,13 @@ pub fn poisson_points(
     rng: &mut impl Rng,
 ) -> Result<Vec<DVec3>, SurfaceError> {
     let surface = Surface::sampler(mesh, (birth_min, birth_max), density)?;
-    Ok(poisson(&surface, rng))
+    Ok(poisson(&surface, rng).into_iter().map(|(p, _)| p).collect())
 }
 
 /// Poisson-disk sources on the surface by dart throwing: each dart lands uniformly by area and
-/// is kept when no kept source lies within the birth distance at its point.
-fn poisson(surface: &Surface, rng: &mut impl Rng) -> Vec<DVec3> {
+/// is kept when no kept source lies within the birth distance at its point. Each comes with its
+/// triangle.
+fn poisson(surface: &Surface, rng: &mut impl Rng) -> Vec<(DVec3, u32)> {
     let mesh = surface.mesh;
     let expected: f64 = mesh
         .triangles
@@ -701,7 +779,7 @@ fn poisson(surface: &Surface, rng: &mut impl Rng) -> Vec<DVec3> {
             .is_none()
         {
             tree.insert(p.to_array());
-            kept.push(p);
+            kept.push((p, t));
         }
     }
     kept
@@ -772,4 +850,66 @@ fn crossings(net: &Network, tol: f64) -> usize {
         }
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two 20 × 20 mm plates side by side in z = 0, `gap` apart along x, each a 20 × 20 grid:
+    /// two bodies.
+    fn split_plate(gap: f64) -> TriMesh {
+        let left = TriMesh::grid(20, 20, |i, j| DVec3::new(i as f64 - 20.0, j as f64, 0.0));
+        let right = TriMesh::grid(20, 20, |i, j| DVec3::new(i as f64 + gap, j as f64, 0.0));
+        let n = left.positions.len() as u32;
+        TriMesh {
+            positions: [left.positions, right.positions].concat(),
+            triangles: left
+                .triangles
+                .into_iter()
+                .chain(right.triangles.into_iter().map(|t| t.map(|v| v + n)))
+                .collect(),
+            colors: None,
+        }
+    }
+
+    #[test]
+    fn growth_stays_on_each_body_across_a_gap_narrower_than_a_step() {
+        let gap = 0.05;
+        let mesh = split_plate(gap);
+        let opts = SurfaceOptions::for_mesh(&mesh, Mode::Closed, 300, None);
+        assert!(opts.growth.step > 10.0 * gap, "D = {}", opts.growth.step);
+        let grown = grow_on_surface(&mesh, &[], &opts, None).unwrap();
+        let u = &grown.quality.unrooted;
+        assert_eq!((u.bodies, u.bodies_without_root), (2, 0));
+        let net = &grown.network;
+        let side = |n: u32| net.nodes[n as usize].p.x > 0.5 * gap;
+        assert!(net.nodes.iter().any(|n| n.p.x > gap) && net.nodes.iter().any(|n| n.p.x < 0.0));
+        let across = net.edges.iter().filter(|e| side(e.a) != side(e.b)).count();
+        assert_eq!(across, 0);
+        assert_eq!(net.component_labels().1, 2);
+    }
+
+    #[test]
+    fn a_body_without_a_root_is_named_with_its_sources_and_lowest_vertex() {
+        let mesh = split_plate(1.0);
+        let opts = SurfaceOptions::for_mesh(&mesh, Mode::Open, 300, None);
+        let grown = grow_on_surface(&mesh, &[Root::Vertex(0)], &opts, None).unwrap();
+        let u = &grown.quality.unrooted;
+        assert_eq!((u.bodies, u.bodies_without_root), (2, 1));
+        let [b] = &u.without_root[..] else {
+            panic!("{u:?}")
+        };
+        // The right plate: its first vertex (1, 0, 0) is its lowest (least z, y, x).
+        assert_eq!((b.body, b.triangles, b.lowest_vertex), (1, 800, 441));
+        assert_eq!(b.at, [1.0, 0.0, 0.0]);
+        assert!(b.sources > 0);
+        assert_eq!(u.sources_left_out, b.sources);
+        assert!(grown.network.nodes.iter().all(|n| n.p.x <= 0.0));
+        assert_eq!(grown.growth.sources_placed + b.sources, {
+            let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+            let s = Surface::for_growth(&mesh, &opts).unwrap();
+            poisson(&s, &mut rng).len()
+        });
+    }
 }

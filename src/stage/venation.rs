@@ -21,7 +21,9 @@ pub use crate::grow::leaf::Placement;
 use crate::grow::leaf::{grow_leaf, Leaf, LeafError, LeafOptions};
 use crate::grow::outline::Outline;
 use crate::grow::report::Quality;
-use crate::grow::surface::{self, grow_on_surface, SurfaceError, SurfaceOptions, SurfaceVeins};
+use crate::grow::surface::{
+    self, grow_on_surface, SurfaceError, SurfaceOptions, SurfaceVeins, Unrooted,
+};
 pub use crate::grow::surface::{Channel, Root};
 pub use crate::grow::venation::{BladeGrowth, Mode};
 use crate::grow::venation::{Frame, Observer, Stop, VenationOptions};
@@ -550,15 +552,15 @@ pub fn on_surface(
         None => Observer::stop_only(&stop, &mut none),
     };
     let veins = grow_on_surface(mesh, roots, &s, Some(observer))?;
+    let u = &veins.quality.unrooted;
     let mut notes = Vec::new();
-    let u = veins.quality.unrooted;
-    if u.bodies_without_root > 0 {
+    if roots.is_empty() && u.bodies > 1 {
         notes.push(format!(
-            "{} of its {} bodies have no root, so growth cannot reach them: {} sources there \
-             left out (give a root= on each body to grow on it)",
-            u.bodies_without_root, u.bodies, u.sources_left_out
+            "its {} bodies each grow from their lowest vertex (give root= to choose)",
+            u.bodies
         ));
     }
+    notes.extend(unrooted_lines(u));
     let g = &veins.growth;
     let report = SurfaceReport {
         birth_max: s.birth_max,
@@ -582,6 +584,33 @@ pub fn on_surface(
         report,
         notes,
     })
+}
+
+/// The bodies of a surface that no root reaches, one line each (none when every body has a
+/// root): how many, then each named by its number, size and lowest vertex.
+pub fn unrooted_lines(u: &Unrooted) -> Vec<String> {
+    if u.bodies_without_root == 0 {
+        return Vec::new();
+    }
+    let mut lines = vec![format!(
+        "{} of its {} bodies have no root, so growth cannot reach them ({} sources there left \
+         out); give a root= on each body to grow on it",
+        u.bodies_without_root, u.bodies, u.sources_left_out
+    )];
+    for b in &u.without_root {
+        let [x, y, z] = b.at;
+        lines.push(format!(
+            "body {}: {} triangles, {} sources, no root (its lowest vertex: {} at {x}, {y}, {z})",
+            b.body, b.triangles, b.sources, b.lowest_vertex
+        ));
+    }
+    if u.bodies_without_root > u.without_root.len() {
+        lines.push(format!(
+            "(and {} more bodies without a root)",
+            u.bodies_without_root - u.without_root.len()
+        ));
+    }
+    lines
 }
 
 /// A report's text as the command writes it: pretty JSON, one final line break.

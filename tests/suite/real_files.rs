@@ -223,15 +223,62 @@ fn veins_on_a_jittered_cad_mesh_need_the_weld_and_grow_with_it() -> TestResult {
 fn growth_on_several_bodies_needs_a_root_on_each_and_says_so() -> TestResult {
     let dir = tempfile::tempdir()?;
     let stl = path("surfaces/two_bodies.stl")?;
-    let one = dir.path().join("one.json");
-    let one = one.to_str().ok_or("path")?;
-    let o = lamina(&["venation", "--surface", &stl, "--sources", "200", "-o", one]);
+    // No --root: each body grows from its lowest vertex, and that is said.
+    let each = dir.path().join("each.json");
+    let each = each.to_str().ok_or("path")?;
+    let o = lamina(&[
+        "venation",
+        "--surface",
+        &stl,
+        "--sources",
+        "200",
+        "-o",
+        each,
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("1 of its 2 bodies have no root"),
+        stderr(&o).contains("its 2 bodies each grow from their lowest vertex (give --root"),
         "{}",
         stderr(&o)
     );
+    assert_eq!(info(&[each])?["components"], 2);
+    // A root on the first cube only: the outputs are written, the second cube is named with
+    // its lowest vertex, and the exit status is 1.
+    let one = dir.path().join("one.json");
+    let one = one.to_str().ok_or("path")?;
+    let report = dir.path().join("one_report.json");
+    let report = report.to_str().ok_or("path")?;
+    let o = lamina(&[
+        "venation",
+        "--surface",
+        &stl,
+        "--sources",
+        "200",
+        "--root",
+        "0,0,-5",
+        "-o",
+        one,
+        "--report",
+        report,
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("1 of its 2 bodies have no root"), "{err}");
+    assert!(
+        err.contains("body 1: 12 triangles, ")
+            && err.contains("(its lowest vertex: 10 at 25, -5, -5)"),
+        "{err}"
+    );
+    assert_eq!(info(&[one])?["components"], 1);
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report)?)?;
+    let u = &r["quality"]["unrooted"];
+    assert_eq!(
+        (u["bodies"].as_u64(), u["bodies_without_root"].as_u64()),
+        (Some(2), Some(1))
+    );
+    assert_eq!(u["without_root"][0]["lowest_vertex"], 10);
+    assert_eq!(u["without_root"][0]["sources"], u["sources_left_out"]);
+    // A root on each: both grow, nothing said.
     let both = dir.path().join("both.json");
     let both = both.to_str().ok_or("path")?;
     let o = lamina(&[
@@ -243,14 +290,13 @@ fn growth_on_several_bodies_needs_a_root_on_each_and_says_so() -> TestResult {
         "--root",
         "0,0,-5",
         "--root",
-        "30,0,-5",
+        "10",
         "-o",
         both,
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!stderr(&o).contains("no root"), "{}", stderr(&o));
     assert_eq!(info(&[both])?["components"], 2);
-    assert_eq!(info(&[one])?["components"], 1);
     Ok(())
 }
 
