@@ -14,7 +14,9 @@
 //! commands do) and read inside `catch_unwind`. A failure stops the run and keeps the input in
 //! `fuzz/crashes/TARGET/` (check it in; `tests/fuzz_replay.rs` replays the folder):
 //! - a panic;
-//! - a run over 2 s (a watchdog thread copies the input and exits with status 3);
+//! - a run over 2 s of CPU time (all threads; read from /proc, so a loaded machine does not
+//!   count against the input), or over 20 s of wall time (a run blocked without working): a
+//!   watchdog thread copies the input and exits with status 3;
 //! - more than 1 GiB live at once, or one request over it (the global allocator refuses it,
 //!   and the input, written before the call, is left at the path printed at the start).
 
@@ -27,7 +29,10 @@ use std::time::{Duration, Instant};
 use lamina::fuzz::{seed_files, Target, TARGETS};
 
 const LIVE_LIMIT: usize = 1 << 30;
+/// CPU time one run may take (all threads).
 const TIME_LIMIT: Duration = Duration::from_secs(2);
+/// Wall time one run may take: only a run that waits instead of working gets near it.
+const WALL_LIMIT: Duration = Duration::from_secs(20);
 const MAX_INPUT: usize = 1 << 20;
 
 /// The system allocator with a ceiling on live bytes.
@@ -227,6 +232,27 @@ fn args() -> Result<Args, String> {
     Ok(out)
 }
 
+/// CPU time this process has used, all threads, user and system, in milliseconds (fields 14
+/// and 15 of /proc/self/stat, in ticks of 1/100 s); 0 where there is no /proc.
+fn cpu_millis() -> u64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0;
+    };
+    // The fields after the command name, which is in parentheses and may hold spaces; the
+    // first of them is field 3.
+    let Some(rest) = stat.rfind(')').and_then(|i| stat.get(i + 2..)) else {
+        return 0;
+    };
+    let fields: Vec<&str> = rest.split(' ').collect();
+    let tick = |k: usize| {
+        fields
+            .get(k)
+            .and_then(|f| f.parse::<u64>().ok())
+            .unwrap_or(0)
+    };
+    (tick(11) + tick(12)) * 10
+}
+
 fn keep(root: &Path, target: &Target, input: &[u8], why: &str) -> PathBuf {
     let dir = root.join("fuzz/crashes").join(target.name);
     let _ = std::fs::create_dir_all(&dir);
@@ -256,21 +282,29 @@ fn main() {
         work.display()
     );
     println!(
-        "{:<14} {:>10} {:>8} {:>10} {:>9}",
-        "target", "runs", "seconds", "runs/s", "slowest"
+        "{:<14} {:>10} {:>8} {:>10} {:>9} {:>9}",
+        "target", "runs", "seconds", "runs/s", "slowest", "CPU"
     );
     let started = Arc::new(AtomicU64::new(0));
+    let started_cpu = Arc::new(AtomicU64::new(0));
     let busy = Arc::new(AtomicBool::new(false));
     let current = Arc::new(std::sync::Mutex::new(PathBuf::new()));
     let clock = Instant::now();
     {
-        let (started, busy, current, root) =
-            (started.clone(), busy.clone(), current.clone(), root.clone());
+        let (started, started_cpu, busy, current, root) = (
+            started.clone(),
+            started_cpu.clone(),
+            busy.clone(),
+            current.clone(),
+            root.clone(),
+        );
         std::thread::spawn(move || loop {
             std::thread::sleep(Duration::from_millis(100));
             let t = started.load(Ordering::Relaxed);
+            let cpu = cpu_millis().saturating_sub(started_cpu.load(Ordering::Relaxed));
+            let wall = (clock.elapsed().as_millis() as u64).saturating_sub(t);
             if busy.load(Ordering::Relaxed)
-                && clock.elapsed().as_millis() as u64 > t + TIME_LIMIT.as_millis() as u64
+                && (cpu > TIME_LIMIT.as_millis() as u64 || wall > WALL_LIMIT.as_millis() as u64)
             {
                 // The input file is named after its target (`dxf.dxf`): keep it where the
                 // replay test finds it.
@@ -279,11 +313,13 @@ fn main() {
                 let input = std::fs::read(&path).unwrap_or_default();
                 match TARGETS.iter().find(|t| t.name == name) {
                     Some(target) => eprintln!(
-                        "fuzz: an input ran over {TIME_LIMIT:?}; kept as {}",
+                        "fuzz: an input ran {cpu} ms of CPU time, {wall} ms of wall time; kept \
+                         as {}",
                         keep(&root, target, &input, "hang").display()
                     ),
                     None => eprintln!(
-                        "fuzz: an input ran over {TIME_LIMIT:?}; it is {}",
+                        "fuzz: an input ran {cpu} ms of CPU time, {wall} ms of wall time; it is \
+                         {}",
                         path.display()
                     ),
                 }
@@ -306,7 +342,7 @@ fn main() {
         let path = work.join(format!("{}.{}", target.name, target.ext));
         *current.lock().expect("not poisoned") = path.clone();
         let begin = Instant::now();
-        let (mut runs, mut slowest) = (0u64, Duration::ZERO);
+        let (mut runs, mut slowest, mut slowest_cpu) = (0u64, Duration::ZERO, 0u64);
         while runs < args.runs && begin.elapsed().as_secs_f64() < args.seconds {
             let seed = &seeds[rng.below(seeds.len())];
             let input = mutate(seed, &mut rng);
@@ -314,6 +350,8 @@ fn main() {
                 eprintln!("fuzz: cannot write {}", path.display());
                 std::process::exit(2);
             }
+            let cpu = cpu_millis();
+            started_cpu.store(cpu, Ordering::Relaxed);
             started.store(clock.elapsed().as_millis() as u64, Ordering::Relaxed);
             busy.store(true, Ordering::Relaxed);
             let t = Instant::now();
@@ -321,6 +359,7 @@ fn main() {
             let took = t.elapsed();
             busy.store(false, Ordering::Relaxed);
             slowest = slowest.max(took);
+            slowest_cpu = slowest_cpu.max(cpu_millis().saturating_sub(cpu));
             runs += 1;
             if outcome.is_err() {
                 let kept = keep(&root, target, &input, "panic");
@@ -331,12 +370,13 @@ fn main() {
         }
         let secs = begin.elapsed().as_secs_f64();
         println!(
-            "{:<14} {:>10} {:>8.1} {:>10.0} {:>7.3} s",
+            "{:<14} {:>10} {:>8.1} {:>10.0} {:>7.3} s {:>7.2} s",
             target.name,
             runs,
             secs,
             runs as f64 / secs,
-            slowest.as_secs_f64()
+            slowest.as_secs_f64(),
+            slowest_cpu as f64 / 1000.0
         );
     }
     let _ = std::fs::remove_dir_all(&work);

@@ -18,8 +18,20 @@ pub struct Target {
 }
 
 fn network(path: &Path) -> Result<(), String> {
-    let imported =
-        crate::network::io::read_network(path, &Default::default()).map_err(|e| e.to_string())?;
+    network_with(path, &Default::default())
+}
+
+/// A DXF network with its HATCH boundaries read too (the flag that reaches the most code).
+fn dxf_network(path: &Path) -> Result<(), String> {
+    let opts = crate::network::io::ReadOptions {
+        hatch_boundaries: true,
+        ..Default::default()
+    };
+    network_with(path, &opts)
+}
+
+fn network_with(path: &Path, opts: &crate::network::io::ReadOptions) -> Result<(), String> {
+    let imported = crate::network::io::read_network(path, opts).map_err(|e| e.to_string())?;
     let _ = imported.network.validate();
     let tol = imported.point_tolerance();
     let _ = crate::network::arrangement::defects(&imported.network, tol, 1000);
@@ -111,10 +123,11 @@ pub const TARGETS: &[Target] = &[
             "fixtures/networks/ezdxf_round_holes.dxf",
             "fixtures/networks/ezdxf_overlaps.dxf",
             "fixtures/networks/ezdxf_unread_entities.dxf",
+            "fixtures/networks/ezdxf_hatches.dxf",
             "fixtures/outlines/oak.dxf",
             "fixtures/fuzz/P7_dxf_julian_date/in.dxf",
         ],
-        run: network,
+        run: dxf_network,
     },
     Target {
         name: "obj_network",

@@ -1,12 +1,14 @@
 """Checks that lamina read a DXF's geometry faithfully, with ezdxf's own geometry as the truth.
 
-    check_dxf_import.py DRAWING.dxf NETWORK.json [--tol 0.05]
+    check_dxf_import.py DRAWING.dxf NETWORK.json [--tol 0.05] [--hatch]
 
 ezdxf reads the drawing, expands every INSERT (nested, MINSERT arrays) and every polyline (into
 LINEs and bulge ARCs) into virtual entities, and flattens each LINE, ARC, CIRCLE, ELLIPSE and
 SPLINE of model space with the entity's own exact construction (not ezdxf's Bézier paths, which
 approximate arcs), 50 times finer than the chord tolerance, in millimetres by the file's
-$INSUNITS.
+$INSUNITS. With --hatch, so is every edge of every HATCH boundary path (model space and inserted
+blocks: lines, bulged polyline segments, arcs, ellipses and splines by their construction tools,
+taken from the HATCH's OCS and elevation to world coordinates).
 Then, in both directions:
   - every node of lamina's network lies within the tolerance of that geometry;
   - every point of that geometry (sampled every tolerance/2) lies within the tolerance of one of
@@ -15,45 +17,78 @@ Shares no code with lamina.
 """
 import argparse
 import json
+import math
 import sys
 
 import ezdxf
 import numpy as np
 from scipy.spatial import cKDTree
 from ezdxf import units as ezunits
+from ezdxf.entities.boundary_paths import BoundaryPathType, EdgeType
+from ezdxf.math import OCS, ConstructionArc, bulge_to_arc
 
 CURVES = {"LINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"}
 
 
-def expand(entities):
+def expand(entities, hatch):
     for e in entities:
         kind = e.dxftype()
         if kind == "INSERT":
             for cell in e.multi_insert():
-                yield from expand(cell.virtual_entities())
+                yield from expand(cell.virtual_entities(), hatch)
         elif kind in ("LWPOLYLINE", "POLYLINE"):
-            yield from expand(e.virtual_entities())
-        elif kind in CURVES:
+            yield from expand(e.virtual_entities(), hatch)
+        elif kind in CURVES or (hatch and kind == "HATCH"):
             yield e
 
 
 def flatten(e, step):
+    if e.dxftype() == "HATCH":
+        return hatch_edges(e, step)
     if e.dxftype() == "LINE":
-        return [e.dxf.start, e.dxf.end]
+        return [[e.dxf.start, e.dxf.end]]
     if e.dxftype() in ("ARC", "CIRCLE"):
-        return list(e.flattening(sagitta=step))
-    return list(e.flattening(distance=step))
+        return [list(e.flattening(sagitta=step))]
+    return [list(e.flattening(distance=step))]
 
 
-def reference_polylines(dxf_path, tol):
+def hatch_edges(h, step):
+    """Every edge of every boundary path, each a polyline in world coordinates."""
+    ocs = OCS(h.dxf.extrusion)
+    z = h.dxf.elevation.z
+    out = []
+    for path in h.paths:
+        if path.type == BoundaryPathType.POLYLINE:
+            v = [(x, y, b) for x, y, b in path.vertices]
+            for i, (x0, y0, b) in enumerate(v):
+                x1, y1, _ = v[(i + 1) % len(v)]
+                if b:
+                    c, a0, a1, r = bulge_to_arc((x0, y0), (x1, y1), b)
+                    arc = ConstructionArc(c, r, math.degrees(a0), math.degrees(a1))
+                    out.append(list(arc.flattening(sagitta=step)))
+                else:
+                    out.append([(x0, y0), (x1, y1)])
+        else:
+            for edge in path.edges:
+                if edge.type == EdgeType.LINE:
+                    out.append([edge.start, edge.end])
+                elif edge.type == EdgeType.ARC:
+                    out.append(list(edge.construction_tool().flattening(sagitta=step)))
+                else:
+                    out.append(list(edge.construction_tool().flattening(distance=step)))
+    return [[ocs.to_wcs((p[0], p[1], z)) for p in line] for line in out]
+
+
+def reference_polylines(dxf_path, tol, hatch=False):
     doc = ezdxf.readfile(dxf_path)
     unit = doc.header.get("$INSUNITS", 0)
     scale = ezunits.conversion_factor(unit, ezunits.MM) if unit else 1.0
     lines = []
-    for e in expand(doc.modelspace()):
-        pts = np.array([tuple(v) for v in flatten(e, tol / 50 / scale)], float)
-        if len(pts):
-            lines.append(pts * scale)
+    for e in expand(doc.modelspace(), hatch):
+        for line in flatten(e, tol / 50 / scale):
+            pts = np.array([tuple(v) for v in line], float)
+            if len(pts):
+                lines.append(pts * scale)
     return lines
 
 
@@ -110,8 +145,9 @@ def main():
     ap.add_argument("dxf")
     ap.add_argument("network")
     ap.add_argument("--tol", type=float, default=0.05)
+    ap.add_argument("--hatch", action="store_true", help="read HATCH boundaries too")
     a = ap.parse_args()
-    ref = reference_polylines(a.dxf, a.tol)
+    ref = reference_polylines(a.dxf, a.tol, a.hatch)
     if not ref:
         print(f"{a.dxf}: no geometry in model space", file=sys.stderr)
         return 1

@@ -127,7 +127,10 @@ fn human(s: &Value) -> String {
             );
         }
         if let Some(sk) = s["import"]["skipped"].as_object().filter(|m| !m.is_empty()) {
-            let parts: Vec<String> = sk.iter().map(|(k, n)| format!("{n} {k}")).collect();
+            let parts: Vec<String> = sk
+                .iter()
+                .map(|(k, n)| super::input::skipped_item(k, n))
+                .collect();
             line(&mut out, "skipped", parts.join(", "));
         }
     } else {

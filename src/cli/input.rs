@@ -43,6 +43,10 @@ pub struct ReadArgs {
     /// million plus 20 per byte of the file, at most 20 million]
     #[arg(long, value_name = "N")]
     pub max_points: Option<f64>,
+    /// Read the boundaries of a DXF's HATCH fills as closed loops [default: a HATCH is
+    /// skipped and named]
+    #[arg(long)]
+    pub hatch_boundaries: bool,
 }
 
 impl Default for ReadArgs {
@@ -55,6 +59,7 @@ impl Default for ReadArgs {
             strict: false,
             split_crossings: false,
             max_points: None,
+            hatch_boundaries: false,
         }
     }
 }
@@ -109,6 +114,7 @@ impl ReadArgs {
             units,
             chord_tolerance: c,
             max_points,
+            hatch_boundaries: self.hatch_boundaries,
         })
     }
 
@@ -121,6 +127,7 @@ impl ReadArgs {
             || self.strict
             || self.split_crossings
             || self.max_points.is_some()
+            || self.hatch_boundaries
     }
 
     /// Reads a network, says on stderr what was assumed or left out (one line each), and
@@ -186,9 +193,18 @@ pub fn skipped_list(imported: &Imported) -> String {
     imported
         .skipped
         .iter()
-        .map(|(k, n)| format!("{n} {k}"))
+        .map(|(k, n)| skipped_item(k, n))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// "3 TEXT"; a model-space HATCH says which flag reads it.
+pub fn skipped_item(name: &str, n: impl std::fmt::Display) -> String {
+    if name == "HATCH" {
+        format!("{n} {name} (--hatch-boundaries reads their boundaries)")
+    } else {
+        format!("{n} {name}")
+    }
 }
 
 /// One line on stderr for units that were assumed or converted, one for what was skipped.

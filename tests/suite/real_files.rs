@@ -389,6 +389,110 @@ fn round_holes_drawn_as_two_bulged_vertices_are_whole_circles() -> TestResult {
     Ok(())
 }
 
+/// Length of the plane curve `f` over [0, 1] by the midpoint rule on `n` pieces.
+fn curve_length(f: impl Fn(f64) -> (f64, f64), n: usize) -> f64 {
+    (0..n)
+        .map(|k| {
+            let (a, b) = (f(k as f64 / n as f64), f((k + 1) as f64 / n as f64));
+            (b.0 - a.0).hypot(b.1 - a.1)
+        })
+        .sum()
+}
+
+#[test]
+fn hatch_boundaries_are_closed_loops_when_asked_and_named_otherwise() -> TestResult {
+    let dxf = path("networks/ezdxf_hatches.dxf")?;
+    // Not asked: the line alone, the hatches named with the flag that reads them.
+    let v = info(&[&dxf])?;
+    let skipped = &v["import"]["skipped"];
+    assert_eq!(skipped["HATCH"], 8, "{skipped}");
+    assert_eq!(skipped["HATCH (in block definitions)"], 1, "{skipped}");
+    let o = lamina(&["info", "--strict", &dxf]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("8 HATCH (--hatch-boundaries reads their boundaries)"),
+        "{}",
+        stderr(&o)
+    );
+    // Asked: ten closed loops (the plate and its hole, two slots, two ellipses, the spline,
+    // the mirrored square, the block's triangle twice) and the line; the paper-space hatch is
+    // named.
+    let v = info(&["--hatch-boundaries", "--chord-tolerance", "0.005", &dxf])?;
+    assert_eq!(v["cycles"], 10);
+    assert_eq!(v["components"], 11);
+    let skipped = v["import"]["skipped"].as_object().ok_or("skipped")?;
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert_eq!(skipped["paper-space entity"], 1);
+    // The mirrored square (extrusion -Z) lies at x = -20..-10; the scaled triangle reaches 420.
+    assert!(close(&v["bbox"]["min"][0], -20.0, 1e-9), "{}", v["bbox"]);
+    assert!(close(&v["bbox"]["max"][0], 420.0, 1e-9), "{}", v["bbox"]);
+    let pi = std::f64::consts::PI;
+    let ellipse = |a: f64, b: f64, turn: f64| {
+        curve_length(|t| (a * (turn * t).cos(), b * (turn * t).sin()), 200_000)
+    };
+    let bezier = curve_length(
+        |t| {
+            let u = 1.0 - t;
+            let (b0, b1, b2, b3) = (u * u * u, 3.0 * u * u * t, 3.0 * u * t * t, t * t * t);
+            (
+                300.0 * b0 + 310.0 * b1 + 330.0 * b2 + 340.0 * b3,
+                30.0 * (b1 + b2),
+            )
+        },
+        200_000,
+    );
+    let exact = (300.0 + 20.0 * pi) // plate and hole
+        + (60.0 + 10.0 * pi) // slot, counter-clockwise
+        + (70.0 + 5.0 * pi) // slot with clockwise corners
+        + ellipse(20.0, 10.0, 2.0 * pi)
+        + (ellipse(15.0, 9.0, pi) + 30.0)
+        + (bezier + 40.0)
+        + 40.0 // mirrored square
+        + (40.0 + 20.0 * 2f64.sqrt()) // triangle scaled 2
+        + (20.0 + 10.0 * 2f64.sqrt()) // triangle turned
+        + 100.0; // the line
+    let total = v["lengths"]["total"].as_f64().ok_or("total")?;
+    // Chords are never longer than their arcs, and with a sagitta of 0.005 mm fall short by
+    // about s / 3r per unit length: 0.04 mm on these radii of 5 to 20 mm.
+    assert!(
+        total <= exact + 1e-6 && total > exact - 0.06,
+        "{total} against {exact}"
+    );
+    // Their points count against --max-points like any curve's: 200 in all at 0.05 mm.
+    let budget = |n: &str| lamina(&["info", "--hatch-boundaries", "--max-points", n, &dxf]);
+    assert!(budget("200").status.success());
+    let o = budget("199");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("expands to more than 199 points"),
+        "{}",
+        stderr(&o)
+    );
+    // A HATCH that cannot be read is named by its line, nothing written.
+    let dir = tempfile::tempdir()?;
+    let bad = dir.path().join("bad.dxf");
+    std::fs::write(
+        &bad,
+        "0\nSECTION\n2\nENTITIES\n0\nLINE\n10\n0\n20\n0\n11\n1\n21\n0\n\
+         0\nHATCH\n91\n1\n92\n1\n93\n1\n72\n9\n0\nENDSEC\n0\nEOF\n",
+    )?;
+    let out = dir.path().join("out.json");
+    let o = lamina(&[
+        "convert",
+        "--hatch-boundaries",
+        bad.to_str().ok_or("path")?,
+        out.to_str().ok_or("path")?,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("line 15 (HATCH): boundary path 1: edge 1: edge type 9 (72)"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    Ok(())
+}
+
 #[test]
 fn strokes_drawn_over_each_other_are_noded_only_where_they_end() -> TestResult {
     // Three collinear strokes along x = 0 and a line ending on them; a frame drawn in

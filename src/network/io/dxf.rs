@@ -6,7 +6,7 @@
 //! edge, one LWPOLYLINE per chain that lies at one height, one 3D POLYLINE per other chain, one
 //! POINT per isolated node.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
 use dxf::entities::{Entity, EntityType, Line, LwPolyline, ModelPoint, Polyline, Vertex};
@@ -19,6 +19,8 @@ use super::dxf_entities::{
     collect, default_max_points, from_ocs, ocs_axes, Collected, Context, MAX_POINTS,
 };
 pub(crate) use super::dxf_entities::{placements, type_name};
+use super::dxf_groups::{walk_groups, Place};
+use super::dxf_hatch::{read_hatches, Hatch, Hatches};
 use super::dxf_split::Part;
 use super::units::{dxf_units, scale_to_mm};
 use super::{Imported, ReadOptions};
@@ -55,7 +57,13 @@ pub(super) fn read_bytes(
         .unwrap_or_else(|| default_max_points(bytes.len()))
         .min(MAX_POINTS);
     let tol = opts.chord_tolerance / units.scale_to_mm;
-    let (pieces, block_parsed) = parse_and_collect(path, &parts, tol, budget)?;
+    let hatches = if opts.hatch_boundaries {
+        read_hatches(bytes)
+            .map_err(|e| ReadError::record(path, format!("line {} (HATCH)", e.line), e.msg))?
+    } else {
+        Hatches::default()
+    };
+    let (pieces, block_parsed) = parse_and_collect(path, &parts, tol, budget, &hatches.blocks)?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
@@ -64,7 +72,25 @@ pub(super) fn read_bytes(
     let mut parsed: BTreeMap<String, usize> = BTreeMap::new();
     let mut expanded: BTreeSet<String> = BTreeSet::new();
     let total: usize = pieces.iter().map(|p| p.points.len()).sum();
-    if pieces.iter().any(|p| p.over_budget) || total > budget {
+    // Model-space HATCH boundaries, flattened within what the budget leaves.
+    let mut loops: Vec<Vec<DVec3>> = Vec::new();
+    let mut hatch_points = 0usize;
+    let mut hatches_over = false;
+    for (line, h) in &hatches.model {
+        let left = budget.saturating_sub(total + hatch_points);
+        let Some(these) = h
+            .loops(tol, left)
+            .map_err(|m| ReadError::record(path, format!("line {line} (HATCH)"), m))?
+        else {
+            hatches_over = true;
+            break;
+        };
+        for l in these {
+            hatch_points += l.len();
+            loops.push(l);
+        }
+    }
+    if hatches_over || pieces.iter().any(|p| p.over_budget) || total + hatch_points > budget {
         return Err(ReadError::file(
             path,
             format!(
@@ -106,6 +132,19 @@ pub(super) fn read_bytes(
         }
         expanded.extend(piece.expanded);
     }
+    points.reserve_exact(hatch_points);
+    for l in &loops {
+        let first = points.len() as u32;
+        points.extend(l);
+        segments.extend((1..l.len() as u32).map(|k| (first + k - 1, first + k)));
+    }
+    let hatch_count = hatches.model.len() + hatches.paper;
+    if hatch_count > 0 {
+        *parsed.entry("HATCH".into()).or_default() += hatch_count;
+    }
+    if hatches.paper > 0 {
+        *skipped.entry("paper-space entity".into()).or_default() += hatches.paper;
+    }
     // Entities the dxf crate drops without a trace (HATCH, MULTILEADER, MESH, ARC_DIMENSION,
     // some DIMENSION subtypes…): the file's own count of each name, less what was parsed, in
     // model space and in the blocks the drawing inserts.
@@ -143,6 +182,8 @@ pub(super) fn read_bytes(
         let only_faces = !skipped.is_empty() && skipped.keys().all(|k| faces.contains(&k.as_str()));
         let hint = if only_faces {
             ": it is a mesh of faces, not a network of lines; `lamina audit` reads its panels"
+        } else if skipped.contains_key("HATCH") {
+            "; hatch_boundaries= reads the boundaries of its HATCH fills as loops"
         } else {
             ""
         };
@@ -188,62 +229,25 @@ pub(crate) fn entity_census(bytes: &[u8]) -> EntityCensus {
         model: BTreeMap::new(),
         blocks: BTreeMap::new(),
     };
-    let mut lines = bytes.split(|&b| b == b'\n').map(|l| l.trim_ascii());
-    #[derive(PartialEq)]
-    enum At {
-        Other,
-        Entities,
-        Blocks,
-    }
-    let mut at = At::Other;
-    let mut after_section = false;
-    // Inside BLOCKS: the block being defined, and whether its name (code 2) is still to come.
-    let mut block: Option<String> = None;
-    let mut naming = false;
-    while let (Some(code), Some(value)) = (lines.next(), lines.next()) {
-        if code == b"0" {
-            after_section = value == b"SECTION";
-            match value {
-                b"ENDSEC" => at = At::Other,
-                b"BLOCK" if at == At::Blocks => {
-                    naming = true;
-                    block = None;
-                }
-                b"ENDBLK" if at == At::Blocks => block = None,
-                // Records that belong to the entity before them, as the parser folds them.
-                b"VERTEX" | b"SEQEND" | b"ATTRIB" => {}
-                name => {
-                    let name = String::from_utf8_lossy(name).into_owned();
-                    match at {
-                        At::Entities => *census.model.entry(name).or_default() += 1,
-                        At::Blocks => {
-                            if let Some(b) = &block {
-                                *census
-                                    .blocks
-                                    .entry(b.clone())
-                                    .or_default()
-                                    .entry(name)
-                                    .or_default() += 1;
-                            }
-                        }
-                        At::Other => {}
-                    }
-                }
-            }
-        } else if code == b"2" {
-            if after_section {
-                at = match value {
-                    b"ENTITIES" => At::Entities,
-                    b"BLOCKS" => At::Blocks,
-                    _ => At::Other,
-                };
-                after_section = false;
-            } else if naming {
-                block = Some(String::from_utf8_lossy(value).to_ascii_uppercase());
-                naming = false;
-            }
+    walk_groups(bytes, |place, g| {
+        // Records that belong to the entity before them, as the parser folds them.
+        if g.code != 0 || matches!(g.value, b"VERTEX" | b"SEQEND" | b"ATTRIB") {
+            return;
         }
-    }
+        let name = String::from_utf8_lossy(g.value).into_owned();
+        match place {
+            Place::Entities => *census.model.entry(name).or_default() += 1,
+            Place::Block(b) => {
+                *census
+                    .blocks
+                    .entry(b.to_string())
+                    .or_default()
+                    .entry(name)
+                    .or_default() += 1
+            }
+            Place::Other => {}
+        }
+    });
     census
 }
 
@@ -256,6 +260,7 @@ fn parse_and_collect(
     parts: &[Part],
     chord_tolerance: f64,
     budget: usize,
+    block_hatches: &HashMap<String, Vec<(usize, Hatch)>>,
 ) -> Result<(Vec<Collected>, BlockCounts), ReadError> {
     let first = match parse_part(path, &parts[0]) {
         Ok(d) => d,
@@ -268,7 +273,7 @@ fn parse_and_collect(
             ))
         }
     };
-    let ctx = Context::new(&first, chord_tolerance);
+    let ctx = Context::new(&first, chord_tolerance, block_hatches);
     let blocks: BlockCounts = ctx
         .blocks
         .iter()
@@ -276,6 +281,9 @@ fn parse_and_collect(
             let mut counts = BTreeMap::new();
             for e in &b.entities {
                 *counts.entry(type_name(&e.specific)).or_default() += 1;
+            }
+            if let Some(h) = block_hatches.get(name) {
+                *counts.entry("HATCH".into()).or_default() += h.len();
             }
             (name.clone(), counts)
         })

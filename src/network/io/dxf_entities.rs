@@ -10,6 +10,7 @@ use dxf::entities::{Entity, EntityType, Insert, LwPolyline, Polyline, Spline, Ve
 use dxf::{Block, Drawing, Point};
 use glam::{DAffine3, DMat3, DVec2, DVec3};
 
+use super::dxf_hatch::Hatch;
 use crate::geom::curves::{self, Nurbs};
 
 /// Blocks nest at most this deep (AutoCAD allows far less in practice); deeper is refused as a
@@ -38,15 +39,26 @@ pub(super) struct Context<'a> {
     pub tol: f64,
     /// Block definitions by upper-case name.
     pub blocks: HashMap<String, &'a Block>,
+    /// The HATCH entities of each block definition whose boundaries are read (none unless
+    /// asked), with the line each starts on.
+    pub hatches: &'a HashMap<String, Vec<(usize, Hatch)>>,
 }
 
 impl<'a> Context<'a> {
-    pub fn new(drawing: &'a Drawing, tol: f64) -> Self {
+    pub fn new(
+        drawing: &'a Drawing,
+        tol: f64,
+        hatches: &'a HashMap<String, Vec<(usize, Hatch)>>,
+    ) -> Self {
         let blocks = drawing
             .blocks()
             .map(|b| (b.name.to_ascii_uppercase(), b))
             .collect();
-        Context { tol, blocks }
+        Context {
+            tol,
+            blocks,
+            hatches,
+        }
     }
 }
 
@@ -166,6 +178,15 @@ struct Walk<'a, 'c> {
 }
 
 impl Walk<'_, '_> {
+    /// The blocks being expanded, "\"A\" → \"B\"".
+    fn chain(&self) -> String {
+        self.stack
+            .iter()
+            .map(|b| format!("\"{}\"", b.escape_debug()))
+            .collect::<Vec<_>>()
+            .join(" → ")
+    }
+
     fn skip(&mut self, what: &str) {
         *self.out.skipped.entry(what.to_string()).or_default() += 1;
     }
@@ -307,15 +328,23 @@ impl Walk<'_, '_> {
                     .map_err(|stop| match stop {
                         Stop::Bad(msg) if !msg.starts_with("in block ") => Stop::Bad(format!(
                             "in block {}, entity {k} ({}): {msg}",
-                            self.stack
-                                .iter()
-                                .map(|b| format!("\"{}\"", b.escape_debug()))
-                                .collect::<Vec<_>>()
-                                .join(" → "),
+                            self.chain(),
                             describe(e)
                         )),
                         other => other,
                     })?;
+            }
+            let name = self.stack.last().cloned().unwrap_or_default();
+            for (line, hatch) in self.ctx.hatches.get(&name).into_iter().flatten() {
+                let loops = hatch
+                    .loops(self.ctx.tol / stretch(&world), self.budget)
+                    .map_err(|msg| {
+                        format!("in block {}, HATCH at line {line}: {msg}", self.chain())
+                    })?
+                    .ok_or(Stop::OverBudget)?;
+                for l in loops {
+                    self.emit(&l, &world)?;
+                }
             }
         }
         self.stack.pop();
@@ -445,7 +474,11 @@ pub(super) fn from_ocs(axes: &[DVec3; 3], x: f64, y: f64, z: f64) -> DVec3 {
 }
 
 /// Flat 2D vertices with bulges (arc segments) into points, closing the loop when asked.
-fn bulged(vertices: &[(DVec2, f64)], closed: bool, tol: f64) -> Result<Vec<DVec2>, String> {
+pub(super) fn bulged(
+    vertices: &[(DVec2, f64)],
+    closed: bool,
+    tol: f64,
+) -> Result<Vec<DVec2>, String> {
     let Some(&(first, _)) = vertices.first() else {
         return Ok(Vec::new());
     };

@@ -7,6 +7,8 @@
 
 pub mod dxf;
 mod dxf_entities;
+mod dxf_groups;
+mod dxf_hatch;
 pub use dxf_entities::{default_max_points, MAX_POINTS as MAX_DXF_POINTS};
 mod dxf_split;
 pub(crate) mod dxf_write;
@@ -69,6 +71,9 @@ pub struct ReadOptions {
     /// The most points a DXF may expand to (curves flattened, blocks inserted), at most
     /// `dxf_entities::MAX_POINTS`. Default: `default_max_points` of the file's size.
     pub max_points: Option<usize>,
+    /// Read the boundary paths of model-space HATCH entities as closed loops (else a HATCH is
+    /// skipped and named). Default: false.
+    pub hatch_boundaries: bool,
 }
 
 impl ReadOptions {
@@ -82,6 +87,7 @@ impl Default for ReadOptions {
             units: None,
             chord_tolerance: Self::DEFAULT_CHORD_TOLERANCE,
             max_points: None,
+            hatch_boundaries: false,
         }
     }
 }
