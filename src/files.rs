@@ -255,6 +255,28 @@ pub fn guarded<T: Send>(decode: impl FnOnce() -> T + Send) -> Result<T, String> 
     })
 }
 
+/// A PNG decoder's message as a user reads it: the png crate writes chunk names as Rust debug
+/// structs ("ChunkType { type: IDAT, critical: true, … }"), here just the name ("IDAT").
+pub fn png_message(e: &png::DecodingError) -> String {
+    let text = e.to_string();
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text.as_str();
+    const OPEN: &str = "ChunkType { type: ";
+    while let Some(at) = rest.find(OPEN) {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + OPEN.len()..];
+        let (Some(comma), Some(close)) = (after.find(','), after.find(" }")) else {
+            out.push_str(&rest[at..]);
+            rest = "";
+            break;
+        };
+        out.push_str(&after[..comma.min(close)]);
+        rest = &after[close + 2..];
+    }
+    out.push_str(rest);
+    printable(&out).into_owned()
+}
+
 /// What is wrong with a PNG's palette, if anything: a PLTE chunk must hold whole RGB entries,
 /// 1 to 256 of them (decoders index past a partial one). Chunks are walked by their lengths;
 /// a truncated file is left to the decoder.

@@ -289,7 +289,7 @@ fn decode_png(bytes: &[u8], px: u32, py: u32) -> Result<Result<Vec<u8>, String>,
     });
     let mut reader = decoder
         .read_info()
-        .map_err(|e| format!("not a PNG ({e})"))?;
+        .map_err(|e| format!("not a PNG ({})", crate::files::png_message(&e)))?;
     let (w, h) = (reader.info().width, reader.info().height);
     if (w, h) != (px, py) {
         return Ok(Err(format!("{w} × {h} pixels, the display is {px} × {py}")));
@@ -297,7 +297,7 @@ fn decode_png(bytes: &[u8], px: u32, py: u32) -> Result<Result<Vec<u8>, String>,
     let mut buf = vec![0; reader.output_buffer_size().ok_or("too large")?];
     let frame = reader
         .next_frame(&mut buf)
-        .map_err(|e| format!("a broken PNG ({e})"))?;
+        .map_err(|e| format!("a broken PNG ({})", crate::files::png_message(&e)))?;
     let channels = frame.color_type.samples();
     buf.truncate(frame.buffer_size());
     if channels == 1 {

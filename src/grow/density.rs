@@ -70,7 +70,7 @@ impl DensityMap {
             return Err(problem);
         }
         let pixmap = crate::files::guarded(|| tiny_skia::Pixmap::decode_png(bytes))?
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| crate::files::png_message(&e))?;
         let (width, height) = (pixmap.width() as usize, pixmap.height() as usize);
         let pixels = pixmap.pixels();
         let transparent = pixels.iter().any(|p| p.alpha() < 255);
@@ -136,6 +136,18 @@ mod tests {
             }
         }
         pm.encode_png().expect("encode")
+    }
+
+    #[test]
+    fn a_broken_chunk_is_named_plainly() {
+        let mut bytes = png(4, 4, |x, _| [(60 * x) as u8, 0, 0, 255]);
+        // The IDAT chunk's CRC (after its length, type and data), spoiled.
+        let at = bytes.windows(4).position(|w| w == b"IDAT").expect("IDAT") - 4;
+        let len = u32::from_be_bytes(bytes[at..at + 4].try_into().expect("4 bytes")) as usize;
+        bytes[at + 8 + len] ^= 0xff;
+        let msg = DensityMap::from_png(&bytes).expect_err("a CRC error");
+        assert!(msg.contains("IDAT chunk"), "{msg}");
+        assert!(!msg.contains("ChunkType") && !msg.contains('{'), "{msg}");
     }
 
     #[test]

@@ -180,7 +180,14 @@ pub fn strip(pngs: &[Vec<u8>]) -> Result<Vec<u8>, String> {
     use tiny_skia::PixmapPaint;
     let images = pngs
         .iter()
-        .map(|p| Pixmap::decode_png(p).map_err(|e| format!("a frame that does not decode: {e}")))
+        .map(|p| {
+            Pixmap::decode_png(p).map_err(|e| {
+                format!(
+                    "a frame that does not decode: {}",
+                    crate::files::png_message(&e)
+                )
+            })
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let width = images.iter().map(Pixmap::width).sum::<u32>();
     let height = images.iter().map(Pixmap::height).max().unwrap_or(0);

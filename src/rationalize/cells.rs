@@ -413,7 +413,7 @@ fn triangulate(f: &Face, positions: &[DVec3]) -> Result<Vec<[u32; 3]>, String> {
     for &v in &distinct {
         let h = cdt
             .insert(flat(v))
-            .map_err(|e| format!("node {v} cannot be placed in the cell's plane: {e:?}"))?;
+            .map_err(|e| format!("node {v} cannot be placed in the cell's plane: {e}"))?;
         if let Some(other) = node_of.insert(h, v) {
             return Err(format!(
                 "nodes {other} and {v} fall on the same point of the cell's plane"

@@ -167,6 +167,8 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
     let torus = torus.to_str().ok_or("path")?;
     let palette = fixture("../fuzz/corpus/png/palette_plte4.png");
     let palette = palette.to_str().ok_or("path")?;
+    let crc = fixture("../fuzz/corpus/png/crc_idat.png");
+    let crc = crc.to_str().ok_or("path")?;
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
             vec![
@@ -223,6 +225,17 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
             ],
             "its palette (PLTE) is 4 bytes",
         ),
+        // A spoiled checksum: the chunk is named plainly, not as the decoder's debug struct.
+        (
+            vec![
+                "venation".into(),
+                "--density".into(),
+                crc.into(),
+                "-o".into(),
+                out("v.json"),
+            ],
+            "while decoding IDAT chunk",
+        ),
         (
             vec![
                 "venation".into(),
@@ -267,6 +280,8 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
             "{args:?}: the error does not name {flag}: {err}"
         );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
+        // No Rust debug struct from a decoder.
+        assert!(!err.contains("ChunkType"), "{args:?}: {err}");
     }
     assert_eq!(std::fs::read_dir(dir.path())?.count(), 0, "nothing written");
     Ok(())
