@@ -111,11 +111,13 @@ def rows(table: dict) -> list:
 # Files.
 
 
-def read_network(path: PathLike, units: Optional[str] = None) -> dict:
+def read_network(path: PathLike, units: Optional[str] = None,
+                 hatch_boundaries: bool = False) -> dict:
     """A network file (.json .obj .dxf) as a network dict, read as the commands read it (a DXF
     in the unit its header states, an OBJ in mm unless `units` says otherwise): positions in
-    mm."""
-    return _done(_lamina.read_network(os.fspath(path), units), "mm")
+    mm. ``hatch_boundaries=True`` reads each boundary of a DXF's HATCH fills as a closed loop
+    (else they are named in the notes as not read)."""
+    return _done(_lamina.read_network(os.fspath(path), units, bool(hatch_boundaries)), "mm")
 
 
 def write_network(path: PathLike, net: dict, units: Optional[str] = None) -> None:

@@ -1267,15 +1267,20 @@ fn print<'py>(
 // Files.
 
 /// Reads a network file (.json .obj .dxf) as the commands read it with their default flags
-/// (and `units` for an OBJ or DXF); the notes say what was assumed or left out.
+/// (and `units` for an OBJ or DXF, `hatch_boundaries` for a DXF's HATCH fills); the notes say
+/// what was assumed or left out.
 #[pyfunction]
-#[pyo3(signature = (path, units=None))]
+#[pyo3(signature = (path, units=None, hatch_boundaries=false))]
 fn read_network<'py>(
     py: Python<'py>,
     path: PathBuf,
     units: Option<String>,
+    hatch_boundaries: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut opts = ReadOptions::default();
+    let mut opts = ReadOptions {
+        hatch_boundaries,
+        ..ReadOptions::default()
+    };
     if let Some(u) = units {
         opts.units = Some(
             lamina::network::io::units::LengthUnit::parse(&u).ok_or_else(|| {

@@ -213,6 +213,17 @@ def test_venation_on_two_bodies_names_the_one_without_a_root():
     assert each["report"]["quality"]["components"] == 2
 
 
+def test_read_network_reads_hatch_boundaries_when_asked(tmp_path):
+    dxf = ROOT / "fixtures" / "networks" / "ezdxf_hatches.dxf"
+    with pytest.warns(lamina.LaminaWarning, match="HATCH"):
+        plain = lamina.read_network(dxf)
+    assert len(plain["edges"]) == 1
+    with pytest.warns(lamina.LaminaWarning, match="1 paper-space entity"):
+        read = lamina.read_network(dxf, hatch_boundaries=True)
+    cli(tmp_path, "convert", "--hatch-boundaries", dxf, "hatches.json")
+    same_network(read, tmp_path / "hatches.json")
+
+
 def test_veins_equals_cli(tmp_path):
     mesh = lamina.read_mesh(TORUS)
     py = lamina.veins(mesh["vertices"], mesh["faces"], sources=60, seed=5)
