@@ -123,6 +123,12 @@ pub enum Error {
         /// How many more there are, in words.
         more: String,
     },
+    #[error("the network has {nodes} node(s) and no edges: there are no cells to find")]
+    /// Nothing to bound a cell.
+    NoEdges {
+        /// Its nodes.
+        nodes: usize,
+    },
     #[error(transparent)]
     /// No reference directions.
     Reference(#[from] ReferenceError),
@@ -134,6 +140,11 @@ pub enum Error {
 /// Finds and triangulates the cells of `net`; `surface` gives the reference normals and the
 /// χ to check against (else each component is taken as a disk).
 pub fn run(net: &Network, surface: Option<&TriMesh>, opts: &Options) -> Result<Found, Error> {
+    if net.edges.is_empty() {
+        return Err(Error::NoEdges {
+            nodes: net.nodes.len(),
+        });
+    }
     let tol = opts.point_tolerance.unwrap_or(1e-9 * net.bbox().diagonal());
     let found = defects(net, tol, 1);
     if let Some(first) = found.listed.first() {

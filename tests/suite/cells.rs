@@ -138,3 +138,23 @@ fn a_curved_network_without_normals_or_surface_is_refused() -> TestResult {
     assert!(!out.exists());
     Ok(())
 }
+
+#[test]
+fn a_drawing_of_one_point_has_no_cells_and_says_why() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let dxf = dir.path().join("point.dxf");
+    std::fs::write(
+        &dxf,
+        "0\nSECTION\n2\nENTITIES\n0\nPOINT\n8\n0\n10\n1\n20\n2\n30\n3\n0\nENDSEC\n0\nEOF\n",
+    )?;
+    let out = dir.path().join("cells.obj");
+    let o = lamina(&["cells", s(&dxf), "-o", s(&out)]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("the network has 1 node(s) and no edges: there are no cells to find"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.exists());
+    Ok(())
+}
