@@ -59,11 +59,15 @@ pub(super) fn read_bytes(
     let tol = opts.chord_tolerance / units.scale_to_mm;
     let hatches = if opts.hatch_boundaries {
         read_hatches(bytes)
-            .map_err(|e| ReadError::record(path, format!("line {} (HATCH)", e.line), e.msg))?
     } else {
-        Hatches::default()
+        Ok(Hatches::default())
     };
-    let (pieces, block_parsed) = parse_and_collect(path, &parts, tol, budget, &hatches.blocks)?;
+    let none = HashMap::new();
+    let block_hatches = hatches.as_ref().map_or(&none, |h| &h.blocks);
+    // A file the parser refuses is reported as such before any HATCH in it.
+    let (pieces, block_parsed) = parse_and_collect(path, &parts, tol, budget, block_hatches)?;
+    let hatches =
+        hatches.map_err(|e| ReadError::record(path, format!("line {} (HATCH)", e.line), e.msg))?;
     let mut points: Vec<DVec3> = Vec::new();
     let mut segments: Vec<(u32, u32)> = Vec::new();
     let mut skipped: BTreeMap<String, usize> = BTreeMap::new();
