@@ -450,7 +450,8 @@ pub fn grow_on_surface(
 ) -> Result<SurfaceVeins, SurfaceError> {
     let mut surface = Surface::for_growth(mesh, opts)?;
     check(mesh, opts)?;
-    let roots = root_points(mesh, &surface, roots)?;
+    let all = bodies(mesh, &surface.body, surface.bodies);
+    let roots = root_points(mesh, &surface, &all, roots)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
     let placed = poisson(&surface, &mut rng);
     // Growth stays on the body it starts on: sources on a body without a root are left out.
@@ -459,7 +460,7 @@ pub fn grow_on_surface(
         rooted[b as usize] = true;
     }
     let roots: Vec<DVec3> = roots.iter().map(|r| r.0).collect();
-    let unrooted = Unrooted::of(mesh, &surface, &rooted, &placed);
+    let unrooted = Unrooted::of(&surface, &all, &rooted, &placed);
     let sources: Vec<DVec3> = placed
         .iter()
         .filter(|(_, t)| rooted[surface.body[*t as usize] as usize])
@@ -623,7 +624,9 @@ pub struct Body {
 }
 
 impl Unrooted {
-    fn of(mesh: &TriMesh, surface: &Surface, rooted: &[bool], placed: &[(DVec3, u32)]) -> Self {
+    /// From the mesh's `bodies` (as `bodies()` gives them), which have a root, and the sources
+    /// placed with their triangles.
+    fn of(surface: &Surface, bodies: &[Body], rooted: &[bool], placed: &[(DVec3, u32)]) -> Self {
         let mut sources = vec![0usize; surface.bodies];
         for (_, t) in placed {
             sources[surface.body[*t as usize] as usize] += 1;
@@ -631,14 +634,13 @@ impl Unrooted {
         let lacking: Vec<u32> = (0..surface.bodies as u32)
             .filter(|&b| !rooted[b as usize])
             .collect();
-        let named: Vec<u32> = lacking.iter().copied().take(BODIES_NAMED).collect();
-        let bodies = bodies(mesh, &surface.body, surface.bodies);
         Unrooted {
             bodies: surface.bodies,
             bodies_without_root: lacking.len(),
             sources_left_out: lacking.iter().map(|&b| sources[b as usize]).sum(),
-            without_root: named
+            without_root: lacking
                 .iter()
+                .take(BODIES_NAMED)
                 .map(|&b| Body {
                     sources: sources[b as usize],
                     ..bodies[b as usize].clone()
@@ -700,10 +702,11 @@ fn bodies(mesh: &TriMesh, body: &[u32], count: usize) -> Vec<Body> {
 fn root_points(
     mesh: &TriMesh,
     surface: &Surface,
+    bodies: &[Body],
     roots: &[Root],
 ) -> Result<Vec<(DVec3, u32)>, SurfaceError> {
     if roots.is_empty() {
-        return Ok(bodies(mesh, &surface.body, surface.bodies)
+        return Ok(bodies
             .iter()
             .map(|b| (DVec3::from_array(b.at), b.body))
             .collect());
