@@ -124,6 +124,7 @@ pub const TARGETS: &[Target] = &[
             "fixtures/networks/ezdxf_overlaps.dxf",
             "fixtures/networks/ezdxf_unread_entities.dxf",
             "fixtures/networks/ezdxf_hatches.dxf",
+            "fixtures/networks/ezdxf_hatch_curves.dxf",
             "fixtures/outlines/oak.dxf",
             "fixtures/fuzz/P7_dxf_julian_date/in.dxf",
         ],
