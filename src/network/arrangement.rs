@@ -6,6 +6,8 @@
 //! edges' boxes, so the cost is O(E log E + crossings).
 
 use std::collections::HashSet;
+use std::hash::BuildHasherDefault;
+use std::ops::ControlFlow;
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
@@ -14,6 +16,7 @@ use rstar::{RTree, AABB};
 
 use super::{Edge, Network, Node};
 use crate::geom::merge::merge_points;
+use crate::geom::KeyHasher;
 
 /// A place where a flat drawing is not noded.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -213,12 +216,13 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
     // Each pair of nodes is searched once: a drawing with 50,000 copies of 72 lines costs what
     // 72 lines cost.
     let mut searched = vec![true; net.edges.len()];
-    let mut seen: HashSet<(u32, u32)> = HashSet::with_capacity(net.edges.len());
+    let mut seen: HashSet<u64, BuildHasherDefault<KeyHasher>> =
+        HashSet::with_capacity_and_hasher(net.edges.len(), Default::default());
     let mut repeated_edges = 0;
     for (k, e) in net.edges.iter().enumerate() {
         if e.a == e.b {
             searched[k] = false;
-        } else if !seen.insert((e.a.min(e.b), e.a.max(e.b))) {
+        } else if !seen.insert((e.a.min(e.b) as u64) << 32 | e.a.max(e.b) as u64) {
             searched[k] = false;
             repeated_edges += 1;
         }
@@ -238,11 +242,20 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
             )
         })
         .collect();
-    // Every node, to find the ones on each edge's interior (its T-junctions).
-    let points: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
+    // A node on an edge's interior is an end of some searched edge whose box meets that
+    // edge's box, so the edge tree finds it; only nodes that end no searched edge (isolated
+    // nodes, nodes of loops only) need a tree of their own.
+    let mut ends_an_edge = vec![false; net.nodes.len()];
+    for (e, _) in net.edges.iter().zip(&searched).filter(|(_, s)| **s) {
+        ends_an_edge[e.a as usize] = true;
+        ends_an_edge[e.b as usize] = true;
+    }
+    let loose: Vec<GeomWithData<[f64; 2], u32>> = (0..net.nodes.len())
+        .filter(|&i| !ends_an_edge[i])
         .map(|i| GeomWithData::new(flat.pts[i].to_array(), i as u32))
         .collect();
-    let points = RTree::bulk_load(points);
+    drop(ends_an_edge);
+    let loose = RTree::bulk_load(loose);
     let tree = RTree::bulk_load(boxes);
     // Each edge finds the nodes on its interior (its T-junctions) and its proper crossings
     // with later edges whose boxes meet its own, so every defect is found once, by the task
@@ -264,29 +277,41 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
             let (a, b) = flat.seg(e);
             let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
             let env = AABB::from_corners([lo.x, lo.y], [hi.x, hi.y]);
-            // The nodes on its interior (its T-junctions, each found once, here), then its
-            // proper crossings with the later edges whose boxes meet its own.
+            // The edges whose boxes meet its own: their ends on its interior are its
+            // T-junctions (each found once, here); the later ones may cross it.
             on.clear();
-            on.extend(points.locate_in_envelope(&env).filter_map(|p| {
-                let n = p.data;
-                if n == e.a || n == e.b {
-                    return None;
+            others.clear();
+            let mut on_interior = |n: u32| {
+                let q = flat.pts[n as usize];
+                let in_box = q.cmpge(lo).all() && q.cmple(hi).all();
+                if in_box && n != e.a && n != e.b {
+                    if let Some(t) = interior_param(a, b, q, tol) {
+                        on.push((n, t));
+                    }
                 }
-                interior_param(a, b, flat.pts[n as usize], tol).map(|t| (n, t))
-            }));
+            };
+            let _ = tree.locate_in_envelope_intersecting_int(&env, |g| {
+                let f = &net.edges[g.data as usize];
+                on_interior(f.a);
+                on_interior(f.b);
+                if g.data > k {
+                    others.push(g.data);
+                }
+                ControlFlow::<()>::Continue(())
+            });
+            let _ = loose.locate_in_envelope_int(&env, |p| {
+                on_interior(p.data);
+                ControlFlow::<()>::Continue(())
+            });
+            // A node ending several edges near this one is found once per edge.
             on.sort_unstable_by_key(|&(n, _)| n);
+            on.dedup_by_key(|&mut (n, _)| n);
             for &(node, t) in &on {
                 out.t_junctions += 1;
                 if out.raw.len() < room {
                     out.raw.push(Raw::On(k, node, t));
                 }
             }
-            others.clear();
-            others.extend(
-                tree.locate_in_envelope_intersecting(&env)
-                    .map(|g| g.data)
-                    .filter(|&j| j > k),
-            );
             others.sort_unstable();
             for &j in &others {
                 let f = &net.edges[j as usize];

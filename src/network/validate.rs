@@ -1,10 +1,13 @@
 //! `Network::validate`: every problem at once, plus the figures a designer checks first
 //! (degree histogram, connected components, independent cycles).
 
+use std::collections::hash_map::Entry;
 use std::collections::HashMap;
 use std::fmt;
+use std::hash::BuildHasherDefault;
 
 use super::Network;
+use crate::geom::KeyHasher;
 
 /// Edges shorter than this fraction of the bounding-box diagonal count as zero-length.
 pub const ZERO_LENGTH_FRACTION: f64 = 1e-12;
@@ -123,7 +126,9 @@ impl Network {
         }
         let nodes = self.nodes.len();
         let min_length = ZERO_LENGTH_FRACTION * self.bbox().diagonal();
-        let mut first_seen: HashMap<(u32, u32), u32> = HashMap::with_capacity(self.edges.len());
+        // Keyed by the edge's two nodes, lower first, in one word.
+        let mut first_seen: HashMap<u64, u32, BuildHasherDefault<KeyHasher>> =
+            HashMap::with_capacity_and_hasher(self.edges.len(), Default::default());
         let mut simple_edges = 0usize;
         for (k, e) in self.edges.iter().enumerate() {
             let edge = k as u32;
@@ -146,11 +151,19 @@ impl Network {
                 problems.push(Problem::SelfLoop { edge, node: e.a });
                 continue;
             }
-            if let Some(&first) = first_seen.get(&(e.a.min(e.b), e.a.max(e.b))) {
-                problems.push(Problem::RepeatedEdge { edge, first });
-                continue;
+            let key = (e.a.min(e.b) as u64) << 32 | e.a.max(e.b) as u64;
+            match first_seen.entry(key) {
+                Entry::Occupied(first) => {
+                    problems.push(Problem::RepeatedEdge {
+                        edge,
+                        first: *first.get(),
+                    });
+                    continue;
+                }
+                Entry::Vacant(slot) => {
+                    slot.insert(edge);
+                }
             }
-            first_seen.insert((e.a.min(e.b), e.a.max(e.b)), edge);
             simple_edges += 1;
             let length = self.edge_length(e);
             if length <= min_length {
