@@ -29,6 +29,19 @@ impl<'a, 'py> Opts<'a, 'py> {
         Ok(v.filter(|v| !v.is_none()))
     }
 
+    /// The value under `key` when it is a string, taken; anything else is left for a typed
+    /// read (`fit=` is the longest side in mm, or a word for `print`).
+    pub fn word(&mut self, key: &str) -> PyResult<Option<String>> {
+        let Some(v) = self.d.get_item(key)? else {
+            return Ok(None);
+        };
+        if !v.is_instance_of::<pyo3::types::PyString>() {
+            return Ok(None);
+        }
+        self.d.del_item(key)?;
+        Ok(Some(v.extract::<String>()?))
+    }
+
     fn typed<T>(
         &mut self,
         key: &str,
@@ -998,8 +1011,21 @@ pub fn slice(o: &mut Opts) -> PyResult<stage::slice::Options> {
 }
 
 pub fn print(o: &mut Opts) -> PyResult<stage::print::Options> {
+    use stage::print::DisplayFit;
     let job = job(o)?;
+    // fit="auto" fills the display, fit="keep" prints as drawn; a number is the longest side.
+    let display_fit = match o.word("fit")?.as_deref() {
+        None => DisplayFit::Shrink,
+        Some("auto") => DisplayFit::Fill,
+        Some("keep") => DisplayFit::Keep,
+        Some(other) => {
+            return Err(crate::error(format!(
+                "fit={other:?}: expected the longest side in mm, \"auto\" or \"keep\""
+            )))
+        }
+    };
     Ok(stage::print::Options {
+        display_fit,
         shape: solid_shape(o)?,
         name: Some(job.name.clone()),
         job,

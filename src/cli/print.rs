@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args as ClapArgs;
 
 use super::input::ReadArgs;
@@ -34,6 +34,7 @@ pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
     let opts = print::Options {
         shape: args.shape.shape(args.supports.options()?)?,
+        display_fit: args.shape.display_fit(),
         job,
         name: Some(args.network.display().to_string()),
     };
@@ -44,6 +45,10 @@ pub fn run(args: Args) -> Result<()> {
         &opts.job.name,
         |archive, _| print::run(&net, &opts, archive, &Bar::new()),
     )
-    .with_context(within)?;
+    // Errors of the plate already name the network.
+    .map_err(|e| match format!("{e:#}").starts_with(&within()) {
+        true => e,
+        false => e.context(within()),
+    })?;
     args.job.finish(&sliced, &opts.job.printer, &args.output)
 }

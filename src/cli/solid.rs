@@ -10,6 +10,7 @@ use super::input::ReadArgs;
 use super::progress::Bar;
 use super::venation::write_json;
 use lamina::mesh::io::write_mesh;
+use lamina::stage::print::DisplayFit;
 use lamina::stage::solid::{self, Base, Shape, SupportOptions, DEFAULT_CELL};
 
 #[derive(ClapArgs)]
@@ -50,9 +51,11 @@ pub struct ShapeArgs {
     /// Add a base under the root: cylinder:DIAMETER,HEIGHT in mm
     #[arg(long, value_name = "cylinder:D,H")]
     pub base: Option<String>,
-    /// Scale so the longest side of the veins (and blade) is this many mm
+    /// Scale so the longest side of the veins (and blade) is this many mm. `print` also takes
+    /// `auto` (the largest size the display takes) and `keep` (as drawn; refused when too
+    /// big), and without it shrinks a network too big for the display to fit
     #[arg(long, value_name = "MM")]
-    pub fit: Option<f64>,
+    pub fit: Option<String>,
     /// Stand the leaf up for printing: its +y becomes +z
     #[arg(long)]
     pub upright: bool,
@@ -64,14 +67,45 @@ pub struct ShapeArgs {
 impl ShapeArgs {
     /// The stage's shape options, with the supports asked for.
     pub fn shape(&self, supports: Option<SupportOptions>) -> Result<Shape> {
+        let fit = match self.fit.as_deref() {
+            None | Some("auto" | "keep") => None,
+            Some(mm) => Some(mm.parse::<f64>().map_err(|_| {
+                anyhow::anyhow!(
+                    "--fit {mm}: expected the longest side in mm (or, for print, auto or keep)"
+                )
+            })?),
+        };
         Ok(Shape {
             lamina: self.lamina,
             base: self.base.as_deref().map(parse_base).transpose()?,
-            fit: self.fit,
+            fit,
             upright: self.upright,
             radius: self.radius,
             supports,
         })
+    }
+}
+
+impl ShapeArgs {
+    /// How `print` sizes the network for the display (`--fit auto`, `--fit keep`, or shrunk
+    /// when too big).
+    pub fn display_fit(&self) -> DisplayFit {
+        match self.fit.as_deref() {
+            Some("auto") => DisplayFit::Fill,
+            Some("keep") => DisplayFit::Keep,
+            _ => DisplayFit::Shrink,
+        }
+    }
+
+    /// Refuses the words only `print` knows (`solid` does not know the display).
+    pub fn fit_in_mm(&self) -> Result<()> {
+        if let Some(word @ ("auto" | "keep")) = self.fit.as_deref() {
+            bail!(
+                "--fit {word}: only print sizes to its display; give the longest side in mm \
+                 (the DMP-SL's display is 67.2 × 37.8 mm, 100 mm tall)"
+            );
+        }
+        Ok(())
     }
 }
 
@@ -141,6 +175,7 @@ pub fn parse_base(text: &str) -> Result<Base> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    args.shape.fit_in_mm()?;
     let net = args.weld.network(&args.network)?.network;
     let opts = solid::Options {
         cell: args.cell,

@@ -17,16 +17,32 @@ use serde_json::json;
 
 use super::slice::{slice_job, Archive, Error as SliceJobError, JobOptions, Sliced, Source};
 use super::solid::{shapes_with_supports, Error as SolidStageError, Shape};
-use crate::fabricate::slice::arrange_boxes;
 use crate::fabricate::slice::shapes::Placed;
+use crate::fabricate::slice::{arrange_boxes, fitting_scale, SliceError};
+use crate::fabricate::solid::shapes;
 use crate::stage::Progress;
 use crate::Network;
+
+/// How a network that `Shape::fit` does not size is sized for the display.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DisplayFit {
+    /// As drawn when it fits; scaled down to the largest size that fits when it does not
+    /// (said in a note).
+    #[default]
+    Shrink,
+    /// Scaled, up or down, to the largest size that fits (`--fit auto`).
+    Fill,
+    /// As drawn: a network too big for the display is refused, with the factor that would fit.
+    Keep,
+}
 
 /// The solid and the job. `Default` is the command's defaults.
 #[derive(Clone, Debug, Default)]
 pub struct Options {
     /// What the solid or tree is made of.
     pub shape: Shape,
+    /// How the network is sized when `shape.fit` is `None`.
+    pub display_fit: DisplayFit,
     /// The printer, plate and estimate settings.
     pub job: JobOptions,
     /// The network's name in print.json (its path). Default "network".
@@ -65,9 +81,52 @@ pub fn run(
     opts.job.check().map_err(SliceJobError::from)?;
     let printer = &opts.job.printer;
     // The outline's distance buckets are sized by the cell; the pixel is the cell here.
-    let solid_opts = opts.shape.solid_options(printer.pixel_mm);
-    let (made, supports, mut notes) =
-        shapes_with_supports(net, &solid_opts, &opts.shape, printer, progress)?;
+    let name = opts.name.clone().unwrap_or_else(|| "network".into());
+    let mut shape = opts.shape.clone();
+    let mut sized = None;
+    if shape.fit.is_none() && opts.display_fit != DisplayFit::Keep {
+        // The model as drawn (supports follow its size, and stay under it): the factor that
+        // fits its box, as the longest side `fit` sets.
+        let drawn =
+            shapes(net, &shape.solid_options(printer.pixel_mm)).map_err(SolidStageError::from)?;
+        let drawn_size = drawn.drawn_size;
+        let (lo, hi) = Placed::new(drawn, shape.upright).bounds();
+        let factor = fitting_scale(hi - lo, printer);
+        if factor.is_finite() && (factor < 1.0 || opts.display_fit == DisplayFit::Fill) {
+            shape.fit = Some(factor * drawn_size);
+            sized = Some((hi - lo, factor));
+        }
+    }
+    let mut solid_opts = shape.solid_options(printer.pixel_mm);
+    let (mut made, mut supports, mut notes) =
+        shapes_with_supports(net, &solid_opts, &shape, printer, progress)?;
+    // A base or a lamina does not scale with the veins, nor do the supports' feet exactly:
+    // where the sized model still does not fit, shrink it by what is left (a few times).
+    for _ in 0..3 {
+        let (lo, hi) = Placed::new(made.clone(), shape.upright).bounds();
+        let factor = fitting_scale(hi - lo, printer);
+        let (Some(fit), true) = (shape.fit.filter(|_| sized.is_some()), factor < 1.0) else {
+            break;
+        };
+        shape.fit = Some(fit * factor);
+        solid_opts = shape.solid_options(printer.pixel_mm);
+        (made, supports, notes) =
+            shapes_with_supports(net, &solid_opts, &shape, printer, progress)?;
+    }
+    if let (Some((size, _)), Some(fit)) = (sized, shape.fit) {
+        let how = match opts.display_fit {
+            DisplayFit::Fill => "scaled to fill the display",
+            _ => "too big for the display, scaled down to fit",
+        };
+        notes.insert(
+            0,
+            format!(
+                "{name}: {:.2} × {:.2} × {:.2} mm as drawn, {how}: × {:.4}, its longest side \
+                 {fit:.2} mm (give fit= in mm for another size)",
+                size.x, size.y, size.z, made.scale
+            ),
+        );
+    }
     let (scale, min_radius, max_radius) = (made.scale, made.min_radius, made.max_radius);
     if min_radius < printer.pixel_mm {
         notes.push(format!(
@@ -76,7 +135,6 @@ pub fn run(
             printer.pixel_mm
         ));
     }
-    let name = opts.name.clone().unwrap_or_else(|| "network".into());
     let path = std::path::PathBuf::from(&name);
     let model = Placed::new(made, opts.shape.upright);
     let (lo, hi) = model.bounds();
@@ -87,7 +145,13 @@ pub fn run(
         opts.job.gap,
         false,
     )
-    .map_err(SliceJobError::from)?;
+    .map_err(|mut e| {
+        // A network is scaled by fit=, not scale=.
+        if let SliceError::TooBig { hint, .. } | SliceError::TooTall { hint, .. } = &mut e {
+            *hint = "fit= auto, or fit= in mm";
+        }
+        SliceJobError::from(e)
+    })?;
     let source = Source::Shapes {
         model: &model,
         path: &path,

@@ -436,7 +436,22 @@ fn slice_refuses_open_meshes_and_models_that_do_not_fit() -> TestResult {
         out.to_str().ok_or("p")?,
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("does not fit"), "{}", stderr(&o));
+    // 80 × 50 mm on 67.2 × 37.8 mm less a pixel each side: 37.73 / 50 straight, the factor
+    // said; sliced at that scale it fits.
+    let said = "scaled by 0.7546 or less it would (--scale)";
+    assert!(
+        stderr(&o).contains("does not fit") && stderr(&o).contains(said),
+        "{}",
+        stderr(&o)
+    );
+    run_ok(&[
+        "slice",
+        big.to_str().ok_or("p")?,
+        "--scale",
+        "0.7546",
+        "-o",
+        dir.path().join("scaled.sl1").to_str().ok_or("p")?,
+    ])?;
 
     let bar = dir.path().join("bar.stl");
     write_mesh(&cuboid(DVec3::ZERO, DVec3::new(30.0, 10.0, 2.0)), &bar, 256)?;
@@ -650,6 +665,69 @@ fn print_samples_the_true_sections_of_a_standing_vein_and_repeats_its_bytes() ->
         Ok(out)
     };
     assert_eq!(layer(&a, "a00050.png")?, layer(&b, "b00050.png")?);
+    Ok(())
+}
+
+#[test]
+fn print_sizes_a_network_to_the_display_and_says_so() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let out = dir.path().join("job.sl1");
+    let out_s = out.to_str().ok_or("p")?;
+    let report = dir.path().join("print.json");
+    let report_s = report.to_str().ok_or("p")?;
+    // The display less a pixel at each side, mm.
+    let (w, h) = (1920.0 * 0.035 - 0.07, 1080.0 * 0.035 - 0.07);
+
+    // A vein 202 mm long (balls of 1 mm at its ends) lying flat: shrunk to the display's
+    // width by default, and said.
+    let long = vein(dir.path(), [0.0, 0.0, 0.0], [200.0, 0.0, 0.0], 1.0)?;
+    let o = lamina(&["print", &long, "-o", out_s, "--report", report_s]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("too big for the display, scaled down to fit: × 0.3323"),
+        "{}",
+        stderr(&o)
+    );
+    let scale = json(&report)?["solid"]["scale"].as_f64().ok_or("scale")?;
+    assert!((scale - w / 202.0).abs() < 1e-12, "scale {scale}");
+
+    // As drawn on request: refused, naming the factor and the flags, nothing written.
+    std::fs::remove_file(&out)?;
+    let o = lamina(&["print", &long, "-o", out_s, "--fit", "keep"]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("202.00 × 2.00 mm does not fit") && e.contains("scaled by 0.3323 or less"),
+        "{e}"
+    );
+    assert!(
+        e.contains("--fit auto") && e.matches("vein.json").count() == 1,
+        "{e}"
+    );
+    assert!(!out.exists());
+
+    // A vein 10.6 mm long fits as drawn, and `--fit auto` fills the display's width.
+    let short = vein(dir.path(), [0.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.3)?;
+    let o = lamina(&["print", &short, "-o", out_s, "--report", report_s]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("scaled"), "{}", stderr(&o));
+    assert_eq!(json(&report)?["solid"]["scale"], 1.0);
+    let o = lamina(&[
+        "print", &short, "-o", out_s, "--report", report_s, "--fit", "auto",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("scaled to fill the display"),
+        "{}",
+        stderr(&o)
+    );
+    let scale = json(&report)?["solid"]["scale"].as_f64().ok_or("scale")?;
+    assert!((scale - w / 10.6).abs() < 1e-12 && w / 10.6 < h / 0.6);
+
+    // `solid` has no display to fit.
+    let o = lamina(&["solid", &short, "-o", "x.stl", "--fit", "auto"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("only print sizes to its display"));
     Ok(())
 }
 

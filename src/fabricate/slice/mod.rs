@@ -74,6 +74,16 @@ impl Default for Printer {
     }
 }
 
+/// The largest factor a model `size` mm across can be scaled by and still print on
+/// `printer`: on the display either way round, a pixel clear of each side, and under the
+/// printer's height. Infinite for a model of no size.
+pub fn fitting_scale(size: DVec3, printer: &Printer) -> f64 {
+    let area = printer.area() - DVec2::splat(2.0 * printer.pixel_mm);
+    let within = |w: f64, h: f64| (area.x / w).min(area.y / h);
+    let flat = within(size.x, size.y).max(within(size.y, size.x));
+    flat.min(printer.max_height_mm / size.z)
+}
+
 impl Printer {
     /// The display, mm.
     pub fn area(&self) -> DVec2 {
@@ -166,7 +176,8 @@ pub enum SliceError {
         b: [f64; 3],
     },
     #[error(
-        "{}: {size_x:.2} × {size_y:.2} mm does not fit the {area_x:.2} × {area_y:.2} mm display",
+        "{}: {size_x:.2} × {size_y:.2} mm does not fit the {area_x:.2} × {area_y:.2} mm \
+         display; scaled by {fits_at:.4} or less it would ({hint})",
         path.display()
     )]
     TooBig {
@@ -175,12 +186,24 @@ pub enum SliceError {
         size_y: f64,
         area_x: f64,
         area_y: f64,
+        /// The largest factor at which it fits ([`fitting_scale`]).
+        fits_at: f64,
+        /// The option that scales it (`scale=` for meshes).
+        hint: &'static str,
     },
-    #[error("{}: {height:.2} mm tall; the printer builds at most {max:.2} mm", path.display())]
+    #[error(
+        "{}: {height:.2} mm tall; the printer builds at most {max:.2} mm; scaled by \
+         {fits_at:.4} or less it would ({hint})",
+        path.display()
+    )]
     TooTall {
         path: PathBuf,
         height: f64,
         max: f64,
+        /// The largest factor at which it fits ([`fitting_scale`]).
+        fits_at: f64,
+        /// The option that scales it (`scale=` for meshes).
+        hint: &'static str,
     },
     #[error(
         "{placed} of {wanted} models fit side by side on the {area_x:.2} × {area_y:.2} mm \
@@ -260,6 +283,8 @@ pub fn arrange_boxes(
                 path: path.to_path_buf(),
                 height: size.z,
                 max: printer.max_height_mm,
+                fits_at: fitting_scale(size, printer),
+                hint: "scale=",
             });
         }
         let layers = size.z / printer.layer_mm;
@@ -279,6 +304,8 @@ pub fn arrange_boxes(
                 size_y: size.y,
                 area_x: area.x,
                 area_y: area.y,
+                fits_at: fitting_scale(size, printer),
+                hint: "scale=",
             });
         }
     }

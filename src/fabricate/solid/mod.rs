@@ -222,6 +222,9 @@ pub struct Shapes {
     pub prims: Vec<Primitive>,
     /// Factor the network was scaled by (`--fit`), 1 otherwise.
     pub scale: f64,
+    /// The longest side of the veins' box (and the blade's) as drawn, mm: `fit` makes it
+    /// `fit` mm.
+    pub drawn_size: f64,
     /// Radius at each end of each edge, after scaling.
     pub ends: Vec<[f64; 2]>,
     pub min_radius: f64,
@@ -306,25 +309,24 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
         Some(_) => Some(outline(net)?),
         None => None,
     };
-    let scale = match opts.fit {
-        Some(size) => {
-            let mut lo = DVec3::splat(f64::INFINITY);
-            let mut hi = DVec3::splat(f64::NEG_INFINITY);
-            for (e, r) in net.edges.iter().zip(&ends) {
-                for (i, r) in [(e.a, r[0]), (e.b, r[1])] {
-                    let p = net.nodes[i as usize].p;
-                    lo = lo.min(p - DVec3::splat(r));
-                    hi = hi.max(p + DVec3::splat(r));
-                }
+    // The longest side of the veins (and blade) as drawn: what `fit` sets.
+    let drawn_size = {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for (e, r) in net.edges.iter().zip(&ends) {
+            for (i, r) in [(e.a, r[0]), (e.b, r[1])] {
+                let p = net.nodes[i as usize].p;
+                lo = lo.min(p - DVec3::splat(r));
+                hi = hi.max(p + DVec3::splat(r));
             }
-            for p in outline.iter().flatten() {
-                lo = lo.min(p.extend(lo.z));
-                hi = hi.max(p.extend(hi.z));
-            }
-            size / (hi - lo).max_element()
         }
-        None => 1.0,
+        for p in outline.iter().flatten() {
+            lo = lo.min(p.extend(lo.z));
+            hi = hi.max(p.extend(hi.z));
+        }
+        (hi - lo).max_element()
     };
+    let scale = opts.fit.map_or(1.0, |size| size / drawn_size);
     let points: Vec<DVec3> = net.nodes.iter().map(|v| v.p * scale).collect();
     let ends: Vec<[f64; 2]> = ends.iter().map(|r| r.map(|r| r * scale)).collect();
     let (min_radius, max_radius) = ends
@@ -393,6 +395,7 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
     Ok(Shapes {
         prims,
         scale,
+        drawn_size,
         ends,
         min_radius,
         max_radius,
@@ -421,6 +424,7 @@ pub fn solid_of(
     let Shapes {
         prims,
         scale,
+        drawn_size: _,
         ends,
         min_radius,
         max_radius,
