@@ -430,8 +430,8 @@ def test_solid_slice_and_print_equal_cli(tmp_path):
     assert straight["sl1"] == (tmp_path / "lamina.sl1").read_bytes()
     # fit="auto" fills the display, as --fit auto; fit="keep" refuses what does not fit.
     filled = lamina.print(net, fit="auto")
-    cli(tmp_path, "print", SMALL_LOOP, "--fit", "auto", "-o", "auto.sl1")
-    assert filled["sl1"] == (tmp_path / "auto.sl1").read_bytes()
+    cli(tmp_path, "print", SMALL_LOOP, "--fit", "auto", "-o", "lamina.sl1")
+    assert filled["sl1"] == (tmp_path / "lamina.sl1").read_bytes()
     assert filled["report"]["solid"]["scale"] > 1
     with pytest.raises(lamina.LaminaError, match=r"fit= auto, or fit= in mm"):
         lamina.print(net, fit=1000, upright=True)
