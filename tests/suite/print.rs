@@ -411,6 +411,33 @@ fn overlapping_shells_print_as_their_union() -> TestResult {
 }
 
 #[test]
+fn a_model_a_hair_over_whole_layers_gets_no_empty_last_layer() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let stl = dir.path().join("block.stl");
+    // 2 mm and 1.2 µm tall (dipping 1.2 µm below the plate, as a simplified mesh may): 40
+    // layers of 0.05 mm, every one the block's full 25 mm² (a 41st would be blank).
+    let block = cuboid(DVec3::new(0.0, 0.0, -0.0012), DVec3::new(5.0, 5.0, 2.0));
+    write_mesh(&block, &stl, 256)?;
+    let report = dir.path().join("print.json");
+    run_ok(&[
+        "slice",
+        stl.to_str().ok_or("p")?,
+        "-o",
+        dir.path().join("job.sl1").to_str().ok_or("p")?,
+        "--report",
+        report.to_str().ok_or("p")?,
+    ])?;
+    let r = json(&report)?;
+    let areas = r["layer_area_mm2"].as_array().ok_or("areas")?;
+    assert_eq!(areas.len(), 40);
+    for (i, a) in areas.iter().enumerate() {
+        let a = a.as_f64().ok_or("area")?;
+        assert!((a - 25.0).abs() < 0.05, "layer {i}: {a} mm²");
+    }
+    Ok(())
+}
+
+#[test]
 fn slice_refuses_open_meshes_and_models_that_do_not_fit() -> TestResult {
     let dir = tempfile::tempdir()?;
     let out = dir.path().join("job.sl1");

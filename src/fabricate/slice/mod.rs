@@ -588,7 +588,14 @@ pub fn layer_count(models: &[Model], printer: &Printer) -> usize {
         .iter()
         .map(|m| m.mesh.bbox().size().z)
         .fold(0.0, f64::max);
-    ((height / printer.layer_mm) - 1e-9).ceil().max(1.0) as usize
+    layers_for(height, printer.layer_mm)
+}
+
+/// Layers a model `height` mm tall takes at `layer` mm: those whose middle, where each layer
+/// is sampled, lies below its top (at least one). A layer above that would be empty: a mesh
+/// 1.2 µm over a whole number of layers gets no blank last layer.
+pub fn layers_for(height: f64, layer: f64) -> usize {
+    (height / layer - 0.5).ceil().max(1.0) as usize
 }
 
 /// Slices the placed models and hands each layer, in order, to `sink`. Layers are made in
@@ -741,6 +748,16 @@ fn crossing(mesh: &TriMesh, a: u32, b: u32, z: f64) -> DVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_layer_is_counted_only_when_its_middle_is_below_the_top() {
+        // 20 layers and 1.2 µm: the 21st layer's middle (1.025) is above the top.
+        assert_eq!(layers_for(1.0012, 0.05), 20);
+        assert_eq!(layers_for(1.0, 0.05), 20);
+        assert_eq!(layers_for(1.026, 0.05), 21);
+        assert_eq!(layers_for(4.6, 0.05), 92);
+        assert_eq!(layers_for(0.01, 0.05), 1);
+    }
 
     #[test]
     fn batches_reach_the_sink_in_order_and_stop_at_its_first_error() {

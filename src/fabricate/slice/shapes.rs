@@ -208,7 +208,7 @@ impl Placed {
 /// How many layers the placed solid needs.
 pub fn layer_count(model: &Placed, printer: &Printer) -> usize {
     let (lo, hi) = model.bounds();
-    (((hi.z - lo.z) / printer.layer_mm) - 1e-9).ceil().max(1.0) as usize
+    super::layers_for(hi.z - lo.z, printer.layer_mm)
 }
 
 /// Slices the placed copies of the solid and hands each layer, in order, to `sink`; layers are
