@@ -288,15 +288,18 @@ fn main() {
     let started = Arc::new(AtomicU64::new(0));
     let started_cpu = Arc::new(AtomicU64::new(0));
     let busy = Arc::new(AtomicBool::new(false));
+    // Runs of the current target so far, for the line a stop prints.
+    let done = Arc::new(AtomicU64::new(0));
     let current = Arc::new(std::sync::Mutex::new(PathBuf::new()));
     let clock = Instant::now();
     {
-        let (started, started_cpu, busy, current, root) = (
+        let (started, started_cpu, busy, current, root, done) = (
             started.clone(),
             started_cpu.clone(),
             busy.clone(),
             current.clone(),
             root.clone(),
+            done.clone(),
         );
         std::thread::spawn(move || loop {
             std::thread::sleep(Duration::from_millis(100));
@@ -313,8 +316,9 @@ fn main() {
                 let input = std::fs::read(&path).unwrap_or_default();
                 match TARGETS.iter().find(|t| t.name == name) {
                     Some(target) => eprintln!(
-                        "fuzz: an input ran {cpu} ms of CPU time, {wall} ms of wall time; kept \
-                         as {}",
+                        "fuzz: {name}: after {} runs without a failure, an input ran {cpu} ms \
+                         of CPU time, {wall} ms of wall time; kept as {}",
+                        done.load(Ordering::Relaxed),
                         keep(&root, target, &input, "hang").display()
                     ),
                     None => eprintln!(
@@ -343,6 +347,7 @@ fn main() {
         *current.lock().expect("not poisoned") = path.clone();
         let begin = Instant::now();
         let (mut runs, mut slowest, mut slowest_cpu) = (0u64, Duration::ZERO, 0u64);
+        done.store(0, Ordering::Relaxed);
         while runs < args.runs && begin.elapsed().as_secs_f64() < args.seconds {
             let seed = &seeds[rng.below(seeds.len())];
             let input = mutate(seed, &mut rng);
@@ -361,9 +366,15 @@ fn main() {
             slowest = slowest.max(took);
             slowest_cpu = slowest_cpu.max(cpu_millis().saturating_sub(cpu));
             runs += 1;
+            done.store(runs, Ordering::Relaxed);
             if outcome.is_err() {
                 let kept = keep(&root, target, &input, "panic");
-                eprintln!("fuzz: {}: a panic; kept as {}", target.name, kept.display());
+                eprintln!(
+                    "fuzz: {}: after {} runs without a failure, a panic; kept as {}",
+                    target.name,
+                    runs - 1,
+                    kept.display()
+                );
                 failed = true;
                 break;
             }
