@@ -101,11 +101,13 @@ pub fn run(
     let (mut made, mut supports, mut notes) =
         shapes_with_supports(net, &solid_opts, &shape, printer, progress)?;
     // A base or a lamina does not scale with the veins, nor do the supports' feet exactly:
-    // where the sized model still does not fit, shrink it by what is left (a few times).
+    // where the sized model still does not fit, shrink it by what is left (a few times). The
+    // veins alone come out at a factor of 1 to rounding (the margin of a pixel absorbs that).
     for _ in 0..3 {
         let (lo, hi) = Placed::new(made.clone(), shape.upright).bounds();
         let factor = fitting_scale(hi - lo, printer);
-        let (Some(fit), true) = (shape.fit.filter(|_| sized.is_some()), factor < 1.0) else {
+        let short = factor < 1.0 - 1e-9;
+        let (Some(fit), true) = (shape.fit.filter(|_| sized.is_some()), short) else {
             break;
         };
         shape.fit = Some(fit * factor);
