@@ -94,7 +94,7 @@ pub fn run(
         let factor = fitting_scale(hi - lo, printer);
         if factor.is_finite() && (factor < 1.0 || opts.display_fit == DisplayFit::Fill) {
             shape.fit = Some(factor * drawn_size);
-            sized = Some((hi - lo, factor));
+            sized = Some(hi - lo);
         }
     }
     let mut solid_opts = shape.solid_options(printer.pixel_mm);
@@ -104,18 +104,20 @@ pub fn run(
     // where the sized model still does not fit, shrink it by what is left (a few times). The
     // veins alone come out at a factor of 1 to rounding (the margin of a pixel absorbs that).
     for _ in 0..3 {
-        let (lo, hi) = Placed::new(made.clone(), shape.upright).bounds();
-        let factor = fitting_scale(hi - lo, printer);
-        let short = factor < 1.0 - 1e-9;
-        let (Some(fit), true) = (shape.fit.filter(|_| sized.is_some()), short) else {
+        let Some(fit) = shape.fit.filter(|_| sized.is_some()) else {
             break;
         };
+        let (lo, hi) = Placed::new(made.clone(), shape.upright).bounds();
+        let factor = fitting_scale(hi - lo, printer);
+        if factor >= 1.0 - 1e-9 {
+            break;
+        }
         shape.fit = Some(fit * factor);
         solid_opts = shape.solid_options(printer.pixel_mm);
         (made, supports, notes) =
             shapes_with_supports(net, &solid_opts, &shape, printer, progress)?;
     }
-    if let (Some((size, _)), Some(fit)) = (sized, shape.fit) {
+    if let (Some(size), Some(fit)) = (sized, shape.fit) {
         let how = match opts.display_fit {
             DisplayFit::Fill => "scaled to fill the display",
             _ => "too big for the display, scaled down to fit",
