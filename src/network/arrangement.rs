@@ -11,8 +11,9 @@ use std::ops::ControlFlow;
 
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
-use rstar::primitives::{GeomWithData, Rectangle};
+use rstar::primitives::GeomWithData;
 use rstar::{RTree, AABB};
+use static_aabb2d_index::StaticAABB2DIndexBuilder;
 
 use super::{Edge, Network, Node};
 use crate::geom::merge::merge_points;
@@ -87,8 +88,6 @@ fn plane(net: &Network, tol: f64) -> Option<(DVec3, DVec3, DVec3)> {
     }
     Some((o, u, n.cross(u)))
 }
-
-type Boxed = GeomWithData<Rectangle<[f64; 2]>, u32>;
 
 struct Flat {
     pts: Vec<DVec2>,
@@ -175,6 +174,9 @@ struct Cut {
     at: DVec3,
 }
 
+/// Children per node of the edge tree (8 queried fastest on a million-edge drawing, against
+/// 4, 16 and 32).
+const TREE_NODE: usize = 8;
 /// Edges per parallel task in the crossing search.
 const EDGE_CHUNK: usize = 4096;
 /// Tasks searched before the count is checked against the ceiling (fixed, so every machine
@@ -228,20 +230,20 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
         }
     }
     drop(seen);
-    let boxes: Vec<Boxed> = net
-        .edges
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| searched[*k])
-        .map(|(k, e)| {
-            let (a, b) = flat.seg(e);
-            let (lo, hi) = (a.min(b) - tol, a.max(b) + tol);
-            GeomWithData::new(
-                Rectangle::from_corners([lo.x, lo.y], [hi.x, hi.y]),
-                k as u32,
-            )
-        })
-        .collect();
+    // The searched edges' boxes in a packed Hilbert R-tree: on a million-edge drawing it is
+    // built in a third of the time of rstar's bulk load and queried in a third of the time.
+    let count = searched.iter().filter(|s| **s).count();
+    let mut built = StaticAABB2DIndexBuilder::new_with_node_size(count, TREE_NODE);
+    let mut item_edge: Vec<u32> = Vec::with_capacity(count);
+    for (k, e) in net.edges.iter().enumerate().filter(|(k, _)| searched[*k]) {
+        // Boxes as drawn; each query widens its own by the tolerance.
+        let (a, b) = flat.seg(e);
+        let (lo, hi) = (a.min(b), a.max(b));
+        built.add(lo.x, lo.y, hi.x, hi.y);
+        item_edge.push(k as u32);
+    }
+    // The builder fails only when it is given fewer or more boxes than it was told.
+    let tree = built.build().ok()?;
     // A node on an edge's interior is an end of some searched edge whose box meets that
     // edge's box, so the edge tree finds it; only nodes that end no searched edge (isolated
     // nodes, nodes of loops only) need a tree of their own.
@@ -256,7 +258,6 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
         .collect();
     drop(ends_an_edge);
     let loose = RTree::bulk_load(loose);
-    let tree = RTree::bulk_load(boxes);
     // Each edge finds the nodes on its interior (its T-junctions) and its proper crossings
     // with later edges whose boxes meet its own, so every defect is found once, by the task
     // holding the edge, in edge order. Tasks run in parallel a wave at a time; each keeps at
@@ -271,6 +272,7 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
         let last = (first + EDGE_CHUNK).min(net.edges.len());
         let mut on: Vec<(u32, f64)> = Vec::new();
         let mut others: Vec<u32> = Vec::new();
+        let mut stack: Vec<usize> = Vec::new();
         let edges = net.edges[first..last].iter().zip(&searched[first..last]);
         for (k, (e, _)) in (first..).zip(edges).filter(|(_, (_, s))| **s) {
             let k = k as u32;
@@ -290,15 +292,25 @@ fn find(net: &Network, tol: f64, keep: usize) -> Option<Found> {
                     }
                 }
             };
-            let _ = tree.locate_in_envelope_intersecting_int(&env, |g| {
-                let f = &net.edges[g.data as usize];
-                on_interior(f.a);
-                on_interior(f.b);
-                if g.data > k {
-                    others.push(g.data);
-                }
-                ControlFlow::<()>::Continue(())
-            });
+            tree.visit_query_with_stack(
+                lo.x,
+                lo.y,
+                hi.x,
+                hi.y,
+                &mut |item: usize| {
+                    let j = item_edge[item];
+                    if j == k {
+                        return;
+                    }
+                    let f = &net.edges[j as usize];
+                    on_interior(f.a);
+                    on_interior(f.b);
+                    if j > k {
+                        others.push(j);
+                    }
+                },
+                &mut stack,
+            );
             let _ = loose.locate_in_envelope_int(&env, |p| {
                 on_interior(p.data);
                 ControlFlow::<()>::Continue(())
