@@ -44,6 +44,12 @@ impl From<ShapeArg> for Shape {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+pub enum SweepByArg {
+    Blade,
+    Step,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum ModeArg {
     Open,
     Closed,
@@ -116,9 +122,10 @@ pub struct Args {
     /// on a surface the lowest vertex of each body]
     #[arg(long, value_name = "X,Y|V|tT|X,Y,Z")]
     pub root: Vec<String>,
-    /// Open venation grows trees; closed venation joins veins into loops
-    #[arg(long, value_enum, default_value = "closed")]
-    pub mode: ModeArg,
+    /// Open venation grows trees; closed venation joins veins into loops [default: closed, or
+    /// open with --sweep-r, as Peele's Figure 1]
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
     /// Output network (.json .obj .dxf .svg .png); with --sweep-r, a folder
     #[arg(short, long)]
     pub output: PathBuf,
@@ -177,9 +184,9 @@ pub struct Args {
     /// Blade size at the first step, as a fraction of the outline
     #[arg(long, default_value_t = 0.2)]
     pub initial_scale: f64,
-    /// Blade size added per step, as a fraction of the outline
-    #[arg(long, default_value_t = 0.005, conflicts_with_all = ["r", "sweep_r"])]
-    pub blade_rate: f64,
+    /// Blade size added per step, as a fraction of the outline [default: 0.005]
+    #[arg(long, conflicts_with = "r")]
+    pub blade_rate: Option<f64>,
     /// Peele's r = vein growth rate / leaf growth rate: sets --blade-rate from --step so the
     /// farthest margin point moves D / r per step
     #[arg(long, conflicts_with = "sweep_r")]
@@ -192,6 +199,14 @@ pub struct Args {
         conflicts_with_all = ["frames", "svg", "png", "report"]
     )]
     pub sweep_r: Vec<f64>,
+    /// With --sweep-r: leaves grown per r, from --seed up; sweep.json gets each measure's mean,
+    /// standard deviation, least and greatest per r
+    #[arg(long, value_name = "N", default_value_t = 1, requires = "sweep_r")]
+    pub seeds: usize,
+    /// With --sweep-r: what sets r, the blade's growth rate (D stays --step) or D (the blade
+    /// rate stays --blade-rate; Peele's way)
+    #[arg(long, value_enum, default_value = "blade", requires = "sweep_r")]
+    pub sweep_by: SweepByArg,
     /// Closed venation: longest loop-closing edge, mm [default: 2 × --kill]
     #[arg(long)]
     pub join_distance: Option<f64>,
@@ -257,8 +272,10 @@ pub fn options(args: &Args) -> Result<venation::Options> {
     };
     Ok(venation::Options {
         mode: match args.mode {
-            ModeArg::Open => Mode::Open,
-            ModeArg::Closed => Mode::Closed,
+            Some(ModeArg::Open) => Mode::Open,
+            Some(ModeArg::Closed) => Mode::Closed,
+            None if args.sweep_r.is_empty() => Mode::Closed,
+            None => Mode::Open,
         },
         root,
         step: args.step,
@@ -279,7 +296,7 @@ pub fn options(args: &Args) -> Result<venation::Options> {
             BladeArg::Marginal => BladeGrowth::Marginal,
         }),
         initial_scale: args.initial_scale,
-        blade_rate: args.blade_rate,
+        blade_rate: args.blade_rate.unwrap_or(0.005),
         r: args.r,
         join_distance: args.join_distance,
         join_angle: args.join_angle,
@@ -446,45 +463,109 @@ pub(super) fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(
     Ok(())
 }
 
-/// Peele Fig. 1: one leaf per r, side by side.
+/// Peele Fig. 1: one leaf per r and seed; the table of the two claims' measures per r, and a
+/// figure of the leaves side by side above those measures.
 fn sweep(args: &Args, outline: &Outline, opts: &venation::Options) -> Result<()> {
     let dir = &args.output;
-    let render = RenderOptions { size: args.size };
-    // Grown first: a refused option leaves no folder behind.
-    let leaves = venation::sweep(outline, opts, &args.sweep_r, &Bar::new())?;
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("-o {}: cannot create the folder", dir.display()))?;
-    let mut rows = Vec::new();
-    for swept in &leaves {
-        let (r, leaf) = (swept.r, &swept.grown.leaf);
-        let name = format!("r-{r}");
-        write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;
-        write_network(&leaf.network, &dir.join(format!("{name}.png")), &render)?;
-        let mut report = swept.grown.report.clone();
-        report.output = Some(dir.join(format!("{name}.json")).display().to_string());
-        let mut row = serde_json::to_value(&report)?;
-        row["r"] = json!(r);
-        row["blade_rate"] = json!(swept.blade_rate);
-        if !args.json {
+    // Checked and grown first: a refused option leaves no folder behind.
+    let by = match args.sweep_by {
+        SweepByArg::Blade if args.blade_rate.is_some() => anyhow::bail!(
+            "--blade-rate: a sweep by blade sets the blade rate from each r; --sweep-by step \
+             keeps it and sets D instead"
+        ),
+        SweepByArg::Blade => venation::SweepBy::Blade,
+        SweepByArg::Step if args.step.is_some() => anyhow::bail!(
+            "--step: a sweep by step sets D from each r; --sweep-by blade keeps it and sets the \
+             blade rate instead"
+        ),
+        SweepByArg::Step => venation::SweepBy::Step,
+    };
+    let leaves = venation::sweep(outline, opts, &args.sweep_r, by, args.seeds, &Bar::new())?;
+    let table = write_sweep(dir, &leaves, args.seeds, by, args.size)?;
+    if !args.json {
+        let mode = match opts.mode {
+            Mode::Open => "open",
+            Mode::Closed => "closed",
+        };
+        outln!(
+            "{mode} venation, r set by the {}, {} seed(s) per r from {}; per r the mean ± \
+             standard deviation:",
+            match by {
+                venation::SweepBy::Blade => "blade's growth rate",
+                venation::SweepBy::Step => "vein step D",
+            },
+            args.seeds,
+            args.seed
+        );
+        let rows = venation::sweep_table(&leaves);
+        for row in &rows {
             outln!(
-                "r = {r}: {} nodes, {} thick edges (radius > half the root's), {} loops",
-                leaf.network.nodes.len(),
-                leaf.quality.thick_edges,
-                leaf.quality.loops
+                "r = {}: {:.1} ± {:.1} dominant veins (radius ≥ half the petiole's), their radius \
+                 {:.3} ± {:.3} of the petiole's; zigzag {:.2} ± {:.2}°, turning {:.2} ± {:.2}°/mm \
+                 along dominant veins",
+                row.r,
+                row.dominant.mean,
+                row.dominant.sd,
+                row.dominant_radius_ratio.mean,
+                row.dominant_radius_ratio.sd,
+                row.zigzag_deg.mean,
+                row.zigzag_deg.sd,
+                row.turning_deg_per_mm.mean,
+                row.turning_deg_per_mm.sd
             );
         }
-        rows.push(row);
+        for line in venation::sweep_verdict(&rows) {
+            outln!("{line}");
+        }
     }
-    let table = json!({ "sweep": "peele-r", "leaves": rows });
-    write_json(&dir.join("sweep.json"), &table)?;
-    let svg = venation::contact_sheet(&leaves);
-    write_atomic(&dir.join("sweep.svg"), |w| {
-        std::io::Write::write_all(w, svg.as_bytes())
-    })?;
     if args.json {
         outln!("{table}");
     } else {
         outln!("wrote {}/sweep.json and sweep.svg", dir.display());
     }
     Ok(())
+}
+
+/// Writes a sweep into the folder `dir`: each leaf's network (JSON and a PNG `size` pixels
+/// long), sweep.json (each leaf's report with its r, seed, blade rate and D; the table per r;
+/// the verdict) and sweep.svg (the leaves and the measures). Returns sweep.json's value.
+pub fn write_sweep(
+    dir: &Path,
+    leaves: &[venation::SweptLeaf],
+    seeds: usize,
+    by: venation::SweepBy,
+    size: u32,
+) -> Result<serde_json::Value> {
+    let render = RenderOptions { size };
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("-o {}: cannot create the folder", dir.display()))?;
+    let mut rows = Vec::new();
+    for swept in leaves {
+        let (r, leaf) = (swept.r, &swept.grown.leaf);
+        let name = if seeds == 1 {
+            format!("r-{r}")
+        } else {
+            format!("r-{r}-seed-{}", swept.seed)
+        };
+        write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;
+        write_network(&leaf.network, &dir.join(format!("{name}.png")), &render)?;
+        let mut report = swept.grown.report.clone();
+        report.output = Some(dir.join(format!("{name}.json")).display().to_string());
+        let mut row = serde_json::to_value(&report)?;
+        row["r"] = json!(r);
+        row["seed"] = json!(swept.seed);
+        row["blade_rate"] = json!(swept.blade_rate);
+        row["step"] = json!(swept.step);
+        rows.push(row);
+    }
+    let table = venation::sweep_table(leaves);
+    let verdict = venation::sweep_verdict(&table);
+    let value =
+        json!({ "sweep": "peele-r", "by": by, "leaves": rows, "table": table, "verdict": verdict });
+    write_json(&dir.join("sweep.json"), &value)?;
+    let svg = venation::sweep_figure(leaves);
+    write_atomic(&dir.join("sweep.svg"), |w| {
+        std::io::Write::write_all(w, svg.as_bytes())
+    })?;
+    Ok(value)
 }

@@ -39,6 +39,91 @@ pub struct Quality {
     pub thick_edges: usize,
     /// Pairs of edges that cross or touch away from a shared node (in the XY projection).
     pub crossings: usize,
+    /// The veins, and the dominant ones among them (Peele's Figure 1).
+    pub veins: Veins,
+}
+
+/// Peele's Figure 1 made countable: "for lower vein growth rates, a smaller number of
+/// dominant, thicker veins tend to form", and "more chaotic vein patterns" at higher ones.
+///
+/// A vein is a maximal chain of edges through nodes of degree 2, between junctions and tips
+/// (a loop of degree-2 nodes is one vein). Its radius is its thickest edge's (under Murray's
+/// law, the radius at its thick end). It is dominant when that radius is at least half the
+/// petiole's: the thickest edge at a root, or the thickest edge of all when there is no root.
+/// A network without radii has no dominant vein.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Veins {
+    /// Veins of any radius.
+    pub count: usize,
+    /// The petiole's radius, mm.
+    pub petiole_radius: f64,
+    /// Dominant veins.
+    pub dominant: usize,
+    /// The dominant veins' mean radius over the petiole's (0 when there are none).
+    pub dominant_radius_ratio: f64,
+    /// The dominant veins' length, mm.
+    pub dominant_length: f64,
+    /// Turning along the dominant veins per unit length, degrees per mm: the sum over their
+    /// inner nodes of the angle between the edges in and out, over their length (0 when they
+    /// have no length).
+    pub dominant_turning_deg_per_mm: f64,
+}
+
+impl Veins {
+    /// Measures `net`; its first `roots` nodes are roots.
+    pub fn of(net: &Network, roots: usize) -> Veins {
+        let roots = roots.min(net.nodes.len()) as u32;
+        let petiole_radius = net
+            .edges
+            .iter()
+            .filter(|e| roots == 0 || e.a < roots || e.b < roots)
+            .map(|e| e.radius)
+            .fold(0.0, f64::max);
+        let chains = net.chains();
+        let mut out = Veins {
+            count: chains.len(),
+            petiole_radius,
+            ..Default::default()
+        };
+        if petiole_radius <= 0.0 {
+            return out;
+        }
+        let mut radius_sum = 0.0;
+        let mut turning = 0.0;
+        for chain in &chains {
+            let radius = chain
+                .edges
+                .iter()
+                .map(|&k| net.edges[k as usize].radius)
+                .fold(0.0, f64::max);
+            if radius < 0.5 * petiole_radius {
+                continue;
+            }
+            out.dominant += 1;
+            radius_sum += radius;
+            let p: Vec<DVec3> = chain
+                .nodes
+                .iter()
+                .map(|&v| net.nodes[v as usize].p)
+                .collect();
+            out.dominant_length += p.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
+            // The turns at the inner nodes; a loop also turns where it starts.
+            let mut turns: Vec<[DVec3; 3]> = p.windows(3).map(|w| [w[0], w[1], w[2]]).collect();
+            if chain.is_closed() {
+                turns.push([p[p.len() - 2], p[0], p[1]]);
+            }
+            for [a, b, c] in turns {
+                turning += angle_deg(b - a, c - b);
+            }
+        }
+        if out.dominant > 0 {
+            out.dominant_radius_ratio = radius_sum / out.dominant as f64 / petiole_radius;
+        }
+        if out.dominant_length > 0.0 {
+            out.dominant_turning_deg_per_mm = turning / out.dominant_length;
+        }
+        out
+    }
 }
 
 impl Quality {
@@ -59,7 +144,7 @@ impl Quality {
             *by_degree.entry(adj.degree(v as u32)).or_default() += 1;
             if legs.len() == 2 {
                 // Turning angle: 0 for a straight vein.
-                let turn = (-legs[0].dot(legs[1])).clamp(-1.0, 1.0).acos().to_degrees();
+                let turn = angle_deg(-legs[0], legs[1]);
                 turns += 1;
                 turn_sum += turn;
                 max_turn = max_turn.max(turn);
@@ -105,6 +190,7 @@ impl Quality {
             max_turn_deg: max_turn,
             thick_edges,
             crossings: crossings(net),
+            veins: Veins::of(net, roots),
         }
     }
 
@@ -133,8 +219,24 @@ impl Quality {
                 "zigzag index: {:.2}° mean turn along veins (max {:.1}°)",
                 self.zigzag_deg, self.max_turn_deg
             ),
+            format!(
+                "veins: {}, {} dominant (radius at least half the petiole's {:.3} mm), their \
+                 mean radius {:.3} of the petiole's, turning {:.2}°/mm along them",
+                self.veins.count,
+                self.veins.dominant,
+                self.veins.petiole_radius,
+                self.veins.dominant_radius_ratio,
+                self.veins.dominant_turning_deg_per_mm
+            ),
         ]
     }
+}
+
+/// The angle between two directions, degrees (0 when either has no length). From the sine and
+/// the cosine together: exact for the nearly straight turns veins mostly make, where an arc
+/// cosine would magnify the rounding of the dot product a million times.
+fn angle_deg(u: DVec3, v: DVec3) -> f64 {
+    u.cross(v).length().atan2(u.dot(v)).to_degrees()
 }
 
 type EdgeBox = GeomWithData<Rectangle<[f64; 2]>, u32>;
@@ -250,5 +352,71 @@ mod tests {
         assert_eq!(q.not_y_or_i, 1);
         assert_eq!(q.sharp_joints, 1, "legs to (11, 0) and (11, 0.1)");
         assert_eq!(q.open_tips, 8);
+    }
+
+    fn with_radii(mut net: Network, radii: &[f64]) -> Network {
+        for (e, &r) in net.edges.iter_mut().zip(radii) {
+            e.radius = r;
+        }
+        net
+    }
+
+    #[test]
+    fn veins_dominant_ones_and_their_turning_are_measured() {
+        // A petiole (radius 1) to a junction; from it a straight vein (0.8) to a second
+        // junction and a thin side vein (0.3); from the second junction a wiggly vein (0.6)
+        // of three 5-mm zigzags and a thin side vein (0.2). Dominant: radius ≥ 0.5.
+        let tree = with_radii(
+            net(
+                &[
+                    (0.0, 0.0),
+                    (0.0, 10.0),
+                    (0.0, 20.0),
+                    (10.0, 10.0),
+                    (3.0, 24.0),
+                    (0.0, 28.0),
+                    (3.0, 32.0),
+                    (-10.0, 20.0),
+                ],
+                &[(0, 1), (1, 2), (1, 3), (2, 4), (4, 5), (5, 6), (2, 7)],
+            ),
+            &[1.0, 0.8, 0.3, 0.6, 0.6, 0.6, 0.2],
+        );
+        let v = Veins::of(&tree, 1);
+        assert_eq!((v.count, v.dominant), (5, 3));
+        assert_eq!(v.petiole_radius, 1.0);
+        assert!((v.dominant_radius_ratio - 0.8).abs() < 1e-15);
+        assert!((v.dominant_length - 35.0).abs() < 1e-12);
+        // Each zigzag corner turns by acos(0.6·(−0.6) + 0.8·0.8) = acos(0.28) = 73.74°.
+        let turning = 2.0 * 0.28f64.acos().to_degrees() / 35.0;
+        assert!((v.dominant_turning_deg_per_mm - turning).abs() < 1e-12);
+        // The same drawing without a root: the petiole is the thickest edge.
+        assert_eq!(Veins::of(&tree, 0), v);
+        // Half the petiole's radius exactly is dominant; a hair under it is not.
+        let mut at_half = tree.clone();
+        at_half.edges[2].radius = 0.5;
+        assert_eq!(Veins::of(&at_half, 1).dominant, 4);
+        at_half.edges[2].radius = 0.5 - 1e-12;
+        assert_eq!(Veins::of(&at_half, 1).dominant, 3);
+    }
+
+    #[test]
+    fn a_loop_is_one_vein_that_turns_at_every_corner() {
+        let square = with_radii(
+            net(
+                &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],
+                &[(0, 1), (1, 2), (2, 3), (3, 0)],
+            ),
+            &[0.5; 4],
+        );
+        let v = Veins::of(&square, 1);
+        assert_eq!((v.count, v.dominant), (1, 1));
+        assert!((v.dominant_turning_deg_per_mm - 90.0).abs() < 1e-12);
+        // Without radii nothing is dominant.
+        let bare = Veins::of(&with_radii(square, &[0.0; 4]), 1);
+        assert_eq!(
+            (bare.count, bare.dominant, bare.dominant_length),
+            (1, 0, 0.0)
+        );
     }
 }

@@ -258,12 +258,16 @@ impl Options {
 /// The blade rate that makes Peele's r = D / (speed of the farthest margin point).
 fn blade_rate_for(r: f64, step: f64, outline: &Outline, root: DVec2) -> Result<f64, OptionError> {
     check_r("r", r)?;
-    let reach = outline
+    Ok(step / (r * reach(outline, root)))
+}
+
+/// How far the blade's margin reaches from the root, mm.
+fn reach(outline: &Outline, root: DVec2) -> f64 {
+    outline
         .points()
         .iter()
         .map(|p| p.distance(root))
-        .fold(0.0, f64::max);
-    Ok(step / (r * reach))
+        .fold(0.0, f64::max)
 }
 
 /// The largest vein-to-blade growth ratio: Peele's leaves span 0.5 to 5.5; at 1000 the blade
@@ -341,18 +345,42 @@ fn report(leaf: &Leaf) -> Report {
 pub struct SweptLeaf {
     /// Peele's r.
     pub r: f64,
+    /// The seed it grew from.
+    pub seed: u64,
     /// Blade size added per step.
     pub blade_rate: f64,
+    /// D, mm.
+    pub step: f64,
     /// The leaf and its report.
     pub grown: Grown,
 }
 
-/// Peele's Figure 1: one leaf per r, each with the blade rate that makes it, grown with the
-/// same options otherwise (a marginal blade unless `blade` says otherwise).
+/// What a sweep varies to set r = D / (speed of the farthest margin point).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepBy {
+    /// The blade's growth: D stays `step`, the blade rate is D / (r · reach).
+    #[default]
+    Blade,
+    /// D, as Peele did ("all parameters are held constant except for the vein growth rate (as
+    /// controlled by the vein edge length parameter)"): the blade rate stays `blade_rate`, D is
+    /// r · blade rate · reach.
+    Step,
+}
+
+/// The most seeds a sweep grows per r.
+pub const MAX_SEEDS: usize = 1000;
+
+/// Peele's Figure 1: one leaf per r and seed (`seeds` of them, from `opts.seed` up), each with
+/// the blade rate (or, `by` [`SweepBy::Step`], the D) that makes its r, grown with the same
+/// options otherwise (a marginal blade unless `blade` says otherwise). Leaves in order of r,
+/// then seed.
 pub fn sweep(
     outline: &Outline,
     opts: &Options,
     rs: &[f64],
+    by: SweepBy,
+    seeds: usize,
     progress: &dyn Progress,
 ) -> Result<Vec<SweptLeaf>, Error> {
     // Every ratio checked before the first leaf grows.
@@ -362,28 +390,201 @@ pub fn sweep(
     for &r in rs {
         check_r("sweep_r", r)?;
     }
+    if !(1..=MAX_SEEDS).contains(&seeds) {
+        return Err(OptionError::new(
+            "seeds",
+            format!("must be 1 to {MAX_SEEDS} leaves per r, got {seeds}"),
+        )
+        .into());
+    }
+    let seeds: Vec<u64> = (0..seeds as u64)
+        .map(|k| opts.seed.checked_add(k))
+        .collect::<Option<_>>()
+        .ok_or_else(|| OptionError::new("seed", "leaves no room for the seeds after it"))?;
     let (base, roots) = opts.leaf(outline, true)?;
-    let mut out = Vec::with_capacity(rs.len());
+    let mut out = Vec::with_capacity(rs.len() * seeds.len());
     for &r in rs {
-        let mut leaf_opts = base.clone();
-        leaf_opts.growth.blade_rate = blade_rate_for(r, leaf_opts.growth.step, outline, roots[0])?;
-        let leaf = grow_in_blade(outline, &roots, &leaf_opts, None, progress)?;
-        let report = report(&leaf);
-        out.push(SweptLeaf {
-            r,
-            blade_rate: leaf_opts.growth.blade_rate,
-            grown: Grown { leaf, report },
-        });
+        for &seed in &seeds {
+            let mut leaf_opts = base.clone();
+            match by {
+                SweepBy::Blade => {
+                    leaf_opts.growth.blade_rate =
+                        blade_rate_for(r, leaf_opts.growth.step, outline, roots[0])?
+                }
+                SweepBy::Step => {
+                    leaf_opts.growth.step =
+                        r * leaf_opts.growth.blade_rate * reach(outline, roots[0])
+                }
+            }
+            leaf_opts.seed = seed;
+            let leaf = grow_in_blade(outline, &roots, &leaf_opts, None, progress)?;
+            let report = report(&leaf);
+            out.push(SweptLeaf {
+                r,
+                seed,
+                blade_rate: leaf_opts.growth.blade_rate,
+                step: leaf_opts.growth.step,
+                grown: Grown { leaf, report },
+            });
+        }
     }
     Ok(out)
 }
 
-/// The leaves of a sweep side by side in one SVG, each with its r.
-pub fn contact_sheet(leaves: &[SweptLeaf]) -> String {
+/// Mean, sample standard deviation (0 for one value), least and greatest of a measure over
+/// the seeds of one r.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Spread {
+    /// Mean.
+    pub mean: f64,
+    /// Sample standard deviation.
+    pub sd: f64,
+    /// Least.
+    pub min: f64,
+    /// Greatest.
+    pub max: f64,
+}
+
+impl Spread {
+    fn of(values: &[f64]) -> Spread {
+        let n = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / n;
+        let sd = if values.len() > 1 {
+            (values.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+        } else {
+            0.0
+        };
+        Spread {
+            mean,
+            sd,
+            min: values.iter().copied().fold(f64::INFINITY, f64::min),
+            max: values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}
+
+/// One r of a sweep over its seeds: Peele's two claims as measures (see
+/// [`crate::grow::report::Veins`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SweepRow {
+    /// Peele's r.
+    pub r: f64,
+    /// Leaves grown at this r.
+    pub seeds: usize,
+    /// Dominant veins (radius at least half the petiole's).
+    pub dominant: Spread,
+    /// Their mean radius over the petiole's.
+    pub dominant_radius_ratio: Spread,
+    /// The zigzag index, degrees.
+    pub zigzag_deg: Spread,
+    /// Turning along the dominant veins, degrees per mm.
+    pub turning_deg_per_mm: Spread,
+}
+
+/// The sweep's table: one row per r, in the sweep's order.
+pub fn sweep_table(leaves: &[SweptLeaf]) -> Vec<SweepRow> {
+    let mut rows: Vec<SweepRow> = Vec::new();
+    let mut start = 0;
+    while start < leaves.len() {
+        let r = leaves[start].r;
+        let end = start + leaves[start..].iter().take_while(|l| l.r == r).count();
+        let group = &leaves[start..end];
+        let of = |f: &dyn Fn(&Quality) -> f64| {
+            Spread::of(
+                &group
+                    .iter()
+                    .map(|l| f(&l.grown.report.quality))
+                    .collect::<Vec<_>>(),
+            )
+        };
+        rows.push(SweepRow {
+            r,
+            seeds: group.len(),
+            dominant: of(&|q| q.veins.dominant as f64),
+            dominant_radius_ratio: of(&|q| q.veins.dominant_radius_ratio),
+            zigzag_deg: of(&|q| q.zigzag_deg),
+            turning_deg_per_mm: of(&|q| q.veins.dominant_turning_deg_per_mm),
+        });
+        start = end;
+    }
+    rows
+}
+
+/// Peele's two claims tested on a sweep's table, lowest r against highest, in words: "beyond
+/// the spread" means the two means differ by more than the sum of their standard deviations.
+/// Empty when the table has fewer than two r.
+pub fn sweep_verdict(table: &[SweepRow]) -> Vec<String> {
+    let (Some(lo), Some(hi)) = (table.first(), table.last()) else {
+        return Vec::new();
+    };
+    if table.len() < 2 {
+        return Vec::new();
+    }
+    // +1 when the lowest r's mean is above the highest's beyond the spread, -1 below, 0 not.
+    let apart = |f: fn(&SweepRow) -> Spread| {
+        let (a, b) = (f(lo), f(hi));
+        if a.mean - a.sd > b.mean + b.sd {
+            1
+        } else if a.mean + a.sd < b.mean - b.sd {
+            -1
+        } else {
+            0
+        }
+    };
+    let said = |sign: i32, want: i32| match sign {
+        0 => "not beyond the spread",
+        s if s == want => "as the paper says",
+        _ => "the opposite of the paper",
+    };
+    let (r0, r1) = (lo.r, hi.r);
+    vec![
+        format!(
+            "fewer dominant veins at low r: {:.1} ± {:.1} at r = {r0} against {:.1} ± {:.1} at r = {r1}, {}",
+            lo.dominant.mean,
+            lo.dominant.sd,
+            hi.dominant.mean,
+            hi.dominant.sd,
+            said(apart(|r| r.dominant), -1)
+        ),
+        format!(
+            "thicker dominant veins at low r: {:.3} ± {:.3} of the petiole's radius at r = {r0} \
+             against {:.3} ± {:.3} at r = {r1}, {}",
+            lo.dominant_radius_ratio.mean,
+            lo.dominant_radius_ratio.sd,
+            hi.dominant_radius_ratio.mean,
+            hi.dominant_radius_ratio.sd,
+            said(apart(|r| r.dominant_radius_ratio), 1)
+        ),
+        format!(
+            "more chaotic at high r: zigzag index {:.1} ± {:.1}° at r = {r0} against {:.1} ± {:.1}° \
+             at r = {r1}, {}; turning along dominant veins {:.2} ± {:.2} against {:.2} ± {:.2}°/mm, {}",
+            lo.zigzag_deg.mean,
+            lo.zigzag_deg.sd,
+            hi.zigzag_deg.mean,
+            hi.zigzag_deg.sd,
+            said(apart(|r| r.zigzag_deg), -1),
+            lo.turning_deg_per_mm.mean,
+            lo.turning_deg_per_mm.sd,
+            hi.turning_deg_per_mm.mean,
+            hi.turning_deg_per_mm.sd,
+            said(apart(|r| r.turning_deg_per_mm), -1)
+        ),
+    ]
+}
+
+/// The sweep as one SVG: the first seed's leaf of each r side by side, each with its r, and
+/// under them the four measures of the table against r (mean, a bar from least to greatest
+/// over the seeds, and a tick at one standard deviation either side of the mean).
+pub fn sweep_figure(leaves: &[SweptLeaf]) -> String {
     let mut body = String::new();
     let mut x = 0.0;
     let mut height: f64 = 0.0;
+    let mut drawn: Vec<f64> = Vec::new();
     for leaf in leaves {
+        if drawn.contains(&leaf.r) {
+            continue;
+        }
+        drawn.push(leaf.r);
         let net = &leaf.grown.leaf.network;
         let b = net.bbox();
         let (w, h) = (b.max.x - b.min.x, b.max.y - b.min.y);
@@ -405,20 +606,139 @@ pub fn contact_sheet(leaves: &[SweptLeaf]) -> String {
         }
         body.push_str("</g>");
         body.push_str(&format!(
-            "<text x=\"{:.3}\" y=\"8\" font-family=\"sans-serif\" font-size=\"6\">r = {}</text>",
-            x, leaf.r
+            "<text x=\"{:.3}\" y=\"8\" font-family=\"sans-serif\" font-size=\"6\" \
+             stroke=\"none\" fill=\"#222\">r = {} (seed {})</text>",
+            x, leaf.r, leaf.seed
         ));
-        x += w + 10.0;
+        // Room for the label under a leaf that stayed small.
+        x += w.max(LABEL_WIDTH) + 10.0;
         height = height.max(h + 14.0);
     }
+    let width = (x - 10.0).max(4.0 * MIN_PLOT_WIDTH);
+    let table = sweep_table(leaves);
+    let plots = measure_plots(&table, height + 6.0, width);
     format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"-5 0 {:.3} {:.3}\" \
-         width=\"{:.0}mm\" height=\"{:.0}mm\">\n<g stroke=\"#1d3b2a\" stroke-linecap=\"round\">{body}</g>\n</svg>\n",
-        x + 5.0,
-        height,
-        x + 5.0,
-        height
+         width=\"{:.0}mm\" height=\"{:.0}mm\">\n<rect x=\"-5\" y=\"0\" width=\"100%\" \
+         height=\"100%\" fill=\"white\"/>\n<g stroke=\"#1d3b2a\" stroke-linecap=\"round\">{body}</g>\n{plots}</svg>\n",
+        width + 10.0,
+        height + 6.0 + PLOT_HEIGHT,
+        width + 10.0,
+        height + 6.0 + PLOT_HEIGHT
     )
+}
+
+/// Height of the row of measure plots under the leaves, in the figure's units (mm).
+const PLOT_HEIGHT: f64 = 62.0;
+/// Width a leaf's label "r = … (seed …)" needs.
+const LABEL_WIDTH: f64 = 52.0;
+/// Narrowest a measure plot is drawn (its title fits).
+const MIN_PLOT_WIDTH: f64 = 60.0;
+
+/// Four small plots side by side at height `top`, across `width`.
+fn measure_plots(table: &[SweepRow], top: f64, width: f64) -> String {
+    type Pick = fn(&SweepRow) -> Spread;
+    let plots: [(&str, Pick); 4] = [
+        ("dominant veins", |r| r.dominant),
+        ("their radius / petiole", |r| r.dominant_radius_ratio),
+        ("zigzag index (°)", |r| r.zigzag_deg),
+        ("turning, dominant veins (°/mm)", |r| r.turning_deg_per_mm),
+    ];
+    let gap = 8.0;
+    let pw = (width - 3.0 * gap) / 4.0;
+    let (ph, margin) = (PLOT_HEIGHT - 22.0, 10.0);
+    let (r_lo, r_hi) = table
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), row| {
+            (lo.min(row.r), hi.max(row.r))
+        });
+    let r_span = if r_hi > r_lo { r_hi - r_lo } else { 1.0 };
+    let mut out = String::from("<g font-family=\"sans-serif\" font-size=\"3.2\" fill=\"#222\">");
+    for (k, (title, pick)) in plots.iter().enumerate() {
+        let x0 = k as f64 * (pw + gap) + margin;
+        let w = pw - margin;
+        let y0 = top + 6.0;
+        let spreads: Vec<Spread> = table.iter().map(pick).collect();
+        let lo = spreads
+            .iter()
+            .map(|s| s.min.min(s.mean - s.sd))
+            .fold(f64::INFINITY, f64::min);
+        let hi = spreads
+            .iter()
+            .map(|s| s.max.max(s.mean + s.sd))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo - 1.0, hi + 1.0)
+        };
+        let pad = 0.08 * (hi - lo);
+        // Counts, ratios and angles are never negative: the axis stops at 0.
+        let floor = if lo >= 0.0 { 0.0 } else { f64::NEG_INFINITY };
+        let (lo, hi) = ((lo - pad).max(floor), hi + pad);
+        let px = |r: f64| x0 + 3.0 + (w - 6.0) * (r - r_lo) / r_span;
+        let py = |v: f64| y0 + ph * (hi - v) / (hi - lo);
+        out.push_str(&format!(
+            "<text x=\"{x0:.2}\" y=\"{:.2}\" font-weight=\"bold\">{title}</text>\
+             <rect x=\"{x0:.2}\" y=\"{y0:.2}\" width=\"{w:.2}\" height=\"{ph:.2}\" fill=\"none\" \
+             stroke=\"#999\" stroke-width=\"0.2\"/>\
+             <text x=\"{:.2}\" y=\"{:.2}\" text-anchor=\"end\">{}</text>\
+             <text x=\"{:.2}\" y=\"{:.2}\" text-anchor=\"end\">{}</text>",
+            top + 3.0,
+            x0 - 0.8,
+            y0 + 3.0,
+            tick(hi),
+            x0 - 0.8,
+            y0 + ph,
+            tick(lo)
+        ));
+        let mut line = String::new();
+        for (row, s) in table.iter().zip(&spreads) {
+            let x = px(row.r);
+            out.push_str(&format!(
+                "<line x1=\"{x:.2}\" y1=\"{:.2}\" x2=\"{x:.2}\" y2=\"{:.2}\" stroke=\"#7a9a86\" \
+                 stroke-width=\"0.5\"/>\
+                 <line x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\" stroke=\"#1d3b2a\" stroke-width=\"0.3\"/>\
+                 <line x1=\"{:.2}\" y1=\"{:.2}\" x2=\"{:.2}\" y2=\"{:.2}\" stroke=\"#1d3b2a\" stroke-width=\"0.3\"/>\
+                 <circle cx=\"{x:.2}\" cy=\"{:.2}\" r=\"0.9\" fill=\"#1d3b2a\"/>\
+                 <text x=\"{x:.2}\" y=\"{:.2}\" text-anchor=\"middle\">{}</text>",
+                py(s.min),
+                py(s.max),
+                x - 1.2,
+                py(s.mean + s.sd),
+                x + 1.2,
+                py(s.mean + s.sd),
+                x - 1.2,
+                py(s.mean - s.sd),
+                x + 1.2,
+                py(s.mean - s.sd),
+                py(s.mean),
+                y0 + ph + 4.0,
+                row.r
+            ));
+            line.push_str(&format!("{x:.2},{:.2} ", py(s.mean)));
+        }
+        out.push_str(&format!(
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"#1d3b2a\" stroke-width=\"0.3\"/>",
+            line.trim_end()
+        ));
+        out.push_str(&format!(
+            "<text x=\"{:.2}\" y=\"{:.2}\" text-anchor=\"middle\">r</text>",
+            x0 + w / 2.0,
+            y0 + ph + 8.0
+        ));
+    }
+    out.push_str("</g>\n");
+    out
+}
+
+/// An axis label with three significant digits.
+fn tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let digits = (2 - v.abs().max(1e-12).log10().floor() as i32).clamp(0, 6) as usize;
+    format!("{v:.digits$}")
 }
 
 /// Veins grown on a surface, with the options that grew them (defaults resolved) and the
@@ -616,4 +936,58 @@ pub fn unrooted_lines(u: &Unrooted) -> Vec<String> {
 /// A report's text as the command writes it: pretty JSON, one final line break.
 pub fn json_text(value: &impl Serialize) -> String {
     serde_json::to_string_pretty(value).expect("reports serialise") + "\n"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spread(mean: f64, sd: f64) -> Spread {
+        Spread {
+            mean,
+            sd,
+            min: mean - sd,
+            max: mean + sd,
+        }
+    }
+
+    fn row(r: f64, dominant: (f64, f64), ratio: (f64, f64), zigzag: (f64, f64)) -> SweepRow {
+        SweepRow {
+            r,
+            seeds: 5,
+            dominant: spread(dominant.0, dominant.1),
+            dominant_radius_ratio: spread(ratio.0, ratio.1),
+            zigzag_deg: spread(zigzag.0, zigzag.1),
+            turning_deg_per_mm: spread(zigzag.0 / 10.0, zigzag.1 / 10.0),
+        }
+    }
+
+    #[test]
+    fn the_verdict_compares_the_ends_beyond_the_spread() {
+        // Fewer at low r beyond the spread (10 + 2 < 20 - 3); thinner at low r, the opposite
+        // (0.6 + 0.01 < 0.8 - 0.01); zigzag apart by exactly the spread: not beyond it.
+        let table = [
+            row(0.5, (10.0, 2.0), (0.6, 0.01), (10.0, 5.0)),
+            row(1.5, (99.0, 0.0), (0.0, 0.0), (0.0, 0.0)),
+            row(5.5, (20.0, 3.0), (0.8, 0.01), (20.0, 5.0)),
+        ];
+        let v = sweep_verdict(&table);
+        assert_eq!(v.len(), 3);
+        assert!(v[0].ends_with("as the paper says"), "{}", v[0]);
+        assert!(v[1].ends_with("the opposite of the paper"), "{}", v[1]);
+        assert!(
+            v[2].contains("at r = 5.5, not beyond the spread;"),
+            "{}",
+            v[2]
+        );
+        assert!(sweep_verdict(&table[..1]).is_empty());
+    }
+
+    #[test]
+    fn a_spread_has_the_sample_deviation() {
+        let s = Spread::of(&[1.0, 2.0, 3.0, 6.0]);
+        assert_eq!((s.mean, s.min, s.max), (3.0, 1.0, 6.0));
+        assert!((s.sd - (14.0f64 / 3.0).sqrt()).abs() < 1e-15);
+        assert_eq!(Spread::of(&[4.0]).sd, 0.0);
+    }
 }

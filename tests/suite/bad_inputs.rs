@@ -214,6 +214,58 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
             ],
             "--sweep-r must be a ratio above 0 and at most 1000, got 1e308",
         ),
+        // Seeds per r: at least one, at most a thousand, checked before the folder is made.
+        (
+            vec![
+                "venation".into(),
+                "--sweep-r".into(),
+                "0.5".into(),
+                "--seeds".into(),
+                "0".into(),
+                "-o".into(),
+                out("sweep"),
+            ],
+            "--seeds must be 1 to 1000 leaves per r, got 0",
+        ),
+        (
+            vec![
+                "venation".into(),
+                "--sweep-r".into(),
+                "0.5".into(),
+                "--seeds".into(),
+                "18446744073709551615".into(),
+                "-o".into(),
+                out("sweep"),
+            ],
+            "--seeds must be 1 to 1000 leaves per r",
+        ),
+        // What the sweep sets from each r is not also taken from a flag.
+        (
+            vec![
+                "venation".into(),
+                "--sweep-r".into(),
+                "0.5".into(),
+                "--blade-rate".into(),
+                "0.01".into(),
+                "-o".into(),
+                out("sweep"),
+            ],
+            "--blade-rate: a sweep by blade sets the blade rate from each r",
+        ),
+        (
+            vec![
+                "venation".into(),
+                "--sweep-r".into(),
+                "0.5".into(),
+                "--sweep-by".into(),
+                "step".into(),
+                "--step".into(),
+                "0.5".into(),
+                "-o".into(),
+                out("sweep"),
+            ],
+            "--step: a sweep by step sets D from each r",
+        ),
         // A palette PNG whose PLTE is 4 bytes: the png crate indexed past it and panicked.
         (
             vec![
