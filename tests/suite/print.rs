@@ -851,6 +851,91 @@ fn supports_hold_a_floating_vein_on_the_one_below_and_leave_no_island() -> TestR
     Ok(())
 }
 
+#[test]
+fn supports_stand_on_the_plate_and_leave_the_parts_lit_pixels_as_they_are() -> TestResult {
+    // A vein on the plate and one floating beside it, crossing nothing: at 3 mm it is held by
+    // a tip, a pillar and a base; at 0.6 mm (its underside 0.3 mm up) a pillar on a base would
+    // reach into the plate (and lift the whole print by that when placed, as it once did), so
+    // a pin as thin as the tip holds it.
+    let dir = tempfile::tempdir()?;
+    for (height, pins) in [(3.0, 0), (0.6, 1)] {
+        let net = serde_json::json!({
+            "format": "lamina-network", "version": 1, "meta": {"units": "mm", "parameters": {}},
+            "nodes": [{"p": [0.0, 0.0, 0.0], "radius": 0.4}, {"p": [6.0, 0.0, 0.0], "radius": 0.4},
+                      {"p": [10.0, -3.0, height], "radius": 0.3},
+                      {"p": [10.0, 3.0, height], "radius": 0.3}],
+            "edges": [{"a": 0, "b": 1, "radius": 0.4}, {"a": 2, "b": 3, "radius": 0.3}],
+        });
+        let path = dir.path().join("two.json");
+        std::fs::write(&path, net.to_string())?;
+        let mut reports = Vec::new();
+        for (name, extra) in [("bare", None), ("held", Some("--supports"))] {
+            let sl1 = dir.path().join(format!("{name}.sl1"));
+            let report = dir.path().join(format!("{name}.json"));
+            let mut args = vec![
+                "print",
+                path.to_str().ok_or("p")?,
+                "-o",
+                sl1.to_str().ok_or("p")?,
+                "--report",
+                report.to_str().ok_or("p")?,
+            ];
+            args.extend(extra);
+            run_ok(&args)?;
+            reports.push((sl1, json(&report)?));
+        }
+        let [(bare_sl1, bare), (held_sl1, held)] = &reports[..] else {
+            return Err("two prints".into());
+        };
+        assert_eq!(bare["island_count"], 1, "at {height} mm");
+        assert_eq!(held["island_count"], 0, "at {height} mm");
+        assert_eq!(held["supports"]["pins"], pins, "at {height} mm");
+        assert_eq!(
+            held["layers"], bare["layers"],
+            "at {height} mm: nothing lifted"
+        );
+        // Placed a whole number of pixels apart (both on pixel corners): every pixel the part
+        // lights without supports has the same grey with them.
+        let pixel = bare["printer"]["pixel_mm"].as_f64().ok_or("pixel")?;
+        let offset = |r: &serde_json::Value, k: usize| r["placements"][0]["offset"][k].as_f64();
+        let dx = (offset(held, 0).ok_or("x")? - offset(bare, 0).ok_or("x")?) / pixel;
+        let dy = (offset(held, 1).ok_or("y")? - offset(bare, 1).ok_or("y")?) / pixel;
+        assert!((dx - dx.round()).abs() < 1e-6 && (dy - dy.round()).abs() < 1e-6);
+        let (dx, dy) = (dx.round() as isize, dy.round() as isize);
+        let layers = bare["layers"].as_u64().ok_or("layers")? as usize;
+        let (mut lit, mut changed, mut added) = (0, 0, 0);
+        for i in 0..layers {
+            let name = format!("bare{i:05}.png");
+            let (a, w) = layer_grey(bare_sl1, &name)?;
+            let (b, _) = layer_grey(held_sl1, &name.replace("bare", "held"))?;
+            let h = a.len() / w;
+            for r in 0..h {
+                for c in 0..w {
+                    let (rb, cb) = (r as isize - dy, c as isize + dx);
+                    let other = if (0..h as isize).contains(&rb) && (0..w as isize).contains(&cb) {
+                        b[rb as usize * w + cb as usize]
+                    } else {
+                        0
+                    };
+                    if a[r * w + c] >= 128 {
+                        lit += 1;
+                        changed += usize::from(other != a[r * w + c]);
+                    } else if other > a[r * w + c] {
+                        added += 1;
+                    }
+                }
+            }
+        }
+        assert!(lit > 1000, "at {height} mm: {lit} lit pixels");
+        assert_eq!(
+            changed, 0,
+            "at {height} mm: {changed} of {lit} lit part pixels changed"
+        );
+        assert!(added > 0, "at {height} mm: the supports are in the layers");
+    }
+    Ok(())
+}
+
 /// The grey bytes of layer image `name` in an SL1 archive.
 fn layer_grey(sl1: &Path, name: &str) -> Result<(Vec<u8>, usize), Box<dyn std::error::Error>> {
     let mut z = zip::ZipArchive::new(std::fs::File::open(sl1)?)?;

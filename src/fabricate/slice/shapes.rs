@@ -32,6 +32,7 @@ use std::ops::Range;
 
 use glam::{DVec2, DVec3};
 
+use super::islands::LIT;
 use super::{encode_grey, in_batches, Layer, Placement, Printer};
 use crate::fabricate::solid::sdf::{Primitive, RoundCone};
 use crate::fabricate::solid::{placing_shift, Shapes};
@@ -305,6 +306,9 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
     let mut total = 0u64;
     let reach_tile = TILE as f64 * px * FRAC_1_SQRT_2 + px;
     let (mut values, mut near) = (Vec::new(), Vec::new());
+    let (mut part, mut held) = (Vec::new(), Vec::new());
+    // Pieces from here on are supports.
+    let first_support = (model.shapes().prims.len() - model.shapes().added) as u32;
     let mut s = 0;
     while s < entries.len() {
         let tile = entries[s].tile;
@@ -314,108 +318,147 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
         }
         let group = &entries[s..e];
         s = e;
-        let (ty, tx) = (tile as usize / tw, tile as usize % tw);
-        debug_assert!(ty < th);
-        let (c0, r0) = (tx * TILE, ty * TILE);
-        let (c1, r1) = ((c0 + TILE).min(w), (r0 + TILE).min(h));
-        let at = |col: f64, row: f64| DVec3::new(col * px, (h as f64 - row) * px, z);
-        let piece = |en: &Entry, q: DVec3, reach: f64| {
-            if let Some(cone) = &cones[en.copy as usize][en.piece as usize] {
-                return cone.eval(q);
+        // The part's pixels first, then the supports' where the part leaves a pixel unlit: the
+        // part's lit pixels are the same with supports or without (supports are added to its
+        // layer, not blended into its edges), and a support still meets the part's faint edge.
+        part.clear();
+        held.clear();
+        for en in group {
+            if en.piece < first_support {
+                part.push(*en);
+            } else {
+                held.push(*en);
             }
-            let p = &placed[en.copy as usize];
-            let local = turn_back(
-                q.truncate() - DVec2::new(p.offset[0], p.offset[1]),
-                p.turned,
-            );
-            model.eval_piece(en.piece, local.extend(q.z - p.offset[2]), reach)
-        };
-        let dist = |among: &[Entry], q: DVec3, reach: f64| {
-            among
-                .iter()
-                .fold(f64::INFINITY, |d, en| d.min(piece(en, q, reach)))
-        };
-        let centre = dist(
-            group,
-            at(0.5 * (c0 + c1) as f64, 0.5 * (r0 + r1) as f64),
-            reach_tile,
-        );
-        if centre > reach_tile {
-            continue;
         }
-        if centre < -reach_tile {
-            total += light(&mut image, w, r0..r1, c0..c1);
-            continue;
-        }
-        // Quarters of the tile (4 × 4 pixels) far from the surface are wholly dark or lit the
-        // same way, without a look at each pixel: every pixel centre of a quarter lies within
-        // 1.5·√2 pixels of the quarter's centre.
-        let reach_quarter = (1.5 * std::f64::consts::SQRT_2 + FRAC_1_SQRT_2) * px;
-        for (qr0, qc0) in [
-            (r0, c0),
-            (r0, c0 + HALF),
-            (r0 + HALF, c0),
-            (r0 + HALF, c0 + HALF),
-        ] {
-            let (qr1, qc1) = ((qr0 + HALF).min(r1), (qc0 + HALF).min(c1));
-            if qr0 >= qr1 || qc0 >= qc1 {
-                continue;
-            }
-            if qr1 - qr0 == HALF && qc1 - qc0 == HALF {
-                // Values beyond the reach asked for may come back as ±reach: ask for more.
-                let d = dist(
-                    group,
-                    at((qc0 + HALF / 2) as f64, (qr0 + HALF / 2) as f64),
-                    reach_tile,
+        let mut paint = |group: &[Entry], only_unlit: bool| {
+            let (ty, tx) = (tile as usize / tw, tile as usize % tw);
+            debug_assert!(ty < th);
+            let (c0, r0) = (tx * TILE, ty * TILE);
+            let (c1, r1) = ((c0 + TILE).min(w), (r0 + TILE).min(h));
+            let at = |col: f64, row: f64| DVec3::new(col * px, (h as f64 - row) * px, z);
+            let piece = |en: &Entry, q: DVec3, reach: f64| {
+                if let Some(cone) = &cones[en.copy as usize][en.piece as usize] {
+                    return cone.eval(q);
+                }
+                let p = &placed[en.copy as usize];
+                let local = turn_back(
+                    q.truncate() - DVec2::new(p.offset[0], p.offset[1]),
+                    p.turned,
                 );
-                if d > reach_quarter {
+                model.eval_piece(en.piece, local.extend(q.z - p.offset[2]), reach)
+            };
+            let dist = |among: &[Entry], q: DVec3, reach: f64| {
+                among
+                    .iter()
+                    .fold(f64::INFINITY, |d, en| d.min(piece(en, q, reach)))
+            };
+            let centre = dist(
+                group,
+                at(0.5 * (c0 + c1) as f64, 0.5 * (r0 + r1) as f64),
+                reach_tile,
+            );
+            if centre > reach_tile {
+                return;
+            }
+            if centre < -reach_tile {
+                total += light(&mut image, w, r0..r1, c0..c1, only_unlit);
+                return;
+            }
+            // Quarters of the tile (4 × 4 pixels) far from the surface are wholly dark or lit the
+            // same way, without a look at each pixel: every pixel centre of a quarter lies within
+            // 1.5·√2 pixels of the quarter's centre.
+            let reach_quarter = (1.5 * std::f64::consts::SQRT_2 + FRAC_1_SQRT_2) * px;
+            for (qr0, qc0) in [
+                (r0, c0),
+                (r0, c0 + HALF),
+                (r0 + HALF, c0),
+                (r0 + HALF, c0 + HALF),
+            ] {
+                let (qr1, qc1) = ((qr0 + HALF).min(r1), (qc0 + HALF).min(c1));
+                if qr0 >= qr1 || qc0 >= qc1 {
                     continue;
                 }
-                if d < -reach_quarter {
-                    total += light(&mut image, w, qr0..qr1, qc0..qc1);
-                    continue;
+                if qr1 - qr0 == HALF && qc1 - qc0 == HALF {
+                    // Values beyond the reach asked for may come back as ±reach: ask for more.
+                    let d = dist(
+                        group,
+                        at((qc0 + HALF / 2) as f64, (qr0 + HALF / 2) as f64),
+                        reach_tile,
+                    );
+                    if d > reach_quarter {
+                        continue;
+                    }
+                    if d < -reach_quarter {
+                        total += light(&mut image, w, qr0..qr1, qc0..qc1, only_unlit);
+                        continue;
+                    }
+                }
+                for r in qr0..qr1 {
+                    for c in qc0..qc1 {
+                        let before = image[r * w + c];
+                        if only_unlit && before >= LIT {
+                            continue;
+                        }
+                        let q = at(c as f64 + 0.5, r as f64 + 0.5);
+                        values.clear();
+                        values.extend(group.iter().map(|en| piece(en, q, px)));
+                        let d = values.iter().copied().fold(f64::INFINITY, f64::min);
+                        let grey = if d >= FRAC_1_SQRT_2 * px {
+                            0
+                        } else if d <= -FRAC_1_SQRT_2 * px {
+                            255
+                        } else {
+                            // The sub-pixel centres lie within 0.375·√2 < 0.55 pixel of the pixel's:
+                            // a piece more than 1.1 pixels farther than the nearest at the centre is
+                            // never the nearest at one of them.
+                            near.clear();
+                            near.extend(
+                                group
+                                    .iter()
+                                    .zip(&values)
+                                    .filter(|&(_, &v)| v <= d + 1.1 * px)
+                                    .map(|(en, _)| *en),
+                            );
+                            (255.0 * fine(&|p| dist(&near, p, px), q, px)).round() as u8
+                        };
+                        // A support only brightens what the part leaves unlit.
+                        if grey > before {
+                            image[r * w + c] = grey;
+                            total += (grey - before) as u64;
+                        }
+                    }
                 }
             }
-            for r in qr0..qr1 {
-                for c in qc0..qc1 {
-                    let q = at(c as f64 + 0.5, r as f64 + 0.5);
-                    values.clear();
-                    values.extend(group.iter().map(|en| piece(en, q, px)));
-                    let d = values.iter().copied().fold(f64::INFINITY, f64::min);
-                    let grey = if d >= FRAC_1_SQRT_2 * px {
-                        0
-                    } else if d <= -FRAC_1_SQRT_2 * px {
-                        255
-                    } else {
-                        // The sub-pixel centres lie within 0.375·√2 < 0.55 pixel of the pixel's:
-                        // a piece more than 1.1 pixels farther than the nearest at the centre is
-                        // never the nearest at one of them.
-                        near.clear();
-                        near.extend(
-                            group
-                                .iter()
-                                .zip(&values)
-                                .filter(|&(_, &v)| v <= d + 1.1 * px)
-                                .map(|(en, _)| *en),
-                        );
-                        (255.0 * fine(&|p| dist(&near, p, px), q, px)).round() as u8
-                    };
-                    image[r * w + c] = grey;
-                    total += grey as u64;
-                }
-            }
+        };
+        if !part.is_empty() {
+            paint(&part, false);
+        }
+        if !held.is_empty() {
+            paint(&held, true);
         }
     }
     (image, total as f64 / 255.0 * px * px)
 }
 
-/// Lights the block of `rows` × `cols` of an image `width` wide; returns the grey added.
-fn light(image: &mut [u8], width: usize, rows: Range<usize>, cols: Range<usize>) -> u64 {
-    let count = rows.len() * cols.len();
+/// Lights the block of `rows` × `cols` of an image `width` wide (`only_unlit`: only its pixels
+/// under `LIT`); returns the grey added.
+fn light(
+    image: &mut [u8],
+    width: usize,
+    rows: Range<usize>,
+    cols: Range<usize>,
+    only_unlit: bool,
+) -> u64 {
+    let mut added = 0u64;
     for r in rows {
-        image[r * width + cols.start..r * width + cols.end].fill(255);
+        for v in &mut image[r * width + cols.start..r * width + cols.end] {
+            if !only_unlit || *v < LIT {
+                added += 255 - *v as u64;
+                *v = 255;
+            }
+        }
     }
-    255 * count as u64
+    added
 }
 
 /// Sub-pixels per pixel side in `fine`.

@@ -10,8 +10,15 @@
 //! a tip: a ball no wider than `tip` and never wider than the vein there, widening downwards into
 //! a pillar. The pillar goes straight down until the solid (or a support) is right below it (it
 //! then narrows onto it, ending in a ball half as wide as the vein there, sunk into it: nothing
-//! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). A pillar
+//! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). An island
+//! too low for a pillar on a base (the pillar's neck would reach into the plate, and the print,
+//! which puts the lowest point on the plate, would lift everything by that) gets a pin: a
+//! cylinder as thin as the tip from the plate to the top of the island's first layer. A pillar
 //! may brush the solid on its way down; that only merges them.
+//!
+//! Islands are found with the layers drawn as the print draws them: the solid first, then the
+//! supports only where the solid leaves a pixel unlit (`shapes::image`), and the lowest point
+//! on the plate.
 //! Pillars bound for the plate that stand closer than `join` are joined in pairs, nearest first:
 //! each leans at most 45° to a point between them, from where one pillar goes on down (and may
 //! be joined again): a tree. A join whose braces would pass within a pillar's radius of the
@@ -76,6 +83,9 @@ pub struct SupportReport {
     pub islands: usize,
     pub tips: usize,
     pub to_plate: usize,
+    /// Of those, pins: tips too low for a pillar on a base, held by a cylinder as thin as the
+    /// tip from the plate.
+    pub pins: usize,
     pub to_model: usize,
     pub joins: usize,
     /// Islands of the solid with its supports (0 when every island is held).
@@ -147,6 +157,8 @@ const ROUNDS: usize = 3;
 #[derive(Default)]
 struct Tally {
     tips: usize,
+    /// Tips too low for a pillar, held by a pin from the plate.
+    pins: usize,
     to_plate: usize,
     to_model: usize,
     joins: usize,
@@ -180,6 +192,8 @@ pub fn plan(
         }
         let pieces = hold(&current, &holds, printer, opts, &mut tally);
         let made: Vec<Primitive> = pieces.iter().map(|s| s.local(&current)).collect();
+        // Counted as supports, so the layers are drawn as the print draws them.
+        shapes.added += made.len();
         shapes.prims.extend(made.iter().cloned());
         prims.extend(made);
         current = Placed::new(shapes.clone(), model.upright());
@@ -193,6 +207,7 @@ pub fn plan(
             islands: islands.list.len(),
             tips: tally.tips,
             to_plate: tally.to_plate,
+            pins: tally.pins,
             to_model: tally.to_model,
             joins: tally.joins,
             islands_left: left.list.len(),
@@ -254,7 +269,18 @@ fn hold(
         // The tip widens over up to four pillar radii, never past half the drop.
         let tip_len = (4.0 * rp).min(0.5 * (z - bottom)).max(0.0);
         let neck = p - DVec3::Z * tip_len;
-        pieces.push(Piece::Cone(p, neck, rt, rp.max(rt)));
+        let rn = rp.max(rt);
+        if end == End::Plate && neck.z - rn < opts.base_height {
+            // Too low for a pillar on a base (its neck's ball would reach into the plate, and
+            // everything would be lifted by that when placed): a pin as thin as the tip, from
+            // the plate to the top of the island's first layer.
+            let r = rt.max(printer.pixel_mm);
+            pieces.push(Piece::Base(DVec3::new(p.x, p.y, 0.0), r, z + 0.5 * layer));
+            tally.pins += 1;
+            tally.to_plate += 1;
+            continue;
+        }
+        pieces.push(Piece::Cone(p, neck, rt, rn));
         match end {
             End::Model(h) => {
                 tally.to_model += 1;
@@ -396,11 +422,13 @@ fn find_islands(
         ..printer.clone()
     };
     let offset = (DVec2::new(margin - lo.x / px, margin - lo.y / px).ceil() + phase) * px;
+    // Lowest point on the plate, as the print places it: a support reaching below z = 0 would
+    // lift everything, and show here as islands left.
     let place = Placement {
         model: 0,
         copy: 0,
         turned: false,
-        offset: [offset.x, offset.y, 0.0],
+        offset: [offset.x, offset.y, -lo.z],
         min: [lo.x + offset.x, lo.y + offset.y],
         max: [hi.x + offset.x, hi.y + offset.y],
     };
