@@ -312,6 +312,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "support_tip",
             "support_pillar",
             "support_join",
+            "support_clearance",
             "support_base",
         ],
         "slice" => &[
@@ -362,6 +363,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "support_tip",
             "support_pillar",
             "support_join",
+            "support_clearance",
             "support_base",
         ],
         _ => &[],
@@ -892,12 +894,14 @@ fn solid_shape(o: &mut Opts) -> PyResult<stage::solid::Shape> {
             base: b,
             base_height: bh,
             join: o.f64("support_join")?.unwrap_or(d.join),
+            clearance: o.f64("support_clearance")?.unwrap_or(d.clearance),
         })
     } else {
         for k in [
             "support_tip",
             "support_pillar",
             "support_join",
+            "support_clearance",
             "support_base",
         ] {
             if o.take(k)?.is_some() {

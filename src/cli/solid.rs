@@ -125,6 +125,9 @@ pub struct SupportArgs {
     /// Join pillars standing closer than this, mm
     #[arg(long, value_name = "MM", default_value_t = 4.0)]
     pub support_join: f64,
+    /// Room kept between the supports and the part except at tips and landings, mm
+    #[arg(long, value_name = "MM", default_value_t = 0.3)]
+    pub support_clearance: f64,
     /// Base disc under each pillar on the plate: DIAMETER,HEIGHT in mm
     #[arg(long, value_name = "D,H", default_value = "2,0.4")]
     pub support_base: String,
@@ -155,6 +158,7 @@ impl SupportArgs {
             base: base[0],
             base_height: base[1],
             join: self.support_join,
+            clearance: self.support_clearance,
         }))
     }
 }

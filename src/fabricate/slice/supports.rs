@@ -8,7 +8,12 @@
 //! and again on a grid half a pixel over, where a sliver may be an island that the first grid
 //! holds. Under each island, at its first layer's height and at its pixel nearest its centroid,
 //! a tip: a ball no wider than `tip` and never wider than the vein there, widening downwards into
-//! a pillar. The pillar goes straight down until the solid (or a support) is right below it (it
+//! a pillar. The pillar keeps `clearance` from the part all the way down (but over the last four
+//! pillar radii above where it lands): where the column straight below the tip does not, the
+//! tip leans (at most 45°, up to four pillar radii aside, nearest first) to a neck whose column
+//! does, with its own lower half clear too; a tip with no such neck goes straight down and is
+//! counted as crowded. A pillar landing on the part is never wider than the vein there; a base
+//! disc narrows (down to the pillar) to keep the clearance; joins keep it too. The pillar goes straight down until the solid (or a support) is right below it (it
 //! then narrows onto it, ending in a ball half as wide as the vein there, sunk into it: nothing
 //! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). An island
 //! too low for a pillar on a base (the pillar's neck would reach into the plate, and the print,
@@ -48,6 +53,9 @@ pub struct SupportOptions {
     pub base_height: f64,
     /// Pillars closer than this are joined.
     pub join: f64,
+    /// Room kept between a support and the part, except where a tip holds an island and where
+    /// a pillar lands on the part below.
+    pub clearance: f64,
 }
 
 impl Default for SupportOptions {
@@ -58,6 +66,7 @@ impl Default for SupportOptions {
             base: 2.0,
             base_height: 0.4,
             join: 4.0,
+            clearance: 0.3,
         }
     }
 }
@@ -83,6 +92,9 @@ pub struct SupportReport {
     pub islands: usize,
     pub tips: usize,
     pub to_plate: usize,
+    /// Tips whose pillar could not keep `clearance` from the part (it goes straight down and
+    /// may touch the part beside it).
+    pub crowded: usize,
     /// Of those, pins: tips too low for a pillar on a base, held by a cylinder as thin as the
     /// tip from the plate.
     pub pins: usize,
@@ -110,6 +122,7 @@ impl SupportOptions {
             ("base", self.base),
             ("base-height", self.base_height),
             ("join", self.join),
+            ("clearance", self.clearance),
         ] {
             if !(value.is_finite() && value > 0.0 && value <= 100.0) {
                 return Err(SupportError::Option { what, value });
@@ -157,6 +170,8 @@ const ROUNDS: usize = 3;
 #[derive(Default)]
 struct Tally {
     tips: usize,
+    /// Tips whose pillar could not keep the clearance from the part anywhere within 45°.
+    crowded: usize,
     /// Tips too low for a pillar, held by a pin from the plate.
     pins: usize,
     to_plate: usize,
@@ -207,6 +222,7 @@ pub fn plan(
             islands: islands.list.len(),
             tips: tally.tips,
             to_plate: tally.to_plate,
+            crowded: tally.crowded,
             pins: tally.pins,
             to_model: tally.to_model,
             joins: tally.joins,
@@ -280,6 +296,24 @@ fn hold(
             tally.to_plate += 1;
             continue;
         }
+        // The neck under the tip where the pillar below it keeps its room from the part, the
+        // nearest to straight below (the tip leans at most 45°); straight below if none does.
+        let room = Room {
+            r: rp,
+            clearance: opts.clearance,
+            taper: 4.0 * rp,
+        };
+        let found = offsets(room.taper).find_map(|off| {
+            // Leaning at most 45°: a neck `off` aside is at least as far down.
+            let at = p + off.extend(-tip_len.max(off.length()));
+            let end = room.column(model, at)?;
+            let low_enough = end != End::Plate || at.z - rn >= opts.base_height;
+            (low_enough && room.tip_clear(model, p, at, rt, rn)).then_some((at, end))
+        });
+        let (neck, end) = found.unwrap_or_else(|| {
+            tally.crowded += 1;
+            (neck, end)
+        });
         pieces.push(Piece::Cone(p, neck, rt, rn));
         match end {
             End::Model(h) => {
@@ -312,9 +346,16 @@ fn hold(
         let (a, b) = (tops[i], tops[j]);
         let mid = 0.5 * (a.truncate() + b.truncate());
         let joint = mid.extend(a.z.min(b.z) - 0.5 * d);
+        let room = Room {
+            r: rp,
+            clearance: opts.clearance,
+            taper: 4.0 * rp,
+        };
+        let below = room.column(model, joint);
         let clear = joint.z > opts.base_height + 2.0 * rp
-            && clear_of(model, a, joint, rp)
-            && clear_of(model, b, joint, rp);
+            && clear_of(model, a, joint, rp + opts.clearance)
+            && clear_of(model, b, joint, rp + opts.clearance)
+            && below.is_some();
         if !clear {
             refused.push((a.truncate(), b.truncate()));
             continue;
@@ -325,7 +366,7 @@ fn hold(
         let (hi, lo) = (i.max(j), i.min(j));
         tops.swap_remove(hi);
         tops.swap_remove(lo);
-        match descend(model, joint) {
+        match below.unwrap_or(End::Plate) {
             End::Model(h) => {
                 tally.to_model += 1;
                 land(model, &mut pieces, joint, h, rp);
@@ -337,9 +378,13 @@ fn hold(
     for t in &tops {
         let foot = DVec3::new(t.x, t.y, opts.base_height);
         pieces.push(pillar(*t, foot, rp));
+        // The base keeps the clearance from the part too (a leaf standing on its petiole is on
+        // the plate beside it): narrower where the part is near, never narrower than the pillar.
+        let near = model.eval(DVec3::new(t.x, t.y, 0.5 * opts.base_height), opts.base);
+        let radius = (0.5 * opts.base).min(near - opts.clearance).max(rp);
         pieces.push(Piece::Base(
             DVec3::new(t.x, t.y, 0.0),
-            0.5 * opts.base,
+            radius,
             opts.base_height,
         ));
     }
@@ -366,15 +411,17 @@ fn descend(model: &Placed, from: DVec3) -> End {
     End::Plate
 }
 
-/// A pillar of radius `r` from `top` down onto the solid, which it meets at height `h`: the
-/// pillar narrows over its last stretch to a ball half as wide as the vein it lands on, sunk
-/// into the vein, so no part of it hangs beside the vein (it would be an island).
+/// A pillar of radius `r` (no wider than the vein it lands on) from `top` down onto the solid,
+/// which it meets at height `h`: the pillar narrows over its last stretch to a ball half as
+/// wide as the vein, sunk into it, so no part of it hangs beside the vein (it would be an
+/// island).
 fn land(model: &Placed, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
     let hit = DVec3::new(top.x, top.y, h);
     let inside = hit - DVec3::Z * 0.01;
-    let rl = model
-        .vein_radius(inside)
-        .map_or(0.5 * r, |v| (0.5 * v).min(r));
+    let vein = model.vein_radius(inside);
+    // Never wider than the vein it stands on.
+    let r = vein.map_or(r, |v| r.min(v));
+    let rl = vein.map_or(0.5 * r, |v| (0.5 * v).min(r));
     let taper = (4.0 * r).min(0.5 * (top.z - h)).max(0.0);
     let foot = DVec3::new(top.x, top.y, h + taper);
     if top.z > foot.z {
@@ -388,6 +435,70 @@ fn clear_of(model: &Placed, a: DVec3, b: DVec3, r: f64) -> bool {
     let len = a.distance(b);
     let steps = (len / (0.5 * r)).ceil().max(1.0) as usize;
     (0..=steps).all(|k| model.eval(a.lerp(b, k as f64 / steps as f64), 2.0 * r) > r)
+}
+
+/// Rings of neck positions around straight below, out to `reach` (a tip of that length leans
+/// at most 45°), nearest first: offsets in the plane.
+fn offsets(reach: f64) -> impl Iterator<Item = DVec2> {
+    const RINGS: usize = 6;
+    (0..=RINGS).flat_map(move |ring| {
+        let n = if ring == 0 { 1 } else { 6 * ring };
+        let radius = reach * ring as f64 / RINGS as f64;
+        (0..n).map(move |k| {
+            let a = std::f64::consts::TAU * (k as f64 + 0.5 * (ring % 2) as f64) / n as f64;
+            DVec2::new(a.cos(), a.sin()) * radius
+        })
+    })
+}
+
+/// The room a pillar of radius `r` keeps from the part: `clearance` everywhere but over the
+/// last `taper` above where it lands.
+struct Room {
+    r: f64,
+    clearance: f64,
+    taper: f64,
+}
+
+impl Room {
+    /// Straight down from `top`: where the pillar ends (the plate, or the height where the
+    /// part is right below), if it keeps its room all the way.
+    fn column(&self, model: &Placed, top: DVec3) -> Option<End> {
+        let room = self.r + self.clearance;
+        let mut p = top;
+        let mut crowded: Option<f64> = None;
+        while p.z > 0.0 {
+            let d = model.eval(p, room + 1.0);
+            if d <= 0.0 {
+                return match crowded {
+                    Some(z) if z > p.z + self.taper => None,
+                    _ => Some(End::Model(p.z)),
+                };
+            }
+            if d < room {
+                let first = *crowded.get_or_insert(p.z);
+                // Crowded above where it could still land tapering: no landing will do.
+                if first - p.z > self.taper {
+                    return None;
+                }
+            }
+            // Never past where the room could run out (or, inside it, the part begin); at
+            // least 20 µm a step (under half a layer), so a descent takes at most
+            // (height / 20 µm) steps.
+            p.z -= if d > room { d - room } else { d }.max(0.02);
+        }
+        crowded.is_none().then_some(End::Plate)
+    }
+
+    /// Whether a tip from `p` (radius `rt`) to `neck` (radius `rn`) keeps its room over its
+    /// lower half (its upper half holds the island).
+    fn tip_clear(&self, model: &Placed, p: DVec3, neck: DVec3, rt: f64, rn: f64) -> bool {
+        const SAMPLES: usize = 8;
+        (SAMPLES / 2..=SAMPLES).all(|k| {
+            let t = k as f64 / SAMPLES as f64;
+            let r = rt + (rn - rt) * t;
+            model.eval(p.lerp(neck, t), r + self.clearance + 1.0) >= r + self.clearance
+        })
+    }
 }
 
 /// The islands of the placed solid on a display just large enough for it.
