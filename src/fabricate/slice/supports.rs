@@ -8,27 +8,27 @@
 //! and again on a grid half a pixel over, where a sliver may be an island that the first grid
 //! holds. Under each island, at its first layer's height and at its pixel nearest its centroid,
 //! a tip: a ball no wider than `tip` and never wider than the vein there, widening downwards into
-//! a pillar. The pillar keeps `clearance` from the part all the way down (but over the last four
-//! pillar radii above where it lands): where the column straight below the tip does not, the
-//! tip leans (at most 45°, up to four pillar radii aside, nearest first) to a neck whose column
-//! does, with its own lower half clear too; a tip with no such neck goes straight down and is
-//! counted as crowded. A pillar landing on the part is never wider than the vein there; a base
-//! disc narrows (down to the pillar) to keep the clearance; joins keep it too. The pillar goes straight down until the solid (or a support) is right below it (it
-//! then narrows onto it, ending in a ball half as wide as the vein there, sunk into it: nothing
-//! hangs beside the vein) or reaches the plate (it then stands on a disc, the base). An island
-//! too low for a pillar on a base (the pillar's neck would reach into the plate, and the print,
-//! which puts the lowest point on the plate, would lift everything by that) gets a pin: a
-//! cylinder as thin as the tip from the plate to the top of the island's first layer. A pillar
-//! may brush the solid on its way down; that only merges them.
+//! a pillar. The pillar goes down until the solid is right below it (it then narrows onto it,
+//! no wider than the vein there, ending in a ball half as wide as the vein, sunk into it:
+//! nothing hangs beside the vein) or reaches the plate (it then stands on a disc, the base,
+//! narrowed down to the pillar where the part is near). It keeps `clearance` from the part all
+//! the way down but over the last four pillar radii above where it lands: where the column
+//! straight below the tip does not, the tip leans (at most 45°, up to four pillar radii aside,
+//! nearest first) to a neck whose column does, with the tip's own lower half clear too; a tip
+//! with no such neck goes straight down and is counted as crowded. An island too low for a
+//! pillar on a base (the pillar's neck would reach into the plate, and the print, which puts
+//! the lowest point on the plate, would lift everything by that) gets a pin: a cylinder as thin
+//! as the tip from the plate to the top of the island's first layer.
+//!
+//! Pillars bound for the plate that stand closer than `join` are joined in pairs, nearest first:
+//! each leans at most 45° to a point between them, from where one pillar goes on down (and may
+//! be joined again): a tree. A join whose braces would pass within a pillar's radius plus the
+//! clearance of the solid, or whose column below would not keep it, is not made. Every step down
+//! looks at the exact distance to the solid, so a pillar's axis never passes through it.
 //!
 //! Islands are found with the layers drawn as the print draws them: the solid first, then the
 //! supports only where the solid leaves a pixel unlit (`shapes::image`), and the lowest point
 //! on the plate.
-//! Pillars bound for the plate that stand closer than `join` are joined in pairs, nearest first:
-//! each leans at most 45° to a point between them, from where one pillar goes on down (and may
-//! be joined again): a tree. A join whose braces would pass within a pillar's radius of the
-//! solid is not made. Every step down looks at the exact distance to the solid, so a pillar's
-//! axis never passes through it.
 //!
 //! The supported solid is sliced again on both grids and what islands are left (slivers beside
 //! a tip) are held the same way, for up to three rounds. The islands left on the print's grid
