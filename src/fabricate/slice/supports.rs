@@ -264,6 +264,12 @@ fn hold(
     let layer = printer.layer_mm;
     let rp = 0.5 * opts.pillar;
     let mut pieces: Vec<Piece> = Vec::new();
+    // The room every pillar keeps from the part.
+    let room = Room {
+        r: rp,
+        clearance: opts.clearance,
+        taper: 4.0 * rp,
+    };
     // The tops of pillars bound for the plate.
     let mut tops: Vec<DVec3> = Vec::new();
     for (island, offset) in holds {
@@ -298,11 +304,6 @@ fn hold(
         }
         // The neck under the tip where the pillar below it keeps its room from the part, the
         // nearest to straight below (the tip leans at most 45°); straight below if none does.
-        let room = Room {
-            r: rp,
-            clearance: opts.clearance,
-            taper: 4.0 * rp,
-        };
         let found = offsets(room.taper).find_map(|off| {
             // Leaning at most 45°: a neck `off` aside is at least as far down.
             let at = p + off.extend(-tip_len.max(off.length()));
@@ -346,11 +347,6 @@ fn hold(
         let (a, b) = (tops[i], tops[j]);
         let mid = 0.5 * (a.truncate() + b.truncate());
         let joint = mid.extend(a.z.min(b.z) - 0.5 * d);
-        let room = Room {
-            r: rp,
-            clearance: opts.clearance,
-            taper: 4.0 * rp,
-        };
         let below = room.column(model, joint);
         let clear = joint.z > opts.base_height + 2.0 * rp
             && clear_of(model, a, joint, rp + opts.clearance)
