@@ -18,7 +18,8 @@ to the pixel) and the support report's counts. Checks:
   contacts than tips (those farther than a tip's reach from every island of the bare print
   are listed: a tip may hold a sliver seen only on a grid half a pixel over); no more landings than the report's; none beside the part; none
   larger than the tip's footprint (a disc of the tip's diameter plus a pixel around) on each of
-  three layers.
+  three layers. A holding contact is at an island when the part right above it is the first
+  layer of one of the bare print's islands, or within a tip's reach of one's anchor.
 """
 import argparse
 import io
@@ -94,6 +95,15 @@ def main():
             islands += int((np.asarray(held_below) == 0).sum())
     if islands:
         problems.append(f"{islands} island(s) with supports")
+    # The bare print's islands, each as its first layer's pixels: a tip may hold one anywhere
+    # on it (a wide island is held at several points).
+    island_first = np.zeros_like(part)
+    for k in range(1, n):
+        lab, m = ndimage.label(part[k], structure=np.ones((3, 3)))
+        if m:
+            below_lit = np.asarray(ndimage.maximum(part[k - 1], lab, index=np.arange(1, m + 1)))
+            free = np.concatenate([[False], below_lit == 0])
+            island_first[k] = free[lab]
     support = held & ~part
     near_part = ndimage.binary_dilation(part, structure=np.array(
         [np.zeros((3, 3)), np.ones((3, 3)), np.zeros((3, 3))], dtype=bool))
@@ -132,7 +142,9 @@ def main():
             k = ks.max() + sl[0].start + 1
             x = (cc.mean() + sl[2].start + c0 + 0.5) * px
             y = (a_rows - (rr.mean() + sl[1].start + r0) - 0.5) * px
-            ok = any(
+            kk = ks + sl[0].start + 1
+            under = island_first[np.minimum(kk, n - 1), rr + sl[1].start, cc + sl[2].start]
+            ok = bool(under.any()) or any(
                 k - 3 <= layer <= k + 1 and math.dist(anchor, (x, y)) <= tip + 4 * px
                 for layer, anchor in islands_mm
             )

@@ -542,7 +542,8 @@ def slice(models: Any, *, units: Optional[str] = None, progress: Progress = None
           **options: Any) -> dict:
     """Slice closed meshes into a DMP-SL/MSLA print job. ``models``: a mesh (a dict or a
     (vertices, faces) pair) or a list of them. Returns ``sl1`` (the archive's bytes) and
-    ``report`` (print.json: layers, islands, resin, time)."""
+    ``report`` (print.json: layers, islands, resin, time). ``supports=True`` (with the
+    ``support_*`` options of ``print``, in mm) holds every island as ``slice --supports`` does."""
     units = _units(units, models)
     k = scale_of(units)
     if isinstance(models, dict) or (isinstance(models, tuple) and len(models) == 2

@@ -313,6 +313,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "support_pillar",
             "support_join",
             "support_clearance",
+            "support_spacing",
             "support_base",
         ],
         "slice" => &[
@@ -336,6 +337,13 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "scale",
             "weld",
             "weld_rel",
+            "supports",
+            "support_tip",
+            "support_pillar",
+            "support_join",
+            "support_clearance",
+            "support_spacing",
+            "support_base",
         ],
         "print" => &[
             "printer",
@@ -364,6 +372,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "support_pillar",
             "support_join",
             "support_clearance",
+            "support_spacing",
             "support_base",
         ],
         _ => &[],
@@ -878,38 +887,47 @@ pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {
     })
 }
 
-fn solid_shape(o: &mut Opts) -> PyResult<stage::solid::Shape> {
+/// `supports=True` and the support_* keys (refused without it).
+fn support_options(
+    o: &mut Opts,
+) -> PyResult<Option<lamina::fabricate::slice::supports::SupportOptions>> {
     use lamina::fabricate::slice::supports::SupportOptions;
-    let base = o
-        .vector::<2>("base")?
-        .map(|[diameter, height]| stage::solid::Base { diameter, height });
-    let supports = if o.bool("supports")? {
+    if o.bool("supports")? {
         let d = SupportOptions::default();
         let [b, bh] = o
             .vector::<2>("support_base")?
             .unwrap_or([d.base, d.base_height]);
-        Some(SupportOptions {
+        Ok(Some(SupportOptions {
             tip: o.f64("support_tip")?.unwrap_or(d.tip),
             pillar: o.f64("support_pillar")?.unwrap_or(d.pillar),
             base: b,
             base_height: bh,
             join: o.f64("support_join")?.unwrap_or(d.join),
             clearance: o.f64("support_clearance")?.unwrap_or(d.clearance),
-        })
+            spacing: o.f64("support_spacing")?.unwrap_or(d.spacing),
+        }))
     } else {
         for k in [
             "support_tip",
             "support_pillar",
             "support_join",
             "support_clearance",
+            "support_spacing",
             "support_base",
         ] {
             if o.take(k)?.is_some() {
                 return Err(crate::error(format!("{k}= needs supports=True")));
             }
         }
-        None
-    };
+        Ok(None)
+    }
+}
+
+fn solid_shape(o: &mut Opts) -> PyResult<stage::solid::Shape> {
+    let base = o
+        .vector::<2>("base")?
+        .map(|[diameter, height]| stage::solid::Base { diameter, height });
+    let supports = support_options(o)?;
     Ok(stage::solid::Shape {
         lamina: o.f64("lamina")?,
         base,
@@ -1011,6 +1029,7 @@ pub fn slice(o: &mut Opts) -> PyResult<stage::slice::Options> {
             (None, Some(f)) => Some(lamina::network::Weld::Relative(f)),
             (None, None) => None,
         },
+        supports: support_options(o)?,
     })
 }
 

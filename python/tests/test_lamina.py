@@ -880,3 +880,18 @@ def test_slice_drops_collapsed_triangles_and_welds_on_request():
         lamina.slice(mesh, weld=0.001, weld_rel=1e-6, **small)
     with pytest.raises(lamina.LaminaError, match="weld_rel= must be"):
         lamina.slice(mesh, weld_rel=0.9, **small)
+
+
+def test_slice_supports_any_mesh_as_the_command_does(tmp_path):
+    # manifold3d's overhang piece: two islands, held; the same archive as `slice --supports`.
+    path = ROOT / "fixtures" / "print" / "manifold_overhang.stl"
+    mesh = lamina.read_mesh(path)
+    bare = lamina.slice(mesh)
+    held = lamina.slice(mesh, supports=True, support_spacing=2.5)
+    assert bare["report"]["island_count"] == 2
+    assert held["report"]["island_count"] == 0
+    assert held["report"]["supports"]["tips"] >= 2
+    cli(tmp_path, "slice", path, "--supports", "-o", "lamina.sl1")
+    assert held["sl1"] == (tmp_path / "lamina.sl1").read_bytes()
+    with pytest.raises(lamina.LaminaError, match="needs supports=True"):
+        lamina.slice(mesh, support_tip=0.3)

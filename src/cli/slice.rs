@@ -37,6 +37,8 @@ pub struct Args {
     pub units: Option<String>,
     #[command(flatten)]
     pub weld: super::surface::SurfaceWeld,
+    #[command(flatten)]
+    pub supports: super::solid::SupportArgs,
 }
 
 /// The printer, the plate and the report: what `slice` and `print` share.
@@ -258,6 +260,7 @@ pub fn run(args: Args) -> Result<()> {
         units: units(&args)?,
         scale: args.scale,
         weld: args.weld.weld()?,
+        supports: args.supports.options()?,
     };
     let sliced = write_job(
         &args.output,

@@ -128,6 +128,9 @@ pub struct SupportArgs {
     /// Room kept between the supports and the part except at tips and landings, mm
     #[arg(long, value_name = "MM", default_value_t = 0.3)]
     pub support_clearance: f64,
+    /// An island wider than this is held by tips about this far apart, mm
+    #[arg(long, value_name = "MM", default_value_t = 2.5)]
+    pub support_spacing: f64,
     /// Base disc under each pillar on the plate: DIAMETER,HEIGHT in mm
     #[arg(long, value_name = "D,H", default_value = "2,0.4")]
     pub support_base: String,
@@ -159,6 +162,7 @@ impl SupportArgs {
             base_height: base[1],
             join: self.support_join,
             clearance: self.support_clearance,
+            spacing: self.support_spacing,
         }))
     }
 }

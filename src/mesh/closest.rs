@@ -67,6 +67,12 @@ impl<'a> SurfaceIndex<'a> {
 
     /// None for a mesh without triangles, or a query that is not a finite point.
     pub fn closest(&self, p: DVec3) -> Option<Closest> {
+        self.closest_within(p, f64::INFINITY)
+    }
+
+    /// The closest point if it is within `reach` of `p` (None otherwise, or for a mesh without
+    /// triangles, or a query that is not a finite point): a far query stops at the first box.
+    pub fn closest_within(&self, p: DVec3, reach: f64) -> Option<Closest> {
         if !p.is_finite() {
             return None;
         }
@@ -75,10 +81,9 @@ impl<'a> SurfaceIndex<'a> {
             .tree
             .nearest_neighbor_iter_with_distance_2(&p.to_array())
         {
-            if let Some(b) = best {
-                if box_d2 > b.distance * b.distance {
-                    break;
-                }
+            let bound = best.map_or(reach, |b| b.distance.min(reach));
+            if box_d2 > bound * bound {
+                break;
             }
             let t = cand.data;
             let [a, b, c] = self.mesh.corners(&self.mesh.triangles[t as usize]);
@@ -88,7 +93,7 @@ impl<'a> SurfaceIndex<'a> {
             if d.is_nan() {
                 continue;
             }
-            if best.is_none_or(|b| d < b.distance) {
+            if d <= reach && best.is_none_or(|b| d < b.distance) {
                 best = Some(Closest {
                     point: q,
                     distance: d,

@@ -3,6 +3,7 @@
 
 mod check;
 pub mod closest;
+pub mod inside;
 pub mod intersect;
 pub mod io;
 mod weld;
@@ -44,6 +45,33 @@ impl TriMesh {
         TriMesh {
             positions,
             triangles,
+            colors: None,
+        }
+    }
+
+    /// An axis-aligned box from `lo` to `hi`: 8 corners, 12 triangles wound outwards.
+    pub fn cuboid(lo: DVec3, hi: DVec3) -> TriMesh {
+        let corner = |i: usize| {
+            DVec3::new(
+                if i & 1 == 1 { hi.x } else { lo.x },
+                if i & 2 == 2 { hi.y } else { lo.y },
+                if i & 4 == 4 { hi.z } else { lo.z },
+            )
+        };
+        let quads: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        TriMesh {
+            positions: (0..8).map(corner).collect(),
+            triangles: quads
+                .iter()
+                .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+                .collect(),
             colors: None,
         }
     }

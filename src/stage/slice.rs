@@ -24,7 +24,10 @@ use crate::fabricate::estimate::{estimate, Estimate, Resin};
 use crate::fabricate::sl1::MAX_LISTED;
 use crate::fabricate::slice::islands::{Island, Islands};
 use crate::fabricate::slice::shapes::{self, Placed};
-use crate::fabricate::slice::{self as slicer, arrange, layer_count, Layer, SliceError};
+use crate::fabricate::slice::supports::{
+    plan_mesh, supports_only, SupportError, SupportOptions, SupportReport,
+};
+use crate::fabricate::slice::{self as slicer, arrange_held, layer_count, Layer, SliceError};
 pub use crate::fabricate::slice::{Model, Placement, Printer};
 use crate::stage::{OptionError, Progress};
 
@@ -187,6 +190,9 @@ pub struct Options {
     /// Weld each model's corners within this before slicing (CAD STLs whose shared corners
     /// differ in the last bits). Default none: only equal corners are one point.
     pub weld: Option<crate::network::Weld>,
+    /// Tree supports under every island of each model, planned at the printer's pixel and
+    /// layer (`supports::plan_mesh`). Default none.
+    pub supports: Option<SupportOptions>,
 }
 
 /// A sliced job: print.json and the estimate (the archive went to the writer).
@@ -272,6 +278,14 @@ pub enum Error {
     #[error("cancelled")]
     /// The caller stopped the stage.
     Cancelled,
+    #[error("{path}: {source}")]
+    /// Supports could not be planned for a model.
+    Supports {
+        /// The model's file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: SupportError,
+    },
 }
 
 /// Where an archive is written: a file, or memory (`std::io::Cursor<Vec<u8>>`).
@@ -369,15 +383,48 @@ pub fn run(
             mesh,
         });
     }
-    let placed = arrange(&scaled, printer, job.copies, job.gap, opts.keep_position)?;
+    let mut held: Vec<Option<Placed>> = Vec::new();
+    let mut reports = Vec::new();
+    if let Some(s) = &opts.supports {
+        s.check().map_err(|source| Error::Supports {
+            path: scaled[0].path.clone(),
+            source,
+        })?;
+        for m in &scaled {
+            // Supports are planned on closed shells only.
+            slicer::check_closed(m)?;
+            let planned = plan_mesh(&m.mesh, printer, s, progress).map_err(|e| match e {
+                SupportError::Cancelled(_) => Error::Cancelled,
+                source => Error::Supports {
+                    path: m.path.clone(),
+                    source,
+                },
+            })?;
+            reports.push(planned.report);
+            held.push(Some(supports_only(planned.prims)));
+        }
+    }
+    let placed = arrange_held(
+        &scaled,
+        &held,
+        printer,
+        job.copies,
+        job.gap,
+        opts.keep_position,
+    )?;
     let mut sliced = slice_job(
-        Source::Meshes(&scaled),
+        Source::Held {
+            models: &scaled,
+            supports: &held,
+        },
         &placed,
         job,
         archive,
         on_layer,
         progress,
     )?;
+    sliced.report.supports =
+        SupportReport::total(&reports).map(|r| serde_json::to_value(r).expect("reports serialise"));
     sliced.notes.splice(0..0, notes);
     Ok(sliced)
 }
@@ -387,6 +434,14 @@ pub fn run(
 pub enum Source<'a> {
     /// Closed meshes.
     Meshes(&'a [Model]),
+    /// Closed meshes and each one's supports (in its frame), drawn after the meshes where
+    /// they leave a pixel unlit.
+    Held {
+        /// The meshes.
+        models: &'a [Model],
+        /// Each model's supports, if it has them.
+        supports: &'a [Option<Placed>],
+    },
     /// A solid's shapes sampled directly.
     Shapes {
         /// The shapes, placed as the print places them.
@@ -419,8 +474,12 @@ pub fn slice_job(
 ) -> Result<Sliced, Error> {
     let printer = &job.printer;
     let name = job.name.clone();
+    let (source, supports) = match source {
+        Source::Held { models, supports } => (Source::Meshes(models), supports),
+        other => (other, &[][..]),
+    };
     let layers_total = match source {
-        Source::Meshes(models) => layer_count(models, printer),
+        Source::Held { models, .. } | Source::Meshes(models) => layer_count(models, printer),
         Source::Shapes { model, .. } => shapes::layer_count(model, printer),
     };
     progress.begin("slicing", Some(layers_total as u64));
@@ -458,7 +517,9 @@ pub fn slice_job(
         Ok(())
     };
     let done = match source {
-        Source::Meshes(models) => slicer::slice(models, placed, printer, &mut sink),
+        Source::Held { models, .. } | Source::Meshes(models) => {
+            slicer::slice_held(models, supports, placed, printer, &mut sink)
+        }
         Source::Shapes { model, .. } => shapes::slice(model, placed, printer, &mut sink),
     };
     match done {
@@ -479,7 +540,7 @@ pub fn slice_job(
     )?;
     // Per model once; every copy has the same volume and height.
     let (paths, volumes, heights): (Vec<String>, Option<Vec<f64>>, Vec<f64>) = match source {
-        Source::Meshes(models) => (
+        Source::Held { models, .. } | Source::Meshes(models) => (
             models
                 .iter()
                 .map(|m| m.path.display().to_string())

@@ -15,31 +15,7 @@ use lamina::TriMesh;
 
 /// An axis-aligned box from `lo` to `hi`, outward-wound.
 fn cuboid(lo: DVec3, hi: DVec3) -> TriMesh {
-    let c = |i: usize| {
-        DVec3::new(
-            if i & 1 == 1 { hi.x } else { lo.x },
-            if i & 2 == 2 { hi.y } else { lo.y },
-            if i & 4 == 4 { hi.z } else { lo.z },
-        )
-    };
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let mut triangles = Vec::new();
-    for q in quads {
-        triangles.push([q[0], q[1], q[2]]);
-        triangles.push([q[0], q[2], q[3]]);
-    }
-    TriMesh {
-        positions: (0..8).map(c).collect(),
-        triangles,
-        colors: None,
-    }
+    TriMesh::cuboid(lo, hi)
 }
 
 fn json(path: &Path) -> Result<serde_json::Value, Box<dyn std::error::Error>> {
@@ -856,9 +832,9 @@ fn supports_stand_on_the_plate_and_leave_the_parts_lit_pixels_as_they_are() -> T
     // A vein on the plate and one floating beside it, crossing nothing: at 3 mm it is held by
     // a tip, a pillar and a base; at 0.6 mm (its underside 0.3 mm up) a pillar on a base would
     // reach into the plate (and lift the whole print by that when placed, as it once did), so
-    // a pin as thin as the tip holds it.
+    // pins as thin as the tip hold it.
     let dir = tempfile::tempdir()?;
-    for (height, pins) in [(3.0, 0), (0.6, 1)] {
+    for (height, pins) in [(3.0, false), (0.6, true)] {
         let net = serde_json::json!({
             "format": "lamina-network", "version": 1, "meta": {"units": "mm", "parameters": {}},
             "nodes": [{"p": [0.0, 0.0, 0.0], "radius": 0.4}, {"p": [6.0, 0.0, 0.0], "radius": 0.4},
@@ -868,64 +844,27 @@ fn supports_stand_on_the_plate_and_leave_the_parts_lit_pixels_as_they_are() -> T
         });
         let path = dir.path().join("two.json");
         std::fs::write(&path, net.to_string())?;
-        let mut reports = Vec::new();
-        for (name, extra) in [("bare", None), ("held", Some("--supports"))] {
-            let sl1 = dir.path().join(format!("{name}.sl1"));
-            let report = dir.path().join(format!("{name}.json"));
-            let mut args = vec![
-                "print",
-                path.to_str().ok_or("p")?,
-                "-o",
-                sl1.to_str().ok_or("p")?,
-                "--report",
-                report.to_str().ok_or("p")?,
-            ];
-            args.extend(extra);
-            run_ok(&args)?;
-            reports.push((sl1, json(&report)?));
-        }
-        let [(bare_sl1, bare), (held_sl1, held)] = &reports[..] else {
-            return Err("two prints".into());
-        };
+        let [(bare_sl1, bare), (held_sl1, held)] = &bare_and_held(dir.path(), "print", &path)?;
         assert_eq!(bare["island_count"], 1, "at {height} mm");
         assert_eq!(held["island_count"], 0, "at {height} mm");
-        assert_eq!(held["supports"]["pins"], pins, "at {height} mm");
+        // The floating vein's first layer is a strip 6 mm long: held at points about 2.5 mm
+        // apart, each by a pin when it is too low for pillars.
+        let (tips, pinned) = (&held["supports"]["tips"], &held["supports"]["pins"]);
+        assert!(
+            tips.as_u64().ok_or("tips")? >= 2,
+            "at {height} mm: {tips} tips"
+        );
+        let want = if pins {
+            tips.clone()
+        } else {
+            serde_json::json!(0)
+        };
+        assert_eq!(pinned, &want, "at {height} mm");
         assert_eq!(
             held["layers"], bare["layers"],
             "at {height} mm: nothing lifted"
         );
-        // Placed a whole number of pixels apart (both on pixel corners): every pixel the part
-        // lights without supports has the same grey with them.
-        let pixel = bare["printer"]["pixel_mm"].as_f64().ok_or("pixel")?;
-        let offset = |r: &serde_json::Value, k: usize| r["placements"][0]["offset"][k].as_f64();
-        let dx = (offset(held, 0).ok_or("x")? - offset(bare, 0).ok_or("x")?) / pixel;
-        let dy = (offset(held, 1).ok_or("y")? - offset(bare, 1).ok_or("y")?) / pixel;
-        assert!((dx - dx.round()).abs() < 1e-6 && (dy - dy.round()).abs() < 1e-6);
-        let (dx, dy) = (dx.round() as isize, dy.round() as isize);
-        let layers = bare["layers"].as_u64().ok_or("layers")? as usize;
-        let (mut lit, mut changed, mut added) = (0, 0, 0);
-        for i in 0..layers {
-            let name = format!("bare{i:05}.png");
-            let (a, w) = layer_grey(bare_sl1, &name)?;
-            let (b, _) = layer_grey(held_sl1, &name.replace("bare", "held"))?;
-            let h = a.len() / w;
-            for r in 0..h {
-                for c in 0..w {
-                    let (rb, cb) = (r as isize - dy, c as isize + dx);
-                    let other = if (0..h as isize).contains(&rb) && (0..w as isize).contains(&cb) {
-                        b[rb as usize * w + cb as usize]
-                    } else {
-                        0
-                    };
-                    if a[r * w + c] >= 128 {
-                        lit += 1;
-                        changed += usize::from(other != a[r * w + c]);
-                    } else if other > a[r * w + c] {
-                        added += 1;
-                    }
-                }
-            }
-        }
+        let (lit, changed, added) = compare_lit(bare_sl1, bare, held_sl1, held)?;
         assert!(lit > 1000, "at {height} mm: {lit} lit pixels");
         assert_eq!(
             changed, 0,
@@ -933,6 +872,130 @@ fn supports_stand_on_the_plate_and_leave_the_parts_lit_pixels_as_they_are() -> T
         );
         assert!(added > 0, "at {height} mm: the supports are in the layers");
     }
+    Ok(())
+}
+
+/// `command INPUT` run into `dir` without and with `--supports`: each archive and report.
+fn bare_and_held(
+    dir: &Path,
+    command: &str,
+    input: &Path,
+) -> Result<[(std::path::PathBuf, serde_json::Value); 2], Box<dyn std::error::Error>> {
+    let run = |name: &str, extra: Option<&str>| -> Result<_, Box<dyn std::error::Error>> {
+        let sl1 = dir.join(format!("{name}.sl1"));
+        let report = dir.join(format!("{name}.json"));
+        let mut args = vec![
+            command,
+            input.to_str().ok_or("p")?,
+            "-o",
+            sl1.to_str().ok_or("p")?,
+            "--report",
+            report.to_str().ok_or("p")?,
+        ];
+        args.extend(extra);
+        run_ok(&args)?;
+        let report = json(&report)?;
+        Ok((sl1, report))
+    };
+    Ok([run("bare", None)?, run("held", Some("--supports"))?])
+}
+
+/// Pixels the part lights without supports (grey ≥ 128), how many of them have another grey
+/// with supports, and how many pixels the supports brighten: the two prints lined up by their
+/// placements, which must be a whole number of pixels apart. Layer images are named by each
+/// archive's stem.
+fn compare_lit(
+    bare_sl1: &Path,
+    bare: &serde_json::Value,
+    held_sl1: &Path,
+    held: &serde_json::Value,
+) -> Result<(usize, usize, usize), Box<dyn std::error::Error>> {
+    let pixel = bare["printer"]["pixel_mm"].as_f64().ok_or("pixel")?;
+    let offset = |r: &serde_json::Value, k: usize| r["placements"][0]["offset"][k].as_f64();
+    let dx = (offset(held, 0).ok_or("x")? - offset(bare, 0).ok_or("x")?) / pixel;
+    let dy = (offset(held, 1).ok_or("y")? - offset(bare, 1).ok_or("y")?) / pixel;
+    assert!((dx - dx.round()).abs() < 1e-6 && (dy - dy.round()).abs() < 1e-6);
+    let (dx, dy) = (dx.round() as isize, dy.round() as isize);
+    assert_eq!(held["layers"], bare["layers"], "nothing lifted");
+    let layers = bare["layers"].as_u64().ok_or("layers")? as usize;
+    let stem = |p: &Path| -> Result<String, Box<dyn std::error::Error>> {
+        Ok(p.file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or("stem")?
+            .to_string())
+    };
+    let (bare_name, held_name) = (stem(bare_sl1)?, stem(held_sl1)?);
+    let (mut lit, mut changed, mut added) = (0, 0, 0);
+    for i in 0..layers {
+        let (a, w) = layer_grey(bare_sl1, &format!("{bare_name}{i:05}.png"))?;
+        let (b, _) = layer_grey(held_sl1, &format!("{held_name}{i:05}.png"))?;
+        let h = a.len() / w;
+        for r in 0..h {
+            for c in 0..w {
+                let (rb, cb) = (r as isize - dy, c as isize + dx);
+                let other = if (0..h as isize).contains(&rb) && (0..w as isize).contains(&cb) {
+                    b[rb as usize * w + cb as usize]
+                } else {
+                    0
+                };
+                if a[r * w + c] >= 128 {
+                    lit += 1;
+                    changed += usize::from(other != a[r * w + c]);
+                } else if other > a[r * w + c] {
+                    added += 1;
+                }
+            }
+        }
+    }
+    Ok((lit, changed, added))
+}
+
+#[test]
+fn slice_supports_any_closed_mesh_and_leaves_its_lit_pixels_as_they_are() -> TestResult {
+    // Meshes lamina did not make: manifold3d's overhang piece (a rod hanging from an arm to a
+    // point, a ball floating beside the post: two islands, each held by a pillar landing on the
+    // base block) and two cubes touching along an edge (the upper cube's 10 x 10 mm underside
+    // is one island, held at several points about 2.5 mm apart, its pillars joined to the
+    // plate).
+    let dir = tempfile::tempdir()?;
+    for (mesh, islands, at_least_tips, landings) in [
+        ("print/manifold_overhang.stl", 2, 2, 2),
+        ("surfaces/touching_cubes.stl", 1, 9, 0),
+    ] {
+        let stl = fixture(mesh);
+        let [(bare_sl1, bare), (held_sl1, held)] = &bare_and_held(dir.path(), "slice", &stl)?;
+        assert_eq!(bare["island_count"], islands, "{mesh}");
+        assert_eq!(held["island_count"], 0, "{mesh}");
+        let s = &held["supports"];
+        assert_eq!(s["islands"], islands, "{mesh}");
+        assert_eq!(s["islands_left"], 0, "{mesh}");
+        assert_eq!(s["to_model"], landings, "{mesh}");
+        assert!(
+            s["tips"].as_u64().ok_or("tips")? >= at_least_tips,
+            "{mesh}: {s}"
+        );
+        assert!(s["support_ml"].as_f64().ok_or("ml")? > 0.0, "{mesh}");
+        let (lit, changed, added) = compare_lit(bare_sl1, bare, held_sl1, held)?;
+        assert!(lit > 10_000, "{mesh}: {lit} lit pixels");
+        assert_eq!(
+            changed, 0,
+            "{mesh}: {changed} of {lit} lit part pixels changed"
+        );
+        assert!(added > 0, "{mesh}: the supports are in the layers");
+    }
+    // An open mesh is refused before any planning, naming the file.
+    let open = fixture("surfaces/colored_patch.obj");
+    let out = dir.path().join("open.sl1");
+    let o = lamina(&[
+        "slice",
+        open.to_str().ok_or("p")?,
+        "--supports",
+        "-o",
+        out.to_str().ok_or("p")?,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("colored_patch.obj"), "{}", stderr(&o));
+    assert!(!out.exists());
     Ok(())
 }
 

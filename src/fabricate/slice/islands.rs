@@ -23,6 +23,11 @@ pub struct Island {
     /// The island's pixel nearest its centroid, mm: a point surely on it, where a support can
     /// hold it (the centroid of a crescent lies off it).
     pub anchor_mm: [f64; 2],
+    /// More points on it where supports should hold it, mm, when it is wider than the spread
+    /// asked for ([`Islands::with_spread`]): one near the middle of each square of that side
+    /// it covers, at least half a spread from the anchor and each other.
+    #[serde(skip)]
+    pub holds: Vec<[f64; 2]>,
 }
 
 /// Finds islands layer by layer; feed the layers in order.
@@ -39,6 +44,8 @@ pub struct Islands {
     next: u32,
     stack: Vec<usize>,
     members: Vec<usize>,
+    /// Spread of the points an island is held at, pixels (none when 0).
+    spread_px: f64,
 }
 
 /// Whether any grey byte of `row` is lit (≥ 128: its top bit set); eight at a time.
@@ -63,7 +70,51 @@ impl Islands {
             next: 0,
             stack: Vec::new(),
             members: Vec::new(),
+            spread_px: 0.0,
         }
+    }
+
+    /// Islands wider than `mm` get more points to be held at ([`Island::holds`]), about `mm`
+    /// apart.
+    pub fn with_spread(mut self, mm: f64) -> Islands {
+        self.spread_px = mm / self.pixel_mm;
+        self
+    }
+
+    /// The island's (`members`) pixels nearest the centres of the cells of a grid `spread_px`
+    /// wide, in cell order, each kept when it is at least half that far from the anchor and
+    /// from those kept before it (so no part of the island is much more than a spread from a
+    /// point that holds it).
+    fn spread(&self, anchor: usize) -> Vec<usize> {
+        let step = self.spread_px;
+        if step.is_nan() || step < 1.0 || self.members.len() < 2 {
+            return Vec::new();
+        }
+        let w = self.width;
+        let at = |p: usize| ((p % w) as f64, (p / w) as f64);
+        let mut best: std::collections::BTreeMap<(u64, u64), (f64, usize)> = Default::default();
+        for &p in &self.members {
+            let (x, y) = at(p);
+            let cell = ((y / step) as u64, (x / step) as u64);
+            let centre = ((cell.1 as f64 + 0.5) * step, (cell.0 as f64 + 0.5) * step);
+            let d = (x - centre.0).powi(2) + (y - centre.1).powi(2);
+            let e = best.entry(cell).or_insert((d, p));
+            if (d, p) < *e {
+                *e = (d, p);
+            }
+        }
+        let mut kept = vec![anchor];
+        for &(_, p) in best.values() {
+            let (x, y) = at(p);
+            let clear = kept.iter().all(|&q| {
+                let (qx, qy) = at(q);
+                (x - qx).powi(2) + (y - qy).powi(2) >= 0.25 * step * step
+            });
+            if clear {
+                kept.push(p);
+            }
+        }
+        kept.split_off(1)
     }
 
     /// The islands that start in `layer` (row-major grey, `width` × `height`).
@@ -130,7 +181,19 @@ impl Islands {
                             .min_by(|&a, &b| far(a).total_cmp(&far(b)).then(a.cmp(&b)))
                             .unwrap_or(start);
                         let (ax, ay) = ((anchor % w) as f64, (anchor / w) as f64);
+                        let holds = self
+                            .spread(anchor)
+                            .into_iter()
+                            .map(|p| {
+                                let (x, y) = ((p % w) as f64, (p / w) as f64);
+                                [
+                                    (x + 0.5) * self.pixel_mm,
+                                    (h as f64 - (y + 0.5)) * self.pixel_mm,
+                                ]
+                            })
+                            .collect();
                         out.push(Island {
+                            holds,
                             anchor_mm: [
                                 (ax + 0.5) * self.pixel_mm,
                                 (h as f64 - (ay + 0.5)) * self.pixel_mm,
@@ -179,6 +242,44 @@ mod tests {
         assert_eq!((i.layer, i.pixels), (1, 2));
         assert!((i.x_mm - 7.0 * 0.05).abs() < 1e-12, "{}", i.x_mm);
         assert!((i.y_mm - (8.0 - 6.5) * 0.05).abs() < 1e-12, "{}", i.y_mm);
+    }
+
+    #[test]
+    fn a_wide_island_is_held_at_points_a_spread_apart_and_a_small_one_at_its_anchor() {
+        // A 40 × 4 pixel bar (1 mm pixels) and a 2 × 2 dot, spread 10 mm.
+        let (w, h) = (50, 12);
+        let mut f = Islands::new(w, h, 1.0, 1.0).with_spread(10.0);
+        f.layer(0, &layer(w, h, &[]));
+        let mut lit: Vec<(usize, usize)> = (0..4)
+            .flat_map(|r| (0..40).map(move |c| (r + 2, c + 5)))
+            .collect();
+        lit.extend([(9, 1), (9, 2), (10, 1), (10, 2)]);
+        let found = f.layer(1, &layer(w, h, &lit));
+        assert_eq!(found.len(), 2);
+        let bar = found.iter().find(|i| i.pixels == 160).expect("the bar");
+        let dot = found.iter().find(|i| i.pixels == 4).expect("the dot");
+        assert!(dot.holds.is_empty(), "{:?}", dot.holds);
+        // Across 40 mm at 10 mm: the anchor and three or four more, all on the bar, none
+        // closer than 5 mm to another, and every pixel of the bar within 10 mm of one.
+        let mut all = vec![bar.anchor_mm];
+        all.extend(bar.holds.iter().copied());
+        assert!((4..=5).contains(&all.len()), "{all:?}");
+        for (k, p) in all.iter().enumerate() {
+            assert!(
+                (5.0..45.0).contains(&p[0]) && (6.0..10.0).contains(&p[1]),
+                "{p:?}"
+            );
+            for q in &all[..k] {
+                assert!(((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt() >= 5.0);
+            }
+        }
+        for &(r, c) in &lit[..160] {
+            let (x, y) = (c as f64 + 0.5, h as f64 - (r as f64 + 0.5));
+            let near = all
+                .iter()
+                .any(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2)).sqrt() <= 10.0);
+            assert!(near, "({x}, {y}) is far from every hold: {all:?}");
+        }
     }
 
     #[test]

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 
 use crate::geom::mix64 as mix;
 use crate::mesh::TriMesh;
+use shapes::{Placed, Plate};
 
 pub use grey::encode_grey;
 pub use raster::Coverage;
@@ -255,16 +256,40 @@ pub fn arrange(
     gap: f64,
     keep_position: bool,
 ) -> Result<Vec<Placement>, SliceError> {
+    arrange_held(models, &[], printer, copies, gap, keep_position)
+}
+
+/// [`arrange`] with each model's supports: `supports[k]`, when there, widens model k's box.
+pub fn arrange_held(
+    models: &[Model],
+    supports: &[Option<Placed>],
+    printer: &Printer,
+    copies: usize,
+    gap: f64,
+    keep_position: bool,
+) -> Result<Vec<Placement>, SliceError> {
     let mut boxes = Vec::with_capacity(models.len());
-    for m in models {
-        if m.mesh.triangles.is_empty() {
-            return Err(SliceError::Empty(m.path.clone()));
-        }
-        closed(m)?;
+    for (k, m) in models.iter().enumerate() {
+        check_closed(m)?;
         let b = m.mesh.bbox();
-        boxes.push((m.path.as_path(), b.min, b.max));
+        let (lo, hi) = match supports.get(k) {
+            Some(Some(s)) => {
+                let (lo, hi) = s.bounds();
+                (b.min.min(lo), b.max.max(hi))
+            }
+            _ => (b.min, b.max),
+        };
+        boxes.push((m.path.as_path(), lo, hi));
     }
     arrange_boxes(&boxes, printer, copies, gap, keep_position)
+}
+
+/// Checks a model has triangles and is a closed shell.
+pub fn check_closed(m: &Model) -> Result<(), SliceError> {
+    if m.mesh.triangles.is_empty() {
+        return Err(SliceError::Empty(m.path.clone()));
+    }
+    closed(m)
 }
 
 /// The same for models known by their boxes: (file, lowest corner, highest corner).
@@ -534,13 +559,13 @@ pub struct Layer {
 }
 
 /// Which triangles cross each layer plane, per model.
-struct LayerIndex {
+pub(super) struct LayerIndex {
     start: Vec<u32>,
     triangles: Vec<u32>,
 }
 
 impl LayerIndex {
-    fn new(mesh: &TriMesh, z0: f64, layer: f64, layers: usize) -> Self {
+    pub(super) fn new(mesh: &TriMesh, z0: f64, layer: f64, layers: usize) -> Self {
         // Layer i is cut at (i + ½)·layer; a triangle crosses it when min z ≤ cut < max z.
         let range = |t: &[u32; 3]| {
             let zs = t.map(|i| mesh.positions[i as usize].z - z0);
@@ -604,6 +629,19 @@ pub fn slice<E>(
     models: &[Model],
     placed: &[Placement],
     printer: &Printer,
+    sink: impl FnMut(Layer) -> Result<(), E>,
+) -> Result<usize, E> {
+    slice_held(models, &[], placed, printer, sink)
+}
+
+/// [`slice`] with each model's supports (`supports[k]` for model k, in its frame with its
+/// lowest point at z = 0, as [`supports::plan_mesh`] plans them), drawn after the meshes where
+/// they leave pixels unlit.
+pub fn slice_held<E>(
+    models: &[Model],
+    supports: &[Option<Placed>],
+    placed: &[Placement],
+    printer: &Printer,
     mut sink: impl FnMut(Layer) -> Result<(), E>,
 ) -> Result<usize, E> {
     let layers = layer_count(models, printer);
@@ -613,7 +651,7 @@ pub fn slice<E>(
         .collect();
     in_batches(
         layers,
-        |i| layer(models, placed, &indices, printer, i),
+        |i| layer(models, supports, placed, &indices, printer, i),
         |_, l| sink(l),
     )?;
     Ok(layers)
@@ -657,21 +695,54 @@ pub fn in_batches<T: Send, E>(
 
 fn layer(
     models: &[Model],
+    supports: &[Option<Placed>],
     placed: &[Placement],
     indices: &[LayerIndex],
     printer: &Printer,
     i: usize,
 ) -> Layer {
+    let px = printer.pixel_mm;
+    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
+    let mut image = vec![0u8; w * h];
+    let sections = placed
+        .iter()
+        .map(|p| (&models[p.model].mesh, &indices[p.model], p));
+    let (area_px, exact) = sections_onto(sections, printer, i, &mut image);
+    let mut area_mm2 = area_px * px * px;
+    // Supports after the parts, where they leave pixels unlit.
+    for (k, held) in supports.iter().enumerate() {
+        let Some(held) = held else {
+            continue;
+        };
+        let copies: Vec<Placement> = placed.iter().filter(|p| p.model == k).copied().collect();
+        area_mm2 += shapes::image_onto(&Plate::new(held, &copies), printer, i, &mut image);
+    }
+    Layer {
+        index: i,
+        png: encode_grey(&image, w as u32, h as u32),
+        image,
+        area_mm2,
+        exact_area_mm2: Some(exact),
+    }
+}
+
+/// Draws layer `i`'s sections of placed meshes onto `image` (a whole display's, row-major; its
+/// pixels are set, not added to): (covered pixels, area inside the contours in mm²).
+pub(super) fn sections_onto<'m>(
+    sections: impl Iterator<Item = (&'m TriMesh, &'m LayerIndex, &'m Placement)>,
+    printer: &Printer,
+    i: usize,
+    image: &mut [u8],
+) -> (f64, f64) {
     let z = (i as f64 + 0.5) * printer.layer_mm;
     let px = printer.pixel_mm;
     let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
     let mut segments: Vec<[[f64; 2]; 2]> = Vec::new();
     let mut exact = 0.0;
-    for p in placed {
-        let mesh = &models[p.model].mesh;
+    for (mesh, index, p) in sections {
         let off = DVec3::from_array(p.offset);
         let z_model = z - off.z;
-        for &t in indices[p.model].layer(i) {
+        for &t in index.layer(i) {
             if let Some([a, b]) = cut(mesh, mesh.triangles[t as usize], z_model) {
                 let turn = |q: DVec2| if p.turned { q.perp() } else { q };
                 let (a, b) = (turn(a) + off.truncate(), turn(b) + off.truncate());
@@ -682,7 +753,6 @@ fn layer(
             }
         }
     }
-    let mut image = vec![0u8; w * h];
     let mut area_px = 0.0;
     if !segments.is_empty() {
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -700,15 +770,9 @@ fn layer(
         for s in &segments {
             cov.add(s);
         }
-        area_px = cov.write(&mut image, w);
+        area_px = cov.write(image, w);
     }
-    Layer {
-        index: i,
-        png: encode_grey(&image, w as u32, h as u32),
-        image,
-        area_mm2: area_px * px * px,
-        exact_area_mm2: Some(exact.abs()),
-    }
+    (area_px, exact.abs())
 }
 
 /// The segment where triangle `t` crosses the plane at height `z`, directed so the solid is on

@@ -268,6 +268,16 @@ impl<'a> Plate<'a> {
 
 /// Layer `i`'s grey image and its area (Σ grey / 255 × pixel area, mm²).
 pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
+    let (w, h) = (printer.pixels_x as usize, printer.pixels_y as usize);
+    let mut image = vec![0u8; w * h];
+    let area = image_onto(plate, printer, i, &mut image);
+    (image, area)
+}
+
+/// Draws layer `i` onto `image` (a whole display's, row-major), the supports only where it is
+/// unlit; returns the area it added (Σ added grey / 255 × pixel area, mm²). On an image of
+/// another solid's layer (a mesh's), a plate of supports alone draws them as the print does.
+pub fn image_onto(plate: &Plate, printer: &Printer, i: usize, image: &mut [u8]) -> f64 {
     let (model, placed, cones) = (plate.model, plate.placed, &plate.cones);
     let z = (i as f64 + 0.5) * printer.layer_mm;
     let px = printer.pixel_mm;
@@ -302,7 +312,6 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
         }
     }
     entries.sort_unstable();
-    let mut image = vec![0u8; w * h];
     let mut total = 0u64;
     let reach_tile = TILE as f64 * px * FRAC_1_SQRT_2 + px;
     let (mut values, mut near) = (Vec::new(), Vec::new());
@@ -361,7 +370,7 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
                 return;
             }
             if centre < -reach_tile {
-                total += light(&mut image, w, r0..r1, c0..c1, only_unlit);
+                total += light(image, w, r0..r1, c0..c1, only_unlit);
                 return;
             }
             // Quarters of the tile (4 × 4 pixels) far from the surface are wholly dark or lit the
@@ -389,7 +398,7 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
                         continue;
                     }
                     if d < -reach_quarter {
-                        total += light(&mut image, w, qr0..qr1, qc0..qc1, only_unlit);
+                        total += light(image, w, qr0..qr1, qc0..qc1, only_unlit);
                         continue;
                     }
                 }
@@ -437,7 +446,7 @@ pub fn image(plate: &Plate, printer: &Printer, i: usize) -> (Vec<u8>, f64) {
             paint(&held, true);
         }
     }
-    (image, total as f64 / 255.0 * px * px)
+    total as f64 / 255.0 * px * px
 }
 
 /// Lights the block of `rows` × `cols` of an image `width` wide (`only_unlit`: only its pixels

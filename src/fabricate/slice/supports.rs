@@ -30,6 +30,17 @@
 //! supports only where the solid leaves a pixel unlit (`shapes::image`), and the lowest point
 //! on the plate.
 //!
+//! An island wider than `spacing` is held at more points than its anchor: one near the middle
+//! of each square of that side its first layer covers, at least half a spacing apart.
+//!
+//! A closed mesh (`plan_mesh`, for `slice --supports`) is planned by the same code through the
+//! same three questions asked of the solid: its signed distance (the nearest triangle, through
+//! a box tree; inside where the mesh's winding number about the point is not zero, counted on
+//! the vertical ray, as the slicer fills sections by the non-zero rule), its thickness where a
+//! tip or a pillar meets it (the largest ball inside the mesh touching its surface at the point
+//! nearest, by bisection: it stands for the vein's radius), and its layers (cut as `slice` cuts
+//! them, the supports drawn over them where they leave a pixel unlit).
+//!
 //! The supported solid is sliced again on both grids and what islands are left (slivers beside
 //! a tip) are held the same way, for up to three rounds. The islands left on the print's grid
 //! (none, unless a pillar could not be placed) and the supports' resin are reported.
@@ -37,9 +48,13 @@
 use glam::{DVec2, DVec3};
 
 use super::islands::{Island, Islands};
-use super::shapes::{image, layer_count, Placed, Plate};
-use super::{in_batches, Placement, Printer};
+use super::shapes::{image, image_onto, layer_count, Placed, Plate};
+use super::{in_batches, LayerIndex, Placement, Printer};
 use crate::fabricate::solid::sdf::{Cylinder, Primitive, RoundCone};
+use crate::fabricate::solid::Shapes;
+use crate::mesh::closest::SurfaceIndex;
+use crate::mesh::inside::Winding;
+use crate::mesh::TriMesh;
 
 /// How the supports are made, mm.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -56,6 +71,8 @@ pub struct SupportOptions {
     /// Room kept between a support and the part, except where a tip holds an island and where
     /// a pillar lands on the part below.
     pub clearance: f64,
+    /// An island wider than this is held by tips about this far apart over its first layer.
+    pub spacing: f64,
 }
 
 impl Default for SupportOptions {
@@ -67,6 +84,7 @@ impl Default for SupportOptions {
             base_height: 0.4,
             join: 4.0,
             clearance: 0.3,
+            spacing: 2.5,
         }
     }
 }
@@ -108,6 +126,28 @@ pub struct SupportReport {
     pub model_ml: f64,
 }
 
+impl SupportReport {
+    /// The reports of several models' supports as one: counts, resin and islands added up, the
+    /// first island left of the first model that has one. `None` for no reports.
+    pub fn total(reports: &[SupportReport]) -> Option<SupportReport> {
+        let mut all = reports.first()?.clone();
+        for r in &reports[1..] {
+            all.islands += r.islands;
+            all.tips += r.tips;
+            all.to_plate += r.to_plate;
+            all.crowded += r.crowded;
+            all.pins += r.pins;
+            all.to_model += r.to_model;
+            all.joins += r.joins;
+            all.islands_left += r.islands_left;
+            all.first_left = all.first_left.or_else(|| r.first_left.clone());
+            all.support_ml += r.support_ml;
+            all.model_ml += r.model_ml;
+        }
+        Some(all)
+    }
+}
+
 /// The supports' shapes, in the solid's own frame (as `Shapes::prims`), and what they are.
 pub struct Supports {
     pub prims: Vec<Primitive>,
@@ -123,6 +163,7 @@ impl SupportOptions {
             ("base-height", self.base_height),
             ("join", self.join),
             ("clearance", self.clearance),
+            ("spacing", self.spacing),
         ] {
             if !(value.is_finite() && value > 0.0 && value <= 100.0) {
                 return Err(SupportError::Option { what, value });
@@ -133,6 +174,7 @@ impl SupportOptions {
 }
 
 /// A piece of support in the placed frame.
+#[derive(Clone, Copy)]
 enum Piece {
     Cone(DVec3, DVec3, f64, f64),
     /// A disc on the plate: centre of its bottom, radius, height.
@@ -142,17 +184,90 @@ enum Piece {
 impl Piece {
     /// The piece in the solid's own frame.
     fn local(&self, model: &Placed) -> Primitive {
+        self.moved(&|p| model.local(p), &|v| model.local_direction(v))
+    }
+
+    /// The piece with its points moved by `point` and its directions by `direction`.
+    fn moved(
+        &self,
+        point: &dyn Fn(DVec3) -> DVec3,
+        direction: &dyn Fn(DVec3) -> DVec3,
+    ) -> Primitive {
         match *self {
             Piece::Cone(a, b, ra, rb) => {
-                Primitive::Cone(RoundCone::new(model.local(a), model.local(b), ra, rb))
+                Primitive::Cone(RoundCone::new(point(a), point(b), ra, rb))
             }
             Piece::Base(c, radius, height) => Primitive::Cylinder(Cylinder {
-                base: model.local(c),
-                axis: model.local_direction(DVec3::Z),
+                base: point(c),
+                axis: direction(DVec3::Z),
                 height,
                 radius,
             }),
         }
+    }
+}
+
+/// A solid the planner holds up, placed with its lowest point on the plate, with the supports
+/// made so far (part of it for every later look: a pillar of a later round may land on one).
+trait Held: Sync {
+    /// The placed box of the solid and its supports.
+    fn bounds(&self) -> (DVec3, DVec3);
+    /// Signed distance at a placed point (at least `reach` when it is farther).
+    fn eval(&self, q: DVec3, reach: f64) -> f64;
+    /// How thick the solid is where it holds `p` (a vein's radius there), `None` outside.
+    fn vein_radius(&self, p: DVec3) -> Option<f64>;
+    fn layer_count(&self, grid: &Printer) -> usize;
+    /// Layer images (and their areas, mm²) on `grid`, with the solid placed by `place`; the
+    /// supports drawn where the solid leaves a pixel unlit.
+    fn layers<'s>(
+        &'s self,
+        grid: &'s Printer,
+        place: &'s Placement,
+    ) -> Box<dyn Fn(usize) -> (Vec<u8>, f64) + Sync + 's>;
+    /// Adds supports (placed frame) and returns them in the frame the caller keeps them in.
+    fn add(&mut self, pieces: &[Piece]) -> Vec<Primitive>;
+}
+
+/// A solid made of shapes: the supports join its shapes, after them.
+struct HeldShapes {
+    shapes: Shapes,
+    upright: bool,
+    current: Placed,
+}
+
+impl Held for HeldShapes {
+    fn bounds(&self) -> (DVec3, DVec3) {
+        self.current.bounds()
+    }
+
+    fn eval(&self, q: DVec3, reach: f64) -> f64 {
+        self.current.eval(q, reach)
+    }
+
+    fn vein_radius(&self, p: DVec3) -> Option<f64> {
+        self.current.vein_radius(p)
+    }
+
+    fn layer_count(&self, grid: &Printer) -> usize {
+        layer_count(&self.current, grid)
+    }
+
+    fn layers<'s>(
+        &'s self,
+        grid: &'s Printer,
+        place: &'s Placement,
+    ) -> Box<dyn Fn(usize) -> (Vec<u8>, f64) + Sync + 's> {
+        let plate = Plate::new(&self.current, std::slice::from_ref(place));
+        Box::new(move |i| image(&plate, grid, i))
+    }
+
+    fn add(&mut self, pieces: &[Piece]) -> Vec<Primitive> {
+        let made: Vec<Primitive> = pieces.iter().map(|s| s.local(&self.current)).collect();
+        // Counted as supports, so the layers are drawn as the print draws them.
+        self.shapes.added += made.len();
+        self.shapes.prims.extend(made.iter().cloned());
+        self.current = Placed::new(self.shapes.clone(), self.upright);
+        made
     }
 }
 
@@ -190,29 +305,67 @@ pub fn plan(
     progress: &dyn crate::stage::Progress,
 ) -> Result<Supports, SupportError> {
     opts.check()?;
-    let islands = find_islands(model, printer, DVec2::ZERO, progress)?;
     let mut shapes = model.shapes().clone();
     shapes.frame = Some(model.shift());
-    let mut current = Placed::new(shapes.clone(), model.upright());
+    let current = Placed::new(shapes.clone(), model.upright());
+    let mut held = HeldShapes {
+        shapes,
+        upright: model.upright(),
+        current,
+    };
+    plan_held(&mut held, printer, opts, progress)
+}
+
+/// Plans the supports of a closed mesh, standing on its lowest point's height (as `slice`
+/// places it on the plate), with every rule [`plan`] keeps; the supports come in the mesh's
+/// frame; the mesh's thickness where a
+/// tip or a pillar meets it stands for the vein's radius (the largest ball inside it that
+/// touches the surface there).
+pub fn plan_mesh(
+    mesh: &TriMesh,
+    printer: &Printer,
+    opts: &SupportOptions,
+    progress: &dyn crate::stage::Progress,
+) -> Result<Supports, SupportError> {
+    opts.check()?;
+    // Planned with the lowest point on the plate; the supports go back to the mesh's frame.
+    let lift = mesh.bbox().min.z;
+    let mut moved = mesh.clone();
+    for p in &mut moved.positions {
+        p.z -= lift;
+    }
+    let mut held = HeldMesh::new(&moved);
+    let mut planned = plan_held(&mut held, printer, opts, progress)?;
+    let back = DVec3::Z * lift;
+    planned.prims = held
+        .pieces
+        .iter()
+        .map(|s| s.moved(&|p| p + back, &|v| v))
+        .collect();
+    Ok(planned)
+}
+
+fn plan_held(
+    held: &mut dyn Held,
+    printer: &Printer,
+    opts: &SupportOptions,
+    progress: &dyn crate::stage::Progress,
+) -> Result<Supports, SupportError> {
+    let islands = find_islands(held, printer, opts.spacing, DVec2::ZERO, progress)?;
     let mut left = islands.clone();
     let mut prims: Vec<Primitive> = Vec::new();
     let mut tally = Tally::default();
     for _ in 0..ROUNDS {
         // Islands are found on two pixel grids, half a pixel apart: a sliver of a few pixels
         // may be an island on one and held on the other.
-        let shifted = find_islands(&current, printer, DVec2::splat(0.5), progress)?;
+        let shifted = find_islands(held, printer, opts.spacing, DVec2::splat(0.5), progress)?;
         let holds = unite(&left, &shifted, printer.pixel_mm);
         if holds.is_empty() {
             break;
         }
-        let pieces = hold(&current, &holds, printer, opts, &mut tally);
-        let made: Vec<Primitive> = pieces.iter().map(|s| s.local(&current)).collect();
-        // Counted as supports, so the layers are drawn as the print draws them.
-        shapes.added += made.len();
-        shapes.prims.extend(made.iter().cloned());
-        prims.extend(made);
-        current = Placed::new(shapes.clone(), model.upright());
-        left = find_islands(&current, printer, DVec2::ZERO, progress)?;
+        let pieces = hold(held, &holds, printer, opts, &mut tally);
+        prims.extend(held.add(&pieces));
+        left = find_islands(held, printer, opts.spacing, DVec2::ZERO, progress)?;
     }
     let ml = |v: f64| v / 1000.0;
     Ok(Supports {
@@ -255,7 +408,7 @@ fn unite(a: &Found, b: &Found, pixel: f64) -> Vec<(Island, DVec2)> {
 
 /// Tips, pillars, joins and bases under `holds`, in the placed frame of `model`.
 fn hold(
-    model: &Placed,
+    model: &dyn Held,
     holds: &[(Island, DVec2)],
     printer: &Printer,
     opts: &SupportOptions,
@@ -272,13 +425,15 @@ fn hold(
     };
     // The tops of pillars bound for the plate.
     let mut tops: Vec<DVec3> = Vec::new();
-    for (island, offset) in holds {
-        let z = (island.layer as f64 + 0.5) * layer;
-        let p = DVec3::new(
-            island.anchor_mm[0] - offset.x,
-            island.anchor_mm[1] - offset.y,
-            z,
-        );
+    let points = holds.iter().flat_map(|(island, offset)| {
+        std::iter::once(island.anchor_mm)
+            .chain(island.holds.iter().copied())
+            .map(move |at| (island.layer, at, *offset))
+    });
+    for (first_layer, at, offset) in points {
+        tally.tips += 1;
+        let z = (first_layer as f64 + 0.5) * layer;
+        let p = DVec3::new(at[0] - offset.x, at[1] - offset.y, z);
         let rt = model
             .vein_radius(p)
             .map_or(0.5 * opts.tip, |r| r.min(0.5 * opts.tip));
@@ -324,7 +479,6 @@ fn hold(
             End::Plate => tops.push(neck),
         }
     }
-    tally.tips += holds.len();
 
     // Join plate-bound pillars in pairs, nearest first.
     let mut refused: Vec<(DVec2, DVec2)> = Vec::new();
@@ -394,7 +548,7 @@ fn pillar(a: DVec3, b: DVec3, r: f64) -> Piece {
 
 /// Straight down from `from` (outside the solid): the height where the solid is first right
 /// below, or the plate.
-fn descend(model: &Placed, from: DVec3) -> End {
+fn descend(model: &dyn Held, from: DVec3) -> End {
     let mut p = from;
     // Steps are at least 5 µm, so a descent takes at most (height / 5 µm) steps.
     while p.z > 0.0 {
@@ -411,7 +565,7 @@ fn descend(model: &Placed, from: DVec3) -> End {
 /// which it meets at height `h`: the pillar narrows over its last stretch to a ball half as
 /// wide as the vein, sunk into it, so no part of it hangs beside the vein (it would be an
 /// island).
-fn land(model: &Placed, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
+fn land(model: &dyn Held, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
     let hit = DVec3::new(top.x, top.y, h);
     let inside = hit - DVec3::Z * 0.01;
     let vein = model.vein_radius(inside);
@@ -427,7 +581,7 @@ fn land(model: &Placed, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
 }
 
 /// Whether a brace of radius `r` from `a` to `b` keeps clear of the solid.
-fn clear_of(model: &Placed, a: DVec3, b: DVec3, r: f64) -> bool {
+fn clear_of(model: &dyn Held, a: DVec3, b: DVec3, r: f64) -> bool {
     let len = a.distance(b);
     let steps = (len / (0.5 * r)).ceil().max(1.0) as usize;
     (0..=steps).all(|k| model.eval(a.lerp(b, k as f64 / steps as f64), 2.0 * r) > r)
@@ -458,7 +612,7 @@ struct Room {
 impl Room {
     /// Straight down from `top`: where the pillar ends (the plate, or the height where the
     /// part is right below), if it keeps its room all the way.
-    fn column(&self, model: &Placed, top: DVec3) -> Option<End> {
+    fn column(&self, model: &dyn Held, top: DVec3) -> Option<End> {
         let room = self.r + self.clearance;
         let mut p = top;
         let mut crowded: Option<f64> = None;
@@ -487,7 +641,7 @@ impl Room {
 
     /// Whether a tip from `p` (radius `rt`) to `neck` (radius `rn`) keeps its room over its
     /// lower half (its upper half holds the island).
-    fn tip_clear(&self, model: &Placed, p: DVec3, neck: DVec3, rt: f64, rn: f64) -> bool {
+    fn tip_clear(&self, model: &dyn Held, p: DVec3, neck: DVec3, rt: f64, rn: f64) -> bool {
         const SAMPLES: usize = 8;
         (SAMPLES / 2..=SAMPLES).all(|k| {
             let t = k as f64 / SAMPLES as f64;
@@ -509,8 +663,9 @@ struct Found {
 
 /// `phase` shifts the grid by that part of a pixel.
 fn find_islands(
-    model: &Placed,
+    model: &dyn Held,
     printer: &Printer,
+    spacing: f64,
     phase: DVec2,
     progress: &dyn crate::stage::Progress,
 ) -> Result<Found, SupportError> {
@@ -539,25 +694,226 @@ fn find_islands(
         min: [lo.x + offset.x, lo.y + offset.y],
         max: [hi.x + offset.x, hi.y + offset.y],
     };
-    let layers = layer_count(model, &grid);
-    let mut finder = Islands::new(w, h, px, grid.layer_mm);
+    let layers = model.layer_count(&grid);
+    let mut finder = Islands::new(w, h, px, grid.layer_mm).with_spread(spacing);
     let (mut list, mut area) = (Vec::new(), 0.0);
-    let plate = Plate::new(model, std::slice::from_ref(&place));
+    let image = model.layers(&grid, &place);
     progress.begin("supports: slicing", Some(layers as u64));
-    in_batches(
-        layers,
-        |i| image(&plate, &grid, i),
-        |i, (img, a)| {
-            crate::stage::checkpoint(progress)?;
-            area += a;
-            list.extend(finder.layer_owned(i, img));
-            progress.set(i as u64 + 1);
-            Ok::<(), crate::stage::Cancelled>(())
-        },
-    )?;
+    in_batches(layers, image, |i, (img, a)| {
+        crate::stage::checkpoint(progress)?;
+        area += a;
+        list.extend(finder.layer_owned(i, img));
+        progress.set(i as u64 + 1);
+        Ok::<(), crate::stage::Cancelled>(())
+    })?;
     Ok(Found {
         list,
         offset,
         volume: area * grid.layer_mm,
     })
+}
+
+/// A closed mesh (its lowest point at z = 0) and the supports made so far, which the slices
+/// draw after it where it leaves a pixel unlit.
+struct HeldMesh<'a> {
+    mesh: &'a TriMesh,
+    surface: SurfaceIndex<'a>,
+    winding: Winding<'a>,
+    /// +1 when the triangles face outwards (positive volume), −1 for a mesh wound inside out.
+    outward: f64,
+    box_lo: DVec3,
+    box_hi: DVec3,
+    /// The supports, in the mesh's frame (which is the placed one).
+    supports: Vec<Primitive>,
+    placed: Option<Placed>,
+    /// The supports as planned.
+    pieces: Vec<Piece>,
+}
+
+/// Supports alone as a placed solid in their own frame (every piece drawn as a support, where
+/// the part leaves a pixel unlit): what `slice` draws over a mesh's layers.
+pub fn supports_only(prims: Vec<Primitive>) -> Placed {
+    let added = prims.len();
+    Placed::new(
+        Shapes {
+            prims,
+            scale: 1.0,
+            drawn_size: 0.0,
+            ends: Vec::new(),
+            min_radius: 0.0,
+            max_radius: 0.0,
+            added,
+            frame: Some(DVec3::ZERO),
+        },
+        false,
+    )
+}
+
+impl<'a> HeldMesh<'a> {
+    fn new(mesh: &'a TriMesh) -> HeldMesh<'a> {
+        let b = mesh.bbox();
+        HeldMesh {
+            mesh,
+            surface: SurfaceIndex::new(mesh),
+            winding: Winding::new(mesh),
+            outward: if mesh.signed_volume() < 0.0 {
+                -1.0
+            } else {
+                1.0
+            },
+            box_lo: b.min,
+            box_hi: b.max,
+            supports: Vec::new(),
+            placed: None,
+            pieces: Vec::new(),
+        }
+    }
+
+    /// Signed distance to the mesh alone (at least `reach` when farther).
+    fn mesh_eval(&self, q: DVec3, reach: f64) -> f64 {
+        let d = self
+            .surface
+            .closest_within(q, reach)
+            .map_or(reach, |c| c.distance);
+        if self.winding.inside(q) {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// The radius of the largest ball inside the mesh that touches its surface at the point
+    /// nearest `p` (`p` inside): the mesh's half-thickness there, found by bisection on balls
+    /// tangent at that point, which are nested.
+    fn thickness(&self, p: DVec3) -> Option<f64> {
+        if !self.winding.inside(p) {
+            return None;
+        }
+        let c = self.surface.closest(p)?;
+        let inward = if c.distance > 1e-9 {
+            (p - c.point) / c.distance
+        } else {
+            -self.outward * self.surface.normal(&c)
+        };
+        let empty = |r: f64| {
+            let centre = c.point + inward * r;
+            self.surface
+                .closest_within(centre, r)
+                .is_none_or(|hit| hit.distance >= r * (1.0 - 1e-6))
+                && self.winding.inside(centre)
+        };
+        let (mut lo, mut hi) = (
+            c.distance.min(1e-3),
+            (self.box_hi - self.box_lo).max_element(),
+        );
+        if !empty(lo) {
+            return Some(lo);
+        }
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if empty(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi - lo < 1e-4 {
+                break;
+            }
+        }
+        Some(lo)
+    }
+}
+
+impl Held for HeldMesh<'_> {
+    fn bounds(&self) -> (DVec3, DVec3) {
+        match &self.placed {
+            Some(s) => {
+                let (lo, hi) = s.bounds();
+                (self.box_lo.min(lo), self.box_hi.max(hi))
+            }
+            None => (self.box_lo, self.box_hi),
+        }
+    }
+
+    fn eval(&self, q: DVec3, reach: f64) -> f64 {
+        let d = self.mesh_eval(q, reach);
+        self.placed.as_ref().map_or(d, |s| d.min(s.eval(q, reach)))
+    }
+
+    fn vein_radius(&self, p: DVec3) -> Option<f64> {
+        let part = self.thickness(p);
+        let support = self.placed.as_ref().and_then(|s| s.vein_radius(p));
+        match (part, support) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn layer_count(&self, grid: &Printer) -> usize {
+        super::layers_for(self.box_hi.z - self.box_lo.z, grid.layer_mm)
+    }
+
+    fn layers<'s>(
+        &'s self,
+        grid: &'s Printer,
+        place: &'s Placement,
+    ) -> Box<dyn Fn(usize) -> (Vec<u8>, f64) + Sync + 's> {
+        let layers = self.layer_count(grid);
+        let index = LayerIndex::new(self.mesh, self.box_lo.z, grid.layer_mm, layers);
+        let plate = self
+            .placed
+            .as_ref()
+            .map(|s| Plate::new(s, std::slice::from_ref(place)));
+        Box::new(move |i| {
+            let (w, h) = (grid.pixels_x as usize, grid.pixels_y as usize);
+            let mut image = vec![0u8; w * h];
+            let section = std::iter::once((self.mesh, &index, place));
+            let (covered, _) = super::sections_onto(section, grid, i, &mut image);
+            let mut area = covered * grid.pixel_mm * grid.pixel_mm;
+            if let Some(plate) = &plate {
+                area += image_onto(plate, grid, i, &mut image);
+            }
+            (image, area)
+        })
+    }
+
+    fn add(&mut self, pieces: &[Piece]) -> Vec<Primitive> {
+        let made: Vec<Primitive> = pieces.iter().map(|s| s.moved(&|p| p, &|v| v)).collect();
+        self.supports.extend(made.iter().cloned());
+        self.pieces.extend_from_slice(pieces);
+        self.placed = Some(supports_only(self.supports.clone()));
+        made
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_mesh_is_measured_as_the_planner_measures_shapes() {
+        // A 10 × 10 × 2 mm slab: signed distance (negative inside, capped at the reach asked
+        // for) and its half-thickness where a pillar would land.
+        let m = TriMesh::cuboid(DVec3::ZERO, DVec3::new(10.0, 10.0, 2.0));
+        let held = HeldMesh::new(&m);
+        assert!((held.eval(DVec3::new(5.0, 5.0, 1.0), 5.0) + 1.0).abs() < 1e-12);
+        assert!((held.eval(DVec3::new(5.0, 5.0, 3.5), 5.0) - 1.5).abs() < 1e-12);
+        assert_eq!(held.eval(DVec3::new(5.0, 5.0, 30.0), 2.0), 2.0);
+        let r = held
+            .vein_radius(DVec3::new(4.0, 6.0, 1.99))
+            .expect("inside");
+        assert!((r - 1.0).abs() < 1e-3, "{r}");
+        assert_eq!(held.vein_radius(DVec3::new(4.0, 6.0, 2.01)), None);
+        // The same slab wound inside out is the same solid to the planner.
+        let mut inv = m.clone();
+        for t in &mut inv.triangles {
+            t.swap(1, 2);
+        }
+        let held = HeldMesh::new(&inv);
+        assert!((held.eval(DVec3::new(5.0, 5.0, 1.0), 5.0) + 1.0).abs() < 1e-12);
+        let r = held
+            .vein_radius(DVec3::new(4.0, 6.0, 0.01))
+            .expect("inside");
+        assert!((r - 1.0).abs() < 1e-3, "{r}");
+    }
 }
