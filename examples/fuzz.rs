@@ -15,8 +15,9 @@
 //! `fuzz/crashes/TARGET/` (check it in; `tests/fuzz_replay.rs` replays the folder):
 //! - a panic;
 //! - a run over 2 s of CPU time (all threads; read from /proc, so a loaded machine does not
-//!   count against the input), or over 20 s of wall time (a run blocked without working): a
-//!   watchdog thread copies the input and exits with status 3;
+//!   count against the input), or over 20 s of wall time less the time its threads waited for
+//!   a core (a run blocked without working; a run starved by other work on the machine is
+//!   not one): a watchdog thread copies the input and exits with status 3;
 //! - more than 1 GiB live at once, or one request over it (the global allocator refuses it,
 //!   and the input, written before the call, is left at the path printed at the start).
 
@@ -253,6 +254,21 @@ fn cpu_millis() -> u64 {
     (tick(11) + tick(12)) * 10
 }
 
+/// Time this process's threads have spent ready to run but waiting for a core (the second
+/// field of each /proc/self/task/*/schedstat, ns), in milliseconds; 0 where there is no /proc.
+/// On a loaded machine a run waits without working: that wait is not held against it.
+fn waited_millis() -> u64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0;
+    };
+    let ns: u64 = tasks
+        .filter_map(|t| t.ok())
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .sum();
+    ns / 1_000_000
+}
+
 fn keep(root: &Path, target: &Target, input: &[u8], why: &str) -> PathBuf {
     let dir = root.join("fuzz/crashes").join(target.name);
     let _ = std::fs::create_dir_all(&dir);
@@ -287,15 +303,17 @@ fn main() {
     );
     let started = Arc::new(AtomicU64::new(0));
     let started_cpu = Arc::new(AtomicU64::new(0));
+    let started_wait = Arc::new(AtomicU64::new(0));
     let busy = Arc::new(AtomicBool::new(false));
     // Runs of the current target so far, for the line a stop prints.
     let done = Arc::new(AtomicU64::new(0));
     let current = Arc::new(std::sync::Mutex::new(PathBuf::new()));
     let clock = Instant::now();
     {
-        let (started, started_cpu, busy, current, root, done) = (
+        let (started, started_cpu, started_wait, busy, current, root, done) = (
             started.clone(),
             started_cpu.clone(),
+            started_wait.clone(),
             busy.clone(),
             current.clone(),
             root.clone(),
@@ -305,7 +323,13 @@ fn main() {
             std::thread::sleep(Duration::from_millis(100));
             let t = started.load(Ordering::Relaxed);
             let cpu = cpu_millis().saturating_sub(started_cpu.load(Ordering::Relaxed));
-            let wall = (clock.elapsed().as_millis() as u64).saturating_sub(t);
+            // Wall time less the time spent waiting for a core (which only a loaded machine
+            // makes): what is left is time blocked without working.
+            let wall = (clock.elapsed().as_millis() as u64)
+                .saturating_sub(t)
+                .saturating_sub(
+                    waited_millis().saturating_sub(started_wait.load(Ordering::Relaxed)),
+                );
             if busy.load(Ordering::Relaxed)
                 && (cpu > TIME_LIMIT.as_millis() as u64 || wall > WALL_LIMIT.as_millis() as u64)
             {
@@ -357,6 +381,7 @@ fn main() {
             }
             let cpu = cpu_millis();
             started_cpu.store(cpu, Ordering::Relaxed);
+            started_wait.store(waited_millis(), Ordering::Relaxed);
             started.store(clock.elapsed().as_millis() as u64, Ordering::Relaxed);
             busy.store(true, Ordering::Relaxed);
             let t = Instant::now();
