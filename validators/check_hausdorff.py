@@ -18,6 +18,10 @@ z = 0 (as `solid` places it). Checks:
   total length), a point where the two nearest hulls' surfaces meet outside the others (a
   crease, by Gauss-Newton), and for points still not placed, lines in 64 directions, then
   2048;
+- every triangle whole, densely: at the 45 points (i, j, k) / 8 of it, then a local search
+  from its worst point inside it; no point more than T outside the union (the least hull
+  distance is the distance there), nor deeper than T inside any one hull (a lower bound of its
+  distance to the surface: a triangle lying on one vein but inside another that joins it);
 - surface to mesh: random points on the exact surface (on each hull, outside the others),
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - both ways, a point beyond T in a gap between facing veins (outward directions more than
@@ -338,6 +342,57 @@ def slot_width(p, hulls):
     return np.where(d1 < -1e-6, np.inf, width + np.maximum(d1, 0))
 
 
+def lattice(n):
+    """Barycentric weights (i, j, k) / n, i + j + k = n."""
+    return np.array([(i, j, n - i - j) for i in range(n + 1) for j in range(n + 1 - i)],
+                    float) / n
+
+
+def dense_worst(T, hulls, tol, n=8):
+    """Each triangle sampled at the points (i, j, k) / n (45 for n = 8: a region of a fifth of
+    a triangle holds several), then the worst of them improved by a local search inside the
+    triangle (projected steps on the barycentric weights): per triangle, the most its points
+    lie outside the union (the distance there) and the deepest they lie inside one hull (a
+    lower bound of the distance to the surface). Returns (outside, inside, weights of each)."""
+    W = lattice(n)
+    out = np.full(len(T), -np.inf)
+    deep = np.full(len(T), -np.inf)
+    wo = np.zeros((len(T), 3))
+    wi = np.zeros((len(T), 3))
+    step = max(1, 400000 // len(W))
+    for s in range(0, len(T), step):
+        part = T[s:s + step]
+        P = np.einsum("mk,fkd->fmd", W, part).reshape(-1, 3)
+        d = hulls.union(P).reshape(len(part), len(W))
+        out[s:s + step], deep[s:s + step] = d.max(1), (-d).max(1)
+        wo[s:s + step], wi[s:s + step] = W[d.argmax(1)], W[d.argmin(1)]
+    # Local search from the worst sample, on triangles within half the tolerance of failing:
+    # a move of the weights by h along each of six directions, kept when it is worse, h halved
+    # when none is.
+    dirs = np.array([[1, -1, 0], [-1, 1, 0], [0, 1, -1], [0, -1, 1], [1, 0, -1], [-1, 0, 1]], float)
+    for value, w, sign in ((out, wo, 1.0), (deep, wi, -1.0)):
+        idx = np.nonzero(value > 0.5 * tol)[0]
+        if not len(idx):
+            continue
+        tri, cur, best = T[idx], w[idx].copy(), value[idx].copy()
+        h = np.full(len(idx), 0.5 / n)
+        for _ in range(24):
+            cand = cur[:, None, :] + h[:, None, None] * dirs[None, :, :]
+            ok = (cand >= 0).all(2)
+            cand = np.clip(cand, 0, None)
+            cand /= cand.sum(2, keepdims=True)
+            P = np.einsum("fmk,fkd->fmd", cand, tri).reshape(-1, 3)
+            v = sign * hulls.union(P).reshape(len(idx), len(dirs))
+            v = np.where(ok, v, -np.inf)
+            k = v.argmax(1)
+            better = v[np.arange(len(idx)), k] > best
+            cur[better] = cand[np.arange(len(idx)), k][better]
+            best = np.maximum(best, v[np.arange(len(idx)), k])
+            h = np.where(better, h, h / 2)
+        value[idx], w[idx] = best, cur
+    return out, deep, wo, wi
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("mesh")
@@ -410,6 +465,18 @@ def main():
             failures.append(f"{name} {rest[k] * 1000:.2f} um > {tol * 1000:.2f} um at "
                             f"({q[k][0]:.4f}, {q[k][1]:.4f}, {q[k][2]:.4f}); "
                             f"{int((rest > tol).sum())} points over")
+    # Every triangle's interior, densely: outside the union its distance is exact; inside one
+    # hull deeper than T a point is surely farther than T from the surface.
+    dout, ddeep, wo, wi = dense_worst(T, hulls, tol)
+    for name, v, w in (("outside", dout, wo), ("inside", ddeep, wi)):
+        k = int(np.argmax(v))
+        worst[f"dense {name}"] = float(v[k])
+        if v[k] > tol:
+            q = w[k] @ T[k]
+            failures.append(
+                f"triangle {k} (of {len(F)}) has a point {v[k] * 1000:.2f} um {name} the "
+                f"surface > {tol * 1000:.2f} um at ({q[0]:.4f}, {q[1]:.4f}, {q[2]:.4f}); "
+                f"{int((v > tol).sum())} triangles over")
     mesh_to_surface, surface_to_mesh = worst["mesh to surface"], worst["surface to mesh"]
     marched = simplified.get("marched", 0)
     reduction = marched / max(len(F), 1)
@@ -418,7 +485,10 @@ def main():
                         f"below {a.min_reduction}x")
     print(f"check_hausdorff: {a.mesh}: {len(F)} triangles ({reduction:.1f}x fewer than marched); "
           f"mesh to surface {mesh_to_surface * 1000:.2f} um at {len(pts)} points, surface to mesh "
-          f"{surface_to_mesh * 1000:.2f} um at {len(surf)} points; tolerance {tol * 1000:.2f} um")
+          f"{surface_to_mesh * 1000:.2f} um at {len(surf)} points; tolerance {tol * 1000:.2f} um; "
+          f"each triangle at 45 points and searched from its worst: "
+          f"{worst['dense outside'] * 1000:.2f} um outside at most, "
+          f"{worst['dense inside'] * 1000:.2f} um deep in one vein at most")
     if slots:
         print(f"check_hausdorff: beyond the tolerance in gaps between facing veins narrower "
               f"than {narrow * 1000:.1f} um (the cell's diagonal; marching bridges them"

@@ -41,6 +41,16 @@
 //!   witnesses (spacing² / 8r, spacing the longest edge marching makes, a cell's diagonal,
 //!   and r the thinnest vein's radius).
 //!
+//! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
+//! more than the tolerance out of the union (one convex piece within it at all three corners
+//! holds the whole triangle; else the triangle is quartered, down to 1/1024 of its side, until
+//! each quarter is so held by a piece near it, or a corner is found out). Inside: no point
+//! deeper than the tolerance in any one piece (a triangle lying on one vein but crossing a
+//! thinner one that joins it): the tangent plane of a convex piece's distance bounds it from
+//! below over the triangle, and Frank–Wolfe steps settle the few the plane does not. A
+//! triangle found off, or not proven held, has its longest edge and its edges whose midpoints
+//! are not near split at the surface, for up to six rounds; what is left is reported.
+//!
 //! A rejected edge is not tried again until something around it changes. A triangle already a
 //! sliver (marching leaves many) may stay one, but no collapse makes one worse. Neither a
 //! split nor a collapse puts a vertex within a hundredth of the tolerance of another, which
@@ -65,14 +75,18 @@ const COINCIDENT: f64 = 0.01;
 const REFINE_ROUNDS: usize = 8;
 /// Rounds of the last check (`touch_up`).
 const TOUCH_ROUNDS: usize = 6;
-/// The share of the tolerance sampled points of a triangle across a crease are held to.
-const SAMPLED: f64 = 0.95;
 /// Simplification stops after this many sweeps, or when a sweep collapses fewer than
 /// `SETTLED` of the vertices.
 const MAX_SWEEPS: usize = 12;
 const SETTLED: f64 = 0.002;
 /// About this many triangles to a brick.
 const BRICK_TRIANGLES: f64 = 30_000.0;
+/// How many times `Field::off` may quarter a triangle, and how many quarters it may look at,
+/// before it counts a triangle it cannot prove held as off.
+const HELD_DEPTH: u32 = 10;
+const HELD_QUARTERS: usize = 20_000;
+/// Frank–Wolfe steps `Field::deep` takes on one piece before it counts the triangle as deep.
+const FW_STEPS: usize = 40;
 /// Least triangle quality (1 equilateral, 0 flat) a collapse may make, unless the triangle
 /// was already worse.
 const MIN_QUALITY: f64 = 0.05;
@@ -290,24 +304,190 @@ impl<'a> Field<'a> {
             .all(|w| self.near((p[0] * w[0] + p[1] * w[1] + p[2] * w[2]) / 4.0, tol))
     }
 
-    /// Whether some point of triangle `p` is surely more than `limit` outside the surface
-    /// (outside, the value is the distance). A corner is looked at first; then, as in
-    /// `holds`, one convex piece within `limit` of all three corners holds the whole triangle;
-    /// else the points (i, j, k) / 8 are, held to `SAMPLED` of the limit (between them a
-    /// crease can rise a little higher).
-    fn off(&self, p: &[DVec3; 3], limit: f64) -> bool {
+    /// Whether triangle `p` may have a point more than `limit` outside the surface (outside,
+    /// the value is the distance), with a proof when it has none: a corner is looked at
+    /// first (more than `limit` out: off); then, as in `holds`, one convex piece within
+    /// `limit` of all three corners holds the whole triangle (a convex piece's distance is
+    /// at most its largest value at the corners, and the union's at most each piece's); a
+    /// triangle no one piece holds (across a crease) is cut into four, and each quarter must
+    /// be held by a piece near the triangle or cut again, down to `HELD_DEPTH` times (quarters
+    /// 1/1024 of the triangle's side), at most `HELD_QUARTERS` of them; what is not held by
+    /// then counts as off.
+    fn off(&self, p: &[DVec3; 3], limit: f64, near: &mut Vec<u32>) -> bool {
         if p.iter().any(|&x| self.eval(x) > limit) {
             return true;
         }
         if self.one_holds(p, p.map(|x| self.least(x)), limit) {
             return false;
         }
-        (0..=8).any(|i| {
-            (0..=8 - i).any(|j| {
-                let k = 8 - i - j;
-                let x = (p[0] * i as f64 + p[1] * j as f64 + p[2] * k as f64) / 8.0;
-                self.eval(x) > SAMPLED * limit
-            })
+        let lo = p[0].min(p[1]).min(p[2]);
+        let hi = p[0].max(p[1]).max(p[2]);
+        self.pieces_in(lo, hi, near);
+        near.retain(|&n| !matches!(self.prims[n as usize], Primitive::Prism(_)));
+        let mut stack: Vec<([DVec3; 3], u32)> = vec![(*p, 0)];
+        let mut looked = 0usize;
+        while let Some((t, depth)) = stack.pop() {
+            looked += 1;
+            if looked > HELD_QUARTERS {
+                return true;
+            }
+            let held = near.iter().any(|&n| {
+                let piece = &self.prims[n as usize];
+                t.iter().all(|&v| piece.eval(v, self.reach) <= limit)
+            });
+            if held {
+                continue;
+            }
+            if depth >= HELD_DEPTH {
+                return true;
+            }
+            let m = [
+                0.5 * (t[0] + t[1]),
+                0.5 * (t[1] + t[2]),
+                0.5 * (t[2] + t[0]),
+            ];
+            // A new corner out by more than the limit: off, for sure.
+            if m.iter().any(|&x| self.eval(x) > limit) {
+                return true;
+            }
+            stack.extend([
+                ([t[0], m[0], m[2]], depth + 1),
+                ([m[0], t[1], m[1]], depth + 1),
+                ([m[2], m[1], t[2]], depth + 1),
+                ([m[0], m[1], m[2]], depth + 1),
+            ]);
+        }
+        false
+    }
+
+    /// The pieces listed in the cells the box `lo`..`hi` meets, each once, in order.
+    fn pieces_in(&self, lo: DVec3, hi: DVec3, out: &mut Vec<u32>) {
+        out.clear();
+        let c0 = ((lo - self.lo) / self.cell).floor();
+        let c1 = ((hi - self.lo) / self.cell).floor();
+        let range = |k: usize| {
+            let top = self.dims[k] as f64 - 1.0;
+            (
+                c0[k].clamp(0.0, top) as usize,
+                c1[k].clamp(0.0, top) as usize,
+            )
+        };
+        if c1.min_element() < 0.0 || (0..3).any(|k| c0[k] > self.dims[k] as f64 - 1.0) {
+            return;
+        }
+        let ([i0, i1], [j0, j1], [k0, k1]) = {
+            let (a, b, c) = (range(0), range(1), range(2));
+            ([a.0, a.1], [b.0, b.1], [c.0, c.1])
+        };
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                for k in k0..=k1 {
+                    let at = (i * self.dims[1] + j) * self.dims[2] + k;
+                    out.extend_from_slice(
+                        &self.list[self.start[at] as usize..self.start[at + 1] as usize],
+                    );
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Whether some point of triangle `p` is surely more than `limit` inside the surface:
+    /// deeper than that in one convex piece (the union's depth at a point is at least each
+    /// piece's). Decided per piece near the triangle with a proof either way, as far as
+    /// `FW_STEPS` steps go: a convex piece's distance lies above its tangent plane, so the
+    /// plane at the centre bounds the least value over the triangle from below and rules most
+    /// pieces out at once; the others are minimised over the triangle by Frank–Wolfe steps
+    /// (towards the corner the gradient points most against, with a line search), each of
+    /// which bounds the least value from below (the value less the duality gap) until the
+    /// bound is above −`limit` or a point is deeper. Undecided counts as deep. Prisms (the
+    /// lamina, whose outline may be concave) are not looked at.
+    fn deep(&self, p: &[DVec3; 3], limit: f64, near: &mut Vec<u32>) -> bool {
+        let lo = p[0].min(p[1]).min(p[2]);
+        let hi = p[0].max(p[1]).max(p[2]);
+        self.pieces_in(lo, hi, near);
+        let centre = (p[0] + p[1] + p[2]) / 3.0;
+        near.iter().any(|&n| {
+            let piece = &self.prims[n as usize];
+            if matches!(piece, Primitive::Prism(_)) {
+                return false;
+            }
+            let f = |x: DVec3| piece.eval(x, self.reach);
+            let grad = |x: DVec3| piece.gradient(x, self.reach, 1e-3 * limit);
+            // The gradient's length is 1 but where it has none (on an axis): its bound is then
+            // the value less the triangle's reach from there.
+            let floor = |x: DVec3, fx: f64| {
+                let g = grad(x);
+                if g == DVec3::ZERO {
+                    fx - p.iter().map(|v| v.distance(x)).fold(0.0, f64::max)
+                } else {
+                    fx + p
+                        .iter()
+                        .map(|&v| g.dot(v - x))
+                        .fold(f64::INFINITY, f64::min)
+                }
+            };
+            let fc = f(centre);
+            if fc < -limit {
+                return true;
+            }
+            if floor(centre, fc) >= -limit {
+                return false;
+            }
+            let mut x = centre;
+            let mut fx = fc;
+            for &v in p {
+                let fv = f(v);
+                if fv < fx {
+                    (x, fx) = (v, fv);
+                }
+            }
+            for _ in 0..FW_STEPS {
+                if fx < -limit {
+                    return true;
+                }
+                let g = grad(x);
+                if g == DVec3::ZERO {
+                    return floor(x, fx) < -limit;
+                }
+                let s = *p
+                    .iter()
+                    .min_by(|a, b| g.dot(**a).total_cmp(&g.dot(**b)))
+                    .unwrap_or(&x);
+                let gap = g.dot(x - s);
+                if fx - gap >= -limit {
+                    return false;
+                }
+                // Golden-section search along x → s (the value is convex along it).
+                let (mut a, mut b) = (0.0f64, 1.0f64);
+                let r = 0.5 * (5f64.sqrt() - 1.0);
+                let at = |t: f64| f(x + (s - x) * t);
+                let (mut t1, mut t2) = (b - r * (b - a), a + r * (b - a));
+                let (mut f1, mut f2) = (at(t1), at(t2));
+                for _ in 0..20 {
+                    if f1 < f2 {
+                        b = t2;
+                        (t2, f2) = (t1, f1);
+                        t1 = b - r * (b - a);
+                        f1 = at(t1);
+                    } else {
+                        a = t1;
+                        (t1, f1) = (t2, f2);
+                        t2 = a + r * (b - a);
+                        f2 = at(t2);
+                    }
+                }
+                let (t, ft) = if f1 < f2 { (t1, f1) } else { (t2, f2) };
+                if ft < fx {
+                    x += (s - x) * t;
+                    fx = ft;
+                } else {
+                    // No progress along the line: the gap is what is left to prove.
+                    return fx - gap < -limit;
+                }
+            }
+            true
         })
     }
 
@@ -370,8 +550,9 @@ pub struct Simplified {
     /// Grid cells split finer before simplifying, where veins come closer than the grid
     /// resolves (so the mesh does not bridge the gap between them).
     pub cells_split: usize,
-    /// Triangles the last check still finds more than the tolerance outside the surface after
-    /// its rounds of splitting (0: none).
+    /// Triangles the last check still finds (or cannot prove not) more than the tolerance
+    /// outside the surface or deeper than it in one vein, after its rounds of splitting (0:
+    /// none).
     pub unheld: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
@@ -539,11 +720,12 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
     }
 }
 
-/// The last check, of every triangle: no point of it may be more than `tol` outside the surface
-/// (`Field::off`). A triangle that is (one left across a crease, where refinement only looked
-/// at midpoints and centres)
-/// has its longest edge and each edge whose midpoint is off split at the surface, for up to
-/// `TOUCH_ROUNDS` rounds. Returns how many triangles are still off.
+/// The last check, of every triangle whole: no point of it may be more than `tol` outside the
+/// surface (`Field::off`) nor deeper than `tol` in one piece (`Field::deep`). A triangle that
+/// is, or is not proven not to be (one left across a crease, where refinement only looked at
+/// midpoints and centres; one lying on a vein across a thinner one), has its longest edge and
+/// each edge whose midpoint is not near split at the surface, for up to `TOUCH_ROUNDS` rounds.
+/// Returns how many triangles are still off.
 fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
     // Room for the rounding of vertices to 32-bit floats (two units in the last place).
     let extent = mesh
@@ -558,8 +740,11 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
         let bad: Vec<[u32; 3]> = mesh
             .triangles
             .par_iter()
-            .filter(|t| field.off(&corners(t), limit))
-            .copied()
+            .map_init(Vec::new, |near, t| {
+                let p = corners(t);
+                (field.off(&p, limit, near) || field.deep(&p, limit, near)).then_some(*t)
+            })
+            .flatten()
             .collect();
         if bad.is_empty() || round == TOUCH_ROUNDS {
             return bad.len();
@@ -1434,6 +1619,78 @@ mod tests {
         let corners_near = notch.iter().all(|&v| field.eval(v).abs() < tol);
         assert!(corners_near);
         assert!(!field.holds(&notch, least(&notch), tol));
+    }
+
+    #[test]
+    fn the_last_check_proves_a_triangle_held_or_finds_it_off_both_ways() {
+        // A thick vein (radius 10, its top at z = 1) along x and a thin one (radius 0.1, its
+        // axis at z = 0.95) along y across it.
+        let prims = vec![
+            Primitive::Cone(RoundCone::new(
+                DVec3::new(-5.0, 0.0, -9.0),
+                DVec3::new(5.0, 0.0, -9.0),
+                10.0,
+                10.0,
+            )),
+            Primitive::Cone(RoundCone::new(
+                DVec3::new(0.0, -5.0, 0.95),
+                DVec3::new(0.0, 5.0, 0.95),
+                0.1,
+                0.1,
+            )),
+        ];
+        let field = Field::new(&prims, 0.5);
+        let (tol, mut near) = (0.01, Vec::new());
+        // Lying on the thick vein's top with its corners outside the thin vein, but across
+        // it: along x = 0 it is 0.05 mm inside the thin vein.
+        let across = [
+            DVec3::new(0.3, -0.2, 1.0),
+            DVec3::new(-0.3, -0.2, 1.0),
+            DVec3::new(0.3, 0.3, 1.0),
+        ];
+        assert!(across.iter().all(|&v| field.eval(v).abs() < tol));
+        assert!(field.deep(&across, tol, &mut near));
+        assert!(!field.off(&across, tol, &mut near), "nowhere far outside");
+        // Beside the thin vein: proven neither deeper nor farther out than the tolerance.
+        let beside = across.map(|v| v + DVec3::X * 2.0);
+        assert!(!field.deep(&beside, tol, &mut near));
+        assert!(!field.off(&beside, tol, &mut near));
+        // Two veins of radius 1 side by side, 0.2 apart: a chord across both tops, its corners
+        // on their outer sides, is held (the half on each side by that vein) though no one vein
+        // holds all its corners.
+        let pair = vec![
+            Primitive::Cone(RoundCone::new(
+                DVec3::new(-5.0, -0.1, 0.0),
+                DVec3::new(5.0, -0.1, 0.0),
+                1.0,
+                1.0,
+            )),
+            Primitive::Cone(RoundCone::new(
+                DVec3::new(-5.0, 0.1, 0.0),
+                DVec3::new(5.0, 0.1, 0.0),
+                1.0,
+                1.0,
+            )),
+        ];
+        let field = Field::new(&pair, 0.5);
+        let z = (1.0f64 - 0.04).sqrt();
+        let chord = [
+            DVec3::new(0.0, -0.3, z),
+            DVec3::new(0.0, 0.3, z),
+            DVec3::new(0.4, 0.0, z),
+        ];
+        assert!(!field.one_holds(&chord, chord.map(|v| field.least(v)), tol));
+        assert!(!field.off(&chord, tol, &mut near));
+        // Two veins of radius 1 crossing: a wide triangle over the notch between them is off.
+        let prims = cross();
+        let field = Field::new(&prims, 0.5);
+        let on = |p: DVec3| field.project(p, 1e-6);
+        let notch = [
+            on(DVec3::new(1.6, 0.6, 0.0)),
+            on(DVec3::new(0.6, 1.6, 0.0)),
+            on(DVec3::new(1.1, 1.1, 0.45)),
+        ];
+        assert!(field.off(&notch, tol, &mut near));
     }
 
     #[test]
