@@ -477,6 +477,15 @@ def main():
                 f"triangle {k} (of {len(F)}) has a point {v[k] * 1000:.2f} um {name} the "
                 f"surface > {tol * 1000:.2f} um at ({q[0]:.4f}, {q[1]:.4f}, {q[2]:.4f}); "
                 f"{int((v > tol).sum())} triangles over")
+    # What an STL's 32-bit corners and a slicer's plate make of it (reported, not failed):
+    # edges shorter than T/100, triangles lower than that, vertices below the plate, and the
+    # parts manifold3d sees with float32 corners.
+    e = np.stack([np.linalg.norm(T[:, (k + 1) % 3] - T[:, k], axis=1) for k in range(3)], 1)
+    height = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1) / e.max(1)
+    shape = (f"{int((e < tol / 100).sum()) // 2} edges shorter than T/100, "
+             f"{int((height < tol / 100).sum())} triangles lower than that, lowest vertex "
+             f"{V[:, 2].min() * 1000:.4f} um, manifold3d (float32) {len(m.decompose())} part(s) "
+             f"of {m.num_tri()} of {len(F)} triangles, genus {m.genus()}")
     mesh_to_surface, surface_to_mesh = worst["mesh to surface"], worst["surface to mesh"]
     marched = simplified.get("marched", 0)
     reduction = marched / max(len(F), 1)
@@ -488,7 +497,7 @@ def main():
           f"{surface_to_mesh * 1000:.2f} um at {len(surf)} points; tolerance {tol * 1000:.2f} um; "
           f"each triangle at 45 points and searched from its worst: "
           f"{worst['dense outside'] * 1000:.2f} um outside at most, "
-          f"{worst['dense inside'] * 1000:.2f} um deep in one vein at most")
+          f"{worst['dense inside'] * 1000:.2f} um deep in one vein at most; {shape}")
     if slots:
         print(f"check_hausdorff: beyond the tolerance in gaps between facing veins narrower "
               f"than {narrow * 1000:.1f} um (the cell's diagonal; marching bridges them"

@@ -467,24 +467,32 @@ pub fn solid_of(
             Some(fit::fit(&mut mesh, &field, bounds, progress).ok_or_else(cancelled)?)
         }
     };
+    // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
+    let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
     let simplified = match opts.tolerance {
         None => None,
         Some(tol) => {
             let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
             // A marched edge spans at most a cell's diagonal.
             let spacing = 3f64.sqrt() * opts.cell;
-            let mut done =
-                simplify::simplify(&mut mesh, &field, tol, (spacing, min_radius), progress)
-                    .ok_or(SolidError::March(MarchError::Cancelled))?;
+            // The plate, in the shapes' frame: placed z = 0 (+y stands up when upright).
+            let floor = (if opts.upright { 1 } else { 2 }, -shift.z);
+            let mut done = simplify::simplify(
+                &mut mesh,
+                &field,
+                tol,
+                (spacing, min_radius),
+                Some(floor),
+                progress,
+            )
+            .ok_or(SolidError::March(MarchError::Cancelled))?;
             done.cells_split = marched.cells_refined;
             done.gaps_left = marched.gaps_left;
             done.crotch_ends = marched.crotch_ends;
             Some(done)
         }
     };
-    // Placed as `print` places the shapes: the exact box, not the mesh's, is centred.
     crate::stage::checkpoint(progress).map_err(|_| cancelled())?;
-    let shift = frame.unwrap_or_else(|| placing_shift(&prims, opts.upright));
     place(&mut mesh, opts.upright, shift);
     let topo = mesh.check_manifold();
     if !topo.is_manifold() || !topo.closed {

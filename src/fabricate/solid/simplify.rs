@@ -41,6 +41,14 @@
 //!   witnesses (spacing² / 8r, spacing the longest edge marching makes, a cell's diagonal,
 //!   and r the thinnest vein's radius).
 //!
+//! *Tidying.* Then every edge shorter than a hundredth of the tolerance is collapsed to its
+//! midpoint, and the longest edge of every triangle lower than that is flipped, where the mesh
+//! stays a closed 2-manifold, no triangle turns over and (for a flip) the two triangles get
+//! higher; rounds go on until none is left that can be. An STL's 32-bit corners would merge
+//! the ends of such an edge or flatten such a triangle. What cannot be (ends with three
+//! neighbours in common: a tiny handle; a sliver whose flip makes another) stays. The plate:
+//! no vertex is left below the solid's lowest point.
+//!
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
 //! holds the whole triangle; else the triangle is quartered, down to 1/1024 of its side, until
@@ -554,6 +562,10 @@ pub struct Simplified {
     /// outside the surface or deeper than it in one vein, after its rounds of splitting (0:
     /// none).
     pub unheld: usize,
+    /// Edges shorter than a hundredth of the tolerance collapsed, and slivers (triangles
+    /// lower than that) flipped, before the last check (`tidy`).
+    pub short_edges_collapsed: usize,
+    pub slivers_flipped: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
     /// Tetrahedra at the finest split still spanning the very end of a sharp crotch (which
@@ -563,7 +575,8 @@ pub struct Simplified {
 
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of
 /// `field`, edges at most `spacing` long) so it stays within `tol` of the surface, whose least
-/// radius of curvature is about `radius`. `progress` counts passes; asked to stop, the
+/// radius of curvature is about `radius`, and no vertex below `floor` (coordinate `axis` at
+/// least `value`: the plate the solid stands on). `progress` counts passes; asked to stop, the
 /// simplification ends after the pass it is in (the mesh stays within `tol`: every collapse
 /// was checked), and `None` is returned.
 pub fn simplify(
@@ -571,6 +584,7 @@ pub fn simplify(
     field: &Field,
     tol: f64,
     (spacing, radius): (f64, f64),
+    floor: Option<(usize, f64)>,
     progress: &dyn crate::stage::Progress,
 ) -> Option<Simplified> {
     let marched = mesh.triangles.len();
@@ -627,7 +641,40 @@ pub fn simplify(
         }
     }
     whole.finish(mesh);
+    let (collapsed, flipped) = tidy(mesh, tol);
+    let shorts = |m: &TriMesh| {
+        m.triangles
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+            .filter(|&(a, b)| {
+                a < b
+                    && m.positions[a as usize].distance(m.positions[b as usize]) < COINCIDENT * tol
+            })
+            .count()
+    };
+    if debug {
+        eprintln!(
+            "tidied: {collapsed} short edges collapsed, {flipped} slivers flipped; {} short \
+             edges left, {} triangles",
+            shorts(mesh),
+            mesh.triangles.len()
+        );
+    }
+    if let Some((axis, value)) = floor {
+        for p in &mut mesh.positions {
+            p[axis] = p[axis].max(value);
+        }
+    }
     let unheld = touch_up(mesh, field, tol);
+    if let Some((axis, value)) = floor {
+        // What the last check's splits put below it by a rounding.
+        for p in &mut mesh.positions {
+            p[axis] = p[axis].max(value);
+        }
+    }
+    if debug {
+        eprintln!("after the last check: {} short edges", shorts(mesh));
+    }
     if debug {
         eprintln!(
             "touched up: {} triangles, {unheld} not held, {:.2} s",
@@ -642,6 +689,8 @@ pub fn simplify(
         triangles: mesh.triangles.len(),
         sweeps,
         unheld,
+        short_edges_collapsed: collapsed,
+        slivers_flipped: flipped,
         ..Simplified::default()
     })
 }
@@ -771,6 +820,242 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
         cut_edges(mesh, split, tol);
     }
     0
+}
+
+/// Rounds of `tidy`.
+const TIDY_ROUNDS: usize = 40;
+
+/// Collapses every edge shorter than `COINCIDENT · tol` to its midpoint and flips the longest
+/// edge of every triangle lower than that (a sliver with no short edge), where the mesh stays a
+/// closed 2-manifold and no triangle turns over: an STL's 32-bit corners would merge the ends of
+/// such an edge, or flatten such a triangle, and a reader would see a mesh that is not closed.
+/// A collapse moves its two vertices by less than half that length; the last check follows.
+/// Returns (edges collapsed, edges flipped).
+fn tidy(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
+    let short = COINCIDENT * tol;
+    let (mut collapsed, mut flipped) = (0, 0);
+    for _ in 0..TIDY_ROUNDS {
+        let (c, f) = (tidy_collapse(mesh, short), tidy_flip(mesh, short));
+        collapsed += c;
+        flipped += f;
+        if c + f == 0 {
+            break;
+        }
+    }
+    // Drop the vertices no triangle uses any more.
+    let mut index = vec![u32::MAX; mesh.positions.len()];
+    let mut positions = Vec::with_capacity(mesh.positions.len());
+    for t in &mut mesh.triangles {
+        for v in t.iter_mut() {
+            if index[*v as usize] == u32::MAX {
+                index[*v as usize] = positions.len() as u32;
+                positions.push(mesh.positions[*v as usize]);
+            }
+            *v = index[*v as usize];
+        }
+    }
+    mesh.positions = positions;
+    (collapsed, flipped)
+}
+
+/// Each vertex's triangles.
+fn around(mesh: &TriMesh) -> Vec<Vec<u32>> {
+    let mut at = vec![Vec::new(); mesh.positions.len()];
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        for &v in t {
+            at[v as usize].push(k as u32);
+        }
+    }
+    at
+}
+
+/// Twice the area times the unit normal.
+fn normal(p: [DVec3; 3]) -> DVec3 {
+    (p[1] - p[0]).cross(p[2] - p[0])
+}
+
+/// One pass of short-edge collapses; returns how many were made.
+fn tidy_collapse(mesh: &mut TriMesh, short: f64) -> usize {
+    let at = around(mesh);
+    let mut edges: Vec<(f64, u32, u32)> = Vec::new();
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let d = mesh.positions[a as usize].distance(mesh.positions[b as usize]);
+            if a < b && d < short {
+                edges.push((d, a, b));
+            }
+        }
+    }
+    edges.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+    let mut dead = vec![false; mesh.triangles.len()];
+    // Vertices whose triangles changed this pass: their edges wait for the next.
+    let mut touched = vec![false; mesh.positions.len()];
+    let mut made = 0;
+    for (_, a, b) in edges {
+        if touched[a as usize] || touched[b as usize] {
+            continue;
+        }
+        let faces = |v: u32| {
+            at[v as usize]
+                .iter()
+                .copied()
+                .filter(|&f| !dead[f as usize])
+        };
+        let shared: Vec<u32> = faces(a)
+            .filter(|&f| mesh.triangles[f as usize].contains(&b))
+            .collect();
+        if shared.len() != 2 {
+            continue;
+        }
+        // The link condition: a and b have exactly the two opposite corners in common.
+        let ring = |v: u32| {
+            let mut r: Vec<u32> = faces(v)
+                .flat_map(|f| mesh.triangles[f as usize])
+                .filter(|&w| w != v)
+                .collect();
+            r.sort_unstable();
+            r.dedup();
+            r
+        };
+        let (ra, rb) = (ring(a), ring(b));
+        let common: Vec<u32> = ra
+            .iter()
+            .copied()
+            .filter(|w| rb.binary_search(w).is_ok())
+            .collect();
+        // Every vertex left keeps at least three neighbours: the merged one has those of both
+        // but the two ends and the two in common; those two lose one each.
+        let enough = ra.len() + rb.len() >= 7 && common.iter().all(|&w| ring(w).len() >= 4);
+        if common.len() != 2 || !enough {
+            continue;
+        }
+        let mid = 0.5 * (mesh.positions[a as usize] + mesh.positions[b as usize]);
+        // No triangle left around a or b may turn over or vanish.
+        let moved = |t: [u32; 3]| {
+            t.map(|v| {
+                if v == a || v == b {
+                    mid
+                } else {
+                    mesh.positions[v as usize]
+                }
+            })
+        };
+        let keeps = faces(a)
+            .chain(faces(b))
+            .filter(|f| !shared.contains(f))
+            .all(|f| {
+                let t = mesh.triangles[f as usize];
+                let before = normal(mesh.corners(&t));
+                let after = normal(moved(t));
+                after.dot(before) > 0.0 && after.length() > 0.0
+            });
+        if !keeps {
+            continue;
+        }
+        for &f in &shared {
+            dead[f as usize] = true;
+        }
+        for f in at[b as usize].iter().filter(|&&f| !dead[f as usize]) {
+            for v in mesh.triangles[*f as usize].iter_mut() {
+                if *v == b {
+                    *v = a;
+                }
+            }
+        }
+        mesh.positions[a as usize] = mid;
+        for v in ra.iter().chain(&rb).chain([&a, &b]) {
+            touched[*v as usize] = true;
+        }
+        made += 1;
+        // b's triangles are a's now (the lists are rebuilt next pass; nothing here reads
+        // a's list again: a is touched).
+    }
+    let mut k = 0;
+    mesh.triangles.retain(|_| {
+        k += 1;
+        !dead[k - 1]
+    });
+    made
+}
+
+/// One pass of flips of the longest edge of triangles lower than `short`; returns how many.
+fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
+    let height = |p: [DVec3; 3]| {
+        let longest = (0..3)
+            .map(|k| p[k].distance(p[(k + 1) % 3]))
+            .fold(0.0, f64::max);
+        normal(p).length() / longest.max(1e-300)
+    };
+    // Directed edges: (from, to) → the triangle that runs along it.
+    let key = |a: u32, b: u32| (a as u64) << 32 | b as u64;
+    let mut edge: HashMap<u64, u32, Quick> =
+        HashMap::with_capacity_and_hasher(mesh.triangles.len() * 3, Quick);
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        for j in 0..3 {
+            edge.insert(key(t[j], t[(j + 1) % 3]), k as u32);
+        }
+    }
+    let mut busy = vec![false; mesh.triangles.len()];
+    let mut made = 0;
+    for k in 0..mesh.triangles.len() {
+        let t = mesh.triangles[k];
+        let p = mesh.corners(&t);
+        if busy[k] || height(p) >= short {
+            continue;
+        }
+        // Its longest edge (a, b), c opposite.
+        let j = (0..3)
+            .max_by(|&i, &j| {
+                p[i].distance_squared(p[(i + 1) % 3])
+                    .total_cmp(&p[j].distance_squared(p[(j + 1) % 3]))
+            })
+            .unwrap_or(0);
+        let (a, b, c) = (t[j], t[(j + 1) % 3], t[(j + 2) % 3]);
+        if p[j].distance(p[(j + 1) % 3]) < short {
+            continue;
+        }
+        // The triangle across it runs b → a.
+        let Some(&o) = edge.get(&key(b, a)) else {
+            continue;
+        };
+        if o as usize == k || busy[o as usize] {
+            continue;
+        }
+        let u = mesh.triangles[o as usize];
+        let Some(&d) = u.iter().find(|&&v| v != a && v != b) else {
+            continue;
+        };
+        let new_edge = mesh.positions[c as usize].distance(mesh.positions[d as usize]);
+        if d == c
+            || new_edge < short
+            || edge.contains_key(&key(c, d))
+            || edge.contains_key(&key(d, c))
+        {
+            continue;
+        }
+        let (new1, new2) = ([a, d, c], [d, b, c]);
+        let n_old = normal(p) + normal(mesh.corners(&u));
+        let (q1, q2) = (mesh.corners(&new1), mesh.corners(&new2));
+        let better = height(q1).min(height(q2)) > height(p).min(height(mesh.corners(&u)));
+        if !(better && normal(q1).dot(n_old) > 0.0 && normal(q2).dot(n_old) > 0.0) {
+            continue;
+        }
+        mesh.triangles[k] = new1;
+        mesh.triangles[o as usize] = new2;
+        edge.remove(&key(a, b));
+        edge.remove(&key(b, a));
+        for (from, to, tri) in [(a, d, k as u32), (d, c, k as u32), (c, a, k as u32)]
+            .into_iter()
+            .chain([(d, b, o), (b, c, o), (c, d, o)])
+        {
+            edge.insert(key(from, to), tri);
+        }
+        busy[k] = true;
+        busy[o as usize] = true;
+        made += 1;
+    }
+    made
 }
 
 /// Splits each edge `(a, b)` of `split` at its point (on the surface), unless that point is
@@ -1691,6 +1976,30 @@ mod tests {
             on(DVec3::new(1.1, 1.1, 0.45)),
         ];
         assert!(field.off(&notch, tol, &mut near));
+    }
+
+    #[test]
+    fn tidy_collapses_a_short_edge_and_keeps_the_mesh_closed() {
+        // A box with one face's triangle split at a point 1 nm from a corner: three short or
+        // sliver triangles around an edge of 1 nm.
+        let mut m = TriMesh::cuboid(DVec3::ZERO, DVec3::ONE);
+        let t = m.triangles[0];
+        let [a, _, _] = m.corners(&t);
+        let v = m.positions.len() as u32;
+        let (c0, c1, c2) = (t[0], t[1], t[2]);
+        let centroid = (m.corners(&t)[0] + m.corners(&t)[1] + m.corners(&t)[2]) / 3.0;
+        m.positions.push(a + (centroid - a).normalize() * 1e-6);
+        m.triangles[0] = [c0, c1, v];
+        m.triangles.push([c1, c2, v]);
+        m.triangles.push([c2, c0, v]);
+        let volume = m.signed_volume();
+        let (collapsed, _) = tidy(&mut m, 1e-3);
+        assert_eq!(collapsed, 1);
+        assert_eq!(m.triangles.len(), 12);
+        assert_eq!(m.positions.len(), 8);
+        let topo = m.check_manifold();
+        assert!(topo.is_manifold() && topo.closed);
+        assert!((m.signed_volume() - volume).abs() < 1e-6);
     }
 
     #[test]
