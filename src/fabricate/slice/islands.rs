@@ -2,7 +2,9 @@
 //! printer such a region is cured in free resin, where nothing holds it to the part, and the
 //! print fails there. A region is a connected set of lit pixels (grey at least half, 8-connected);
 //! it is an island when none of its pixels is lit in the previous layer. Everything in the
-//! first layer stands on the plate.
+//! first layer stands on the plate. Regions are found as runs of lit pixels along each row,
+//! joined where runs of neighbouring rows touch (a union-find over the runs), so a layer costs
+//! its rows and runs, not its pixels one by one.
 
 /// Grey at or above this is lit.
 pub const LIT: u8 = 128;
@@ -38,11 +40,10 @@ pub struct Islands {
     layer_mm: f64,
     /// The previous layer's image (empty before the first layer).
     below: Vec<u8>,
-    /// Per pixel: the last component (numbered across all layers, from 1) that took it. A
-    /// pixel is free in this layer when its number is at most `first`, the count before it.
-    seen: Vec<u32>,
-    next: u32,
-    stack: Vec<usize>,
+    /// This layer's runs of lit pixels and their union-find parents.
+    runs: Vec<Run>,
+    parent: Vec<u32>,
+    /// The pixels of the island being described.
     members: Vec<usize>,
     /// Spread of the points an island is held at, pixels (none when 0).
     spread_px: f64,
@@ -66,9 +67,8 @@ impl Islands {
             pixel_mm,
             layer_mm,
             below: Vec::new(),
-            seen: Vec::new(),
-            next: 0,
-            stack: Vec::new(),
+            runs: Vec::new(),
+            parent: Vec::new(),
             members: Vec::new(),
             spread_px: 0.0,
         }
@@ -128,89 +128,184 @@ impl Islands {
         debug_assert_eq!(image.len(), w * h);
         let mut out = Vec::new();
         if !self.below.is_empty() {
-            if self.seen.len() != w * h || self.next > u32::MAX - (w * h) as u32 {
-                self.seen = vec![0; w * h];
-                self.next = 0;
-            }
-            let first = self.next;
-            let lit = |p: usize| image[p] >= LIT;
-            // Dark rows are skipped whole.
+            // Runs of lit pixels, row by row (row-major order), joined into regions where
+            // runs in neighbouring rows touch (8-connected: their columns overlap once each is
+            // widened by one) by a union-find over the runs.
+            let mut runs = std::mem::take(&mut self.runs);
+            let mut parent = std::mem::take(&mut self.parent);
+            runs.clear();
+            let mut row_start = Vec::with_capacity(h + 1);
             for (r, row) in image.chunks(w).enumerate() {
+                row_start.push(runs.len());
                 if !any_lit(row) {
                     continue;
                 }
-                for start in r * w..(r + 1) * w {
-                    if !lit(start) || self.seen[start] > first {
+                let mut c = 0;
+                while c < w {
+                    // Dark pixels eight at a time.
+                    while c + 8 <= w && !any_lit(&row[c..c + 8]) {
+                        c += 8;
+                    }
+                    if c >= w {
+                        break;
+                    }
+                    if row[c] < LIT {
+                        c += 1;
                         continue;
                     }
-                    self.next += 1;
-                    let label = self.next;
-                    self.seen[start] = label;
-                    self.stack.push(start);
-                    let (mut count, mut sx, mut sy) = (0usize, 0.0f64, 0.0f64);
-                    let mut held = false;
-                    self.members.clear();
-                    while let Some(p) = self.stack.pop() {
-                        self.members.push(p);
-                        let (r, col) = (p / w, p % w);
-                        count += 1;
-                        sx += col as f64;
-                        sy += r as f64;
-                        held |= self.below[p] >= LIT;
-                        for rr in r.saturating_sub(1)..(r + 2).min(h) {
-                            for cc in col.saturating_sub(1)..(col + 2).min(w) {
-                                let q = rr * w + cc;
-                                if lit(q) && self.seen[q] <= first {
-                                    self.seen[q] = label;
-                                    self.stack.push(q);
-                                }
-                            }
-                        }
+                    let c0 = c;
+                    while c < w && row[c] >= LIT {
+                        c += 1;
                     }
-                    if !held {
-                        let n = count as f64;
-                        let (cx, cy) = (sx / n, sy / n);
-                        let far = |p: usize| {
-                            let (x, y) = ((p % w) as f64 - cx, (p / w) as f64 - cy);
-                            x * x + y * y
-                        };
-                        let anchor = self
-                            .members
-                            .iter()
-                            .copied()
-                            .min_by(|&a, &b| far(a).total_cmp(&far(b)).then(a.cmp(&b)))
-                            .unwrap_or(start);
-                        let (ax, ay) = ((anchor % w) as f64, (anchor / w) as f64);
-                        let holds = self
-                            .spread(anchor)
-                            .into_iter()
-                            .map(|p| {
-                                let (x, y) = ((p % w) as f64, (p / w) as f64);
-                                [
-                                    (x + 0.5) * self.pixel_mm,
-                                    (h as f64 - (y + 0.5)) * self.pixel_mm,
-                                ]
-                            })
-                            .collect();
-                        out.push(Island {
-                            holds,
-                            anchor_mm: [
-                                (ax + 0.5) * self.pixel_mm,
-                                (h as f64 - (ay + 0.5)) * self.pixel_mm,
-                            ],
-                            layer: index,
-                            x_mm: (sx / n + 0.5) * self.pixel_mm,
-                            y_mm: (h as f64 - (sy / n + 0.5)) * self.pixel_mm,
-                            z_mm: index as f64 * self.layer_mm,
-                            pixels: count,
-                            area_mm2: n * self.pixel_mm * self.pixel_mm,
-                        });
+                    runs.push(Run {
+                        row: r as u32,
+                        c0: c0 as u32,
+                        c1: c as u32,
+                    });
+                }
+            }
+            row_start.push(runs.len());
+            parent.clear();
+            parent.extend(0..runs.len() as u32);
+            for r in 1..h {
+                let (mut i, i_end) = (row_start[r - 1], row_start[r]);
+                let (mut j, j_end) = (row_start[r], row_start[r + 1]);
+                while i < i_end && j < j_end {
+                    let (above, here) = (runs[i], runs[j]);
+                    // Touching: [c0 − 1, c1] of one meets [c0, c1) of the other.
+                    if above.c0 <= here.c1 && here.c0 <= above.c1 {
+                        union_runs(&mut parent, i as u32, j as u32);
+                    }
+                    if above.c1 < here.c1 {
+                        i += 1;
+                    } else {
+                        j += 1;
                     }
                 }
             }
+            // Per region (by its root run): pixels, column and row sums, whether any pixel is
+            // lit in the layer below, and its first run (the first in row-major order).
+            let roots: Vec<u32> = (0..runs.len() as u32)
+                .map(|k| find_run(&mut parent, k))
+                .collect();
+            let mut region: Vec<Option<Region>> = vec![None; runs.len()];
+            for k in 0..runs.len() {
+                let root = roots[k] as usize;
+                let run = runs[k];
+                let (r, c0, c1) = (run.row as usize, run.c0 as usize, run.c1 as usize);
+                let n = (c1 - c0) as f64;
+                let held = any_lit(&self.below[r * w + c0..r * w + c1]);
+                let g = region[root].get_or_insert(Region {
+                    first: k,
+                    count: 0,
+                    sx: 0.0,
+                    sy: 0.0,
+                    held: false,
+                });
+                g.count += c1 - c0;
+                g.sx += n * (c0 + c1 - 1) as f64 / 2.0;
+                g.sy += n * r as f64;
+                g.held |= held;
+            }
+            let mut free: Vec<(usize, Region)> = region
+                .into_iter()
+                .enumerate()
+                .filter_map(|(root, g)| g.filter(|g| !g.held).map(|g| (root, g)))
+                .collect();
+            free.sort_by_key(|(_, g)| g.first);
+            for (root, g) in free {
+                self.members.clear();
+                for k in (g.first..runs.len()).filter(|&k| roots[k] as usize == root) {
+                    {
+                        let run = runs[k];
+                        let base = run.row as usize * w;
+                        self.members
+                            .extend(base + run.c0 as usize..base + run.c1 as usize);
+                    }
+                }
+                let start = self.members.first().copied().unwrap_or(0);
+                let (count, sx, sy) = (g.count, g.sx, g.sy);
+                let n = count as f64;
+                let (cx, cy) = (sx / n, sy / n);
+                let far = |p: usize| {
+                    let (x, y) = ((p % w) as f64 - cx, (p / w) as f64 - cy);
+                    x * x + y * y
+                };
+                let anchor = self
+                    .members
+                    .iter()
+                    .copied()
+                    .min_by(|&a, &b| far(a).total_cmp(&far(b)).then(a.cmp(&b)))
+                    .unwrap_or(start);
+                let (ax, ay) = ((anchor % w) as f64, (anchor / w) as f64);
+                let holds = self
+                    .spread(anchor)
+                    .into_iter()
+                    .map(|p| {
+                        let (x, y) = ((p % w) as f64, (p / w) as f64);
+                        [
+                            (x + 0.5) * self.pixel_mm,
+                            (h as f64 - (y + 0.5)) * self.pixel_mm,
+                        ]
+                    })
+                    .collect();
+                out.push(Island {
+                    holds,
+                    anchor_mm: [
+                        (ax + 0.5) * self.pixel_mm,
+                        (h as f64 - (ay + 0.5)) * self.pixel_mm,
+                    ],
+                    layer: index,
+                    x_mm: (sx / n + 0.5) * self.pixel_mm,
+                    y_mm: (h as f64 - (sy / n + 0.5)) * self.pixel_mm,
+                    z_mm: index as f64 * self.layer_mm,
+                    pixels: count,
+                    area_mm2: n * self.pixel_mm * self.pixel_mm,
+                });
+            }
+            self.runs = runs;
+            self.parent = parent;
         }
         self.below = image;
         out
+    }
+}
+
+/// A run of lit pixels in one row: columns `c0..c1`.
+#[derive(Clone, Copy)]
+struct Run {
+    row: u32,
+    c0: u32,
+    c1: u32,
+}
+
+/// A region's sums, gathered at its root run.
+#[derive(Clone, Copy)]
+struct Region {
+    first: usize,
+    count: usize,
+    sx: f64,
+    sy: f64,
+    held: bool,
+}
+
+/// The root of run `k`, halving the path on the way.
+fn find_run(parent: &mut [u32], mut k: u32) -> u32 {
+    while parent[k as usize] != k {
+        let up = parent[parent[k as usize] as usize];
+        parent[k as usize] = up;
+        k = up;
+    }
+    k
+}
+
+/// Joins the regions of runs `a` and `b`: the later root under the earlier, so a region's
+/// root is its first run.
+fn union_runs(parent: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find_run(parent, a), find_run(parent, b));
+    if ra != rb {
+        let (lo, hi) = (ra.min(rb), ra.max(rb));
+        parent[hi as usize] = lo;
     }
 }
 
@@ -280,6 +375,95 @@ mod tests {
                 .any(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2)).sqrt() <= 10.0);
             assert!(near, "({x}, {y}) is far from every hold: {all:?}");
         }
+    }
+
+    /// Islands of `image` over `below` by a plain breadth-first fill (8-connected), in the
+    /// order of each region's first pixel: (pixels, centroid column and row, anchor pixel).
+    fn oracle(w: usize, h: usize, below: &[u8], image: &[u8]) -> Vec<(usize, f64, f64, usize)> {
+        let mut seen = vec![false; w * h];
+        let mut out = Vec::new();
+        for start in 0..w * h {
+            if image[start] < LIT || seen[start] {
+                continue;
+            }
+            seen[start] = true;
+            let mut queue = std::collections::VecDeque::from([start]);
+            let mut members = Vec::new();
+            while let Some(p) = queue.pop_front() {
+                members.push(p);
+                let (r, c) = ((p / w) as i64, (p % w) as i64);
+                for (dr, dc) in (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))) {
+                    let (rr, cc) = (r + dr, c + dc);
+                    if rr < 0 || cc < 0 || rr >= h as i64 || cc >= w as i64 {
+                        continue;
+                    }
+                    let q = rr as usize * w + cc as usize;
+                    if image[q] >= LIT && !seen[q] {
+                        seen[q] = true;
+                        queue.push_back(q);
+                    }
+                }
+            }
+            if members.iter().any(|&p| below[p] >= LIT) {
+                continue;
+            }
+            let n = members.len() as f64;
+            let cx = members.iter().map(|&p| (p % w) as f64).sum::<f64>() / n;
+            let cy = members.iter().map(|&p| (p / w) as f64).sum::<f64>() / n;
+            let far = |p: usize| ((p % w) as f64 - cx).powi(2) + ((p / w) as f64 - cy).powi(2);
+            let anchor = *members
+                .iter()
+                .min_by(|&&a, &&b| far(a).total_cmp(&far(b)).then(a.cmp(&b)))
+                .expect("a member");
+            out.push((members.len(), cx, cy, anchor));
+        }
+        out
+    }
+
+    #[test]
+    fn runs_find_the_islands_a_plain_fill_finds() {
+        let (w, h) = (37, 23);
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            rng
+        };
+        let mut total = 0;
+        for density in [5u64, 20, 45, 60] {
+            let mut f = Islands::new(w, h, 1.0, 1.0);
+            let mut below = vec![0u8; w * h];
+            for layer in 0..12 {
+                let image: Vec<u8> = (0..w * h)
+                    .map(|_| {
+                        if next() % 100 < density {
+                            200
+                        } else {
+                            (next() % 128) as u8
+                        }
+                    })
+                    .collect();
+                let found = f.layer(layer, &image);
+                if layer > 0 {
+                    let want = oracle(w, h, &below, &image);
+                    assert_eq!(found.len(), want.len(), "density {density} layer {layer}");
+                    total += want.len();
+                    for (i, (n, cx, cy, anchor)) in found.iter().zip(want) {
+                        assert_eq!(i.pixels, n);
+                        assert!((i.x_mm - (cx + 0.5)).abs() < 1e-9);
+                        assert!((i.y_mm - (h as f64 - (cy + 0.5))).abs() < 1e-9);
+                        let (ax, ay) = (
+                            (anchor % w) as f64 + 0.5,
+                            h as f64 - ((anchor / w) as f64 + 0.5),
+                        );
+                        assert_eq!(i.anchor_mm, [ax, ay]);
+                    }
+                }
+                below = image;
+            }
+        }
+        assert!(total > 100, "{total} islands in all");
     }
 
     #[test]
