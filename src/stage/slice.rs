@@ -386,10 +386,13 @@ pub fn run(
     let mut held: Vec<Option<Placed>> = Vec::new();
     let mut reports = Vec::new();
     if let Some(s) = &opts.supports {
-        s.check().map_err(|source| Error::Supports {
-            path: scaled[0].path.clone(),
-            source,
-        })?;
+        // Checked once, named after the first model (with none, nothing is planned).
+        if let Some(first) = scaled.first() {
+            s.check().map_err(|source| Error::Supports {
+                path: first.path.clone(),
+                source,
+            })?;
+        }
         for m in &scaled {
             // Supports are planned on closed shells only.
             slicer::check_closed(m)?;
