@@ -76,6 +76,34 @@ impl TriMesh {
         }
     }
 
+    /// Drops the vertices no triangle uses (and their colours), keeping the others' order.
+    pub fn drop_unused(&mut self) {
+        let mut index = vec![u32::MAX; self.positions.len()];
+        for t in &self.triangles {
+            for &v in t {
+                index[v as usize] = 0;
+            }
+        }
+        let mut positions = Vec::with_capacity(self.positions.len());
+        for (v, p) in self.positions.iter().enumerate() {
+            if index[v] == 0 {
+                index[v] = positions.len() as u32;
+                positions.push(*p);
+            }
+        }
+        for t in &mut self.triangles {
+            *t = t.map(|v| index[v as usize]);
+        }
+        if let Some(colors) = &mut self.colors {
+            let mut k = 0;
+            colors.retain(|_| {
+                k += 1;
+                index.get(k - 1).is_some_and(|&i| i != u32::MAX)
+            });
+        }
+        self.positions = positions;
+    }
+
     pub fn bbox(&self) -> Aabb {
         Aabb::from_points(self.positions.iter().filter(|p| p.is_finite()))
     }

@@ -649,9 +649,18 @@ pub fn slice_held<E>(
         .par_iter()
         .map(|m| LayerIndex::new(&m.mesh, m.mesh.bbox().min.z, printer.layer_mm, layers))
         .collect();
+    // Each model's supports where its copies stand, made once for every layer.
+    let copies: Vec<Vec<Placement>> = (0..supports.len())
+        .map(|k| placed.iter().filter(|p| p.model == k).copied().collect())
+        .collect();
+    let plates: Vec<Plate> = supports
+        .iter()
+        .zip(&copies)
+        .filter_map(|(held, copies)| held.as_ref().map(|h| Plate::new(h, copies)))
+        .collect();
     in_batches(
         layers,
-        |i| layer(models, supports, placed, &indices, printer, i),
+        |i| layer(models, &plates, placed, &indices, printer, i),
         |_, l| sink(l),
     )?;
     Ok(layers)
@@ -695,7 +704,7 @@ pub fn in_batches<T: Send, E>(
 
 fn layer(
     models: &[Model],
-    supports: &[Option<Placed>],
+    supports: &[Plate],
     placed: &[Placement],
     indices: &[LayerIndex],
     printer: &Printer,
@@ -710,12 +719,8 @@ fn layer(
     let (area_px, exact) = sections_onto(sections, printer, i, &mut image);
     let mut area_mm2 = area_px * px * px;
     // Supports after the parts, where they leave pixels unlit.
-    for (k, held) in supports.iter().enumerate() {
-        let Some(held) = held else {
-            continue;
-        };
-        let copies: Vec<Placement> = placed.iter().filter(|p| p.model == k).copied().collect();
-        area_mm2 += shapes::image_onto(&Plate::new(held, &copies), printer, i, &mut image);
+    for plate in supports {
+        area_mm2 += shapes::image_onto(plate, printer, i, &mut image);
     }
     Layer {
         index: i,

@@ -333,7 +333,8 @@ pub fn mesh_union(
     if let Some(split) = fine {
         mesh.positions.extend(split.positions);
         mesh.triangles.extend(split.triangles);
-        drop_unused(&mut mesh);
+        // The vertices of grid edges the bisected cells cut that no triangle uses.
+        mesh.drop_unused();
     }
     Ok((mesh, marched))
 }
@@ -438,27 +439,6 @@ fn fine_triangles<F: adapt::Field>(
         return Err(MarchError::TooManyVertices(count + positions.len()));
     }
     Ok((positions, out))
-}
-
-/// Drops the vertices no triangle uses (those of grid edges the bisected cells cut).
-fn drop_unused(mesh: &mut TriMesh) {
-    let mut index = vec![u32::MAX; mesh.positions.len()];
-    for t in &mesh.triangles {
-        for &v in t {
-            index[v as usize] = 0;
-        }
-    }
-    let mut positions = Vec::with_capacity(mesh.positions.len());
-    for (v, p) in mesh.positions.iter().enumerate() {
-        if index[v] == 0 {
-            index[v] = positions.len() as u32;
-            positions.push(*p);
-        }
-    }
-    for t in &mut mesh.triangles {
-        *t = t.map(|v| index[v as usize]);
-    }
-    mesh.positions = positions;
 }
 
 /// The cosine of the angle between two pieces' outward directions at `x`.

@@ -842,19 +842,7 @@ fn tidy(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
             break;
         }
     }
-    // Drop the vertices no triangle uses any more.
-    let mut index = vec![u32::MAX; mesh.positions.len()];
-    let mut positions = Vec::with_capacity(mesh.positions.len());
-    for t in &mut mesh.triangles {
-        for v in t.iter_mut() {
-            if index[*v as usize] == u32::MAX {
-                index[*v as usize] = positions.len() as u32;
-                positions.push(mesh.positions[*v as usize]);
-            }
-            *v = index[*v as usize];
-        }
-    }
-    mesh.positions = positions;
+    mesh.drop_unused();
     (collapsed, flipped)
 }
 
