@@ -324,11 +324,11 @@ def simplify(positions: Any, edges: Any = None, *, surface: Any = None, units: O
 
 def planarize(positions: Any, edges: Any = None, normals: Any = None, *,
               height: Optional[float] = None, tolerance: Optional[float] = None,
-              method: str = "lbfgs", surface: Any = None, node_radius: Any = None,
+              method: str = "newton", surface: Any = None, node_radius: Any = None,
               edge_radius: Any = None, units: Optional[str] = None, progress: Progress = None,
               **options: Any) -> dict:
-    """Node axes that make every panel of the network planar (L-BFGS, ``projection`` or
-    ``newton``). ``normals`` (N×3) are the reference directions, or the normals of ``surface``
+    """Node axes that make every panel of the network planar (Gauss-Newton by default,
+    ``lbfgs`` or ``projection``). ``normals`` (N×3) are the reference directions, or the normals of ``surface``
     (a mesh) at the nodes. Returns ``axes`` (N×3 unit axes), ``heights`` (N), ``panels``
     (P×4×3 quads), ``within`` (the tolerance was reached), ``summary``, ``report`` (the
     planarity report; its ``panels`` and ``worst`` as columns), and what :func:`size` and

@@ -220,7 +220,7 @@ def planarize(
     *,
     height: Optional[float] = None,
     tolerance: Optional[float] = None,
-    method: str = "lbfgs",
+    method: str = "newton",
     surface: Optional[MeshLike] = None,
     node_radius: Optional[ArrayLike] = None,
     edge_radius: Optional[ArrayLike] = None,

@@ -335,9 +335,9 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     );
     let mut axes = Vec::new();
     for (method, name) in [
+        (MethodArg::Newton, "newton"),
         (MethodArg::Lbfgs, "lbfgs"),
         (MethodArg::Projection, "projection"),
-        (MethodArg::Newton, "newton"),
     ] {
         let file = |ext: &str| dir.join(format!("{name}{ext}"));
         let done = super::planarize::execute(&super::planarize::Args {
@@ -377,17 +377,17 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     let apart = |k: usize| lamina::stage::planarize::largest_axis_angle(&axes[0], &axes[k]);
     let _ = write!(
         facts,
-        "Projection's axes differ from L-BFGS's by at most {:.3}°, Gauss-Newton's by {:.3}°.",
+        "L-BFGS's axes differ from Gauss-Newton's by at most {:.3}°, projection's by {:.3}°.",
         apart(1),
         apart(2)
     );
-    let panels = read_mesh(&dir.join("lbfgs-panels.obj"))?;
+    let panels = read_mesh(&dir.join("newton-panels.obj"))?;
     write_mesh(&panels, &dir.join("panels.png"), size)?;
     outputs.push("calyx/panels.png".into());
     Ok(Entry {
         name: "Calyx: cells and planar panels".into(),
         about: "`lamina cells` on the venation network and its guide surface, then `lamina \
-                planarize` by L-BFGS, by iterative projection and by Gauss-Newton: 100 mm panels on every vein, \
+                planarize` by Gauss-Newton (the default), by L-BFGS and by iterative projection: 100 mm panels on every vein, \
                 tolerance 0.01 mm, base plates held to +Z (`--fix-normal 'z<1:0,0,1'`)"
             .into(),
         outputs,
@@ -396,7 +396,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
     })
 }
 
-/// From the L-BFGS axes to steel: plates in seven assembly groups (base ring at 6 mm, the rest
+/// From the Gauss-Newton axes to steel: plates in seven assembly groups (base ring at 6 mm, the rest
 /// by vein radius), nested on 3000 × 1500 sheets per thickness.
 fn steel(out: &Path) -> Result<Entry> {
     let dir = out.join("calyx");
@@ -408,7 +408,7 @@ fn steel(out: &Path) -> Result<Entry> {
         ..Default::default()
     };
     let sized = super::size::execute(&super::size::Args {
-        input: dir.join("lbfgs-axes.json"),
+        input: dir.join("newton-axes.json"),
         output: dir.join("sizing.json"),
         material: Some("1.4404".into()),
         gauges: vec![1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0],
@@ -430,7 +430,7 @@ fn steel(out: &Path) -> Result<Entry> {
         json: false,
     })?;
     let plates = super::plates::execute(&super::plates::Args {
-        input: dir.join("lbfgs-axes.json"),
+        input: dir.join("newton-axes.json"),
         gauges: None,
         sizing: Some(dir.join("sizing.json")),
         thickness: None,
@@ -548,7 +548,7 @@ fn steel(out: &Path) -> Result<Entry> {
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
     Ok(Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
-        about: "`lamina size` on the L-BFGS axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
+        about: "`lamina size` on the Gauss-Newton axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

@@ -43,6 +43,7 @@ pub struct Args {
     /// Seeded tries, the best kept [default: 8 up to 250 plates, fewer above, 1 from 2,000]
     #[arg(long)]
     pub tries: Option<usize>,
+    /// Seed of the tries' perturbed orders: the same seed and inputs give the same sheets
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Do not pair congruent quads turned 180°

@@ -23,9 +23,14 @@ use super::progress::Bar;
 
 #[derive(Clone, Copy, ValueEnum)]
 pub enum MethodArg {
+    /// L-BFGS (argmin) on the same objective: no factorisation, but iterations that grow with
+    /// the network
     Lbfgs,
+    /// Gokmen's iterative projection (equal pulls per panel, Anderson-accelerated;
+    /// --plain-projection for the published sweep)
     Projection,
-    /// Gauss-Newton with a sparse Cholesky solve: iterations that do not grow with the network
+    /// Gauss-Newton with a sparse Cholesky solve: iterations that do not grow with the network,
+    /// and the largest α that holds the tolerance kept
     Newton,
 }
 
@@ -36,7 +41,8 @@ pub struct Args {
     /// Guide surface (.obj .stl): reference directions are its normals at the nodes
     #[arg(long)]
     pub surface: Option<PathBuf>,
-    #[arg(long, value_enum, default_value = "lbfgs")]
+    /// How the axes are solved for
+    #[arg(long, value_enum, default_value = "newton")]
     pub method: MethodArg,
     /// Panel height at every node, mm
     #[arg(long, default_value_t = 100.0)]

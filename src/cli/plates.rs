@@ -68,8 +68,9 @@ pub struct JointArgs {
     /// How far a root gap may be from --weld-gap, mm (at most --weld-gap)
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub weld_gap_tolerance: f64,
-    /// Nodes whose gaps setbacks cannot even get a tube on their axis the plates weld to:
-    /// `tube:DIAMETER,WALL` in mm [default: such nodes are only reported]
+    /// A tube on the node's axis for the plates to weld to, at nodes where setting the plates
+    /// back cannot open the weld gap: `tube:DIAMETER,WALL` in mm [default: such nodes are only
+    /// reported]
     #[arg(long, value_parser = CoreSize::parse)]
     pub node_core: Option<CoreSize>,
     /// Bolts through the seam plates: M6, M8, M10, M12, M16, M20, M22, M24, M27, M30
