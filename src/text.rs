@@ -9,6 +9,23 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// A figure to three significant digits for people: plain between 0.001 and 100,000
+/// (`53.4`, `0.00849`), else in exponent form (`8.49e-5`, `1.23e6`).
+pub fn sig3(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    if (1e-3..1e5).contains(&v.abs()) {
+        // Digits after the point for three significant ones, from the rounded value's size.
+        let rounded: f64 = format!("{v:.2e}").parse().unwrap_or(v);
+        let magnitude = rounded.abs().log10().floor() as i32;
+        let places = (2 - magnitude).max(0) as usize;
+        format!("{rounded:.places$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 /// Text from an input file made safe to print in a one-line message: control characters
 /// (escape sequences, NUL, CR, line breaks, DEL) are shown escaped, as `\u{1b}`, `\0`, `\n`;
 /// everything else, quotes and non-ASCII letters included, is kept.
@@ -38,6 +55,18 @@ pub fn html(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn figures_keep_three_significant_digits() {
+        assert_eq!(sig3(53.35), "53.4");
+        assert_eq!(sig3(8.493210529416308e-5), "8.49e-5");
+        assert_eq!(sig3(0.01), "0.0100");
+        assert_eq!(sig3(999.96), "1000");
+        assert_eq!(sig3(0.0084936), "0.00849");
+        assert_eq!(sig3(-2.5), "-2.50");
+        assert_eq!(sig3(123456.0), "1.23e5");
+        assert_eq!(sig3(0.0), "0");
+    }
 
     #[test]
     fn control_characters_are_shown_escaped() {

@@ -268,7 +268,8 @@ pub fn sizing_html(s: &Sizing, material: &Material, source: &str) -> String {
     figures(&mut h, &gauge);
     let _ = write!(
         h,
-        "</div><h2>Deformed shape</h2><p>Under the sum of the loads, displacements × {scale:.3e} (the largest drawn as a tenth of the span); grey undeformed.</p><div class=\"views\">"
+        "</div><h2>Deformed shape</h2><p>Under the sum of the loads, displacements × {} (the largest drawn as a tenth of the span); grey undeformed.</p><div class=\"views\">",
+        crate::text::sig3(scale)
     );
     figures(&mut h, &deformed);
     h.push_str("</div><h2>Most utilised members</h2><table><tr><th>edge</th><th>nodes</th><th>gauge mm</th><th>depth mm</th><th>utilisation</th><th>check</th><th>load</th></tr>");

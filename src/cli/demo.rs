@@ -175,7 +175,10 @@ fn process(out: &Path, input: &Path, name: &str, about: &str, size: u32) -> Resu
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_else(|| name.to_string());
     let loaded = load(input, &ReadArgs::default(), true)?;
-    let info = summary(input, &loaded);
+    let mut info = summary(input, &loaded);
+    // Named as the index links it, from the output folder: the same bytes whatever folder
+    // the demo writes to.
+    info["file"] = serde_json::Value::String(format!("inputs/{name}"));
     let mut outputs = vec![format!("inputs/{name}")];
     let (dir, exts, preview): (&str, &[&str], String) = match &loaded {
         Loaded::Network(_) => (

@@ -331,7 +331,10 @@ impl Report {
             row("time", format!("{:.3} ms", t * 1e3));
         }
         if let (Some(a), Some(u)) = (c.alpha_requested, c.alpha_used) {
-            row("α requested / used", format!("{a:e} / {u:e}"));
+            row(
+                "α requested / used",
+                format!("{} / {}", crate::text::sig3(a), crate::text::sig3(u)),
+            );
         }
         let held = s.metric.name();
         row("held to the tolerance", held.to_string());

@@ -410,7 +410,14 @@ pub fn plates(
 ) -> Result<(Vec<Layer>, Vec<String>), ViewError> {
     bound("plates", plates.len() * 64, "triangles", "")?;
     let mut notes = Vec::new();
-    let mut layer = LayerBuilder::new("plates", Kind::Faces, origin);
+    // The layer's count is its elements: name the cores when there are some, so "296" is
+    // not read as 296 plates.
+    let name = if cores.is_empty() {
+        "plates"
+    } else {
+        "plates and node cores"
+    };
+    let mut layer = LayerBuilder::new(name, Kind::Faces, origin);
     let (mut groups, mut gauges, mut util) = (Vec::new(), Vec::new(), Vec::new());
     // Per plate and node: the middle of the plate's edge at that node (where its weld runs).
     let mut seam_of: std::collections::HashMap<(&str, u32), DVec3> = Default::default();
