@@ -281,4 +281,57 @@ mod tests {
         assert_eq!(default, "newton");
         assert!(about.contains("Gauss-Newton by default"), "{about}");
     }
+
+    /// Every command's `--help`, as `docs/commands.md` holds it.
+    fn commands_markdown() -> String {
+        use clap::CommandFactory;
+        use std::fmt::Write;
+        let mut root = super::Cli::command();
+        root.build();
+        let mut out = String::from(
+            "# lamina commands\n\n\
+             Every command's `--help`, word for word. This file is written by a test \
+             (`cli::tests::docs_commands_md_is_every_commands_help`), which fails when it differs \
+             from the binary's help: run `LAMINA_BLESS=1 cargo test --bin lamina` after changing \
+             a flag. The README's table says what each command is for.\n\n",
+        );
+        let _ = writeln!(out, "```text\n{}```\n", root.render_long_help());
+        for sub in root.get_subcommands_mut() {
+            if sub.get_name() == "help" {
+                continue;
+            }
+            let name = sub.get_name().to_string();
+            let _ = writeln!(
+                out,
+                "## lamina {name}\n\n```text\n{}```\n",
+                sub.render_long_help()
+            );
+            for inner in sub.get_subcommands_mut() {
+                if inner.get_name() == "help" {
+                    continue;
+                }
+                let inner_name = inner.get_name().to_string();
+                let _ = writeln!(
+                    out,
+                    "### lamina {name} {inner_name}\n\n```text\n{}```\n",
+                    inner.render_long_help()
+                );
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn docs_commands_md_is_every_commands_help() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/commands.md");
+        let want = commands_markdown();
+        if std::env::var_os("LAMINA_BLESS").is_some() {
+            std::fs::write(&path, &want).expect("docs/commands.md written");
+        }
+        let have = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            have == want,
+            "docs/commands.md is not the commands' --help: LAMINA_BLESS=1 cargo test --bin lamina"
+        );
+    }
 }
