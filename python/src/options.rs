@@ -248,6 +248,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "max_iterations",
             "fix_normal",
             "fix_axis",
+            "timings",
             "name",
         ],
         "audit" => &["tolerance", "tolerance_rules", "metric", "name"],
@@ -666,6 +667,7 @@ pub fn planarize(o: &mut Opts) -> PyResult<stage::planarize::Options> {
         fix_normal: pairs(o.strings("fix_normal")?, "fix_normal")?,
         fix_axis: pairs(o.strings("fix_axis")?, "fix_axis")?,
         name: o.string("name")?.unwrap_or(d.name),
+        timings: o.bool("timings")?,
     })
 }
 

@@ -356,6 +356,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
             max_iterations: 10_000,
             fix_normal: vec!["z<1:0,0,1".into()],
             fix_axis: Vec::new(),
+            timings: false,
             output: file("-axes.json"),
             panels: Some(file("-panels.obj")),
             reports: ReportArgs {

@@ -73,6 +73,10 @@ pub struct Args {
     /// Nodes matching SELECTOR keep the axis X,Y,Z (repeat), e.g. 'node=0:0,0,1'
     #[arg(long, value_name = "SELECTOR:X,Y,Z")]
     pub fix_axis: Vec<String>,
+    /// Record the solve's time in the report (without it the same inputs give the same report,
+    /// byte for byte)
+    #[arg(long)]
+    pub timings: bool,
     /// The axes file (lamina-axes JSON: positions, axes, heights, edges)
     #[arg(short, long)]
     pub output: PathBuf,
@@ -154,8 +158,17 @@ pub fn options(args: &Args) -> Result<planarize::Options> {
             .iter()
             .map(|s| parse_override(s, "--fix-axis"))
             .collect::<Result<_>>()?,
-        name: args.input.display().to_string(),
+        name: file_name(&args.input),
+        timings: args.timings,
     })
+}
+
+/// A path's last part, as reports name their input (the same report from any folder).
+fn file_name(path: &std::path::Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
 }
 
 /// Reads the network and the guide surface, solves, writes every output asked for.
@@ -262,7 +275,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
             .as_ref()
             .map_or_else(|| "the rules".to_string(), |p| p.display().to_string()),
         metric: args.metric,
-        name: args.input.display().to_string(),
+        name: file_name(&args.input),
     };
     let read = read_panels(&args.input)?;
     let source = args.input.display().to_string();

@@ -550,7 +550,8 @@ pub fn write_sweep(
         write_network(&leaf.network, &dir.join(format!("{name}.json")), &render)?;
         write_network(&leaf.network, &dir.join(format!("{name}.png")), &render)?;
         let mut report = swept.grown.report.clone();
-        report.output = Some(dir.join(format!("{name}.json")).display().to_string());
+        // By name: the runs sit beside sweep.json, wherever the folder is.
+        report.output = Some(format!("{name}.json"));
         let mut row = serde_json::to_value(&report)?;
         row["r"] = json!(r);
         row["seed"] = json!(swept.seed);

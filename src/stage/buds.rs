@@ -31,7 +31,7 @@ pub struct Options {
     pub clearance: f64,
     /// Leave textures out of the geometry. Default false.
     pub no_textures: bool,
-    /// The program's name in the report (its path). Default "program".
+    /// The program's name in the report (the CLI gives its file name). Default "program".
     pub program_name: String,
 }
 

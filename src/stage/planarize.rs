@@ -53,6 +53,9 @@ pub struct Options {
     pub fix_axis: Vec<(Selector, DVec3)>,
     /// The network's name in the report's title. Default "network".
     pub name: String,
+    /// Record the solve's time in the report. Default false: the same inputs give the same
+    /// report, byte for byte (the time is always in [`Planarized::seconds`]).
+    pub timings: bool,
 }
 
 impl Default for Options {
@@ -70,6 +73,7 @@ impl Default for Options {
             fix_normal: Vec::new(),
             fix_axis: Vec::new(),
             name: "network".into(),
+            timings: false,
         }
     }
 }
@@ -216,7 +220,8 @@ pub fn run(
     let seconds = start.elapsed().as_secs_f64();
     let axes = Axes::solved(&input, &sol, net.edges.iter().map(|e| e.radius).collect());
     let notes = notes(&sol);
-    let report = report_of(&opts.name, &sol, &axes.quads(), seconds, notes.clone());
+    let timed = opts.timings.then_some(seconds);
+    let report = report_of(&opts.name, &sol, &axes.quads(), timed, notes.clone());
     Ok(Planarized {
         summary: summary(&sol),
         solution: sol,
@@ -275,7 +280,7 @@ fn report_of(
     name: &str,
     sol: &Solution,
     quads: &[[DVec3; 4]],
-    seconds: f64,
+    seconds: Option<f64>,
     notes: Vec<String>,
 ) -> Report {
     let rows = sol
@@ -302,7 +307,7 @@ fn report_of(
                 .into(),
             ),
             iterations: Some(sol.iterations),
-            seconds: Some(seconds),
+            seconds,
             alpha_requested: Some(sol.alpha_requested),
             alpha_used: Some(sol.alpha_used),
             history: sol.history.clone(),

@@ -59,8 +59,9 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
     )?;
 
     let printer = Printer::default();
+    // Named from the report's folder (leaf.stl and leaf.sl1 sit beside print.json).
     let models = [Model {
-        path: dir.join("leaf.stl"),
+        path: "leaf.stl".into(),
         mesh: made.mesh,
     }];
     let placed = arrange(&models, &printer, COPIES, 2.0, false)?;
@@ -101,7 +102,7 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
         },
     )?;
     let mut report = sliced.report;
-    report.archive = output.display().to_string();
+    report.archive = "leaf.sl1".into();
     let e = sliced.estimate;
     write_json(&dir.join("print.json"), &report)?;
 

@@ -76,6 +76,7 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         max_iterations: 10_000,
         fix_normal: vec!["z<1:0,0,1".into()],
         fix_axis: Vec::new(),
+        timings: false,
         output: dir.join("calyx-axes.json"),
         panels: Some(dir.join("calyx-panels.obj")),
         reports: ReportArgs {
