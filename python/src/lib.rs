@@ -570,7 +570,10 @@ fn buds<'py>(
         lamina::grow::buds::parse_program(program, name).map_err(|e| error(e.to_string()))?;
     let mut o = Opts::new(&options, "buds");
     let mut opts = options::buds(&mut o)?;
-    opts.program_name = name.to_string();
+    // By file name, as the CLI's report names it (errors above keep the whole path).
+    opts.program_name = std::path::Path::new(name)
+        .file_name()
+        .map_or_else(|| name.to_string(), |n| n.to_string_lossy().into_owned());
     o.finish()?;
     let grown = run::run(py, progress.as_ref(), |h| {
         stage::buds::run(&program, &opts, None, h)
