@@ -296,27 +296,24 @@ mod tests {
              a flag. The README's table says what each command is for.\n\n",
         );
         let _ = writeln!(out, "```text\n{}```\n", root.render_long_help());
-        for sub in root.get_subcommands_mut() {
-            if sub.get_name() == "help" {
-                continue;
-            }
-            let name = sub.get_name().to_string();
+        // A command's help under a heading, then its own commands' one level down.
+        fn section(out: &mut String, depth: usize, path: &str, cmd: &mut clap::Command) {
+            let path = format!("{path} {}", cmd.get_name());
             let _ = writeln!(
                 out,
-                "## lamina {name}\n\n```text\n{}```\n",
-                sub.render_long_help()
+                "{} {path}\n\n```text\n{}```\n",
+                "#".repeat(depth),
+                cmd.render_long_help()
             );
-            for inner in sub.get_subcommands_mut() {
-                if inner.get_name() == "help" {
-                    continue;
-                }
-                let inner_name = inner.get_name().to_string();
-                let _ = writeln!(
-                    out,
-                    "### lamina {name} {inner_name}\n\n```text\n{}```\n",
-                    inner.render_long_help()
-                );
+            for inner in cmd.get_subcommands_mut().filter(|c| c.get_name() != "help") {
+                section(out, depth + 1, &path, inner);
             }
+        }
+        for sub in root
+            .get_subcommands_mut()
+            .filter(|c| c.get_name() != "help")
+        {
+            section(&mut out, 2, "lamina", sub);
         }
         out
     }
