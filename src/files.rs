@@ -108,6 +108,15 @@ where
     Ok(())
 }
 
+/// The path's last part, as reports name their inputs and outputs (the same bytes wherever
+/// the files sit); the whole path when it has no last part.
+pub fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 /// Lower-case extension of `path`, without the dot ("" when there is none).
 pub fn extension(path: &Path) -> String {
     path.extension()

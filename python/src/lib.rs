@@ -571,9 +571,7 @@ fn buds<'py>(
     let mut o = Opts::new(&options, "buds");
     let mut opts = options::buds(&mut o)?;
     // By file name, as the CLI's report names it (errors above keep the whole path).
-    opts.program_name = std::path::Path::new(name)
-        .file_name()
-        .map_or_else(|| name.to_string(), |n| n.to_string_lossy().into_owned());
+    opts.program_name = lamina::files::file_name(std::path::Path::new(name));
     o.finish()?;
     let grown = run::run(py, progress.as_ref(), |h| {
         stage::buds::run(&program, &opts, None, h)

@@ -99,10 +99,7 @@ pub fn execute(args: &Args) -> Result<serde_json::Value> {
         cell_mm: args.cell_mm,
         clearance: args.clearance,
         no_textures: args.no_textures,
-        program_name: args.program.file_name().map_or_else(
-            || args.program.display().to_string(),
-            |n| n.to_string_lossy().into_owned(),
-        ),
+        program_name: lamina::files::file_name(&args.program),
     };
     // Made once the flags are checked; removed again if the run fails before its outputs.
     let frames_dir = args.frames.as_deref().map(FramesDir::create).transpose()?;

@@ -158,17 +158,9 @@ pub fn options(args: &Args) -> Result<planarize::Options> {
             .iter()
             .map(|s| parse_override(s, "--fix-axis"))
             .collect::<Result<_>>()?,
-        name: file_name(&args.input),
+        name: lamina::files::file_name(&args.input),
         timings: args.timings,
     })
-}
-
-/// A path's last part, as reports name their input (the same report from any folder).
-fn file_name(path: &std::path::Path) -> String {
-    path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
 }
 
 /// Reads the network and the guide surface, solves, writes every output asked for.
@@ -275,7 +267,7 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
             .as_ref()
             .map_or_else(|| "the rules".to_string(), |p| p.display().to_string()),
         metric: args.metric,
-        name: file_name(&args.input),
+        name: lamina::files::file_name(&args.input),
     };
     let read = read_panels(&args.input)?;
     let source = args.input.display().to_string();

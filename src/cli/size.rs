@@ -88,14 +88,6 @@ pub struct Args {
     pub joints: super::plates::JointArgs,
 }
 
-/// The input's file name: outputs stay the same bytes wherever the input sits.
-fn source_name(path: &std::path::Path) -> String {
-    path.file_name().map_or_else(
-        || path.display().to_string(),
-        |n| n.to_string_lossy().into_owned(),
-    )
-}
-
 /// Reads the axes, sizes, writes sizing.json and what else is asked for.
 pub fn execute(args: &Args) -> Result<size::Sized> {
     let material = args.material.as_deref().map(Material::get).transpose()?;
@@ -112,7 +104,7 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         max_rounds: args.max_rounds,
         shells: args.shells,
         joints: args.joints.joints(),
-        name: source_name(&args.input),
+        name: lamina::files::file_name(&args.input),
     };
     let axes = read_axes(&args.input)?;
     let sized = size::run(&axes, &opts, &Bar::new()).map_err(|e| match e {
@@ -127,14 +119,18 @@ pub fn execute(args: &Args) -> Result<size::Sized> {
         w.write_all(sized.report.json().as_bytes())
     })?;
     if let Some(path) = &args.html {
-        let html = sizing_html(sizing, &sized.report.material, &source_name(&args.input));
+        let html = sizing_html(
+            sizing,
+            &sized.report.material,
+            &lamina::files::file_name(&args.input),
+        );
         write_atomic(path, |w| w.write_all(html.as_bytes()))?;
     }
     if let Some(path) = &args.export_ccx {
         let model = &sizing.model;
         let title = format!(
             "lamina size {}: {} members, {} nodes, the sum of the loads{}",
-            source_name(&args.input),
+            lamina::files::file_name(&args.input),
             model.members.len(),
             model.nodes.len(),
             match sizing.shells {
