@@ -21,7 +21,9 @@ code with lamina:
   other ply passes the node at least the weld gap plus the thickness of its partner ply (which
   welds there; less 0.01 mm for the panels' flattening) from every welded plate, the core and
   every other passing ply (room for the leg of that ply's fillet);
-- the dihedral angle of every pair welds.json lists equals the one computed here to 0.01°;
+- each pair of plates side by side at a node is listed once (a two-plate node's pair too), its
+  angle (between the two plates, 0–180°) equal to the one computed here to 0.01°, its access
+  class that of this angle, and welds.json's counts by class those of the angles here;
 - every bolt can be fitted and tightened: on the stack's face the nut is on (+z, or −z for the
   holes in `nut_below`) the washer, nut and two threads, and a socket over the nut (radius and
   reach from --bolt-clearance, else the nut's corners plus 3 mm and 40 mm), on the other face
@@ -48,6 +50,14 @@ from shapely.geometry import Point, Polygon
 # Bolt: (d, d0).
 HOLES = {"M6": 6.6, "M8": 9.0, "M10": 11.0, "M12": 13.0, "M14": 15.0, "M16": 18.0,
          "M20": 22.0, "M22": 24.0, "M24": 26.0, "M27": 30.0, "M30": 33.0}
+
+
+# Weld access by the angle between two plates: below 60°, 60–120°, 120–135°, 135–180°.
+CLASS_PREFIX = ["below 60°", "60–120°", "120–135°", "135–180°"]
+
+
+def weld_class(angle):
+    return 0 if angle < 60.0 else 1 if angle <= 120.0 else 2 if angle <= 135.0 else 3
 
 
 def fail(problems, msg):
@@ -312,6 +322,7 @@ def main():
     reported = {n["node"]: n for n in welds["nodes"]}
     cores = {c["node"]: c for c in doc.get("cores", [])}
     pairs_checked, worst_angle, worst_gap = 0, 0.0, 0.0
+    class_counts = [0, 0, 0, 0]
     passes_checked, worst_pass = 0, math.inf
     for v, edges in at.items():
         if len(edges) < 2:
@@ -390,17 +401,39 @@ def main():
             if "edges" in node else None
         if names is not None and names != node["plates"]:
             fail(problems, f"node {v}: welds.json names {node['plates']}, the plates of its group are {names}")
-        listed = {(p["edges"][0], p["edges"][1]): p["dihedral_deg"] for p in node["pairs"]}
+        # One angle per pair of neighbours, between the two plates (0–180°): a wedge wider than
+        # 180° is the outside of a corner, measured the other way round.
+        mine = {}
         for a, b, wd in wedges:
-            got = listed.get((a, b))
-            if got is None and len(edges) == 2:
-                got = listed.get((b, a)) if (b, a) in listed and abs(listed[(b, a)] - wd) < 0.01 else None
-            if got is None:
-                fail(problems, f"node {v}: the pair {a}→{b} ({wd:.2f}°) is not in welds.json")
+            mine.setdefault(frozenset((a, b)), min(wd, 360.0 - wd))
+        listed = {}
+        for p in node["pairs"]:
+            key = frozenset(p["edges"])
+            if key in listed:
+                fail(problems, f"node {v}: the pair {sorted(key)} is listed twice in welds.json")
+            listed[key] = p
+        for key in listed:
+            if key not in mine:
+                fail(problems, f"node {v}: welds.json lists the pair {sorted(key)}, not neighbours here")
+        for key, angle in sorted(mine.items(), key=lambda t: sorted(t[0])):
+            p = listed.get(key)
+            if p is None:
+                fail(problems, f"node {v}: the pair {sorted(key)} ({angle:.2f}°) is not in welds.json")
                 continue
-            worst_angle = max(worst_angle, abs(got - wd))
-            if abs(got - wd) > 0.01:
-                fail(problems, f"node {v}: dihedral {a}→{b} {got:.4f}° in welds.json, {wd:.4f}° here")
+            got = p["dihedral_deg"]
+            worst_angle = max(worst_angle, abs(got - angle))
+            if abs(got - angle) > 0.01:
+                fail(problems, f"node {v}: pair {sorted(key)} at {got:.4f}° in welds.json, {angle:.4f}° here")
+            cls = weld_class(angle)
+            class_counts[cls] += 1
+            if not p["access"].startswith(CLASS_PREFIX[cls]):
+                fail(problems, f"node {v}: pair {sorted(key)} at {angle:.2f}° is '{p['access']}' in welds.json")
+    summary = welds["summary"]
+    said = [summary["pairs_below_60"], summary["pairs_60_120"], summary["pairs_120_135"],
+            summary["pairs_over_135"]]
+    if said != class_counts:
+        fail(problems, f"welds.json counts {said} pairs by class (below 60°, 60–120°, 120–135°, "
+                       f"135–180°), the pairs here give {class_counts}")
     fitted, clear_by = bolt_room(plates, by_id, doc.get("cores", []), args.bolt_clearance, problems)
     if problems:
         for p in problems[:20]:
@@ -410,7 +443,7 @@ def main():
     print(f"{folder}: ok ({len(plates)} plates on the gauge list, {holes_checked} holes, hole axes "
           f"within {worst_axis:.1e} mm, {pairs_checked} adjacent pairs, even gaps within "
           f"{worst_gap:.3f} mm of {args.weld_gap}, {uneven} node(s) reported, dihedral angles "
-          f"within {worst_angle:.1e}°; weld partners within their group, {cross} across; "
+          f"within {worst_angle:.1e}°, by class {class_counts}; weld partners within their group, {cross} across; "
           f"{passes_checked} plies passing the other group's node, clear by "
           f"{'—' if passes_checked == 0 else f'{worst_pass:+.3f} mm over the gap + the welded ply'}; "
           f"{fitted} bolts with room for washer, head, nut and socket)")

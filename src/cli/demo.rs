@@ -103,12 +103,24 @@ pub(crate) struct Entry {
     facts: String,
 }
 
+/// One of the three jobs lamina exists for, as the index's first screen shows it: its
+/// headline figures and where to look.
+pub(crate) struct Headline {
+    job: String,
+    /// What was made, in a sentence.
+    what: String,
+    figures: Vec<(String, String)>,
+    preview: String,
+    /// (label, href) of the viewer pages and reports.
+    links: Vec<(String, String)>,
+}
+
 pub fn run(args: Args) -> Result<()> {
     let out = &args.out;
     let inputs = out.join("inputs");
     std::fs::create_dir_all(&inputs)
         .with_context(|| format!("{}: cannot create folder", inputs.display()))?;
-    let bar = super::progress::bar("demo", Some(FIXTURES.len() as u64 + 6 + 4 + 3));
+    let bar = super::progress::bar("demo", Some(FIXTURES.len() as u64 + 7 + 4 + 3));
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
@@ -133,7 +145,12 @@ pub fn run(args: Args) -> Result<()> {
     entries.push(calyx(out, &inputs, args.size)?);
     bar.inc(1);
     bar.set_message("calyx: plates, groups, cut sheets");
-    entries.push(steel(out)?);
+    let (entry, steel_job) = steel(out)?;
+    entries.push(entry);
+    bar.inc(1);
+    bar.set_message("calyx: planarity audit of the panels");
+    let (entry, audit_job) = audit(out)?;
+    entries.push(entry);
     bar.inc(1);
     bar.set_message("simplified networks: calyx to cut sheets, band, leaf");
     entries.push(simplify::simplified(out, &inputs, args.size)?);
@@ -157,15 +174,16 @@ pub fn run(args: Args) -> Result<()> {
     entries.push(buds::buds(out, args.size)?);
     bar.inc(1);
     bar.set_message("print: leaf, solid, slices");
-    entries.push(print::print_leaf(out, args.size)?);
+    let (entry, print_job) = print::print_leaf(out, args.size)?;
+    entries.push(entry);
     bar.inc(1);
     bar.set_message("viewers");
     let viewers = viewers(out, &entries)?;
     bar.finish_and_clear();
     let index = out.join("index.html");
-    let html = index_html(&entries, &viewers);
+    let html = index_html(&[steel_job, print_job, audit_job], &entries, &viewers);
     write_atomic(&index, |w| std::io::Write::write_all(w, html.as_bytes()))?;
-    outln!("wrote {} ({} fixtures)", index.display(), entries.len());
+    outln!("wrote {} ({} sections)", index.display(), entries.len());
     Ok(())
 }
 
@@ -402,7 +420,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
 
 /// From the Gauss-Newton axes to steel: plates in seven assembly groups (base ring at 6 mm, the rest
 /// by vein radius), nested on 3000 × 1500 sheets per thickness.
-fn steel(out: &Path) -> Result<Entry> {
+fn steel(out: &Path) -> Result<(Entry, Headline)> {
     let dir = out.join("calyx");
     let joints = super::plates::JointArgs {
         node_core: Some(
@@ -550,14 +568,152 @@ fn steel(out: &Path) -> Result<Entry> {
     .map(|f| format!("calyx/{f}"))
     .collect();
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
-    Ok(Entry {
+    let assembly = read_mesh(&dir.join("plates/assembly.stl"))?;
+    write_mesh(&assembly, &dir.join("plates/assembly.png"), 1000)?;
+    outputs.push("calyx/plates/assembly.png".into());
+    let w = &plates.welds.summary;
+    let area: f64 = nest
+        .sheets
+        .iter()
+        .map(|s| s.stock.size.x * s.stock.size.y)
+        .sum();
+    let used: f64 = nest
+        .sheets
+        .iter()
+        .map(|s| s.utilisation() * s.stock.size.x * s.stock.size.y)
+        .sum();
+    let job = Headline {
+        job: "Steel: the Calyx in plates".into(),
+        what: "A 2 m venation sculpture as flat stainless plates: sized by a frame analysis, \
+               cut back for even weld gaps at every node, seams bolted, nested on sheets with \
+               etched tags."
+            .into(),
+        figures: vec![
+            (
+                "plates".into(),
+                format!(
+                    "{} in {} groups; {} node cores",
+                    built.plates,
+                    built.groups,
+                    plates.set.cores.len()
+                ),
+            ),
+            (
+                "mass".into(),
+                format!("{mass:.1} kg (1.4404), {} bolts", built.bolts),
+            ),
+            (
+                "worst utilisation".into(),
+                format!(
+                    "{:.2} (welds {:.2})",
+                    sz.max_utilisation(),
+                    sz.max_weld_utilisation()
+                ),
+            ),
+            (
+                "weld pairs by angle".into(),
+                format!(
+                    "{} below 60° · {} AWS only · {} butt · {} fillet",
+                    w.pairs_below_60, w.pairs_120_135, w.pairs_over_135, w.pairs_60_120
+                ),
+            ),
+            (
+                "sheets".into(),
+                format!(
+                    "{} sheets, {:.1} % used",
+                    nest.sheets.len(),
+                    100.0 * used / area.max(f64::MIN_POSITIVE)
+                ),
+            ),
+        ],
+        preview: "calyx/plates/assembly.png".into(),
+        links: vec![
+            ("3D viewer".into(), "view/calyx-plates.html".into()),
+            ("sheets".into(), "view/calyx-sheets.html".into()),
+            ("weld report".into(), "calyx/plates/welds.html".into()),
+            ("sizing report".into(), "calyx/sizing.html".into()),
+        ],
+    };
+    let entry = Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
         about: "`lamina size` on the Gauss-Newton axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),
         facts,
-    })
+    };
+    Ok((entry, job))
+}
+
+/// The planarity audit of the Calyx's Gauss-Newton panels, as a shop would run it on panels
+/// it received: ISO flatness of every panel against 0.01 mm, the report page and a CSV.
+fn audit(out: &Path) -> Result<(Entry, Headline)> {
+    let dir = out.join("calyx");
+    let report = super::planarize::audit_execute(&super::planarize::AuditArgs {
+        input: dir.join("newton-panels.obj"),
+        tolerance: Some(0.01),
+        tolerance_rules: None,
+        metric: lamina::report::planarity::Metric::Flatness,
+        csv: Some(dir.join("audit.csv")),
+        reports: ReportArgs {
+            report: Some(dir.join("audit.json")),
+            html: Some(dir.join("audit.html")),
+            json: false,
+        },
+    })?;
+    let s = &report.summary;
+    let worst = report.worst.first().map_or_else(
+        || "none".to_string(),
+        |r| {
+            format!(
+                "P{}: {} mm ({:.0} % of the tolerance)",
+                r.index,
+                lamina::text::sig3(r.metrics.flatness),
+                100.0 * r.metrics.flatness / r.tolerance
+            )
+        },
+    );
+    let within = s.panels - s.above_tolerance;
+    let job = Headline {
+        job: "Audit: are the panels flat?".into(),
+        what: "The Calyx's panels as an OBJ, checked as a shop checks what it receives: ISO 1101 \
+               flatness of every panel against its tolerance, the worst first."
+            .into(),
+        figures: vec![
+            (
+                "panels within 0.01 mm".into(),
+                format!("{within} of {}", s.panels),
+            ),
+            ("worst panel (flatness)".into(), worst.clone()),
+            (
+                "largest torsion".into(),
+                format!("{}°", lamina::text::sig3(s.max_torsion_deg)),
+            ),
+        ],
+        preview: "calyx/panels.png".into(),
+        links: vec![
+            ("report and 3D view".into(), "calyx/audit.html".into()),
+            ("CSV".into(), "calyx/audit.csv".into()),
+        ],
+    };
+    let entry = Entry {
+        name: "Calyx: planarity audit of the panels".into(),
+        about: "`lamina audit calyx/newton-panels.obj --tolerance 0.01 --csv audit.csv --html \
+                audit.html`: every panel's ISO 1101 flatness (minimum zone), best-fit and corner \
+                figures and torsion, held to 0.01 mm"
+            .into(),
+        outputs: ["audit.html", "audit.json", "audit.csv"]
+            .iter()
+            .map(|f| format!("calyx/{f}"))
+            .collect(),
+        preview: "calyx/panels.png".into(),
+        facts: format!(
+            "{within} of {} panels within 0.01 mm; worst {worst}; mean flatness {} mm.",
+            s.panels,
+            lamina::text::sig3(s.mean_deviation)
+        ),
+    };
+    Ok((entry, job))
 }
 
 /// Closed surface venation and smoothed geodesic veins on one mesh, each rendered on it (the
@@ -755,42 +911,84 @@ fn viewers(out: &Path, entries: &[Entry]) -> Result<Vec<Vec<(String, String)>>> 
     Ok(links)
 }
 
-fn index_html(entries: &[Entry], viewers: &[Vec<(String, String)>]) -> String {
+fn index_html(jobs: &[Headline], entries: &[Entry], viewers: &[Vec<(String, String)>]) -> String {
     let mut s = String::from(
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>lamina demo</title>\n\
-         <style>body{font:15px/1.45 system-ui,sans-serif;margin:2em auto;max-width:70em;color:#222}\
+         <style>body{font:15px/1.45 system-ui,sans-serif;margin:1.5em auto;max-width:76em;color:#222;padding:0 1em}\
          section{border-top:1px solid #ccc;padding:1em 0;display:flex;gap:2em}\
-         img{width:26em;max-height:26em;object-fit:contain;background:#fff;border:1px solid #ddd}\
-         code{background:#f3f3f3;padding:0 .3em}a.view{font-weight:600}</style></head><body>\n\
-         <h1>lamina demo</h1>\n<p>Every fixture read, checked, converted to each format and rendered. \
-         Made by <code>lamina demo</code>.</p>\n",
+         section img{width:26em;max-height:26em;object-fit:contain;background:#fff;border:1px solid #ddd}\
+         code{background:#f3f3f3;padding:0 .3em}a.view{font-weight:600}\
+         .jobs{display:grid;grid-template-columns:repeat(auto-fit,minmax(22em,1fr));gap:1.2em;margin:1em 0 2em}\
+         .job{border:1px solid #ccd;border-radius:6px;padding:.8em 1em;background:#fafbfc}\
+         .job h2{margin:.1em 0 .3em;font-size:1.25em}.job p{margin:.3em 0}\
+         .job img{width:100%;height:12em;object-fit:contain;background:#fff;border:1px solid #e3e3e3}\
+         .job table{border-collapse:collapse;width:100%;margin:.4em 0}\
+         .job td{padding:1px 4px;border-bottom:1px solid #e8e8e8;vertical-align:top}\
+         .job td:last-child{font-weight:600;text-align:right}\
+         .job .go a{display:inline-block;margin:.2em .6em .2em 0;font-weight:600}</style></head><body>\n\
+         <h1>lamina demo</h1>\n<p>Three jobs lamina does end to end, each from one network, checked by \
+         independent validators: steel a fabricator can cut and weld, a resin print, and a planarity \
+         audit. Made by <code>lamina demo</code>; growth forms and every fixture below.</p>\n<div class=\"jobs\">\n",
     );
-    for (e, views) in entries.iter().zip(viewers) {
+    for j in jobs {
         let _ = write!(
             s,
-            "<section><a href=\"{p}\"><img src=\"{p}\" alt=\"{n}\"></a><div><h2>{n}</h2><p>{a}</p><p>{f}</p>",
-            p = e.preview,
-            n = e.name,
-            a = e.about,
-            f = e.facts
+            "<div class=\"job\"><h2>{}</h2><a href=\"{p}\"><img src=\"{p}\" alt=\"{}\"></a><p>{}</p><table>",
+            j.job,
+            j.job,
+            j.what,
+            p = j.preview
         );
-        if !views.is_empty() {
-            let links: Vec<String> = views
-                .iter()
-                .map(|(label, href)| format!("<a class=\"view\" href=\"{href}\">{label}</a>"))
-                .collect();
-            let _ = write!(
-                s,
-                "<p><strong>Look in the viewer:</strong> {}</p>",
-                links.join(" · ")
-            );
+        for (k, v) in &j.figures {
+            let _ = write!(s, "<tr><td>{k}</td><td>{v}</td></tr>");
         }
-        s.push_str("<ul>");
-        for o in &e.outputs {
-            let _ = write!(s, "<li><a href=\"{o}\">{o}</a></li>");
+        s.push_str("</table><p class=\"go\">");
+        for (label, href) in &j.links {
+            let _ = write!(s, "<a href=\"{href}\">{label}</a>");
         }
-        s.push_str("</ul></div></section>\n");
+        s.push_str("</p></div>\n");
+    }
+    s.push_str("</div>\n");
+    // The growth forms and the jobs' own stages, then the fixtures read and converted.
+    let fixtures = FIXTURES.len().min(entries.len());
+    let mut all: Vec<(&Entry, &Vec<(String, String)>)> = entries.iter().zip(viewers).collect();
+    let read = all.drain(..fixtures).collect::<Vec<_>>();
+    for (heading, part) in [
+        ("Growth forms and the stages behind the jobs", all),
+        ("Fixtures: read, checked, converted to every format", read),
+    ] {
+        let _ = writeln!(s, "<h2>{heading}</h2>");
+        for (e, views) in part {
+            entry_html(&mut s, e, views);
+        }
     }
     s.push_str("</body></html>\n");
     s
+}
+
+fn entry_html(s: &mut String, e: &Entry, views: &[(String, String)]) {
+    let _ = write!(
+        s,
+        "<section><a href=\"{p}\"><img src=\"{p}\" alt=\"{n}\"></a><div><h3>{n}</h3><p>{a}</p><p>{f}</p>",
+        p = e.preview,
+        n = e.name,
+        a = e.about,
+        f = e.facts
+    );
+    if !views.is_empty() {
+        let links: Vec<String> = views
+            .iter()
+            .map(|(label, href)| format!("<a class=\"view\" href=\"{href}\">{label}</a>"))
+            .collect();
+        let _ = write!(
+            s,
+            "<p><strong>Look in the viewer:</strong> {}</p>",
+            links.join(" · ")
+        );
+    }
+    s.push_str("<ul>");
+    for o in &e.outputs {
+        let _ = write!(s, "<li><a href=\"{o}\">{o}</a></li>");
+    }
+    s.push_str("</ul></div></section>\n");
 }

@@ -255,6 +255,40 @@ pub struct AuditArgs {
 
 /// Ok(true) when every panel is within its tolerance.
 pub fn audit_run(args: AuditArgs) -> Result<bool> {
+    let report = audit_execute(&args)?;
+    let source = args.input.display().to_string();
+    let s = &report.summary;
+    if args.reports.json {
+        outln!("{}", serde_json::to_string(s)?);
+    } else {
+        let figure = |v: f64| {
+            if v.is_nan() {
+                "none".to_string()
+            } else {
+                format!("{v:.9}")
+            }
+        };
+        outln!(
+            "{source}: {} panels, max {} {} mm (flatness {}, best fit {}, corner {}), {} above {}",
+            s.panels,
+            s.metric.name(),
+            figure(s.max_deviation),
+            figure(s.max_flatness),
+            figure(s.max_best_fit),
+            figure(s.max_corner),
+            s.above_tolerance,
+            match (s.tolerance, s.classes.is_empty()) {
+                (Some(t), true) => format!("{t} mm"),
+                _ => format!("their class's tolerance ({} classes)", s.classes.len()),
+            }
+        );
+    }
+    Ok(s.within_tolerance)
+}
+
+/// Reads the panels, audits them and writes the asked-for files (CSV, report, page); the
+/// report.
+pub fn audit_execute(args: &AuditArgs) -> Result<Report> {
     let rules = match &args.tolerance_rules {
         Some(path) => Some(Rules::read(path)?),
         None => None,
@@ -287,31 +321,5 @@ pub fn audit_run(args: AuditArgs) -> Result<bool> {
         write_atomic(path, |w| w.write_all(text.as_bytes()))?;
     }
     args.reports.write(report)?;
-    let s = &report.summary;
-    if args.reports.json {
-        outln!("{}", serde_json::to_string(s)?);
-    } else {
-        let figure = |v: f64| {
-            if v.is_nan() {
-                "none".to_string()
-            } else {
-                format!("{v:.9}")
-            }
-        };
-        outln!(
-            "{source}: {} panels, max {} {} mm (flatness {}, best fit {}, corner {}), {} above {}",
-            s.panels,
-            s.metric.name(),
-            figure(s.max_deviation),
-            figure(s.max_flatness),
-            figure(s.max_best_fit),
-            figure(s.max_corner),
-            s.above_tolerance,
-            match (s.tolerance, s.classes.is_empty()) {
-                (Some(t), true) => format!("{t} mm"),
-                _ => format!("their class's tolerance ({} classes)", s.classes.len()),
-            }
-        );
-    }
-    Ok(s.within_tolerance)
+    Ok(done.report)
 }

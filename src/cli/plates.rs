@@ -218,7 +218,7 @@ pub fn run(args: Args) -> Result<bool> {
             sum.max_flattening_mm
         );
         outln!(
-            "  welds: {} node(s), {} pair(s); root gap {} ± {} mm at {} node(s){}; dihedral angles from {:.1}°: {} below 60°, {} 60–120°, {} 120–135°, {} over 135° (welds.html)",
+            "  welds: {} node(s), {} pair(s); root gap {} ± {} mm at {} node(s){}; dihedral angles from {:.1}°: {} below 60°, {} 60–120°, {} 120–135°, {} 135–180° (welds.html)",
             weld.nodes,
             weld.pairs,
             args.joints.weld_gap,

@@ -726,7 +726,7 @@ impl Core {
 pub struct WeldPair {
     /// Edges (the plates on them).
     pub edges: [usize; 2],
-    /// Dihedral angle on this side, degrees.
+    /// The angle between the two plates about the node axis, degrees in (0, 180].
     pub angle_deg: f64,
     /// Root gap between the two plates (a seam counts as its stack), mm.
     pub gap: f64,
@@ -1049,14 +1049,25 @@ fn node_welds(
             length: axes.heights[v],
         });
     }
-    let pairs = welds::wedges(&strips)
-        .iter()
-        .map(|w| WeldPair {
-            edges: [here[w.a].0, here[w.b].0],
-            angle_deg: w.angle.to_degrees(),
+    // One record per pair of neighbours (a two-plate node's pair is neighbours on both sides),
+    // with the angle between the two plates, 0–180°: a wedge opening more than 180° is the
+    // outside of a corner, whose plates meet at the other side's angle.
+    let mut pairs: Vec<WeldPair> = Vec::new();
+    for w in welds::wedges(&strips) {
+        let edges = [here[w.a].0, here[w.b].0];
+        if pairs
+            .iter()
+            .any(|p| p.edges == edges || p.edges == [edges[1], edges[0]])
+        {
+            continue;
+        }
+        let angle = w.angle.min(std::f64::consts::TAU - w.angle);
+        pairs.push(WeldPair {
+            edges,
+            angle_deg: angle.to_degrees(),
             gap: welds::root_gap(&strips[w.a], setbacks[w.a], &strips[w.b], setbacks[w.b]),
-        })
-        .collect();
+        });
+    }
     // The other plies, one after another, each clear of the welded plates and those before it
     // by the gap and its own ply's thickness (the ply it lies on welds here with a fillet
     // whose leg, 0.7 √2 t of the thinner plate, is under that).

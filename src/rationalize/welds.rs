@@ -77,6 +77,36 @@ pub fn root_gap(a: &Strip, sa: f64, b: &Strip, sb: f64) -> f64 {
     convex_distance(&a.corners(sa), &b.corners(sb))
 }
 
+/// Weld access by the angle between two plates (0–180°), in angle order, each with the colour
+/// every report and viewer gives it: below 60° there is no prequalified fillet weld (red, what a
+/// shop cannot do); 60–120° is prequalified by EN 1993-1-8 §4.3.2.1 (green); 120–135° only AWS
+/// D1.1 allows (amber); above, the plates meet end to end (a butt weld, blue).
+pub const WELD_CLASSES: [(&str, &str); 4] = [
+    ("below 60°: no prequalified fillet weld", "#d62728"),
+    ("60–120°: fillet (EN 1993-1-8)", "#2ca02c"),
+    ("120–135°: fillet (AWS D1.1 only)", "#e69f00"),
+    ("135–180°: butt", "#1f77b4"),
+];
+
+/// The index into `WELD_CLASSES` of a pair whose plates are `angle_deg` apart.
+pub fn weld_class(angle_deg: f64) -> usize {
+    if angle_deg < 60.0 {
+        0
+    } else if angle_deg <= 120.0 {
+        1
+    } else if angle_deg <= 135.0 {
+        2
+    } else {
+        3
+    }
+}
+
+/// How urgent a class is for the shop, most first: no prequalified weld, AWS only, butt,
+/// prequalified fillet.
+pub fn weld_class_urgency(class: usize) -> usize {
+    [0, 3, 1, 2].get(class).copied().unwrap_or(4)
+}
+
 /// Two plates side by side around the axis, and the wedge between them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wedge {

@@ -40,6 +40,7 @@ use crate::rationalize::plates::{
     plates, Core, Plate, PlateError, PlateOptions, PlateSet, Thickness, HOLE_SEGMENTS,
 };
 pub use crate::rationalize::plates::{CoreSize, EdgeSelector, Joints};
+use crate::rationalize::welds;
 use crate::stage::OptionError;
 use crate::TriMesh;
 
@@ -707,25 +708,10 @@ pub struct WeldSummary {
     pub pairs_below_60: usize,
     /// Pairs below the minimum weld angle.
     pub pairs_below_min_weld_angle: usize,
-    /// Pairs over 135° (butt).
+    /// Pairs at 135–180° (butt).
     pub pairs_over_135: usize,
     /// The smallest dihedral angle, degrees.
     pub smallest_dihedral_deg: f64,
-}
-
-/// Weld access by the dihedral angle, degrees: below 60° no prequalified fillet weld; 60–120°
-/// prequalified (EN 1993-1-8 §4.3.2.1); 120–135° AWS D1.1 only; above, the plates meet end to
-/// end (a butt weld).
-fn weld_class(angle: f64) -> (usize, &'static str) {
-    if angle < 60.0 {
-        (0, "below 60°: no prequalified fillet weld")
-    } else if angle <= 120.0 {
-        (1, "60–120°: fillet (EN 1993-1-8)")
-    } else if angle <= 135.0 {
-        (2, "120–135°: fillet (AWS D1.1 only)")
-    } else {
-        (3, "over 135°: butt")
-    }
 }
 
 fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
@@ -757,7 +743,8 @@ fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
         let mut pairs = Vec::new();
         for p in &w.pairs {
             sum.pairs += 1;
-            let (class, name) = weld_class(p.angle_deg);
+            let class = welds::weld_class(p.angle_deg);
+            let name = welds::WELD_CLASSES[class].0;
             *[
                 &mut sum.pairs_below_60,
                 &mut sum.pairs_60_120,
@@ -823,8 +810,8 @@ fn welds(set: &PlateSet, opts: &PlateOptions, min_angle: Option<f64>) -> Welds {
     sum.even_nodes = sum.nodes - sum.nodes_needing_a_core.len() - sum.cores;
     Welds {
         definitions: WeldDefinitions {
-            access: "below 60°: no prequalified fillet weld; 60–120°: fillet (EN 1993-1-8 §4.3.2.1); 120–135°: fillet under AWS D1.1 only; over 135°: the plates meet end to end (butt weld)",
-            dihedral_deg: "angle between the two plates about the node axis on the side where they are neighbours (the wedge a fillet weld fills)",
+            access: "by the dihedral angle: below 60°: no prequalified fillet weld; 60–120°: fillet (EN 1993-1-8 §4.3.2.1); 120–135°: fillet under AWS D1.1 only; 135–180°: the plates meet end to end (butt weld)",
+            dihedral_deg: "the angle between the two plates about the node axis, 0–180°, one per pair of plates side by side (a two-plate node's pair is listed once, though welded on both sides; where the wedge between two neighbours opens beyond 180°, the outside of a corner, the angle is the one measured the other way round, through the other plates)",
             root_gap_mm: "distance between the two plates (of a bolted seam, its ply in the node's group, which welds there) in the plane perpendicular to the node axis: the weld's root opening along the line where they meet",
         },
         format: crate::fabricate::plates_file::WELDS_FORMAT,
@@ -1100,28 +1087,84 @@ pub fn write_folder(made: &Plated, dir: &Path, page: &str) -> Result<(), WriteEr
     write_atomic(&dir.join("welds.html"), |w| w.write_all(page.as_bytes()))
 }
 
-/// welds.html: the summary, the definitions, the viewer (`viewer`: an embedded scene of the
-/// plates and their welds, see `view::embed`) and every pair in a table.
+/// welds.html: the summary by class, the definitions, the viewer (`viewer`: an embedded scene
+/// of the plates and their welds, see `view::embed`) and every pair in a table, the shop's
+/// problems first: pairs below 60°, root gaps out of tolerance, AWS-only, butt, then the
+/// prequalified fillets; within a class the sharpest (or, of AWS-only, the widest) first.
 pub fn welds_html(made: &Plated, viewer: &str, with_sizing: bool) -> String {
     let w = &made.welds;
     let s = &w.summary;
-    let mut rows = String::new();
+    let mut pairs: Vec<(&WeldNodeDoc, &WeldPairDoc, usize, bool)> = Vec::new();
     for n in &w.nodes {
         for p in &n.pairs {
-            let class = weld_class(p.dihedral_deg).0;
-            rows.push_str(&format!(
-                "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{} / {}</td><td>{:.3}</td><td>{:.2}</td><td>{}</td></tr>\n",
-                if !p.gap_within_tolerance && n.core.is_none() { "bad" } else if class == 0 { "warn" } else { "" },
-                n.node,
-                n.status,
-                p.plates[0],
-                p.plates[1],
-                p.root_gap_mm,
-                p.dihedral_deg,
-                p.access
-            ));
+            let off = !p.gap_within_tolerance && n.core.is_none();
+            pairs.push((n, p, welds::weld_class(p.dihedral_deg), off));
         }
     }
+    let urgency = |&(_, _, class, off): &(&WeldNodeDoc, &WeldPairDoc, usize, bool)| {
+        let u = welds::weld_class_urgency(class);
+        // Out-of-tolerance gaps come right after the pairs no fillet can weld.
+        if u == 0 {
+            0
+        } else if off {
+            1
+        } else {
+            u + 1
+        }
+    };
+    pairs.sort_by(|x, y| {
+        let key = |t: &(&WeldNodeDoc, &WeldPairDoc, usize, bool)| {
+            // AWS-only: widest first; every other class: sharpest first.
+            if t.2 == 2 {
+                -t.1.dihedral_deg
+            } else {
+                t.1.dihedral_deg
+            }
+        };
+        urgency(x)
+            .cmp(&urgency(y))
+            .then(key(x).total_cmp(&key(y)))
+            .then(x.0.node.cmp(&y.0.node))
+    });
+    let mut rows = String::new();
+    for (n, p, class, off) in &pairs {
+        let k = n
+            .pairs
+            .iter()
+            .position(|q| std::ptr::eq(q, *p))
+            .unwrap_or(0);
+        rows.push_str(&format!(
+            "<tr><td>W{}-{}</td><td>{}</td><td>{}</td><td>{} / {}</td><td{}>{:.3}</td><td>{:.2}</td><td><span class=\"sw\" style=\"background:{}\"></span>{}</td></tr>\n",
+            n.node,
+            k + 1,
+            n.node,
+            n.status,
+            p.plates[0],
+            p.plates[1],
+            if *off { " class=\"bad\"" } else { "" },
+            p.root_gap_mm,
+            p.dihedral_deg,
+            welds::WELD_CLASSES[*class].1,
+            p.access
+        ));
+    }
+    let counts = [
+        s.pairs_below_60,
+        s.pairs_60_120,
+        s.pairs_120_135,
+        s.pairs_over_135,
+    ];
+    let mut order: Vec<usize> = (0..welds::WELD_CLASSES.len()).collect();
+    order.sort_by_key(|&c| welds::weld_class_urgency(c));
+    let mut classes = String::new();
+    for c in order {
+        let (label, colour) = welds::WELD_CLASSES[c];
+        classes.push_str(&format!(
+            "<tr><td><span class=\"sw\" style=\"background:{colour}\"></span>{label}</td><td>{}</td></tr>\n",
+            counts[c]
+        ));
+    }
+    let off_gaps = pairs.iter().filter(|t| t.3).count();
     let viewer = format!(
         "<h2>Look around</h2>\n<p>Plates coloured by group, gauge{} (the menu beside them); each pair of plates side by side at a node is a dot between their edges there (mid-height of the seam), coloured by its access class or root gap. Hover or click for figures; find a plate by its tag or a pair as W, its node and its number (W12-2).</p>\n{viewer}",
         if with_sizing { " or utilisation" } else { "" },
@@ -1129,20 +1172,23 @@ pub fn welds_html(made: &Plated, viewer: &str, with_sizing: bool) -> String {
     format!(
         "<!doctype html><meta charset=\"utf-8\"><title>lamina weld report</title>\n\
 <style>body{{font:14px system-ui,sans-serif;margin:2em}}table{{border-collapse:collapse}}\
-td,th{{border:1px solid #ccc;padding:2px 8px;text-align:left}}tr.bad{{background:#fdd}}\
-tr.warn{{background:#ffe9c6}}</style>\n\
+td,th{{border:1px solid #ccc;padding:2px 8px;text-align:left}}td.bad{{background:#fdd}}\
+.sw{{display:inline-block;width:.9em;height:.9em;margin-right:.4em;vertical-align:-.1em;border-radius:2px}}</style>\n\
 <h1>Welds at the nodes</h1>\n\
-<p>{} nodes, {} pairs of plates side by side. Root gap target {} ± {} mm: {} nodes even, {} need a node core{}. \
-Smallest dihedral angle {:.2}°: {} pairs below 60°, {} at 60–120°, {} at 120–135°, {} over 135°.</p>\n\
+<p>{} nodes, {} pairs of plates side by side. Root gap target {} ± {} mm: {} nodes even, {} need a node core{}{}. \
+Smallest angle between welded plates {:.2}°.</p>\n\
+<table><tr><th>access, by the angle between the plates</th><th>pairs</th></tr>\n{classes}</table>\n\
 <dl><dt>Root gap</dt><dd>the distance between the two plates (of a bolted seam, its ply of the node's group, which welds there; the other ply stops clear) \
 in the plane perpendicular to the node axis: the weld's root opening along the line where they meet, mm.</dd>\
-<dt>Dihedral angle</dt><dd>the angle between the two plates about the node axis on the side where they are \
-neighbours: the wedge a fillet weld fills. Below 60° there is no prequalified fillet weld; 60–120° is \
+<dt>Dihedral angle</dt><dd>the angle between the two plates about the node axis, 0–180°, one per pair of plates side by side \
+(a two-plate node's pair is listed once, though it is welded on both sides; where the wedge between two neighbours opens beyond 180°, \
+the outside of a corner, the angle is measured the other way round). Below 60° there is no prequalified fillet weld; 60–120° is \
 prequalified by EN 1993-1-8 §4.3.2.1; AWS D1.1 allows up to 135°; above that the plates meet end to end \
 (a butt weld).</dd></dl>\n\
 {viewer}\n\
-<h2>Pairs</h2>\n\
-<table><tr><th>node</th><th>status</th><th>plates</th><th>root gap, mm</th><th>dihedral, °</th><th>access</th></tr>\n{rows}</table>\n",
+<h2>Pairs, the shop's problems first</h2>\n\
+<p>Below 60° first (sharpest first), then root gaps out of tolerance, AWS D1.1 only (widest first), butt welds, and the prequalified fillets.</p>\n\
+<table><tr><th>pair</th><th>node</th><th>status</th><th>plates</th><th>root gap, mm</th><th>dihedral, °</th><th>access</th></tr>\n{rows}</table>\n",
         s.nodes,
         s.pairs,
         w.weld_gap,
@@ -1154,11 +1200,12 @@ prequalified by EN 1993-1-8 §4.3.2.1; AWS D1.1 allows up to 135°; above that t
         } else {
             String::new()
         },
+        if off_gaps > 0 {
+            format!("; {off_gaps} pair(s) with the root gap out of tolerance")
+        } else {
+            String::new()
+        },
         s.smallest_dihedral_deg,
-        s.pairs_below_60,
-        s.pairs_60_120,
-        s.pairs_120_135,
-        s.pairs_over_135,
     )
 }
 

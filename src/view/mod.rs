@@ -108,6 +108,9 @@ pub struct Coloring {
     pub values: Vec<Option<f64>>,
     /// Non-empty for categories: the name of each value.
     pub labels: Vec<String>,
+    /// Per label, its fixed colour (`#rrggbb`) where the categories are classes that must look
+    /// the same on every model; empty: the palette in label order.
+    pub colors: Vec<String>,
     /// A limit marked on the legend (a tolerance, utilisation 1): the scale runs green to red
     /// from 0 to it, and beyond it stays red.
     pub limit: Option<f64>,
@@ -122,21 +125,24 @@ impl Coloring {
             definition: definition.into(),
             values,
             labels: Vec::new(),
+            colors: Vec::new(),
             limit: None,
         }
     }
 
-    /// Categories: each object's label; the legend lists them in the order first met.
+    /// Categories: each object's label; the legend lists them in natural order (numbers in
+    /// labels by value: group 2 before group 10).
     pub fn categories(name: &str, definition: &str, of: &[String]) -> Self {
-        let mut labels: Vec<String> = Vec::new();
+        let mut labels: Vec<String> = of.to_vec();
+        labels.sort_by(|a, b| natural_order(a, b));
+        labels.dedup();
         let values = of
             .iter()
             .map(|l| {
-                let k = labels.iter().position(|x| x == l).unwrap_or_else(|| {
-                    labels.push(l.clone());
-                    labels.len() - 1
-                });
-                Some(k as f64)
+                labels
+                    .binary_search_by(|x| natural_order(x, l))
+                    .ok()
+                    .map(|k| k as f64)
             })
             .collect();
         Coloring {
@@ -145,7 +151,71 @@ impl Coloring {
             definition: definition.into(),
             values,
             labels,
+            colors: Vec::new(),
             limit: None,
+        }
+    }
+
+    /// Fixed classes, each with its colour, listed in this order on every model (those no
+    /// object falls in too); each object's class by index (None: grey, no class).
+    pub fn classes(
+        name: &str,
+        definition: &str,
+        classes: &[(&str, &str)],
+        of: &[Option<usize>],
+    ) -> Self {
+        Coloring {
+            name: name.into(),
+            unit: String::new(),
+            definition: definition.into(),
+            values: of
+                .iter()
+                .map(|k| k.filter(|&k| k < classes.len()).map(|k| k as f64))
+                .collect(),
+            labels: classes.iter().map(|c| c.0.to_string()).collect(),
+            colors: classes.iter().map(|c| c.1.to_string()).collect(),
+            limit: None,
+        }
+    }
+}
+
+/// Whether a check holds: the two classes and their colours.
+pub const PASS_FAIL: [(&str, &str); 2] = [("within", "#2ca02c"), ("above", "#d62728")];
+
+/// Strings compared with their runs of digits as numbers ("group 2" < "group 10").
+fn natural_order(a: &str, b: &str) -> std::cmp::Ordering {
+    let (mut a, mut b) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (a.first(), b.first()) {
+            (None, None) => return std::cmp::Ordering::Equal,
+            (None, _) => return std::cmp::Ordering::Less,
+            (_, None) => return std::cmp::Ordering::Greater,
+            (Some(x), Some(y)) if x.is_ascii_digit() && y.is_ascii_digit() => {
+                let run = |s: &[u8]| s.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (na, nb) = (run(a), run(b));
+                let trim = |s: &[u8]| {
+                    let z = s.iter().take_while(|&&c| c == b'0').count();
+                    s[z.min(s.len().saturating_sub(1))..].to_vec()
+                };
+                let (da, db) = (trim(&a[..na]), trim(&b[..nb]));
+                let by_value = da.len().cmp(&db.len()).then_with(|| da.cmp(&db));
+                if by_value != std::cmp::Ordering::Equal {
+                    return by_value;
+                }
+                let by_zeros = na.cmp(&nb);
+                if by_zeros != std::cmp::Ordering::Equal {
+                    return by_zeros;
+                }
+                a = &a[na..];
+                b = &b[nb..];
+            }
+            (Some(x), Some(y)) => {
+                if x != y {
+                    return x.cmp(y);
+                }
+                a = &a[1..];
+                b = &b[1..];
+            }
         }
     }
 }
@@ -479,6 +549,40 @@ mod tests {
         assert_eq!(idx, vec![0, 1, 2, 0, 2, 3, 4, 5, 6]);
         assert_eq!(l.columns, ["x", "y"]);
         assert_eq!(l.objects[1].values, ["", "3"]);
+    }
+
+    #[test]
+    fn categories_are_listed_in_natural_order() {
+        let of: Vec<String> = [
+            "group 10", "group 2", "group 1", "group 2", "core", "group 02",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let c = Coloring::categories("group", "", &of);
+        assert_eq!(
+            c.labels,
+            ["core", "group 1", "group 2", "group 02", "group 10"]
+        );
+        assert_eq!(
+            c.values,
+            [
+                Some(4.0),
+                Some(2.0),
+                Some(1.0),
+                Some(2.0),
+                Some(0.0),
+                Some(3.0)
+            ]
+        );
+    }
+
+    #[test]
+    fn classes_keep_their_order_and_colours_whatever_the_objects() {
+        let c = Coloring::classes("access", "", &PASS_FAIL, &[Some(1), None, Some(7)]);
+        assert_eq!(c.labels, ["within", "above"]);
+        assert_eq!(c.colors, ["#2ca02c", "#d62728"]);
+        assert_eq!(c.values, [Some(1.0), None, None]);
     }
 }
 

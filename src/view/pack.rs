@@ -12,6 +12,7 @@ use crate::mesh::TriMesh;
 use crate::network::Network;
 use crate::rationalize::axes::Axes;
 use crate::rationalize::plates::{prism, HOLE_SEGMENTS};
+use crate::rationalize::welds;
 use crate::report::planarity::{Metric, PanelRow, DEFINITIONS};
 
 #[derive(Debug, Error)]
@@ -123,12 +124,15 @@ pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
             &[[a, b]],
         );
     }
-    let radius = Coloring::scale(
-        "radius",
-        "mm",
-        "the member's radius as the network gives it (vein thickness)",
-        net.edges.iter().map(|e| Some(e.radius)).collect(),
-    );
+    // A network without radii (all 0) has no radius to colour by.
+    let radius = net.edges.iter().any(|e| e.radius != 0.0).then(|| {
+        Coloring::scale(
+            "radius",
+            "mm",
+            "the member's radius as the network gives it (vein thickness)",
+            net.edges.iter().map(|e| Some(e.radius)).collect(),
+        )
+    });
     let mut nodes = LayerBuilder::new("nodes", Kind::Points, origin);
     for (k, n) in net.nodes.iter().enumerate() {
         let mut f = vec![
@@ -141,16 +145,15 @@ pub fn network(net: &Network, origin: DVec3) -> Result<Vec<Layer>, ViewError> {
         }
         nodes.point(format!("N{k}"), f, n.p);
     }
-    let degrees = Coloring::scale(
+    let degrees = Coloring::categories(
         "members at the node",
-        "",
         "how many members meet at the node (1: a tip)",
-        degree.iter().map(|&d| Some(f64::from(d))).collect(),
+        &degree.iter().map(|d| d.to_string()).collect::<Vec<_>>(),
     );
     // Thousands of node dots hide the members: then they start hidden (a checkbox away).
     let few = net.nodes.len() <= SHOWN_NODES;
     Ok(vec![
-        members.finish(vec![radius], true),
+        members.finish(radius.into_iter().collect(), true),
         nodes.finish(vec![degrees], few),
     ])
 }
@@ -329,13 +332,11 @@ pub fn panels(
         &definition("torsion_deg"),
         rows.iter().map(|r| Some(r.metrics.torsion_deg)).collect(),
     ));
-    let pass: Vec<String> = rows
-        .iter()
-        .map(|r| if r.pass { "within" } else { "above" }.to_string())
-        .collect();
-    colorings.push(Coloring::categories(
+    let pass: Vec<Option<usize>> = rows.iter().map(|r| Some(usize::from(!r.pass))).collect();
+    colorings.push(Coloring::classes(
         "within tolerance",
         "whether the held figure is at most the panel's tolerance",
+        &super::PASS_FAIL,
         &pass,
     ));
     Ok(layer.finish(colorings, true))
@@ -410,14 +411,8 @@ pub fn plates(
 ) -> Result<(Vec<Layer>, Vec<String>), ViewError> {
     bound("plates", plates.len() * 64, "triangles", "")?;
     let mut notes = Vec::new();
-    // The layer's count is its elements: name the cores when there are some, so "296" is
-    // not read as 296 plates.
-    let name = if cores.is_empty() {
-        "plates"
-    } else {
-        "plates and node cores"
-    };
-    let mut layer = LayerBuilder::new(name, Kind::Faces, origin);
+    // Plates and cores are counted apart (each layer lists its count): cores are their own layer.
+    let mut layer = LayerBuilder::new("plates", Kind::Faces, origin);
     let (mut groups, mut gauges, mut util) = (Vec::new(), Vec::new(), Vec::new());
     // Per plate and node: the middle of the plate's edge at that node (where its weld runs).
     let mut seam_of: std::collections::HashMap<(&str, u32), DVec3> = Default::default();
@@ -494,23 +489,6 @@ pub fn plates(
         }
         layer.faces(p.id.clone(), f, &points, &tris, &outline);
     }
-    for c in cores {
-        let (points, tris) = tube(c);
-        layer.faces(
-            c.id.clone(),
-            vec![
-                fig("node core", format!("at N{}", c.node)),
-                fig("tube", format!("{} × {} mm", c.outer_diameter, c.wall)),
-                fig("length", mm(c.length)),
-            ],
-            &points,
-            &tris,
-            &[],
-        );
-        util.push(None);
-        groups.push(format!("group {}", c.group));
-        gauges.push("core tube".into());
-    }
     let mut colorings = vec![
         Coloring::categories(
             "group",
@@ -530,6 +508,33 @@ pub fn plates(
         colorings.insert(0, u);
     }
     let mut layers = vec![layer.finish(colorings, true)];
+    let mut tubes = LayerBuilder::new("node cores", Kind::Faces, origin);
+    let mut core_groups = Vec::new();
+    for c in cores {
+        let (points, tris) = tube(c);
+        tubes.faces(
+            c.id.clone(),
+            vec![
+                fig("node core", format!("at N{}", c.node)),
+                fig("tube", format!("{} × {} mm", c.outer_diameter, c.wall)),
+                fig("length", mm(c.length)),
+            ],
+            &points,
+            &tris,
+            &[],
+        );
+        core_groups.push(format!("group {}", c.group));
+    }
+    if !cores.is_empty() {
+        layers.push(tubes.finish(
+            vec![Coloring::categories(
+                "group",
+                "the assembly group of the node the tube stands on",
+                &core_groups,
+            )],
+            true,
+        ));
+    }
     if let Some((gap, tol, nodes)) = extras.welds {
         let (layer, unplaced) = welds(nodes, gap, tol, &seam_of, origin)?;
         layers.push(layer);
@@ -632,28 +637,35 @@ fn welds(
                 ],
                 (a + b) / 2.0,
             );
-            class.push(pair.access.clone());
-            gaps.push(Some(pair.root_gap_mm));
-            even.push(
-                if pair.gap_within_tolerance {
-                    "gap within tolerance"
-                } else {
-                    "gap out of tolerance"
-                }
-                .to_string(),
+            // By the class's name; a report of another version by its angle, where that is
+            // one of the classes' (0–180°).
+            class.push(
+                welds::WELD_CLASSES
+                    .iter()
+                    .position(|c| c.0 == pair.access)
+                    .or_else(|| {
+                        (pair.dihedral_deg <= 180.0).then(|| welds::weld_class(pair.dihedral_deg))
+                    }),
             );
+            gaps.push(Some(pair.root_gap_mm));
+            even.push(Some(usize::from(!pair.gap_within_tolerance)));
         }
     }
     let layer = layer.finish(
         vec![
-            Coloring::categories(
+            Coloring::classes(
                 "access",
-                "the dihedral angle's class: below 60° no prequalified fillet weld; 60–120° fillet (EN 1993-1-8 §4.3.2.1); 120–135° fillet under AWS D1.1 only; over 135° butt weld",
+                "the class of the angle between the two plates (0–180°): below 60° no prequalified fillet weld; 60–120° fillet (EN 1993-1-8 §4.3.2.1); 120–135° fillet under AWS D1.1 only; 135–180° butt weld",
+                &welds::WELD_CLASSES,
                 &class,
             ),
-            Coloring::categories(
+            Coloring::classes(
                 "root gap",
                 "whether the root gap (the distance between the two plates across the node axis) is within the target ± tolerance",
+                &[
+                    ("gap within tolerance", "#2ca02c"),
+                    ("gap out of tolerance", "#d62728"),
+                ],
                 &even,
             ),
             Coloring::scale(

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::Entry;
+use super::{Entry, Headline};
 use crate::cli::slice::write_job;
 use crate::cli::venation::write_json;
 use lamina::fabricate::slice::{arrange, layer_count, Model, Printer};
@@ -21,7 +21,11 @@ use lamina::stage::{venation, Quiet};
 /// Leaves printed at once, as in Peele §4.2.
 const COPIES: usize = 5;
 
-pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
+/// lamina's slicing time as a share of PrusaSlicer's on a 50 mm leaf, as BENCHMARKS.md
+/// measured it side by side (a test keeps the two the same).
+pub const AGAINST_PRUSASLICER: &str = "0.16 and 0.17";
+
+pub fn print_leaf(out: &Path, size: u32) -> Result<(Entry, Headline)> {
     let dir = out.join("print");
     std::fs::create_dir_all(&dir)?;
     // Sparser sources and thicker tips than the venation demo: veins a printer can make once
@@ -115,7 +119,54 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
 
     let r = &made.report;
     let layer_names: Vec<String> = kept.iter().map(|(i, _)| i.to_string()).collect();
-    Ok(Entry {
+    let job = Headline {
+        job: "Print: leaves in resin".into(),
+        what: format!(
+            "A leaf grown for printing, made a watertight solid standing on a base, and sliced \
+             {COPIES} at a time for the DMP-SL printer: an SL1 archive PrusaSlicer's printers read."
+        ),
+        figures: vec![
+            ("layers".into(), format!("{} of 50 µm", e.layers)),
+            (
+                "resin".into(),
+                format!(
+                    "{:.3} mL for {COPIES} leaves, {:.2} h",
+                    e.volume_ml, e.build_time_h
+                ),
+            ),
+            (
+                "solid".into(),
+                format!(
+                    "{:.2} M triangles, {} part(s), genus {}, watertight",
+                    made.report.triangles as f64 / 1e6,
+                    made.report.parts,
+                    made.report.genus
+                ),
+            ),
+            (
+                "islands (no supports)".into(),
+                if report.island_count == 0 {
+                    "none: every region rests on the one below".to_string()
+                } else {
+                    format!(
+                        "{}: they start in free resin; `lamina print --supports` holds them",
+                        report.island_count
+                    )
+                },
+            ),
+            (
+                "slicing time".into(),
+                format!("{AGAINST_PRUSASLICER} of PrusaSlicer's (50 mm leaf, BENCHMARKS.md)"),
+            ),
+        ],
+        preview: "print/leaf.png".into(),
+        links: vec![
+            ("layer viewer".into(), "view/print-layers.html".into()),
+            ("print.json".into(), "print/print.json".into()),
+            ("archive".into(), "print/leaf.sl1".into()),
+        ],
+    };
+    let entry = Entry {
         name: "print: leaf → solid → slices".into(),
         about: format!(
             "A closed leaf grown for printing (`lamina venation --birth 4 --tip-radius 0.4`), made \
@@ -164,5 +215,19 @@ pub fn print_leaf(out: &Path, size: u32) -> Result<Entry> {
                 ),
             }
         ),
-    })
+    };
+    Ok((entry, job))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_figure_against_prusaslicer_is_the_benchmarks() {
+        let benchmarks = include_str!("../../../BENCHMARKS.md");
+        assert!(
+            benchmarks.contains(&format!("**{}**", super::AGAINST_PRUSASLICER)),
+            "BENCHMARKS.md no longer says {}",
+            super::AGAINST_PRUSASLICER
+        );
+    }
 }

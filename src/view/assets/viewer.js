@@ -65,9 +65,12 @@ function scaleOf(c) {
   return { kind: "scale", lo, hi };
 }
 
+// A category's colour: fixed for classes (weld access, pass or fail), else the palette.
+const swatch = (c, i) => (c.colors.length ? c.colors[i] : PALETTE[i % PALETTE.length]);
+
 function colourOf(c, s, v) {
   if (v === null || v === undefined || !Number.isFinite(v)) return GREY;
-  if (s.kind === "cat") return hexRgb(PALETTE[v % PALETTE.length]);
+  if (s.kind === "cat") return hexRgb(swatch(c, v));
   if (c.limit !== null) return v > c.limit ? BEYOND : ramp(TRAFFIC, v / c.limit);
   return ramp(VIRIDIS, (v - s.lo) / (s.hi - s.lo));
 }
@@ -182,7 +185,9 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   scene.add(camera);
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.screenSpacePanning = true;
-  const render = () => renderer.render(scene, camera);
+  // Point and line layers' vertices on screen, per layer, for picking: kept until the next frame.
+  const projected = new Map();
+  const render = () => { projected.clear(); renderer.render(scene, camera); };
   controls.addEventListener("change", render);
 
   const dot = document.createElement("canvas");
@@ -336,23 +341,82 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     render();
   }
 
-  // Picking: the nearest visible element under the pointer.
+  // Picking: what is drawn under the pointer, nearest in screen space. A point within its dot
+  // comes first, then a line within a few pixels, then the nearest face the ray meets; a point
+  // or line behind that face is hidden (drawn with the depth test) and not picked. The
+  // vertices of point and line layers are projected once per view, not per move.
+  const PICK_POINT = 6, PICK_LINE = 5; // pixels
   const ray = new THREE.Raycaster();
-  ray.params.Line.threshold = radius * 0.006;
-  ray.params.Points.threshold = radius * 0.012;
-  function pick(ev) {
+  const viewMatrix = new THREE.Matrix4();
+  function projectLayer(li) {
+    let p = projected.get(li);
+    if (p) return p;
+    const pos = layers[li].geo.getAttribute("position").array;
+    camera.updateMatrixWorld();
+    const m = viewMatrix.multiplyMatrices(camera.projectionMatrix, camera.matrixWorldInverse).elements;
     const r = renderer.domElement.getBoundingClientRect();
-    const p = new THREE.Vector2(((ev.clientX - r.left) / r.width) * 2 - 1, -((ev.clientY - r.top) / r.height) * 2 + 1);
-    ray.setFromCamera(p, camera);
-    const objs = layers.filter((l) => l.obj.visible).map((l) => l.obj);
+    p = new Float32Array(pos.length);
+    for (let i = 0; i < pos.length; i += 3) {
+      const x = pos[i], y = pos[i + 1], z = pos[i + 2];
+      const w = m[3] * x + m[7] * y + m[11] * z + m[15];
+      p[i] = ((m[0] * x + m[4] * y + m[8] * z + m[12]) / w + 1) / 2 * r.width;
+      p[i + 1] = (1 - (m[1] * x + m[5] * y + m[9] * z + m[13]) / w) / 2 * r.height;
+      // Depth in normalised device coordinates; 2 (outside) behind the camera.
+      p[i + 2] = w > 0 ? (m[2] * x + m[6] * y + m[10] * z + m[14]) / w : 2;
+    }
+    projected.set(li, p);
+    return p;
+  }
+  // The nearest face hit at client (x, y): its depth (NDC) and object, or null.
+  function faceAt(sx, sy, r) {
+    ray.setFromCamera(new THREE.Vector2((sx / r.width) * 2 - 1, -(sy / r.height) * 2 + 1), camera);
+    const objs = layers.filter((l) => l.obj.visible && l.L.kind === "faces").map((l) => l.obj);
     for (const hit of ray.intersectObjects(objs, false)) {
       const li = layers.findIndex((l) => l.obj === hit.object);
-      const layer = layers[li];
-      const element = layer.L.kind === "faces" ? hit.faceIndex : layer.L.kind === "lines" ? hit.index / 2 : hit.index;
-      if (element === null || element === undefined) continue;
-      return { li, k: layer.owner[element] };
+      if (li < 0 || hit.faceIndex === null || hit.faceIndex === undefined) continue;
+      return { li, k: layers[li].owner[hit.faceIndex], z: hit.point.clone().project(camera).z };
     }
     return null;
+  }
+  function pickAt(sx, sy) {
+    const r = renderer.domElement.getBoundingClientRect();
+    const face = faceAt(sx, sy, r);
+    const inFront = (z) => z >= -1 && z <= 1 && (!face || z <= face.z + 1e-6);
+    for (const kind of ["points", "lines"]) {
+      let best = null, bestD = kind === "points" ? PICK_POINT : PICK_LINE, bestZ = Infinity;
+      const better = (d, z) => d < bestD || (d === bestD && z < bestZ);
+      layers.forEach((layer, li) => {
+        if (!layer.obj.visible || layer.L.kind !== kind) return;
+        const p = projectLayer(li);
+        if (kind === "points") {
+          for (let v = 0; 3 * v < p.length; v++) {
+            const z = p[3 * v + 2];
+            if (!inFront(z)) continue;
+            const d = Math.hypot(p[3 * v] - sx, p[3 * v + 1] - sy);
+            if (better(d, z)) { bestD = d; bestZ = z; best = { li, k: layer.owner[v] }; }
+          }
+        } else {
+          const idx = layer.geo.index.array;
+          for (let s = 0; s < idx.length; s += 2) {
+            const a = 3 * idx[s], b = 3 * idx[s + 1];
+            const ax = p[a], ay = p[a + 1], dx = p[b] - ax, dy = p[b + 1] - ay;
+            const l2 = dx * dx + dy * dy;
+            const t = l2 > 0 ? Math.min(1, Math.max(0, ((sx - ax) * dx + (sy - ay) * dy) / l2)) : 0;
+            const d = Math.hypot(ax + t * dx - sx, ay + t * dy - sy);
+            if (d > bestD) continue;
+            const z = p[a + 2] + t * (p[b + 2] - p[a + 2]);
+            if (p[a + 2] > 1 || p[b + 2] > 1 || !inFront(z)) continue;
+            if (better(d, z)) { bestD = d; bestZ = z; best = { li, k: layer.owner[s / 2] }; }
+          }
+        }
+      });
+      if (best) return best;
+    }
+    return face ? { li: face.li, k: face.k } : null;
+  }
+  function pick(ev) {
+    const r = renderer.domElement.getBoundingClientRect();
+    return pickAt(ev.clientX - r.left, ev.clientY - r.top);
   }
   let down = null;
   renderer.domElement.addEventListener("pointerdown", (e) => { down = [e.clientX, e.clientY]; });
@@ -393,7 +457,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
         const counts = new Map();
         c.values.forEach((v) => counts.set(v, (counts.get(v) || 0) + 1));
         c.labels.forEach((label, i) => {
-          box.append(el("div", { class: "lv-swatch" }, el("span", { style: `background:${PALETTE[i % PALETTE.length]}` }), `${label} (${counts.get(i) || 0})`));
+          box.append(el("div", { class: "lv-swatch" }, el("span", { style: `background:${swatch(c, i)}` }), `${label} (${counts.get(i) || 0})`));
         });
       } else {
         const stops = (c.limit !== null ? TRAFFIC : VIRIDIS).map((rgb, i, a) => `rgb(${rgb.join(",")}) ${(100 * i) / (a.length - 1)}%`);
@@ -445,13 +509,38 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   return {
     node,
     shown: resize,
-    // Where an object's centre is on the screen (client pixels), for tests that click it.
+    // Where an object is drawn on the screen (client pixels), for tests that click it: a point
+    // itself, a line's longest segment's middle, the centroid of a face's largest triangle
+    // that nothing hides; null where it is hidden or off screen.
     screenOf(id) {
       const hit = index.get(id.toLowerCase());
       if (!hit) return null;
-      const p = layers[hit[0]].sphereOf(hit[1]).c.project(camera);
+      const [li, k] = hit;
+      const layer = layers[li];
+      if (!layer.obj.visible) return null;
       const r = renderer.domElement.getBoundingClientRect();
-      return [r.left + ((p.x + 1) / 2) * r.width, r.top + ((1 - p.y) / 2) * r.height];
+      const p = projectLayer(li);
+      const vs = layer.vertsOf(k);
+      const on = ([x, y]) => x >= 0 && y >= 0 && x <= r.width && y <= r.height;
+      const isFront = (f) => f !== null && f.li === li && f.k === k;
+      let at = null;
+      if (layer.L.kind === "points") at = [p[3 * vs[0]], p[3 * vs[0] + 1], p[3 * vs[0] + 2]];
+      else {
+        let best = -1;
+        for (let i = 0; i < vs.length; i += layer.per) {
+          const q = vs.slice(i, i + layer.per).map((v) => [p[3 * v], p[3 * v + 1]]);
+          const size = layer.per === 2 ? Math.hypot(q[1][0] - q[0][0], q[1][1] - q[0][1])
+            : Math.abs((q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
+          const z = vs.slice(i, i + layer.per).reduce((a, v) => a + p[3 * v + 2], 0) / layer.per;
+          const c = [q.reduce((a, v) => a + v[0], 0) / q.length, q.reduce((a, v) => a + v[1], 0) / q.length, z];
+          if (size > best && on(c) && (layer.per !== 3 || isFront(faceAt(c[0], c[1], r)))) { best = size; at = c; }
+        }
+      }
+      if (!at || !on(at) || at[2] < -1 || at[2] > 1) return null;
+      // A point or line behind a face is hidden there.
+      const f = layer.per === 3 ? null : faceAt(at[0], at[1], r);
+      if (f && f.z < at[2] - 1e-6) return null;
+      return [r.left + at[0], r.top + at[1]];
     },
     find(q, exact) {
       let hit = index.get(q);
