@@ -55,7 +55,7 @@ impl Metric {
 pub const DEFINITIONS: [(&str, &str); 10] = [
     ("flatness", "ISO 1101 flatness, mm: the width of the thinnest zone between two parallel planes that holds every corner of the panel (the minimum zone), exact"),
     ("best_fit", "mm: the largest distance of a corner from the least-squares plane through the corners"),
-    ("deviation", "the corner figure, mm: the distance of the third corner from the plane through the other three (quads; for other polygons the largest distance from the plane through the centroid with the Newell normal); on a twisted square 2 times the flatness and 4 times the best-fit figure"),
+    ("deviation", "the corner figure, mm: the distance of the fourth corner from the plane through the other three (quads; for other polygons the largest distance from the plane through the centroid with the Newell normal); on a twisted square 2 times the flatness and 4 times the best-fit figure"),
     ("diagonal_distance", "mm: the distance between the lines of the two diagonals (quads)"),
     ("diagonal_rel_edge", "the diagonal distance over the mean edge length (COMPAS's planarity)"),
     ("diagonal_rel_diagonal", "warp: the diagonal distance over the mean diagonal length (libigl's planarity)"),

@@ -461,18 +461,25 @@ fn scene_json(scene: &Scene) -> String {
 /// The viewer as a block to put inside a page's `<body>`: its style, a container of `height`
 /// (CSS), the scene, three.js and the viewer's script.
 pub fn embed(scene: &Scene, height: &str) -> String {
+    // three.js only where there is something to draw in 3D (not on sheet and print pages).
+    let three = if scene.layers.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "<script type=\"text/plain\" id=\"three-core\">{THREE_CORE}</script>\n\
+             <script type=\"text/plain\" id=\"three-module\">{THREE_MODULE}</script>\n\
+             <script type=\"text/plain\" id=\"three-orbit\">{ORBIT_CONTROLS}</script>\n\
+             <!-- three.js {THREE_VERSION}, vendored unchanged from the npm registry:\n{}-->\n",
+            THREE_LICENSE.replace("--", "- -"),
+        )
+    };
     format!(
         "<style>{VIEWER_CSS}</style>\n\
          <div id=\"lamina-viewer\" style=\"height:{}\"></div>\n\
          <script type=\"application/json\" id=\"lamina-data\">{}</script>\n\
-         <script type=\"text/plain\" id=\"three-core\">{THREE_CORE}</script>\n\
-         <script type=\"text/plain\" id=\"three-module\">{THREE_MODULE}</script>\n\
-         <script type=\"text/plain\" id=\"three-orbit\">{ORBIT_CONTROLS}</script>\n\
-         <!-- three.js {THREE_VERSION}, vendored unchanged from the npm registry:\n{}-->\n\
-         <script type=\"module\">{VIEWER_JS}</script>\n",
+         {three}<script type=\"module\">{VIEWER_JS}</script>\n",
         html(height),
         scene_json(scene),
-        THREE_LICENSE.replace("--", "- -"),
     )
 }
 

@@ -32,7 +32,9 @@ function bytes(b64) {
 
 // Colours. A scale with a limit runs green → amber → red from 0 to the limit and stays dark
 // red beyond; without one it runs over the values' range (viridis stops).
-const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+// Viridis, its last stop darkened from (253, 231, 37) so the top of a scale stays visible on
+// the light background.
+const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 190, 80], [205, 180, 0]];
 const TRAFFIC = [[26, 150, 65], [166, 217, 106], [253, 174, 97], [215, 25, 28]];
 const BEYOND = [120, 0, 10];
 const PALETTE = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2",
@@ -97,7 +99,9 @@ function start(data) {
   stage.append(tip);
 
   const views = {};
-  if (data.layers.length) views["3d"] = build3d(data, stage, layersBox, legend, info, tip);
+  if (data.layers.length) {
+    views["3d"] = hasWebGL() ? build3d(data, stage, layersBox, legend, info, tip) : buildFlat(data, stage, layersBox, legend, info);
+  }
   if (data.sheets.length) views.sheets = buildSheets(data, stage, info);
   if (data.print) views.print = buildPrint(data.print, stage, info);
   let current = null;
@@ -151,7 +155,11 @@ function start(data) {
   show(Object.keys(views)[0]);
   applyHash();
   window.addEventListener("hashchange", applyHash);
-  window.lamina = { find, show, data, screenOf: (id) => views["3d"]?.screenOf(id) ?? null };
+  window.lamina = {
+    find, show, data,
+    screenOf: (id) => views["3d"]?.screenOf?.(id) ?? null,
+    pickTime: (n) => views["3d"]?.pickTime?.(n) ?? null,
+  };
   requestAnimationFrame(() => requestAnimationFrame(() => {
     document.body.dataset.readyMs = performance.now().toFixed(0);
     document.body.dataset.ready = "1";
@@ -166,6 +174,103 @@ function figuresTable(title, sub, figures) {
   const t = el("table");
   for (const [k, v] of figures) t.append(el("tr", {}, el("th", {}, k), el("td", {}, v)));
   return [el("h3", { class: "lv-id" }, title), el("p", { class: "lv-sub" }, sub), t];
+}
+
+// One legend: categories with their counts in class order, or a scale with its range.
+function legendItem(name, c) {
+  const s = scaleOf(c);
+  const box = el("div", { class: "lv-legend-item" }, el("h4", {}, `${name}: ${c.name}${c.unit ? ` (${c.unit})` : ""}`));
+  if (s.kind === "cat") {
+    const counts = new Map();
+    c.values.forEach((v) => counts.set(v, (counts.get(v) || 0) + 1));
+    c.labels.forEach((label, i) => {
+      box.append(el("div", { class: "lv-swatch" }, el("span", { style: `background:${swatch(c, i)}` }), `${label} (${counts.get(i) || 0})`));
+    });
+  } else {
+    const stops = (c.limit !== null ? TRAFFIC : VIRIDIS).map((rgb, i, a) => `rgb(${rgb.join(",")}) ${(100 * i) / (a.length - 1)}%`);
+    const gradient = el("div", { class: "lv-gradient", style: `background:linear-gradient(to right,${stops.join(",")})` });
+    const u = c.unit ? ` ${c.unit}` : "";
+    box.append(gradient, el("div", { class: "lv-ticks" }, el("span", {}, `${fmt(s.lo)}${u}`), el("span", {}, `${fmt(s.hi)}${u}`)));
+    if (c.limit !== null) box.append(el("p", { class: "lv-sub" }, `red at the limit (${fmt(c.limit)}${u}); dark red beyond it`));
+    if (c.values.some((v) => v === null)) box.append(el("p", { class: "lv-sub" }, "grey: no value"));
+  }
+  box.append(el("p", { class: "lv-def" }, c.definition));
+  return box;
+}
+
+// The layer list (a checkbox each, and a menu of colourings) and the legends of the visible
+// coloured layers. Each layer has L, coloring and visible; `changed(layer, what)` redraws.
+function layerControls(layers, layersBox, legend, changed) {
+  function drawLegend() {
+    legend.replaceChildren();
+    for (const layer of layers) {
+      const c = layer.L.colorings[layer.coloring];
+      if (layer.visible && c) legend.append(legendItem(layer.L.name, c));
+    }
+  }
+  layers.forEach((layer) => {
+    const check = el("input", { type: "checkbox" });
+    check.checked = layer.visible;
+    check.addEventListener("change", () => { layer.visible = check.checked; drawLegend(); changed(layer, "visible"); });
+    const row = el("div", { class: "lv-layer" }, el("label", {}, check, ` ${layer.L.name} (${layer.L.objects.length})`));
+    if (layer.L.colorings.length > 1) {
+      const sel = el("select", { "aria-label": `${layer.L.name} colour` });
+      layer.L.colorings.forEach((c, i) => sel.append(el("option", { value: i }, `by ${c.name}`)));
+      sel.addEventListener("change", () => { layer.coloring = Number(sel.value); drawLegend(); changed(layer, "coloring"); });
+      row.append(sel);
+    } else if (layer.L.colorings.length === 1) {
+      row.append(el("span", { class: "lv-sub" }, ` by ${layer.L.colorings[0].name}`));
+    }
+    layersBox.append(row);
+  });
+  drawLegend();
+}
+
+// The views a 3D page offers: the direction the camera looks from (z is up on screen but in plan,
+// where y is).
+const VIEWS = {
+  plan: [0, -1e-4, 1],
+  front: [0, -1, 0],
+  side: [1, 0, 0],
+  iso: [1, -1.3, 0.9],
+};
+
+// A model is flat when its height is under 1 % of its width: it opens in plan.
+const isFlat = (size) => size[2] <= 0.01 * Math.max(size[0], size[1]);
+
+// A round length (1, 2 or 5 × 10^k) near `about`, for a scale bar.
+function roundLength(about) {
+  const k = Math.pow(10, Math.floor(Math.log10(about)));
+  return [1, 2, 5, 10].map((m) => m * k).reduce((a, b) => (Math.abs(b - about) < Math.abs(a - about) ? b : a));
+}
+
+const dims = (size) => size.map((v) => (v >= 100 ? v.toFixed(0) : v.toPrecision(3))).join(" × ") + " mm";
+
+// Search over the layers' objects: by id, then by a figure that names another id (a panel's
+// "edge E5", a plate's edge) when no object has that id, then (not exact) by part of an id.
+function finder(layers, select) {
+  const index = new Map();
+  layers.forEach((layer, li) => layer.L.objects.forEach((o, k) => {
+    const key = o.id.toLowerCase();
+    if (!index.has(key)) index.set(key, [li, k]);
+  }));
+  const also = new Map();
+  layers.forEach((layer, li) => layer.L.objects.forEach((o, k) => {
+    for (const v of o.values) {
+      const m = /^([ENP]\d+)\b/.exec(v);
+      if (m && !index.has(m[1].toLowerCase()) && !also.has(m[1].toLowerCase())) also.set(m[1].toLowerCase(), [li, k]);
+    }
+  }));
+  return {
+    index,
+    find(q, exact) {
+      let hit = index.get(q) || also.get(q);
+      if (!hit && !exact) {
+        for (const [key, v] of index) if (key.includes(q)) { hit = v; break; }
+      }
+      return hit ? () => select(hit[0], hit[1]) : null;
+    },
+  };
 }
 
 // ---------------------------------------------------------------- 3D
@@ -183,11 +288,24 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   sun.position.set(0.4, 0.6, 1);
   camera.add(sun);
   scene.add(camera);
+  camera.up.set(0, 0, 1); // before the controls: they orbit about it
   const controls = new OrbitControls(camera, renderer.domElement);
   controls.screenSpacePanning = true;
   // Point and line layers' vertices on screen, per layer, for picking: kept until the next frame.
   const projected = new Map();
-  const render = () => { projected.clear(); renderer.render(scene, camera); };
+  // A scale bar for the centre of the view (lengths there, in the model's millimetres).
+  const bar = el("div", { class: "lv-scale" }, el("div", { class: "lv-scale-bar" }), el("span", {}));
+  node.append(bar);
+  function drawScale() {
+    const h = node.clientHeight;
+    if (!h) return;
+    const perPixel = (2 * camera.position.distanceTo(controls.target) * Math.tan((camera.fov * Math.PI) / 360)) / h;
+    if (!(perPixel > 0)) return;
+    const len = roundLength(perPixel * 110);
+    bar.firstChild.style.width = `${(len / perPixel).toFixed(1)}px`;
+    bar.lastChild.textContent = `${len >= 1 ? len : len.toPrecision(1)} mm at the centre of view`;
+  }
+  const render = () => { projected.clear(); drawScale(); renderer.render(scene, camera); };
   controls.addEventListener("change", render);
 
   const dot = document.createElement("canvas");
@@ -262,7 +380,8 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
   camera.near = radius / 1000;
   camera.far = radius * 100;
-  camera.up.set(0, 0, 1);
+  const size = box.getSize(new THREE.Vector3()).toArray();
+  let view = isFlat(size) ? "plan" : "iso";
 
   function paint(layer) {
     const { L, colours } = layer;
@@ -279,7 +398,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   function fit(centreAt = centre, r = radius, keep = false) {
     const dir = keep
       ? camera.position.clone().sub(controls.target).normalize()
-      : new THREE.Vector3(1, -1.3, 0.9).normalize();
+      : new THREE.Vector3(...VIEWS[view]).normalize();
     const dist = r / Math.sin((camera.fov * Math.PI) / 360) * 1.05;
     controls.target.copy(centreAt);
     camera.position.copy(centreAt).addScaledVector(dir, dist);
@@ -342,7 +461,8 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   }
 
   // Picking: what is drawn under the pointer, nearest in screen space. A point within its dot
-  // comes first, then a line within a few pixels, then the nearest face the ray meets; a point
+  // comes first, then a line within a few pixels (fewer over a face), then the nearest face the
+  // ray meets; a point
   // or line behind that face is hidden (drawn with the depth test) and not picked. The
   // vertices of point and line layers are projected once per view, not per move.
   const PICK_POINT = 6, PICK_LINE = 5; // pixels
@@ -379,11 +499,16 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     return null;
   }
   function pickAt(sx, sy) {
-    const r = renderer.domElement.getBoundingClientRect();
-    const face = faceAt(sx, sy, r);
+    const face = faceAt(sx, sy, renderer.domElement.getBoundingClientRect());
+    return thinAt(sx, sy, face) || (face ? { li: face.li, k: face.k } : null);
+  }
+  // The point, else the line, drawn nearest (sx, sy) within reach and not behind `face`.
+  function thinAt(sx, sy, face) {
     const inFront = (z) => z >= -1 && z <= 1 && (!face || z <= face.z + 1e-6);
+    // Over a face, a point or line must be nearly under the pointer to win over it.
+    const reach = { points: face ? 4 : PICK_POINT, lines: face ? 2 : PICK_LINE };
     for (const kind of ["points", "lines"]) {
-      let best = null, bestD = kind === "points" ? PICK_POINT : PICK_LINE, bestZ = Infinity;
+      let best = null, bestD = reach[kind], bestZ = Infinity;
       const better = (d, z) => d < bestD || (d === bestD && z < bestZ);
       layers.forEach((layer, li) => {
         if (!layer.obj.visible || layer.L.kind !== kind) return;
@@ -412,7 +537,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       });
       if (best) return best;
     }
-    return face ? { li: face.li, k: face.k } : null;
+    return null;
   }
   function pick(ev) {
     const r = renderer.domElement.getBoundingClientRect();
@@ -445,49 +570,17 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   });
   renderer.domElement.addEventListener("pointerleave", () => { tip.style.display = "none"; });
 
-  // Layer list: visibility and colouring; the legend of the first visible coloured layer.
-  function drawLegend() {
-    legend.replaceChildren();
-    for (const layer of layers) {
-      const c = layer.L.colorings[layer.coloring];
-      if (!layer.obj.visible || !c) continue;
-      const s = scaleOf(c);
-      const box = el("div", { class: "lv-legend-item" }, el("h4", {}, `${layer.L.name}: ${c.name}${c.unit ? ` (${c.unit})` : ""}`));
-      if (s.kind === "cat") {
-        const counts = new Map();
-        c.values.forEach((v) => counts.set(v, (counts.get(v) || 0) + 1));
-        c.labels.forEach((label, i) => {
-          box.append(el("div", { class: "lv-swatch" }, el("span", { style: `background:${swatch(c, i)}` }), `${label} (${counts.get(i) || 0})`));
-        });
-      } else {
-        const stops = (c.limit !== null ? TRAFFIC : VIRIDIS).map((rgb, i, a) => `rgb(${rgb.join(",")}) ${(100 * i) / (a.length - 1)}%`);
-        const gradient = el("div", { class: "lv-gradient", style: `background:linear-gradient(to right,${stops.join(",")})` });
-        const u = c.unit ? ` ${c.unit}` : "";
-        box.append(gradient, el("div", { class: "lv-ticks" }, el("span", {}, `${fmt(s.lo)}${u}`), el("span", {}, `${fmt(s.hi)}${u}`)));
-        if (c.limit !== null) box.append(el("p", { class: "lv-sub" }, `red at the limit (${fmt(c.limit)}${u}); dark red beyond it`));
-        if (c.values.some((v) => v === null)) box.append(el("p", { class: "lv-sub" }, "grey: no value"));
-      }
-      box.append(el("p", { class: "lv-def" }, c.definition));
-      legend.append(box);
-    }
+  // Layer list and legends (shared with the SVG fallback): `visible` is the 3D object's.
+  for (const layer of layers) {
+    Object.defineProperty(layer, "visible", { get: () => layer.obj.visible, set: (v) => { layer.obj.visible = v; } });
   }
-  layers.forEach((layer) => {
-    const check = el("input", { type: "checkbox" });
-    check.checked = layer.obj.visible;
-    check.addEventListener("change", () => { layer.obj.visible = check.checked; drawLegend(); render(); });
-    const row = el("div", { class: "lv-layer" }, el("label", {}, check, ` ${layer.L.name} (${layer.L.objects.length})`));
-    if (layer.L.colorings.length > 1) {
-      const sel = el("select", { "aria-label": `${layer.L.name} colour` });
-      layer.L.colorings.forEach((c, i) => sel.append(el("option", { value: i }, `by ${c.name}`)));
-      sel.addEventListener("change", () => { layer.coloring = Number(sel.value); paint(layer); drawLegend(); render(); });
-      row.append(sel);
-    } else if (layer.L.colorings.length === 1) {
-      row.append(el("span", { class: "lv-sub" }, ` by ${layer.L.colorings[0].name}`));
-    }
-    layersBox.append(row);
-  });
-  layersBox.append(el("button", { type: "button", onclick: () => fit() }, "Fit"));
-  drawLegend();
+  layerControls(layers, layersBox, legend, (layer, what) => { if (what === "coloring") paint(layer); render(); });
+  const viewButtons = el("div", { class: "lv-views" }, "View: ");
+  for (const name of Object.keys(VIEWS)) {
+    viewButtons.append(el("button", { type: "button", "data-view": name, onclick: () => { view = name; fit(); } }, name));
+  }
+  viewButtons.append(el("button", { type: "button", onclick: () => fit() }, "fit"));
+  layersBox.append(viewButtons, el("p", { class: "lv-sub lv-dims" }, `overall ${dims(size)} (x × y × z)`));
 
   function resize() {
     const w = node.clientWidth, h = node.clientHeight;
@@ -501,14 +594,23 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   resize();
   fit();
 
-  const index = new Map();
-  layers.forEach((layer, li) => layer.L.objects.forEach((o, k) => {
-    const key = o.id.toLowerCase();
-    if (!index.has(key)) index.set(key, [li, k]);
-  }));
+  const { index, find } = finder(layers, (li, k) => select(li, k, true));
   return {
     node,
+    find,
     shown: resize,
+    // Milliseconds a hover pick takes: the first after a frame (which projects the layers)
+    // and the mean of `n` more at spread positions, for tests that report it.
+    pickTime(n) {
+      const r = renderer.domElement.getBoundingClientRect();
+      render();
+      let t = performance.now();
+      pickAt(r.width / 2, r.height / 2);
+      const first = performance.now() - t;
+      t = performance.now();
+      for (let i = 0; i < n; i++) pickAt(((i * 0.618034) % 1) * r.width, ((i * 0.754878) % 1) * r.height);
+      return [first, (performance.now() - t) / n];
+    },
     // Where an object is drawn on the screen (client pixels), for tests that click it: a point
     // itself, a line's longest segment's middle, the centroid of a face's largest triangle
     // that nothing hides; null where it is hidden or off screen.
@@ -533,7 +635,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
             : Math.abs((q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
           const z = vs.slice(i, i + layer.per).reduce((a, v) => a + p[3 * v + 2], 0) / layer.per;
           const c = [q.reduce((a, v) => a + v[0], 0) / q.length, q.reduce((a, v) => a + v[1], 0) / q.length, z];
-          if (size > best && on(c) && (layer.per !== 3 || isFront(faceAt(c[0], c[1], r)))) { best = size; at = c; }
+          if (size > best && on(c) && (layer.per !== 3 || ((f) => isFront(f) && !thinAt(c[0], c[1], f))(faceAt(c[0], c[1], r)))) { best = size; at = c; }
         }
       }
       if (!at || !on(at) || at[2] < -1 || at[2] > 1) return null;
@@ -542,14 +644,128 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       if (f && f.z < at[2] - 1e-6) return null;
       return [r.left + at[0], r.top + at[1]];
     },
-    find(q, exact) {
-      let hit = index.get(q);
-      if (!hit && !exact) {
-        for (const [key, v] of index) if (key.includes(q)) { hit = v; break; }
-      }
-      return hit ? () => select(hit[0], hit[1], true) : null;
-    },
   };
+}
+
+// ---------------------------------------------------------------- without WebGL
+function hasWebGL() {
+  try {
+    const c = document.createElement("canvas");
+    return !!(window.WebGLRenderingContext && (c.getContext("webgl2") || c.getContext("webgl")));
+  } catch (e) {
+    return false;
+  }
+}
+
+// Elements an SVG projection draws at most (beyond, whole objects are left out, and said).
+const FLAT_LIMIT = 200000;
+
+// The 3D layers as a static SVG projection (plan, front or side) for a browser without WebGL:
+// the same colours, layer list, legends, figures and search; a click selects.
+function buildFlat(data, stage, layersBox, legend, info) {
+  const node = el("div", { class: "lv-flat" });
+  stage.append(node);
+  const notice = el("p", { class: "lv-notice" }, "This browser has no WebGL (it is off, or the machine has none): " +
+    "the 3D view is replaced by a flat projection of the model. Colours, legends, figures and search work as in 3D; orbiting does not.");
+  const leftOut = el("span");
+  notice.append(leftOut);
+  const buttons = el("div", { class: "lv-views" }, "View: ");
+  const svg = svgEl("svg", { class: "lv-flat-svg", preserveAspectRatio: "xMidYMid meet" });
+  node.append(notice, buttons, svg);
+  const layers = data.layers.map((L) => {
+    const pos = new Float32Array(bytes(L.positions));
+    const idx = new Uint32Array(bytes(L.indices));
+    const per = L.kind === "faces" ? 3 : L.kind === "lines" ? 2 : 1;
+    return { L, pos, idx, per, visible: L.visible, coloring: L.colorings.length ? 0 : -1, shapes: [] };
+  });
+  const lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (const layer of layers) {
+    if (!layer.visible) continue;
+    for (let i = 0; i < layer.pos.length; i++) {
+      lo[i % 3] = Math.min(lo[i % 3], layer.pos[i]);
+      hi[i % 3] = Math.max(hi[i % 3], layer.pos[i]);
+    }
+  }
+  const size = lo.map((v, i) => (Number.isFinite(v) ? hi[i] - v : 0));
+  layersBox.append(buttons, el("p", { class: "lv-sub lv-dims" }, `overall ${dims(size)} (x × y × z)`));
+  // Per view: the two screen axes (index, sign) and the axis toward the viewer.
+  const AXES = { plan: [[0, 1], [1, -1], 2], front: [[0, 1], [2, -1], 1], side: [[1, 1], [2, -1], 0] };
+  const toward = { plan: 1, front: -1, side: 1 };
+  // Flat models in plan, the rest from the front.
+  let view = isFlat(size) ? "plan" : "front";
+  let selected = null;
+  function draw() {
+    svg.replaceChildren();
+    const [[ax, sx], [ay, sy], az] = AXES[view];
+    const span = Math.max(size[ax], size[ay], 1e-9);
+    svg.setAttribute("viewBox", `${sx > 0 ? lo[ax] : -hi[ax]} ${sy > 0 ? lo[ay] : -hi[ay]} ${size[ax] || span} ${size[ay] || span}`);
+    const px = span / 800;
+    const g = svgEl("g");
+    let budget = FLAT_LIMIT, left = 0;
+    const items = [];
+    layers.forEach((layer, li) => {
+      layer.shapes = [];
+      if (!layer.visible) return;
+      const { L, pos, idx, per } = layer;
+      const c = L.colorings[layer.coloring];
+      const sc = c ? scaleOf(c) : null;
+      const base = L.kind === "lines" ? [40, 60, 90] : L.kind === "points" ? [200, 80, 30] : [160, 170, 185];
+      L.objects.forEach((o, k) => {
+        if (o.count > budget) { left += 1; return; }
+        budget -= o.count;
+        const rgb = (c ? colourOf(c, sc, c.values[k]) : base).map(Math.round);
+        const colour = `rgb(${rgb.join(",")})`;
+        const at = (v) => `${sx * pos[3 * v + ax]},${sy * pos[3 * v + ay]}`;
+        let d = "", depth = 0;
+        if (L.kind === "points") {
+          const v = o.first;
+          depth = toward[view] * pos[3 * v + az];
+          items.push([depth, li, k, svgEl("circle", { cx: sx * pos[3 * v + ax], cy: sy * pos[3 * v + ay], r: 3 * px, fill: colour })]);
+          return;
+        }
+        for (let e = o.first; e < o.first + o.count; e++) {
+          const vs = Array.from(idx.subarray(e * per, e * per + per));
+          if (per === 3) {
+            // Every triangle wound the same way on screen, so that the path's nonzero fill
+            // covers the union (a plate's two faces, wound opposite, would cancel).
+            const [a, b, c] = vs.map((v) => [sx * pos[3 * v + ax], sy * pos[3 * v + ay]]);
+            if ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) < 0) vs.reverse();
+          }
+          d += `M${vs.map(at).join("L")}${per === 3 ? "Z" : ""}`;
+          for (const v of vs) depth += toward[view] * pos[3 * v + az];
+        }
+        depth /= o.count * per;
+        const style = per === 3 ? { fill: colour, stroke: colour, "stroke-width": 0.3 * px } : { fill: "none", stroke: colour, "stroke-width": 1.6, "vector-effect": "non-scaling-stroke" };
+        items.push([depth, li, k, svgEl("path", { d, ...style })]);
+      });
+    });
+    // Far first; lines and points over the faces at the same depth.
+    items.sort((a, b) => a[0] - b[0] || (layers[b[1]].per === 3) - (layers[a[1]].per === 3));
+    for (const [, li, k, shape] of items) {
+      shape.addEventListener("click", () => select(li, k));
+      shape.dataset.id = layers[li].L.objects[k].id;
+      layers[li].shapes[k] = shape;
+      g.append(shape);
+    }
+    svg.append(g);
+    leftOut.textContent = left ? ` ${left} objects are too many to draw here and are left out.` : "";
+    if (selected) select(selected[0], selected[1]);
+  }
+  for (const name of Object.keys(AXES)) {
+    buttons.append(el("button", { type: "button", "data-view": name, onclick: () => { view = name; draw(); } }, name));
+  }
+  function select(li, k) {
+    svg.querySelector(".sel")?.classList.remove("sel");
+    const L = layers[li].L, o = L.objects[k];
+    layers[li].shapes[k]?.classList.add("sel");
+    selected = [li, k];
+    info.replaceChildren(...figuresTable(o.id, L.name, figuresOf(L, o)));
+    info.dataset.selected = o.id;
+  }
+  layerControls(layers, layersBox, legend, () => draw());
+  zoomable(svg);
+  draw();
+  return { node, find: finder(layers, select).find };
 }
 
 // ---------------------------------------------------------------- sheets
@@ -578,6 +794,8 @@ function buildSheets(data, stage, info) {
     const g = svgEl("g", { transform: "scale(1,-1)" });
     g.append(svgEl("rect", { x: 0, y: 0, width: w, height: h, style: "fill:#fff;stroke:#9e9e9e;stroke-width:1" }));
     const scale = Math.max(w, h) / 900;
+    const placed = [];
+    let hidden = 0;
     for (const p of sheet.paths) {
       const pts = [];
       for (let i = 0; i < p.points.length; i += 2) pts.push(`${p.points[i]},${p.points[i + 1]}`);
@@ -591,15 +809,23 @@ function buildSheets(data, stage, info) {
       hit.append(svgEl("title"));
       hit.firstChild.textContent = part.id;
       g.append(hit);
-      const t = svgEl("text", { x: part.start[0], y: -part.start[1], transform: "scale(1,-1)", class: "lv-order", "font-size": 14 * scale });
-      t.textContent = part.order;
-      g.append(t);
+      // A cut-order number where it overlaps no number already placed (in cut order); the
+      // others are in the part's figures.
+      const fs = 14 * scale, tw = 0.62 * fs * String(part.order).length;
+      const label = [part.start[0], part.start[1], part.start[0] + tw, part.start[1] + fs];
+      if (placed.every((o) => label[0] >= o[2] || label[2] <= o[0] || label[1] >= o[3] || label[3] <= o[1])) {
+        placed.push(label);
+        const t = svgEl("text", { x: part.start[0], y: -part.start[1], transform: "scale(1,-1)", class: "lv-order", "font-size": fs });
+        t.textContent = part.order;
+        g.append(t);
+      } else hidden += 1;
       partEls.push({ si, pi, hit, id: part.id.toLowerCase() });
     });
     svg.append(g);
     zoomable(svg);
     const fig = el("figure", { class: "lv-sheet-fig", id: `sheet-${si}` }, svg,
-      el("figcaption", {}, `${sheet.name}: ${sheet.figures.map(([k, v]) => `${k} ${v}`).join(" · ")}`));
+      el("figcaption", {}, `${sheet.name}: ${sheet.figures.map(([k, v]) => `${k} ${v}`).join(" · ")}` +
+        (hidden ? ` (${hidden} cut-order numbers left off where they would overlap others: click a part for its own)` : "")));
     fig.addEventListener("click", (e) => {
       if (e.target.classList?.contains("lv-part")) return;
       info.replaceChildren(...figuresTable(sheet.name, "sheet", sheet.figures));
