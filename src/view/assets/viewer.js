@@ -273,6 +273,68 @@ function finder(layers, select) {
   };
 }
 
+// Members on screen at least this wide, pixels (WebGL draws lines one pixel wide).
+const LINE_PX = 2.5;
+
+// Segments (pairs of `idx` into `pos`) as screen-space quads LINE_PX wide: each end's two
+// corners are pushed apart across the segment's direction on screen by the vertex shader.
+// `recolour` copies the source vertices' colours; `viewport` follows the canvas size.
+function fatLines(pos, idx) {
+  const n = idx.length / 2;
+  const here = new Float32Array(12 * n), there = new Float32Array(12 * n), side = new Float32Array(4 * n);
+  const source = new Uint32Array(4 * n), tris = new Uint32Array(6 * n);
+  const SIDES = [-1, 1, 1, -1]; // a's left and right, then b's in a's frame
+  for (let s = 0; s < n; s++) {
+    const a = idx[2 * s], b = idx[2 * s + 1];
+    for (let c = 0; c < 4; c++) {
+      const [p, q] = c < 2 ? [a, b] : [b, a];
+      const v = 4 * s + c;
+      here.set(pos.subarray(3 * p, 3 * p + 3), 3 * v);
+      there.set(pos.subarray(3 * q, 3 * q + 3), 3 * v);
+      side[v] = SIDES[c];
+      source[v] = p;
+    }
+    tris.set([4 * s, 4 * s + 1, 4 * s + 2, 4 * s + 2, 4 * s + 1, 4 * s + 3], 6 * s);
+  }
+  const geo = new THREE.BufferGeometry();
+  geo.setAttribute("position", new THREE.BufferAttribute(here, 3));
+  geo.setAttribute("other", new THREE.BufferAttribute(there, 3));
+  geo.setAttribute("side", new THREE.BufferAttribute(side, 1));
+  const tint = new Float32Array(12 * n);
+  geo.setAttribute("tint", new THREE.BufferAttribute(tint, 3));
+  geo.setIndex(new THREE.BufferAttribute(tris, 1));
+  const material = new THREE.ShaderMaterial({
+    side: THREE.DoubleSide, // a quad's winding depends on the segment's direction on screen
+    uniforms: { halfSize: { value: new THREE.Vector2(1, 1) }, width: { value: LINE_PX } },
+    vertexShader: `
+      attribute vec3 other; attribute float side; attribute vec3 tint;
+      uniform vec2 halfSize; uniform float width;
+      varying vec3 vTint;
+      void main() {
+        vTint = tint;
+        vec4 a = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+        vec4 b = projectionMatrix * modelViewMatrix * vec4(other, 1.0);
+        vec2 d = b.xy / b.w * halfSize - a.xy / a.w * halfSize;
+        d = length(d) > 1e-6 ? normalize(d) : vec2(1.0, 0.0);
+        a.xy += vec2(-d.y, d.x) * side * 0.5 * width / halfSize * a.w;
+        gl_Position = a;
+      }`,
+    fragmentShader: `
+      varying vec3 vTint;
+      void main() { gl_FragColor = vec4(vTint, 1.0); }`,
+  });
+  const mesh = new THREE.Mesh(geo, material);
+  mesh.frustumCulled = false;
+  return {
+    mesh,
+    recolour(colours) {
+      for (let v = 0; v < source.length; v++) tint.set(colours.subarray(3 * source[v], 3 * source[v] + 3), 3 * v);
+      geo.getAttribute("tint").needsUpdate = true;
+    },
+    viewport(w, h) { material.uniforms.halfSize.value.set(w / 2, h / 2); },
+  };
+}
+
 // ---------------------------------------------------------------- 3D
 function build3d(data, stage, layersBox, legend, info, tip) {
   const node = el("div", { class: "lv-3d" });
@@ -326,7 +388,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     geo.setAttribute("position", new THREE.BufferAttribute(pos, 3));
     const colours = new Float32Array(pos.length);
     geo.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-    let obj;
+    let obj, fat = null;
     const per = L.kind === "faces" ? 3 : L.kind === "lines" ? 2 : 1;
     if (L.kind !== "points") geo.setIndex(new THREE.BufferAttribute(idx, 1));
     if (L.kind === "faces") {
@@ -342,7 +404,8 @@ function build3d(data, stage, layersBox, legend, info, tip) {
         obj.add(new THREE.LineSegments(og, new THREE.LineBasicMaterial({ color: 0x30343a, transparent: true, opacity: 0.55 })));
       }
     } else if (L.kind === "lines") {
-      obj = new THREE.LineSegments(geo, new THREE.LineBasicMaterial({ vertexColors: true }));
+      fat = fatLines(pos, idx);
+      obj = fat.mesh;
     } else {
       obj = new THREE.Points(geo, new THREE.PointsMaterial({
         vertexColors: true, size: 7, sizeAttenuation: false, map: dotTexture, alphaTest: 0.5,
@@ -371,7 +434,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       geo.computeBoundingBox();
       if (L.visible) box.union(geo.boundingBox);
     }
-    const layer = { L, obj, geo, colours, owner, vertsOf, sphereOf, per, coloring: L.colorings.length ? 0 : -1 };
+    const layer = { L, obj, geo, fat, colours, owner, vertsOf, sphereOf, per, coloring: L.colorings.length ? 0 : -1 };
     layers.push(layer);
     paint(layer);
   }
@@ -393,6 +456,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       for (const v of layer.vertsOf(k)) colours.set(rgb.map((x) => x / 255), 3 * v);
     });
     layer.geo.getAttribute("color").needsUpdate = true;
+    if (layer.fat) layer.fat.recolour(colours);
   }
 
   function fit(centreAt = centre, r = radius, keep = false) {
@@ -465,7 +529,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
   // ray meets; a point
   // or line behind that face is hidden (drawn with the depth test) and not picked. The
   // vertices of point and line layers are projected once per view, not per move.
-  const PICK_POINT = 6, PICK_LINE = 5; // pixels
+  const PICK_POINT = 6, PICK_LINE = 5, DOT = 3.5; // pixels (DOT: a point's drawn radius)
   const ray = new THREE.Raycaster();
   const viewMatrix = new THREE.Matrix4();
   function projectLayer(li) {
@@ -507,6 +571,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     const inFront = (z) => z >= -1 && z <= 1 && (!face || z <= face.z + 1e-6);
     // Over a face, a point or line must be nearly under the pointer to win over it.
     const reach = { points: face ? 4 : PICK_POINT, lines: face ? 2 : PICK_LINE };
+    const found = {};
     for (const kind of ["points", "lines"]) {
       let best = null, bestD = reach[kind], bestZ = Infinity;
       const better = (d, z) => d < bestD || (d === bestD && z < bestZ);
@@ -535,9 +600,12 @@ function build3d(data, stage, layersBox, legend, info, tip) {
           }
         }
       });
-      if (best) return best;
+      found[kind] = best && { ...best, d: bestD };
     }
-    return null;
+    // A point under its dot wins; else the nearer of the point and the line (the point on a tie).
+    const { points: pt, lines: ln } = found;
+    const hit = pt && (pt.d <= DOT || !ln || pt.d <= ln.d) ? pt : ln;
+    return hit ? { li: hit.li, k: hit.k } : null;
   }
   function pick(ev) {
     const r = renderer.domElement.getBoundingClientRect();
@@ -586,6 +654,7 @@ function build3d(data, stage, layersBox, legend, info, tip) {
     const w = node.clientWidth, h = node.clientHeight;
     if (!w || !h) return;
     renderer.setSize(w, h);
+    for (const l of layers) l.fat?.viewport(w, h);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
     render();
@@ -626,16 +695,31 @@ function build3d(data, stage, layersBox, legend, info, tip) {
       const on = ([x, y]) => x >= 0 && y >= 0 && x <= r.width && y <= r.height;
       const isFront = (f) => f !== null && f.li === li && f.k === k;
       let at = null;
-      if (layer.L.kind === "points") at = [p[3 * vs[0]], p[3 * vs[0] + 1], p[3 * vs[0] + 2]];
-      else {
+      const mine = (x, y) => { const h = thinAt(x, y, null); return h !== null && h.li === li && h.k === k; };
+      if (layer.L.kind === "points") {
+        const c = [p[3 * vs[0]], p[3 * vs[0] + 1], p[3 * vs[0] + 2]];
+        at = on(c) && mine(c[0], c[1]) ? c : null; // null: another point on the same spot
+      } else if (layer.L.kind === "lines") {
+        // Along its segments, longest first, a spot no other point or line is nearer to.
+        const segs = [];
+        for (let i = 0; i < vs.length; i += 2) segs.push([vs[i], vs[i + 1]]);
+        const len = ([a, b]) => Math.hypot(p[3 * b] - p[3 * a], p[3 * b + 1] - p[3 * a + 1]);
+        segs.sort((u, w) => len(w) - len(u));
+        for (const [a, b] of segs.slice(0, 8)) {
+          for (const t of [0.5, 0.35, 0.65, 0.2, 0.8]) {
+            const c = [0, 1, 2].map((j) => p[3 * a + j] + t * (p[3 * b + j] - p[3 * a + j]));
+            if (on(c) && mine(c[0], c[1])) { at = c; break; }
+          }
+          if (at) break;
+        }
+      } else {
+        // The centroid of its largest triangle on screen that it shows, nothing drawn over.
         let best = -1;
-        for (let i = 0; i < vs.length; i += layer.per) {
-          const q = vs.slice(i, i + layer.per).map((v) => [p[3 * v], p[3 * v + 1]]);
-          const size = layer.per === 2 ? Math.hypot(q[1][0] - q[0][0], q[1][1] - q[0][1])
-            : Math.abs((q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
-          const z = vs.slice(i, i + layer.per).reduce((a, v) => a + p[3 * v + 2], 0) / layer.per;
-          const c = [q.reduce((a, v) => a + v[0], 0) / q.length, q.reduce((a, v) => a + v[1], 0) / q.length, z];
-          if (size > best && on(c) && (layer.per !== 3 || ((f) => isFront(f) && !thinAt(c[0], c[1], f))(faceAt(c[0], c[1], r)))) { best = size; at = c; }
+        for (let i = 0; i < vs.length; i += 3) {
+          const q = vs.slice(i, i + 3).map((v) => [p[3 * v], p[3 * v + 1], p[3 * v + 2]]);
+          const size = Math.abs((q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[2][0] - q[0][0]) * (q[1][1] - q[0][1]));
+          const c = [0, 1, 2].map((j) => (q[0][j] + q[1][j] + q[2][j]) / 3);
+          if (size > best && on(c) && ((f) => isFront(f) && !thinAt(c[0], c[1], f))(faceAt(c[0], c[1], r))) { best = size; at = c; }
         }
       }
       if (!at || !on(at) || at[2] < -1 || at[2] > 1) return null;
