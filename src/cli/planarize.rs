@@ -202,7 +202,7 @@ pub fn run(args: Args) -> Result<bool> {
         );
     } else {
         outln!(
-            "{} {}: max panel deviation {:.6} mm (tolerance {} mm) after {} iterations, α {:e}{}",
+            "{} {}: max panel deviation {:.6} mm (tolerance {} mm) after {} iterations, α {}{}",
             if sol.converged {
                 "planar:"
             } else {
@@ -212,11 +212,11 @@ pub fn run(args: Args) -> Result<bool> {
             sol.max_deviation,
             sol.tolerance,
             sol.iterations,
-            sol.alpha_used,
+            lamina::text::sig3(sol.alpha_used),
             if sol.alpha_used < sol.alpha_requested {
                 format!(
-                    " (lowered from {:e} to reach the tolerance)",
-                    sol.alpha_requested
+                    " (lowered from {} to reach the tolerance)",
+                    lamina::text::num(sol.alpha_requested)
                 )
             } else {
                 String::new()

@@ -613,6 +613,10 @@ const BRACKET: f64 = 1.4;
 const CLOSE: f64 = 0.9;
 /// …or this many have been tried between them.
 const REFINEMENTS: usize = 10;
+/// From above, α is cut by at most this factor a round: the power law through two α where the
+/// deviation has barely begun to fall (exponent 0.25 and less) overshoots by decades, and every
+/// round below the largest α that holds is one more to climb back.
+const CUT: f64 = 0.1;
 
 enum Next {
     Try(f64),
@@ -656,7 +660,7 @@ fn newton_alpha(s: &mut Schedule, alpha: f64, dev: f64, tolerance: f64, axes: &[
         // Still above the tolerance: cut α.
         (None, _) => {
             let p_from = last.unwrap_or((alpha, dev));
-            Next::Try(alpha * (aim(p_from, 0.9 * tolerance) / alpha).clamp(1e-4, 0.9))
+            Next::Try(alpha * (aim(p_from, 0.9 * tolerance) / alpha).clamp(CUT, 0.9))
         }
         (Some((lo, lo_dev, _)), Some((hi, hi_dev))) => {
             if hi / lo > BRACKET && *lo_dev < CLOSE * tolerance && s.between < REFINEMENTS {
