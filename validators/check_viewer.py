@@ -83,21 +83,11 @@ class Browser:
              "--no-first-run", "--no-default-browser-check", "--disable-extensions",
              "about:blank"],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        port = None
-        deadline = time.time() + 30
-        while time.time() < deadline:
-            line = self.proc.stderr.readline()
-            if not line:
-                if self.proc.poll() is not None:
-                    break
-                continue
-            m = re.search(r"DevTools listening on ws://127\.0\.0\.1:(\d+)/", line)
-            if m:
-                port = int(m.group(1))
-                break
-        if port is None:
+        m = self.announced(r"DevTools listening on ws://127\.0\.0\.1:(\d+)/", 30)
+        if m is None:
             self.close()
             fail("chromium did not start its DevTools endpoint")
+        port = int(m.group(1))
         # Keep reading chromium's log so a full pipe never stalls it.
         threading.Thread(target=lambda: [None for _ in self.proc.stderr], daemon=True).start()
         targets = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10))
@@ -116,10 +106,14 @@ class Browser:
         while True:
             msg = json.loads(self.ws.recv())
             if msg.get("id") == mine:
-                if "error" in msg:
-                    fail(f"{method}: {msg['error']}")
+                if self.error_of(msg):
+                    fail(f"{method}: {self.error_of(msg)}")
                 return msg.get("result", {})
             self.event(msg)
+
+    @staticmethod
+    def error_of(msg):
+        return msg.get("error")
 
     def event(self, msg):
         m, p = msg.get("method"), msg.get("params", {})
@@ -130,6 +124,21 @@ class Browser:
             self.errors.append(" ".join(str(a.get("value", a.get("description", ""))) for a in p["args"]))
         elif m == "Log.entryAdded" and p["entry"].get("level") == "error":
             self.errors.append(f"{p['entry'].get('source')}: {p['entry'].get('text')}")
+
+    def announced(self, pattern, seconds):
+        """The browser's stderr read until a line matches `pattern` (its match), or None when
+        it exits or `seconds` pass."""
+        deadline = time.time() + seconds
+        while time.time() < deadline:
+            line = self.proc.stderr.readline()
+            if not line:
+                if self.proc.poll() is not None:
+                    return None
+                continue
+            m = re.search(pattern, line)
+            if m:
+                return m
+        return None
 
     def navigate(self, url):
         self.call("Page.navigate", url=url)
@@ -178,21 +187,11 @@ class Firefox(Browser):
             [exe, "--headless", "--no-remote", "--profile", self.profile, "--remote-debugging-port", "0",
              "--width", str(width), "--height", str(height)],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        url = None
-        deadline = time.time() + 60
-        while time.time() < deadline:
-            line = self.proc.stderr.readline()
-            if not line:
-                if self.proc.poll() is not None:
-                    break
-                continue
-            m = re.search(r"WebDriver BiDi listening on (ws://\S+)", line)
-            if m:
-                url = m.group(1)
-                break
-        if url is None:
+        m = self.announced(r"WebDriver BiDi listening on (ws://\S+)", 60)
+        if m is None:
             self.close()
             fail("firefox did not start WebDriver BiDi")
+        url = m.group(1)
         threading.Thread(target=lambda: [None for _ in self.proc.stderr], daemon=True).start()
         self.ws = websocket.create_connection(url.rstrip("/") + "/session", timeout=60, suppress_origin=True)
         self.next_id = 0
@@ -203,18 +202,13 @@ class Firefox(Browser):
         self.call("browsingContext.setViewport", context=self.context,
                   viewport={"width": width, "height": height})
 
-    def call(self, method, **params):
-        self.next_id += 1
-        mine = self.next_id
-        self.ws.send(json.dumps({"id": mine, "method": method, "params": params}))
-        while True:
-            msg = json.loads(self.ws.recv())
-            if msg.get("id") == mine:
-                if msg.get("type") == "error":
-                    fail(f"{method}: {msg.get('error')}: {msg.get('message')}")
-                return msg.get("result", {})
-            if msg.get("method") == "log.entryAdded" and msg["params"].get("level") == "error":
-                self.errors.append(msg["params"].get("text"))
+    @staticmethod
+    def error_of(msg):
+        return msg.get("type") == "error" and f"{msg.get('error')}: {msg.get('message')}"
+
+    def event(self, msg):
+        if msg.get("method") == "log.entryAdded" and msg["params"].get("level") == "error":
+            self.errors.append(msg["params"].get("text"))
 
     def navigate(self, url):
         self.call("browsingContext.navigate", context=self.context, url=url, wait="complete")
