@@ -846,10 +846,21 @@ function buildFlat(data, stage, layersBox, legend, info) {
     info.replaceChildren(...figuresTable(o.id, L.name, figuresOf(L, o)));
     info.dataset.selected = o.id;
   }
+  // A found object framed: the view zoomed to three times its box (at least a twentieth of
+  // the model), centred on it.
+  function frame(li, k) {
+    const shape = layers[li].shapes[k];
+    if (!shape) return;
+    const b = shape.getBBox();
+    const [x, y, w, h] = svg.getAttribute("viewBox").split(" ").map(Number);
+    const side = Math.max(3 * Math.max(b.width, b.height), Math.max(w, h) / 20);
+    const cx = b.x + b.width / 2, cy = b.y + b.height / 2;
+    svg.setAttribute("viewBox", `${cx - side / 2} ${cy - side / 2} ${side} ${side}`);
+  }
   layerControls(layers, layersBox, legend, () => draw());
   zoomable(svg);
   draw();
-  return { node, find: finder(layers, select).find };
+  return { node, find: finder(layers, (li, k) => { select(li, k); frame(li, k); }).find };
 }
 
 // ---------------------------------------------------------------- sheets
