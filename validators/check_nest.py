@@ -5,8 +5,10 @@ with lamina.
   on SHEET, parts as closed counter-clockwise LWPOLYLINEs on CUT_OUTER, holes as closed
   clockwise ones on CUT_INNER, etching as LWPOLYLINEs on ETCH, lead lines only on LEAD,
   remnants on REMNANT, and no TEXT or MTEXT anywhere.
-- File order per part: its etching, then its inner contours, then its outer contour (each inside
-  the outer one that follows).
+- File order: all etching first (tags and the sheet and remnant labels, while every part is held
+  by the sheet), then per part its inner contours, then its outer contour (each inside the outer
+  one that follows). Each etched polyline lies on one part, or is a label in the scrap: at
+  least the spacing from every part.
 - Micro-joints (`--micro-joints N`): the outer contour of every part whose bounding box's longer
   side is under `--micro-joint-below` is N open LWPOLYLINEs in a row, each starting the joint's
   width after the last one ended and the last ending where the first began; every gap lies on a
@@ -95,9 +97,6 @@ def sheet_polygons(path, width, height, joint_width=None):
         for h in inner:
             if not p.contains(h):
                 fail(f"{path}: an inner contour before part {len(parts)} is not inside it")
-        for line in etch:
-            if not p.buffer(1e-6).contains(line):
-                fail(f"{path}: etching before part {len(parts)} is not on it")
         holes.extend(inner)
         parts.append(Polygon(pts, [list(h.exterior.coords) for h in inner]))
         gaps.append(part_gaps)
@@ -135,7 +134,7 @@ def sheet_polygons(path, width, height, joint_width=None):
                     part_gaps = [(a[-1], b[0]) for a, b in zip(pieces, pieces[1:])]
                     close_part(ring, part_gaps)
                     pieces = []
-            etch, inner = [], []
+            inner = []
             continue
         if pieces:
             fail(f"{path}: a {layer} entity between the open pieces of an outer contour")
@@ -149,16 +148,16 @@ def sheet_polygons(path, width, height, joint_width=None):
                 fail(f"{path}: an inner contour runs counter-clockwise")
             inner.append(Polygon(pts))
         elif layer == "ETCH":
-            if inner:
-                fail(f"{path}: etching after an inner contour of part {len(parts)}: etch comes first")
+            if inner or parts:
+                fail(f"{path}: etching after cutting began (part {len(parts)}): all etching comes first")
             etch.append(LineString([(x, y) for x, y, *_ in e.get_points()]))
             etched += 1
         elif layer == "REMNANT":
             remnants.append(Polygon([(x, y) for x, y, *_ in e.get_points()]))
         elif layer not in ("SHEET", "LEAD", "JOINT"):
             fail(f"{path}: unexpected layer {layer}")
-    if etch or inner:
-        fail(f"{path}: etching or inner contours after the last outer contour")
+    if inner:
+        fail(f"{path}: inner contours after the last outer contour")
     if pieces:
         fail(f"{path}: open outer pieces that never close")
     drawn_gaps = sorted(tuple(sorted(g)) for part in gaps for g in part)
@@ -167,7 +166,7 @@ def sheet_polygons(path, width, height, joint_width=None):
             math.dist(a[0], b[0]) > 1e-6 or math.dist(a[1], b[1]) > 1e-6
             for a, b in zip(drawn_gaps, drawn_joints)):
         fail(f"{path}: JOINT lines ({len(drawn_joints)}) are not the micro-joint gaps ({len(drawn_gaps)})")
-    return parts, etched, remnants, gaps, lengths
+    return parts, etched, remnants, gaps, lengths, etch
 
 
 def main():
@@ -218,8 +217,22 @@ def main():
         width, height = s["size"]
         sheet_area = width * height
         inner = box(args.margin, args.margin, width - args.margin, height - args.margin)
-        parts, etched, remnants, _, lengths = sheet_polygons(folder / s["file"], width, height,
-                                                             joint_width)
+        parts, etched, remnants, _, lengths, etch = sheet_polygons(
+            folder / s["file"], width, height, joint_width)
+        etch_tree = STRtree(parts)
+        labels = 0
+        for line in etch:
+            near = etch_tree.query(line.buffer(args.spacing))
+            on = [j for j in near if parts[j].buffer(1e-6).contains(line)]
+            if on:
+                continue
+            d = min((parts[j].distance(line) for j in near), default=math.inf)
+            if d < args.spacing - 1e-6:
+                fail(f"{s['file']}: an etched polyline is on no part and {d:.3f} mm from one "
+                     f"(a label must keep the spacing)")
+            labels += 1
+        if s.get("label") and labels == 0:
+            fail(f"{s['file']}: nest.json gives the label {s['label']!r}, none is etched in the scrap")
         strokes += etched
         # The cut and etched lengths nest.json gives (and times the machine by) are the ones
         # drawn: every contour as the polyline cut (holes as their polygons, micro-joint gaps
@@ -279,7 +292,7 @@ def main():
     drawn = {}
     for s in nest["sheets"]:
         width, height = s["size"]
-        parts, _, _, gaps, _ = sheet_polygons(folder / s["file"], width, height, joint_width)
+        parts, _, _, gaps, _, _ = sheet_polygons(folder / s["file"], width, height, joint_width)
         drawn[s["file"]] = list(zip(parts, gaps))
     clear = nest["micro_joints"]["clear_mm"] if args.micro_joints else 0.0
     jointed = n_joints = 0

@@ -300,6 +300,10 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "micro_joint_below",
             "micro_joint_width",
             "speeds",
+            "kerf",
+            "cut_order",
+            "job",
+            "date",
         ],
         "solid" => &[
             "cell",
@@ -886,6 +890,19 @@ pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {
         material: d.material.clone(),
         speeds,
         speeds_name: "speeds=".into(),
+        kerf: o.f64("kerf")?.unwrap_or(d.kerf),
+        cut_order: match o.string("cut_order")?.as_deref() {
+            None => d.cut_order,
+            Some("travel") => stage::nest::CutOrder::Travel,
+            Some("spread") => stage::nest::CutOrder::Spread,
+            Some(other) => {
+                return Err(crate::error(format!(
+                    "cut_order= must be \"travel\" or \"spread\", got {other:?}"
+                )))
+            }
+        },
+        job: o.string("job")?,
+        date: o.string("date")?,
     })
 }
 

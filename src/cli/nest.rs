@@ -11,11 +11,24 @@ use glam::DVec2;
 use serde_json::json;
 
 use lamina::fabricate::cutplan::SpeedTable;
+use lamina::fabricate::nc::{self, NcFormat, Post};
 use lamina::fabricate::plates_file::read_plates;
 use lamina::files::write_atomic;
 use lamina::stage::nest::{self, parse_rotations, parse_sheet, parse_stock, Rotations, Stock};
 
 use super::progress::Bar;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CutOrderArg {
+    Travel,
+    Spread,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum NcArg {
+    Gcode,
+    Essi,
+}
 
 #[derive(ClapArgs)]
 pub struct Args {
@@ -72,6 +85,35 @@ pub struct Args {
     /// stainless or carbon steel]
     #[arg(long)]
     pub speeds: Option<PathBuf>,
+    /// Width of the cut, mm: the NC programs run half of it outside outer contours and inside
+    /// holes (the DXFs keep the nominal contours and say so); less than the spacing
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub kerf: f64,
+    /// Order of the parts on a sheet: `travel` (short rapids: nearest neighbour, 2-opt,
+    /// Or-opt, pierce corners chosen for short travel) or `spread` (successive parts far apart,
+    /// to spread the heat on thin sheet)
+    #[arg(long, value_enum, default_value_t = CutOrderArg::Travel)]
+    pub cut_order: CutOrderArg,
+    /// Job name, etched on every sheet's label (with sheet number, grade and thickness)
+    #[arg(long)]
+    pub job: Option<String>,
+    /// Date (or any short text) etched on every sheet's label; none by default so that the
+    /// same inputs give the same files
+    #[arg(long)]
+    pub date: Option<String>,
+    /// NC programs beside the DXFs, one per sheet: `gcode` (.ngc) or `essi` (.esi)
+    #[arg(long, value_enum)]
+    pub nc: Option<NcArg>,
+    /// Post-processor (docs/nc.md): linuxcnc, qtplasmac, mach3, grbl-laser for G-code; essi,
+    /// essi-0.1mm for ESSI [default: linuxcnc or essi]
+    #[arg(long, requires = "nc")]
+    pub post: Option<String>,
+    /// Replaces the post's torch-on line (G-code) or code (ESSI)
+    #[arg(long, requires = "nc")]
+    pub nc_on: Option<String>,
+    /// Replaces the post's torch-off line or code
+    #[arg(long, requires = "nc")]
+    pub nc_off: Option<String>,
     /// Output folder (made if missing)
     #[arg(short, long)]
     pub output: PathBuf,
@@ -80,8 +122,49 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The post-processor asked for, with the torch lines replaced where asked.
+fn post(args: &Args) -> Result<Option<Post>> {
+    let Some(format) = args.nc else {
+        return Ok(None);
+    };
+    let (format, default) = match format {
+        NcArg::Gcode => (NcFormat::Gcode, "linuxcnc"),
+        NcArg::Essi => (NcFormat::Essi, "essi"),
+    };
+    let name = args.post.as_deref().unwrap_or(default);
+    let names: Vec<&str> = nc::posts()
+        .into_iter()
+        .filter(|p| p.format == format)
+        .map(|p| p.name)
+        .collect();
+    let mut post = nc::post(name)
+        .filter(|p| p.format == format)
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "--post: `{name}` is not a {} post-processor; known: {}",
+                format.name(),
+                names.join(", ")
+            )
+        })?;
+    for (flag, value, slot) in [
+        ("--nc-on", &args.nc_on, &mut post.on),
+        ("--nc-off", &args.nc_off, &mut post.off),
+    ] {
+        if let Some(v) = value {
+            if v.trim().is_empty() || v.len() > 80 || v.chars().any(char::is_control) {
+                return Err(anyhow::anyhow!(
+                    "{flag}: give 1 to 80 printable characters, got {v:?}"
+                ));
+            }
+            slot.clone_from(v);
+        }
+    }
+    Ok(Some(post))
+}
+
 /// Reads the plates (and speeds), nests, writes every file into the folder.
 pub fn execute(args: &Args) -> Result<nest::Nested> {
+    let post = post(args)?;
     let (plates, cores, stated) = read_plates(&args.input)?;
     let material = stated
         .clone()
@@ -112,6 +195,13 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
             || nest::Options::default().speeds_name,
             |p| p.display().to_string(),
         ),
+        kerf: args.kerf,
+        cut_order: match args.cut_order {
+            CutOrderArg::Travel => nest::CutOrder::Travel,
+            CutOrderArg::Spread => nest::CutOrder::Spread,
+        },
+        job: args.job.clone(),
+        date: args.date.clone(),
     };
     let out = nest::run(plates, cores, &opts, &Bar::new()).map_err(|e| match e {
         e @ (nest::Error::TooLarge { .. } | nest::Error::Plate { .. }) => {
@@ -133,6 +223,9 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
     std::fs::create_dir_all(&args.output)
         .with_context(|| format!("{}: cannot create folder", args.output.display()))?;
     nest::write_sheets(&out, &args.output)?;
+    if let Some(post) = &post {
+        nest::write_nc(&out, &args.output, post)?;
+    }
     // The assembly, from the sheets (not from micro-jointed ones: their outer contours are
     // open, and OpenSCAD's DXF import drops open paths).
     let scad_path = args.output.join("assembly.scad");

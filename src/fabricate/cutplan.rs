@@ -40,6 +40,28 @@ pub struct SpeedTable {
     pub laser: Vec<SpeedRow>,
     pub material: String,
     pub plasma: Vec<SpeedRow>,
+    /// Rapid traverse between contours; tables written before it take the typical figures.
+    #[serde(default)]
+    pub rapid_mm_per_min: Rapid,
+}
+
+/// Rapid traverse speeds, mm/min.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rapid {
+    pub laser: f64,
+    pub plasma: f64,
+}
+
+impl Default for Rapid {
+    /// Typical figures: 60 m/min for a fibre laser's gantry, 20 m/min for a plasma table
+    /// (acceleration left out).
+    fn default() -> Self {
+        Rapid {
+            laser: 60000.0,
+            plasma: 20000.0,
+        }
+    }
 }
 
 const fn row(thickness: f64, cut: f64, pierce: f64, etch: f64) -> SpeedRow {
@@ -84,6 +106,7 @@ impl SpeedTable {
                 row(10.0, 1500.0, 3.0, 10000.0),
                 row(12.0, 1100.0, 4.0, 10000.0),
             ],
+            rapid_mm_per_min: Rapid::default(),
             plasma: vec![
                 row(1.5, 7500.0, 0.2, 8000.0),
                 row(2.0, 7000.0, 0.3, 8000.0),
@@ -114,6 +137,7 @@ impl SpeedTable {
                 row(10.0, 900.0, 3.5, 10000.0),
                 row(12.0, 600.0, 5.0, 10000.0),
             ],
+            rapid_mm_per_min: Rapid::default(),
             plasma: vec![
                 row(1.5, 6500.0, 0.3, 8000.0),
                 row(2.0, 6000.0, 0.3, 8000.0),
@@ -141,6 +165,14 @@ impl SpeedTable {
         let text = utf8_text(path, read_nonempty(path)?)?;
         let table: SpeedTable = serde_json::from_str(&text)
             .map_err(|e| ReadError::line(path, e.line(), e.to_string()))?;
+        let rapid = table.rapid_mm_per_min;
+        if !(rapid.laser > 0.0 && rapid.laser <= 1e7 && rapid.plasma > 0.0 && rapid.plasma <= 1e7) {
+            return Err(ReadError::record(
+                path,
+                "rapid_mm_per_min",
+                "the rapid speeds must be positive, at most 1e7 mm/min",
+            ));
+        }
         for (machine, rows) in [("laser", &table.laser), ("plasma", &table.plasma)] {
             if rows.is_empty() {
                 return Err(ReadError::file(
@@ -175,24 +207,40 @@ impl SpeedTable {
     }
 }
 
-/// Machine time for one sheet, s: (laser, plasma).
+impl SpeedTable {
+    /// The row for thickness `t` (the next thicker one) of the laser or plasma table.
+    pub fn row(&self, laser: bool, t: f64) -> Result<&SpeedRow, SpeedError> {
+        let (rows, machine) = if laser {
+            (&self.laser, "laser")
+        } else {
+            (&self.plasma, "plasma")
+        };
+        rows.iter()
+            .find(|r| r.thickness >= t - 1e-9)
+            .ok_or(SpeedError::NoRow { machine, t })
+    }
+}
+
+/// Machine time for one sheet, s: (laser, plasma): cutting, pierces, marking and rapid travel.
 pub fn times(
     table: &SpeedTable,
     t: f64,
     cut_mm: f64,
     pierces: usize,
     etch_mm: f64,
+    rapid_mm: f64,
 ) -> Result<(f64, f64), SpeedError> {
-    let time = |rows: &[SpeedRow], machine: &'static str| {
-        let r = rows
-            .iter()
-            .find(|r| r.thickness >= t - 1e-9)
-            .ok_or(SpeedError::NoRow { machine, t })?;
+    let time = |laser: bool, rapid: f64| {
+        let r = table.row(laser, t)?;
         Ok(60.0 * cut_mm / r.cut_mm_per_min
             + pierces as f64 * r.pierce_s
-            + 60.0 * etch_mm / r.etch_mm_per_min)
+            + 60.0 * etch_mm / r.etch_mm_per_min
+            + 60.0 * rapid_mm / rapid)
     };
-    Ok((time(&table.laser, "laser")?, time(&table.plasma, "plasma")?))
+    Ok((
+        time(true, table.rapid_mm_per_min.laser)?,
+        time(false, table.rapid_mm_per_min.plasma)?,
+    ))
 }
 
 /// Grid cell for remnants, mm.
@@ -204,30 +252,9 @@ pub const MAX_REMNANTS: usize = 4;
 /// counter-clockwise), each `spacing` clear of every part and at least `min` in both
 /// directions (either way round), largest first.
 pub fn remnants(size: DVec2, parts: &[Vec<DVec2>], spacing: f64, min: DVec2) -> Vec<[DVec2; 2]> {
-    let nx = (size.x / REMNANT_CELL).floor() as usize;
-    let ny = (size.y / REMNANT_CELL).floor() as usize;
+    let (mut taken, nx, ny) = taken_cells(size, parts, spacing);
     if nx == 0 || ny == 0 {
         return Vec::new();
-    }
-    let mut taken = vec![false; nx * ny];
-    for p in parts {
-        let grown = crate::fabricate::nest::grown_hull(p, spacing);
-        let lo = grown.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
-        let hi = grown.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
-        let row0 = ((lo.y / REMNANT_CELL).floor().max(0.0) as usize).min(ny);
-        let row1 = ((hi.y / REMNANT_CELL).ceil().max(0.0) as usize).min(ny);
-        for r in row0..row1 {
-            // The hull's x-extent over the row's band.
-            let (y0, y1) = (r as f64 * REMNANT_CELL, (r + 1) as f64 * REMNANT_CELL);
-            let Some((x0, x1)) = band_extent(&grown, y0, y1) else {
-                continue;
-            };
-            let c0 = ((x0 / REMNANT_CELL).floor().max(0.0) as usize).min(nx);
-            let c1 = ((x1 / REMNANT_CELL).ceil().max(0.0) as usize).min(nx);
-            for c in c0..c1 {
-                taken[r * nx + c] = true;
-            }
-        }
     }
     let (short, long) = (min.min_element(), min.max_element());
     let mut out = Vec::new();
@@ -249,6 +276,93 @@ pub fn remnants(size: DVec2, parts: &[Vec<DVec2>], spacing: f64, min: DVec2) -> 
         out.push([lo, hi]);
     }
     out
+}
+
+/// The grid of `REMNANT_CELL` cells over a sheet, a cell taken when a part's hull grown by
+/// `spacing` touches it; with its columns and rows.
+fn taken_cells(size: DVec2, parts: &[Vec<DVec2>], spacing: f64) -> (Vec<bool>, usize, usize) {
+    let nx = (size.x / REMNANT_CELL).floor() as usize;
+    let ny = (size.y / REMNANT_CELL).floor() as usize;
+    let mut taken = vec![false; nx * ny];
+    for p in parts {
+        let grown = crate::fabricate::nest::grown_hull(p, spacing);
+        let lo = grown.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
+        let hi = grown.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
+        let row0 = ((lo.y / REMNANT_CELL).floor().max(0.0) as usize).min(ny);
+        let row1 = ((hi.y / REMNANT_CELL).ceil().max(0.0) as usize).min(ny);
+        for r in row0..row1 {
+            // The hull's x-extent over the row's band.
+            let (y0, y1) = (r as f64 * REMNANT_CELL, (r + 1) as f64 * REMNANT_CELL);
+            let Some((x0, x1)) = band_extent(&grown, y0, y1) else {
+                continue;
+            };
+            let c0 = ((x0 / REMNANT_CELL).floor().max(0.0) as usize).min(nx);
+            let c1 = ((x1 / REMNANT_CELL).ceil().max(0.0) as usize).min(nx);
+            for c in c0..c1 {
+                taken[r * nx + c] = true;
+            }
+        }
+    }
+    (taken, nx, ny)
+}
+
+/// Where a `want`-sized box (a label) fits on a sheet: `spacing` clear of every part, clear of
+/// the `avoid` rectangles, inside the `margin`; the lowest such place, then the leftmost, on the
+/// cell grid. Its lower-left corner, or None.
+pub fn free_box(
+    size: DVec2,
+    parts: &[Vec<DVec2>],
+    spacing: f64,
+    margin: f64,
+    avoid: &[[DVec2; 2]],
+    want: DVec2,
+) -> Option<DVec2> {
+    let (mut taken, nx, ny) = taken_cells(size, parts, spacing);
+    if nx == 0 || ny == 0 {
+        return None;
+    }
+    for [lo, hi] in avoid {
+        let c0 = ((lo.x / REMNANT_CELL).floor().max(0.0) as usize).min(nx);
+        let c1 = ((hi.x / REMNANT_CELL).ceil().max(0.0) as usize).min(nx);
+        let r0 = ((lo.y / REMNANT_CELL).floor().max(0.0) as usize).min(ny);
+        let r1 = ((hi.y / REMNANT_CELL).ceil().max(0.0) as usize).min(ny);
+        for r in r0..r1 {
+            for c in c0..c1 {
+                taken[r * nx + c] = true;
+            }
+        }
+    }
+    // Cells inside the margin, and a box's size in cells.
+    let first = (margin / REMNANT_CELL).ceil().max(0.0) as usize;
+    let last_x = ((size.x - margin) / REMNANT_CELL).floor().max(0.0) as usize;
+    let last_y = ((size.y - margin) / REMNANT_CELL).floor().max(0.0) as usize;
+    let w = (want.x / REMNANT_CELL).ceil() as usize;
+    let h = (want.y / REMNANT_CELL).ceil() as usize;
+    if w == 0 || h == 0 || first + w > last_x.min(nx) || first + h > last_y.min(ny) {
+        return None;
+    }
+    // Summed counts of taken cells.
+    let mut sum = vec![0u32; (nx + 1) * (ny + 1)];
+    for r in 0..ny {
+        for c in 0..nx {
+            sum[(r + 1) * (nx + 1) + c + 1] =
+                sum[r * (nx + 1) + c + 1] + sum[(r + 1) * (nx + 1) + c] - sum[r * (nx + 1) + c]
+                    + u32::from(taken[r * nx + c]);
+        }
+    }
+    let count = |c0: usize, r0: usize, c1: usize, r1: usize| {
+        sum[r1 * (nx + 1) + c1] + sum[r0 * (nx + 1) + c0]
+            - sum[r0 * (nx + 1) + c1]
+            - sum[r1 * (nx + 1) + c0]
+    };
+    for r in first..=last_y.min(ny) - h {
+        for c in first..=last_x.min(nx) - w {
+            if count(c, r, c + w, r + h) == 0 {
+                return Some(DVec2::new(c as f64, r as f64) * REMNANT_CELL);
+            }
+        }
+    }
+    None
 }
 
 /// The x-range of a convex polygon within the band y0 ≤ y ≤ y1, if it reaches the band.
@@ -340,9 +454,9 @@ mod tests {
     #[test]
     fn times_come_from_the_next_thicker_row() {
         let t = SpeedTable::default();
-        let (laser, plasma) = times(&t, 2.5, 8500.0, 10, 0.0).expect("rows");
+        let (laser, plasma) = times(&t, 2.5, 8500.0, 10, 0.0, 0.0).expect("rows");
         assert!((laser - (60.0 + 5.0)).abs() < 1e-9, "{laser}");
         assert!((plasma - (60.0 * 8500.0 / 5000.0 + 4.0)).abs() < 1e-9);
-        assert!(times(&t, 50.0, 1.0, 1, 0.0).is_err());
+        assert!(times(&t, 50.0, 1.0, 1, 0.0, 0.0).is_err());
     }
 }

@@ -14,8 +14,9 @@
 //! - SHEET, REMNANT: the stock outline and the free rectangles worth keeping; reference only,
 //!   not to be cut (the layers are also marked not to plot).
 //!
-//! File order per part is the order a cut should follow: etching first (while the part is held
-//! by the sheet), then the inner contours, then the outer contour. The header's clock and
+//! File order is the order a cut should follow: on a sheet, all etching first (while every part
+//! is held by the sheet), then part by part in cutting order its inner contours, then its outer
+//! contour; a single part's file has its etching, inner contours, outer contour. The header's clock and
 //! GUIDs are fixed (as for network DXFs) so the same parts give the same bytes.
 
 use std::path::Path;
@@ -199,6 +200,31 @@ pub fn write_cut_dxf(
     label: &str,
     path: &Path,
 ) -> Result<(), WriteError> {
+    write_dxf(None, parts, sheet, remnants, label, path)
+}
+
+/// A sheet as it is cut: `etch` (every etched polyline of the sheet, in marking order) first,
+/// then the parts in cutting order without their own etching, each part's inner contours
+/// before its outer one.
+pub fn write_sheet_dxf(
+    etch: &[Vec<DVec2>],
+    parts: &[&Drawn],
+    sheet: DVec2,
+    remnants: &[[DVec2; 2]],
+    label: &str,
+    path: &Path,
+) -> Result<(), WriteError> {
+    write_dxf(Some(etch), parts, Some(sheet), remnants, label, path)
+}
+
+fn write_dxf(
+    etch: Option<&[Vec<DVec2>]>,
+    parts: &[&Drawn],
+    sheet: Option<DVec2>,
+    remnants: &[[DVec2; 2]],
+    label: &str,
+    path: &Path,
+) -> Result<(), WriteError> {
     let mut drawing = fixed_drawing();
     for (name, colour, plotted) in [
         (CUT_OUTER, 1u8, true),
@@ -233,13 +259,21 @@ pub fn write_cut_dxf(
             REMNANT,
         ));
     }
+    let etch_line = |drawing: &mut dxf::Drawing, line: &[DVec2]| {
+        drawing.add_entity(lw_polyline_entity(
+            line.iter().map(|p| (p.x, p.y)),
+            false,
+            ETCH,
+        ));
+    };
+    for line in etch.unwrap_or_default() {
+        etch_line(&mut drawing, line);
+    }
     for part in parts {
-        for line in &part.etch {
-            drawing.add_entity(lw_polyline_entity(
-                line.iter().map(|p| (p.x, p.y)),
-                false,
-                ETCH,
-            ));
+        if etch.is_none() {
+            for line in &part.etch {
+                etch_line(&mut drawing, line);
+            }
         }
         let mut leads = part.leads.iter();
         // Leads come in pairs per contour (in, out): holes first, then the outline.

@@ -4,9 +4,11 @@
 
 pub mod archive;
 pub mod assembly;
+pub mod cutpath;
 pub mod cutplan;
 pub mod cutsheet;
 pub mod estimate;
+pub mod nc;
 pub mod nest;
 pub mod nest_file;
 pub mod plates_file;

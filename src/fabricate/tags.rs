@@ -1,4 +1,4 @@
-//! Tags etched on parts: our own single-stroke font (0-9, A-Z, '-') on a segment display's
+//! Tags etched on parts: our own single-stroke font (0-9, A-Z, '-', '.', '/') on a segment display's
 //! grid, and the largest tag that fits inside a convex outline away from its edges.
 //!
 //! A glyph lives in a cell 1 wide and 2 tall (y up) and is a set of straight strokes between
@@ -46,6 +46,8 @@ pub fn glyph(c: char) -> Option<&'static [Seg]> {
         '8' => &[T1, T2, UR, LR, B2, B1, LL, UL, M1, M2],
         '9' => &[M2, M1, UL, T1, T2, UR, LR, B2, B1],
         '-' => &[M1, M2],
+        '.' => &[((0.5, 0.0), (0.5, 0.25))],
+        '/' => &[((0.0, 0.0), (1.0, 2.0))],
         'A' => &[LL, UL, T1, T2, UR, LR, M1, M2],
         'B' => &[T1, T2, UR, M2, LR, B2, B1, UC, LC],
         'C' => &[T2, T1, UL, LL, B1, B2],

@@ -25,8 +25,11 @@ use serde::Serialize;
 
 use crate::analyze::material::is_stainless;
 use crate::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
-use crate::fabricate::cutplan::{remnants, times, SpeedError, SpeedTable};
-use crate::fabricate::cutsheet::{place_joints, write_cut_dxf, Drawn, Hole};
+pub use crate::fabricate::cutpath::CutOrder;
+use crate::fabricate::cutpath::{order_parts, plan_sheet, PartShape, SheetPlan};
+use crate::fabricate::cutplan::{free_box, remnants, times, SpeedError, SpeedTable};
+use crate::fabricate::cutsheet::{chain, place_joints, write_sheet_dxf, Drawn, Hole};
+use crate::fabricate::nc::{self, Heading, Machine, NcFormat, Post};
 use crate::fabricate::nest::{
     grown_hull, nest_families, BottomLeft, NestError, NestOptions, SLACK,
 };
@@ -35,6 +38,7 @@ pub use crate::fabricate::plates_file::MaterialRecord;
 use crate::fabricate::plates_file::{CoreRecord, PlateRecord};
 use crate::fabricate::preview::{sheets_svg, SheetView};
 use crate::fabricate::tags::part_marks;
+use crate::fabricate::tags::{strokes, text_width};
 use crate::files::WriteError;
 use crate::stage::{OptionError, Progress};
 
@@ -82,6 +86,17 @@ pub struct Options {
     pub speeds: Option<SpeedTable>,
     /// Where the speeds came from, for errors. Default "the built-in speed table".
     pub speeds_name: String,
+    /// Width of the cut, mm: NC paths run half of it outside outer contours and inside holes
+    /// (the DXFs keep the nominal contours). Less than the spacing. Default 0.
+    pub kerf: f64,
+    /// How parts follow one another on a sheet. Default [`CutOrder::Travel`].
+    pub cut_order: CutOrder,
+    /// The job's name, etched on each sheet's label. Default: none (the label has the sheet
+    /// number, grade and thickness).
+    pub job: Option<String>,
+    /// A date (or any short text) etched on each sheet's label. Default: none, so that the
+    /// same inputs give the same bytes.
+    pub date: Option<String>,
 }
 
 impl Default for Options {
@@ -106,6 +121,10 @@ impl Default for Options {
             material: MaterialRecord::unstated(),
             speeds: None,
             speeds_name: "the built-in speed table".into(),
+            kerf: 0.0,
+            cut_order: CutOrder::Travel,
+            job: None,
+            date: None,
         }
     }
 }
@@ -188,6 +207,10 @@ pub struct SheetInfo {
     pub joints: usize,
     /// Seconds: laser, plasma.
     pub time_s: (f64, f64),
+    /// Rapid travel, mm (from the origin through every contour, as the NC program runs).
+    pub rapid_mm: f64,
+    /// The label etched on the sheet, None when no free place was found for it.
+    pub label: Option<String>,
 }
 
 /// Micro-joints as asked for.
@@ -234,6 +257,12 @@ pub struct Nested {
     pub spacing: f64,
     /// The plates' steel.
     pub material: MaterialRecord,
+    /// Each sheet's cut path, in sheet order.
+    pub plans: Vec<SheetPlan>,
+    /// The speeds the times (and NC feeds) come from.
+    pub speeds: SpeedTable,
+    /// Width of the cut, mm.
+    pub kerf: f64,
 }
 
 impl SheetInfo {
@@ -356,6 +385,9 @@ pub enum Error {
     #[error(transparent)]
     /// The nester failed.
     Nest(NestError),
+    #[error(transparent)]
+    /// A file could not be written.
+    Write(#[from] WriteError),
     #[error("{table}: the time estimate for {sheet}: {source}")]
     /// The speed table has no row for a thickness.
     Speeds {
@@ -398,6 +430,29 @@ impl Options {
                         crate::text::num(l)
                     ),
                 ));
+            }
+        }
+        if !(self.kerf.is_finite() && self.kerf >= 0.0 && self.kerf < self.spacing) {
+            return Err(OptionError::new(
+                "kerf",
+                format!(
+                    "must be at least 0 and less than the spacing ({} mm), so that the cuts of neighbouring parts never meet; got {}",
+                    crate::text::num(self.spacing),
+                    crate::text::num(self.kerf)
+                ),
+            ));
+        }
+        for (name, text, most) in [("job", &self.job, 40), ("date", &self.date, 20)] {
+            if let Some(t) = text {
+                if t.trim().is_empty()
+                    || t.chars().count() > most
+                    || t.chars().any(char::is_control)
+                {
+                    return Err(OptionError::new(
+                        name,
+                        format!("must be 1 to {most} printable characters, got {t:?}"),
+                    ));
+                }
             }
         }
         super::positive("micro_joint_below", self.micro_joint_below, 1e6, "mm")?;
@@ -489,6 +544,8 @@ pub fn run(
                 lead_mm: 0.0,
                 joints: 0,
                 time_s: (0.0, 0.0),
+                rapid_mm: 0.0,
+                label: None,
             }
         })
         .collect();
@@ -496,20 +553,124 @@ pub fn run(
         sheets[place.sheet].parts.push(i);
         sheets[place.sheet].area += plates[i].area();
     }
-    let drawn: Vec<Drawn> = plates
-        .iter()
-        .zip(&places)
-        .map(|(p, place)| on_sheet(p, place, opts.lead_in, joints))
-        .collect();
-    // Remnants and machine time.
-    for sheet in &mut sheets {
-        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &drawn[i]).collect();
-        let hulls: Vec<Vec<DVec2>> = parts.iter().map(|d| d.outline.clone()).collect();
+    if opts.kerf > 0.0 {
+        if let Some(p) = plates
+            .iter()
+            .filter(|p| !p.holes.is_empty())
+            .min_by(|a, b| a.hole_diameter().total_cmp(&b.hole_diameter()))
+        {
+            if opts.kerf > KERF_IN_HOLE * p.hole_diameter() {
+                return Err(OptionError::new(
+                    "kerf",
+                    format!(
+                        "must be at most {} of the smallest hole's diameter ({} mm, plate {}), so that the cut runs inside the hole; got {}",
+                        KERF_IN_HOLE,
+                        crate::text::num(p.hole_diameter()),
+                        p.id,
+                        crate::text::num(opts.kerf)
+                    ),
+                )
+                .into());
+            }
+        }
+    }
+    // Per sheet: the cut order, each part's pierce corner and hole order, then the parts as
+    // drawn, the remnants and labels, and the program.
+    let mut drawn: Vec<Drawn> = vec![Drawn::default(); plates.len()];
+    let mut plans = Vec::with_capacity(sheets.len());
+    let count = sheets.len();
+    for (n, sheet) in sheets.iter_mut().enumerate() {
+        let placed: Vec<(Vec<DVec2>, Vec<DVec2>)> = sheet
+            .parts
+            .iter()
+            .map(|&i| {
+                let at = |q: &DVec2| places[i].apply(*q);
+                (
+                    plates[i].outline.iter().map(at).collect(),
+                    plates[i].holes.iter().map(at).collect(),
+                )
+            })
+            .collect();
+        let shapes: Vec<PartShape> = placed
+            .iter()
+            .map(|(o, h)| PartShape {
+                outline: o,
+                holes: h,
+            })
+            .collect();
+        let order = order_parts(&shapes, DVec2::ZERO, opts.cut_order);
+        for (k, &i) in sheet.parts.iter().enumerate() {
+            drawn[i] = on_sheet(
+                &plates[i],
+                &places[i],
+                order.pierce[k],
+                &order.holes[k],
+                opts.lead_in,
+                joints,
+            );
+        }
+        let proposed: Vec<usize> = order.parts.iter().map(|&k| sheet.parts[k]).collect();
+        let hulls: Vec<Vec<DVec2>> = proposed.iter().map(|&i| drawn[i].outline.clone()).collect();
         sheet.remnants = remnants(sheet.stock.size, &hulls, opts.spacing, opts.remnant_min);
+        // Labels: each remnant's in its lower-left corner, the sheet's in the lowest free place.
+        let mut etch: Vec<(Option<usize>, Vec<DVec2>)> = proposed
+            .iter()
+            .flat_map(|&i| drawn[i].etch.iter().map(move |l| (Some(i), l.clone())))
+            .collect();
+        let mut taken: Vec<[DVec2; 2]> = Vec::new();
+        let spec = |t: f64| format!("{} {}MM", opts.material.grade, thickness_name(t));
+        for [lo, hi] in &sheet.remnants {
+            let text = format!(
+                "REMNANT {}X{} {}",
+                thickness_name(hi.x - lo.x),
+                thickness_name(hi.y - lo.y),
+                spec(sheet.thickness)
+            );
+            let inset = DVec2::splat(opts.margin.max(LABEL_INSET));
+            let room = *hi - *lo - 2.0 * inset;
+            if let Some(h) = label_height(&text, room) {
+                let at = *lo + inset;
+                taken.push([at, at + label_size(&text, h)]);
+                etch.extend(chain(&strokes(&text, at, h)).into_iter().map(|l| (None, l)));
+            }
+        }
+        let mut text = format!("SHEET {}/{count} {}", n + 1, spec(sheet.thickness));
+        if let Some(j) = &opts.job {
+            text = format!("{j} {text}");
+        }
+        if let Some(d) = &opts.date {
+            text = format!("{text} {d}");
+        }
+        let text = text.to_uppercase();
+        sheet.label = LABEL_HEIGHTS.iter().find_map(|&h| {
+            let at = free_box(
+                sheet.stock.size,
+                &hulls,
+                opts.spacing,
+                opts.margin,
+                &taken,
+                label_size(&text, h),
+            )?;
+            etch.extend(chain(&strokes(&text, at, h)).into_iter().map(|l| (None, l)));
+            Some(text.clone())
+        });
+        let parts: Vec<(usize, &Drawn)> = proposed.iter().map(|&i| (i, &drawn[i])).collect();
+        let plan = plan_sheet(&parts, &etch, 0.5 * opts.kerf, opts.cut_order);
+        sheet.parts.clone_from(&plan.parts);
+        sheet.rapid_mm = plan.rapid_mm;
+        plans.push(plan);
+    }
+    // Machine time.
+    for (sheet, plan) in sheets.iter_mut().zip(&plans) {
+        let parts: Vec<&Drawn> = sheet.parts.iter().map(|&i| &drawn[i]).collect();
         sheet.cut_mm = parts.iter().map(|d| d.cut_length()).sum();
         sheet.pierces = parts.iter().map(|d| d.pierces()).sum();
         sheet.joints = parts.iter().map(|d| d.joints.len()).sum();
-        sheet.etch_mm = parts.iter().map(|d| d.etch_length()).sum();
+        sheet.etch_mm = plan
+            .etch
+            .iter()
+            .map(|l| l.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>())
+            .sum();
         sheet.lead_mm = parts
             .iter()
             .flat_map(|d| d.leads.iter())
@@ -521,6 +682,7 @@ pub fn run(
             sheet.cut_mm + sheet.lead_mm,
             sheet.pierces,
             sheet.etch_mm,
+            sheet.rapid_mm,
         )
         .map_err(|source| Error::Speeds {
             table: opts.speeds_name.clone(),
@@ -538,37 +700,57 @@ pub fn run(
         doc: NestDoc::default(),
         spacing: opts.spacing,
         material: opts.material.clone(),
+        plans,
+        speeds: speeds.clone(),
+        kerf: opts.kerf,
     };
-    out.doc = nest_doc(&out, &nest_opts, &speeds);
+    out.doc = nest_doc(&out, &nest_opts, opts);
     Ok(out)
 }
 
-/// A plate as cut on its sheet: the outline counter-clockwise from its pierce point (the middle
-/// of its longest side), holes, marks upright on the sheet, and leads and micro-joints when
-/// asked for.
-fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>, joints: Option<Joints>) -> Drawn {
+/// Kerf at most this fraction of the smallest hole's diameter.
+pub const KERF_IN_HOLE: f64 = 0.2;
+/// Label character heights tried, largest first, mm.
+const LABEL_HEIGHTS: [f64; 3] = [10.0, 6.0, 4.0];
+/// A remnant's label lies at least this far inside it, mm.
+const LABEL_INSET: f64 = 5.0;
+
+/// A label's box at character height `h`.
+fn label_size(text: &str, h: f64) -> DVec2 {
+    DVec2::new(text_width(text.chars().count()) * 0.5 * h, h)
+}
+
+/// The largest label height that fits `room`.
+fn label_height(text: &str, room: DVec2) -> Option<f64> {
+    LABEL_HEIGHTS.iter().copied().find(|&h| {
+        let s = label_size(text, h);
+        s.x <= room.x && s.y <= room.y
+    })
+}
+
+/// A plate as cut on its sheet: the outline counter-clockwise from its pierce point (outline
+/// vertex `pierce`, a corner), holes in the order given, marks upright on the sheet, and leads
+/// and micro-joints when asked for. The outline's lead-in runs along its first side's line into
+/// the corner from the scrap, the lead-out along its last side's line out of it.
+fn on_sheet(
+    p: &PlateRecord,
+    place: &Place,
+    pierce: usize,
+    hole_order: &[usize],
+    lead: Option<f64>,
+    joints: Option<Joints>,
+) -> Drawn {
     let mut outline: Vec<DVec2> = p.outline.iter().map(|q| place.apply(*q)).collect();
     let n = outline.len();
-    let longest = (0..n)
-        .max_by(|&a, &b| {
-            let la = outline[a].distance(outline[(a + 1) % n]);
-            let lb = outline[b].distance(outline[(b + 1) % n]);
-            la.total_cmp(&lb).then(b.cmp(&a))
-        })
-        .expect("an outline has points");
-    let (a, b) = (outline[longest], outline[(longest + 1) % n]);
-    let pierce = 0.5 * (a + b);
-    outline.rotate_left((longest + 1) % n);
-    outline.insert(0, pierce);
-    let r = 0.5 * p.hole_diameter();
-    let holes: Vec<Hole> = p
-        .holes
+    outline.rotate_left(pierce % n);
+    let holes: Vec<Hole> = hole_order
         .iter()
-        .map(|c| Hole {
-            centre: place.apply(*c),
+        .map(|&k| Hole {
+            centre: place.apply(p.holes[k]),
             diameter: p.hole_diameter(),
         })
         .collect();
+    let r = 0.5 * p.hole_diameter();
     let keep: Vec<(DVec2, f64)> = p.holes.iter().map(|c| (*c, r)).collect();
     let nodes = [p.ends[0].0, p.ends[1].0];
     let marks = part_marks(&p.id, &p.outline, &keep, nodes, &|q| place.apply(q));
@@ -582,11 +764,12 @@ fn on_sheet(p: &PlateRecord, place: &Place, lead: Option<f64>, joints: Option<Jo
             leads.push([start - DVec2::X * len, start]);
             leads.push([start, start - DVec2::new(len, len).normalize() * len]);
         }
-        // The outline: square in from the scrap, out at 45° ahead.
-        let along = (b - a).normalize();
-        let out = DVec2::new(along.y, -along.x);
-        leads.push([pierce + out * l, pierce]);
-        leads.push([pierce, pierce + (out + along).normalize() * l]);
+        // The outline: along its first side into the corner, along its last side out.
+        let corner = outline[0];
+        let first = (outline[1] - corner).normalize();
+        let last = (corner - outline[n - 1]).normalize();
+        leads.push([corner - first * l, corner]);
+        leads.push([corner, corner + last * l]);
     }
     let joints = match joints {
         Some(j) if j.applies(&p.outline) => place_joints(&outline, j.per_part, j.width, j.clear()),
@@ -647,12 +830,18 @@ fn size(p: &[DVec2]) -> DVec2 {
 /// and overall, and every plate's placement. Fields in the file's order.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct NestDoc {
+    /// How parts follow one another on a sheet: `travel` or `spread`.
+    pub cut_order: &'static str,
     /// What the figures mean.
     pub definitions: BTreeMap<&'static str, &'static str>,
     /// Sheets by thickness.
     pub families: Vec<Family>,
     /// The file format's name.
     pub format: &'static str,
+    /// The job's name on the sheet labels.
+    pub job: Option<String>,
+    /// Width of the cut, mm: NC paths are offset by half of it; the DXFs are nominal.
+    pub kerf_mm: f64,
     /// Kept clear along every sheet edge, mm.
     pub margin: f64,
     /// The plates' steel.
@@ -769,14 +958,18 @@ pub struct SheetDoc {
     pub file: String,
     /// Assembly group (from 1).
     pub group: Option<u32>,
+    /// The label etched on it.
+    pub label: Option<String>,
     /// Micro-joints.
     pub micro_joints: usize,
     /// Area of the parts, mm².
     pub part_area_mm2: f64,
-    /// The plates on it, by tag.
+    /// The plates on it, by tag, in cutting order.
     pub parts: Vec<String>,
     /// Pierces: one per contour, one after each micro-joint.
     pub pierces: usize,
+    /// Rapid travel, mm.
+    pub rapid_mm: f64,
     /// Free rectangles [lower-left, upper-right] left for later jobs.
     pub remnants: Vec<[[f64; 2]; 2]>,
     /// Size, mm.
@@ -802,6 +995,8 @@ pub struct Total {
     pub part_area_mm2: f64,
     /// Pierces: one per contour, one after each micro-joint.
     pub pierces: usize,
+    /// Rapid travel, mm.
+    pub rapid_mm: f64,
     /// Sheets.
     pub sheets: usize,
     /// Machine time, s.
@@ -810,7 +1005,7 @@ pub struct Total {
     pub utilisation: f64,
 }
 
-fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
+fn nest_doc(out: &Nested, opts: &NestOptions, asked: &Options) -> NestDoc {
     // Per thickness, thinnest first (positive thicknesses order as their bits do).
     let mut families = out.by_thickness();
     families.sort_by_key(|t| t.thickness.to_bits());
@@ -823,6 +1018,7 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
         [lo.x, lo.y]
     };
     NestDoc {
+        cut_order: asked.cut_order.name(),
         definitions: [
             ("bbox_min", "lower-left corner of the part's bounding box on the sheet"),
             ("cut_mm", "outer and inner contours less micro-joints (and lead lines when asked for)"),
@@ -830,7 +1026,8 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
             ("offset", "sheet point = R(rotation_deg) · plate point + offset, the plate point in the plate's own frame (plates.json)"),
             ("pierces", "one per contour, and one after each micro-joint"),
             ("remnants", "free rectangles [lower-left, upper-right] at least remnant_min, the spacing clear of every part"),
-            ("time_s", "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed (speed_table)"),
+            ("rapid_mm", "rapid travel of the NC program: from the sheet's origin to the first path, then from the end of each path (etching first, then each part's holes and outer contour, with leads, offset by half the kerf) to the start of the next; the return home is not counted"),
+            ("time_s", "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed, rapid travel over the rapid speed (speed_table)"),
         ]
         .into_iter()
         .collect(),
@@ -845,6 +1042,8 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
             })
             .collect(),
         format: "lamina-nest",
+        job: asked.job.clone(),
+        kerf_mm: asked.kerf,
         margin: opts.margin,
         material: out.material.clone(),
         micro_joints: out.joints.map(|j| JointsDoc {
@@ -894,10 +1093,12 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
                 etch_mm: s.etch_mm,
                 file: s.file.clone(),
                 group: s.group,
+                label: s.label.clone(),
                 micro_joints: s.joints,
                 part_area_mm2: s.area,
                 parts: s.parts.iter().map(|&i| out.plates[i].id.clone()).collect(),
                 pierces: s.pierces,
+                rapid_mm: s.rapid_mm,
                 remnants: s
                     .remnants
                     .iter()
@@ -913,13 +1114,14 @@ fn nest_doc(out: &Nested, opts: &NestOptions, speeds: &SpeedTable) -> NestDoc {
             })
             .collect(),
         spacing: opts.spacing,
-        speed_table: speeds.clone(),
+        speed_table: out.speeds.clone(),
         total: Total {
             cost: out.sheets.iter().map(|s| s.stock.cost).sum(),
             cut_mm: out.sheets.iter().map(|s| s.cut_mm + s.lead_mm).sum(),
             etch_mm: out.sheets.iter().map(|s| s.etch_mm).sum(),
             part_area_mm2: out.sheets.iter().map(|s| s.area).sum(),
             pierces: out.sheets.iter().map(|s| s.pierces).sum(),
+            rapid_mm: out.sheets.iter().map(|s| s.rapid_mm).sum(),
             sheets: out.sheets.len(),
             time_s: Seconds {
                 laser: out.sheets.iter().map(|s| s.time_s.0).sum(),
@@ -1068,15 +1270,73 @@ pub fn write_sheets(out: &Nested, dir: &Path) -> Result<(), WriteError> {
             sheet.stock.size.y,
             sheet.parts.len()
         );
-        write_cut_dxf(
+        let label = if out.kerf > 0.0 {
+            format!(
+                "{label}; nominal contours: the NC programs offset them by half the {} mm kerf",
+                out.kerf
+            )
+        } else {
+            label
+        };
+        write_sheet_dxf(
+            &out.plans[n].etch,
             &parts,
-            Some(sheet.stock.size),
+            sheet.stock.size,
             &sheet.remnants,
             &label,
             &dir.join(&sheet.file),
         )?;
     }
     Ok(())
+}
+
+/// NC programs for every sheet, `sheet-NN-Tmm.ngc` (G-code) or `.esi` (ESSI) beside its DXF,
+/// by the post-processor given; returns the files' names.
+pub fn write_nc(out: &Nested, dir: &Path, post: &Post) -> Result<Vec<String>, Error> {
+    let count = out.sheets.len();
+    let mut files = Vec::with_capacity(count);
+    for (n, (sheet, plan)) in out.sheets.iter().zip(&out.plans).enumerate() {
+        let heading = Heading {
+            lines: vec![
+                format!(
+                    "lamina nest: {}, sheet {} of {count}, {} x {} mm",
+                    sheet.file,
+                    n + 1,
+                    sheet.stock.size.x,
+                    sheet.stock.size.y
+                ),
+                format!(
+                    "{} {} mm, {} parts, cut order {}",
+                    out.material.grade,
+                    thickness_name(sheet.thickness),
+                    sheet.parts.len(),
+                    out.doc.cut_order
+                ),
+                format!("kerf {} mm", out.kerf),
+            ],
+        };
+        let name = sheet.file.trim_end_matches(".dxf").to_string() + "." + post.format.extension();
+        let text = match post.format {
+            NcFormat::Gcode => {
+                let row = out
+                    .speeds
+                    .row(post.machine == Machine::Laser, sheet.thickness)
+                    .map_err(|source| Error::Speeds {
+                        table: "the speed table".into(),
+                        sheet: sheet.file.clone(),
+                        source,
+                    })?;
+                nc::gcode(plan, post, row, &heading)
+            }
+            NcFormat::Essi => nc::essi(plan, post, &heading),
+        };
+        crate::files::write_atomic(&dir.join(&name), |w| {
+            std::io::Write::write_all(w, text.as_bytes())
+        })
+        .map_err(Error::Write)?;
+        files.push(name);
+    }
+    Ok(files)
 }
 
 /// assembly.scad: every part cut out of its sheet's DXF by a clip polygon around it, placed

@@ -350,6 +350,18 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
         vec!["--micro-joints", "2", "--micro-joint-width", "0"],
         vec!["--micro-joint-below", "-5"],
         vec!["--micro-joint-below", "1e300"],
+        vec!["--kerf", "5"],
+        vec!["--kerf", "7", "--spacing", "5"],
+        vec!["--kerf", "NaN"],
+        vec!["--kerf", "-0.1"],
+        vec!["--nc", "gcode", "--post", "fanuc"],
+        vec!["--nc", "essi", "--post", "linuxcnc"],
+        vec!["--post", "linuxcnc"],
+        vec!["--nc", "gcode", "--nc-on", ""],
+        vec!["--nc", "lasercut"],
+        vec!["--cut-order", "random"],
+        vec!["--job", ""],
+        vec!["--date", "a date far too long for a label"],
     ] {
         let mut args = vec!["nest", s(&file), "-o", s(&out)];
         args.extend_from_slice(&bad);
@@ -361,6 +373,61 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
     let o = lamina(&["nest", s(&axes), "-o", s(&out)]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not lamina-plates"), "{}", stderr(&o));
+    Ok(())
+}
+
+#[test]
+fn nc_programs_cut_what_the_sheets_draw_in_a_shorter_order() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (plates_dir, _) = plates_of(dir.path(), &axes, &["--groups", "7"])?;
+    let file = plates_dir.join("plates.json");
+    let args = [
+        "--tries",
+        "1",
+        "--lead-in",
+        "2",
+        "--kerf",
+        "0.4",
+        "--job",
+        "T1",
+    ];
+    let mut gcode = args.to_vec();
+    gcode.extend(["--nc", "gcode", "--nc-on", "M3 S77"]);
+    let (cut, travel) = nest_of(dir.path(), &file, "gcode", &gcode)?;
+    let mut spread_args = args.to_vec();
+    spread_args.extend(["--cut-order", "spread", "--nc", "essi"]);
+    let (spread_dir, spread) = nest_of(dir.path(), &file, "essi", &spread_args)?;
+    let sheets = travel["sheets"].as_array().ok_or("sheets")?;
+    for (k, sheet) in sheets.iter().enumerate() {
+        let name = sheet["file"].as_str().ok_or("file")?.replace(".dxf", "");
+        let text = std::fs::read_to_string(cut.join(format!("{name}.ngc")))?;
+        // Every contour pierced once with the torch line asked for, after all the marking.
+        let pierces = sheet["pierces"].as_u64().ok_or("pierces")? as usize;
+        assert_eq!(text.lines().filter(|l| *l == "M3 S77").count(), pierces);
+        let lines: Vec<&str> = text.lines().collect();
+        let last_mark = lines.iter().rposition(|l| *l == "M7").ok_or("marking")?;
+        let first_cut = lines.iter().position(|l| *l == "M3 S77").ok_or("cutting")?;
+        assert!(last_mark < first_cut, "{name}: marking after cutting began");
+        assert!(text.contains("(contours offset 0.200 mm for the kerf"));
+        let label = sheet["label"].as_str().ok_or("label")?;
+        assert!(
+            label.starts_with(&format!("T1 SHEET {}/{}", k + 1, sheets.len())),
+            "{label}"
+        );
+        assert!(spread_dir.join(format!("{name}.esi")).exists());
+    }
+    // Spreading the heat costs travel.
+    let rapid = |d: &serde_json::Value| d["total"]["rapid_mm"].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        rapid(&spread) > 1.5 * rapid(&travel),
+        "{} vs {}",
+        rapid(&spread),
+        rapid(&travel)
+    );
+    // The DXFs stay nominal and say so.
+    let dxf = std::fs::read_to_string(cut.join(sheets[0]["file"].as_str().ok_or("file")?))?;
+    assert!(dxf.contains("nominal contours: the NC programs offset them by half the 0.4 mm kerf"));
     Ok(())
 }
 

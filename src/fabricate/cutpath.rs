@@ -1,0 +1,976 @@
+//! The cut path of a sheet: in which order the machine marks and cuts, where each contour is
+//! pierced, and the tool path it follows with the beam on (contours offset by half the kerf),
+//! with the rapid travel between.
+//!
+//! Order: all etching first (tags, sheet and remnant labels, while every part is still held by
+//! the sheet), then part by part, each part's holes before its outer contour. With
+//! [`CutOrder::Travel`] the parts follow a nearest-neighbour tour improved by 2-opt and Or-opt
+//! moves on the exact rapid travel (each part entered at its first contour's start and left at
+//! its outer contour's end), and each part is pierced at the corner that shortens the travel
+//! between its neighbours; the result is never longer than the plain nearest-neighbour tour
+//! over the same contours, which is kept when it is not beaten. With [`CutOrder::Spread`]
+//! successive parts lie far apart, to spread the heat on thin sheet. Etching is ordered the
+//! same way per part (or label), stroke by stroke, each stroke cut in whichever direction is
+//! shorter to reach.
+//!
+//! Kerf: the tool path runs `kerf / 2` to the right of each contour's direction, outside the
+//! counter-clockwise outer contours and inside the clockwise holes: edges shifted along their
+//! normal, joined by an arc about the corner where the path turns left (the part's corner stays
+//! sharp and the offset is exact, as a disc rolled round the corner) and at the lines' meeting
+//! point where it turns right. Leads are moved with their contour's start. Etching is not
+//! offset.
+//!
+//! Rapid travel runs from the sheet's origin to the first path and from the end of each path to
+//! the start of the next; the machine's return home is not counted.
+
+use glam::DVec2;
+
+use crate::fabricate::cutsheet::Drawn;
+
+/// A move with the beam on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Seg {
+    /// A straight move to the point.
+    Line(DVec2),
+    /// An arc to `to` about `centre`, counter-clockwise when `ccw`.
+    Arc { to: DVec2, centre: DVec2, ccw: bool },
+}
+
+impl Seg {
+    /// Where the move ends.
+    pub fn end(&self) -> DVec2 {
+        match *self {
+            Seg::Line(p) => p,
+            Seg::Arc { to, .. } => to,
+        }
+    }
+
+    /// Length of the move from `from`, mm.
+    pub fn length(&self, from: DVec2) -> f64 {
+        match *self {
+            Seg::Line(p) => from.distance(p),
+            Seg::Arc { to, centre, ccw } => {
+                let (a, b) = (from - centre, to - centre);
+                let mut sweep = a.perp_dot(b).atan2(a.dot(b));
+                if ccw && sweep < 0.0 {
+                    sweep += std::f64::consts::TAU;
+                } else if !ccw && sweep > 0.0 {
+                    sweep -= std::f64::consts::TAU;
+                }
+                sweep.abs() * a.length()
+            }
+        }
+    }
+}
+
+/// What a tool path does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op {
+    /// Marking: tags and labels.
+    Etch,
+    /// A hole.
+    Inner,
+    /// A part's outer contour, or one piece of it between micro-joints.
+    Outer,
+}
+
+/// One run with the beam on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ToolPath {
+    pub op: Op,
+    /// The plate (index into the nest's plates), None for sheet and remnant labels.
+    pub part: Option<usize>,
+    /// Where the beam comes on.
+    pub start: DVec2,
+    pub segs: Vec<Seg>,
+}
+
+impl ToolPath {
+    /// Where the beam goes off.
+    pub fn end(&self) -> DVec2 {
+        self.segs.last().map_or(self.start, Seg::end)
+    }
+
+    /// Length with the beam on, mm.
+    pub fn length(&self) -> f64 {
+        let mut at = self.start;
+        let mut sum = 0.0;
+        for s in &self.segs {
+            sum += s.length(at);
+            at = s.end();
+        }
+        sum
+    }
+}
+
+/// How parts follow one another.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CutOrder {
+    /// Short rapid travel. The default.
+    #[default]
+    Travel,
+    /// Successive parts far apart, to spread the heat.
+    Spread,
+}
+
+impl CutOrder {
+    /// As nest.json and the command line write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CutOrder::Travel => "travel",
+            CutOrder::Spread => "spread",
+        }
+    }
+}
+
+/// A part as the ordering sees it: its outline on the sheet (counter-clockwise) and its hole
+/// centres.
+#[derive(Clone, Copy, Debug)]
+pub struct PartShape<'a> {
+    pub outline: &'a [DVec2],
+    pub holes: &'a [DVec2],
+}
+
+/// A proposed cut order for one sheet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Order {
+    /// Parts (indices into the shapes given) in cutting order.
+    pub parts: Vec<usize>,
+    /// Per part (by index): the outline vertex to pierce at.
+    pub pierce: Vec<usize>,
+    /// Per part (by index): its holes in cutting order.
+    pub holes: Vec<Vec<usize>>,
+}
+
+/// Corners worth piercing at: vertices where the outline turns left by at least 15°; all
+/// left turns where there are none such, every vertex where there is no left turn.
+fn corners(outline: &[DVec2]) -> Vec<usize> {
+    let n = outline.len();
+    let turn = |k: usize| {
+        let a = outline[k] - outline[(k + n - 1) % n];
+        let b = outline[(k + 1) % n] - outline[k];
+        let s = a.length() * b.length();
+        if s > 0.0 {
+            a.perp_dot(b) / s
+        } else {
+            0.0
+        }
+    };
+    let sharp: Vec<usize> = (0..n)
+        .filter(|&k| turn(k) >= 15f64.to_radians().sin())
+        .collect();
+    if !sharp.is_empty() {
+        return sharp;
+    }
+    let left: Vec<usize> = (0..n).filter(|&k| turn(k) > 0.0).collect();
+    if !left.is_empty() {
+        return left;
+    }
+    (0..n).collect()
+}
+
+fn centroid(points: &[DVec2]) -> DVec2 {
+    points.iter().copied().sum::<DVec2>() / points.len().max(1) as f64
+}
+
+/// Proposes the order of a sheet's parts, each part's pierce corner and the order of its
+/// holes, starting from `from` (where the etching ended). The final order is set by
+/// [`plan_sheet`] on the exact tool paths.
+pub fn order_parts(parts: &[PartShape], from: DVec2, order: CutOrder) -> Order {
+    let n = parts.len();
+    let corner_sets: Vec<Vec<usize>> = parts.iter().map(|p| corners(p.outline)).collect();
+    let reps: Vec<DVec2> = parts.iter().map(|p| centroid(p.outline)).collect();
+    let tour = match order {
+        CutOrder::Spread => spread(&reps, from),
+        CutOrder::Travel => {
+            let mut t = nearest_tour(from, &reps, &reps);
+            two_opt(from, &reps, &reps, &mut t);
+            t
+        }
+    };
+    let mut pierce: Vec<usize> = corner_sets.iter().map(|c| c[0]).collect();
+    let mut holes: Vec<Vec<usize>> = parts.iter().map(|p| (0..p.holes.len()).collect()).collect();
+    let mut tour = tour;
+    // Pierce corners and hole orders for the neighbours the tour gives, then the tour again
+    // for those pierce points.
+    for round in 0..3 {
+        let mut at = from;
+        for (k, &i) in tour.iter().enumerate() {
+            let p = &parts[i];
+            holes[i] = hole_tour(at, p.holes);
+            let last = holes[i].last().map_or(at, |&h| p.holes[h]);
+            let next = tour.get(k + 1).map(|&j| {
+                let q = &parts[j];
+                nearest_hole(q.holes, p.outline[pierce[i]]).unwrap_or(q.outline[pierce[j]])
+            });
+            pierce[i] = *corner_sets[i]
+                .iter()
+                .min_by(|&&a, &&b| {
+                    let cost = |v: usize| {
+                        let v = p.outline[v];
+                        last.distance(v) + next.map_or(0.0, |q| v.distance(q))
+                    };
+                    cost(a).total_cmp(&cost(b)).then(a.cmp(&b))
+                })
+                .expect("an outline has a vertex");
+            at = p.outline[pierce[i]];
+        }
+        if order == CutOrder::Spread || round == 2 {
+            break;
+        }
+        let entry: Vec<DVec2> = (0..n)
+            .map(|i| {
+                holes[i]
+                    .first()
+                    .map_or(parts[i].outline[pierce[i]], |&h| parts[i].holes[h])
+            })
+            .collect();
+        let exit: Vec<DVec2> = (0..n).map(|i| parts[i].outline[pierce[i]]).collect();
+        two_opt(from, &entry, &exit, &mut tour);
+        or_opt(from, &entry, &exit, &mut tour);
+    }
+    Order {
+        parts: tour,
+        pierce,
+        holes,
+    }
+}
+
+fn nearest_hole(holes: &[DVec2], from: DVec2) -> Option<DVec2> {
+    holes.iter().copied().min_by(|a, b| {
+        a.distance_squared(from)
+            .total_cmp(&b.distance_squared(from))
+    })
+}
+
+/// Holes by nearest neighbour from `from`.
+fn hole_tour(from: DVec2, holes: &[DVec2]) -> Vec<usize> {
+    nearest_tour(from, holes, holes)
+}
+
+/// Successive parts far apart: the next part is the nearest of those at least a quarter of
+/// the layout's diagonal away, or the farthest when none is.
+fn spread(reps: &[DVec2], from: DVec2) -> Vec<usize> {
+    let lo = reps.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
+    let hi = reps.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
+    let far = 0.25 * (hi - lo).length();
+    let mut left: Vec<usize> = (0..reps.len()).collect();
+    let mut tour = Vec::with_capacity(reps.len());
+    let mut at = from;
+    let mut first = true;
+    while !left.is_empty() {
+        let d = |i: usize| reps[i].distance(at);
+        let pick = if first {
+            (0..left.len()).min_by(|&a, &b| d(left[a]).total_cmp(&d(left[b])))
+        } else {
+            (0..left.len())
+                .filter(|&k| d(left[k]) >= far)
+                .min_by(|&a, &b| d(left[a]).total_cmp(&d(left[b])))
+                .or_else(|| (0..left.len()).max_by(|&a, &b| d(left[a]).total_cmp(&d(left[b]))))
+        }
+        .expect("parts are left");
+        first = false;
+        let i = left.remove(pick);
+        at = reps[i];
+        tour.push(i);
+    }
+    tour
+}
+
+/// Nearest-neighbour tour from `from` over items entered at `entry` and left at `exit`; ties
+/// go to the lower index.
+pub fn nearest_tour(from: DVec2, entry: &[DVec2], exit: &[DVec2]) -> Vec<usize> {
+    let n = entry.len();
+    let mut used = vec![false; n];
+    let mut tour = Vec::with_capacity(n);
+    let mut at = from;
+    for _ in 0..n {
+        let mut best: Option<(f64, usize)> = None;
+        for (i, e) in entry.iter().enumerate() {
+            if used[i] {
+                continue;
+            }
+            let d = at.distance_squared(*e);
+            if best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, i));
+            }
+        }
+        let (_, i) = best.expect("an item is left");
+        used[i] = true;
+        at = exit[i];
+        tour.push(i);
+    }
+    tour
+}
+
+/// Rapid travel of a tour, mm.
+pub fn tour_travel(from: DVec2, entry: &[DVec2], exit: &[DVec2], tour: &[usize]) -> f64 {
+    let mut at = from;
+    let mut sum = 0.0;
+    for &i in tour {
+        sum += at.distance(entry[i]);
+        at = exit[i];
+    }
+    sum
+}
+
+/// Most improving passes of 2-opt and Or-opt.
+const PASSES: usize = 100;
+/// An improvement smaller than this is none, mm.
+const GAIN: f64 = 1e-9;
+
+/// 2-opt on an open tour from `from` with fixed entry and exit points per item: a stretch of
+/// the tour is visited backwards (each item still entered at its entry), kept when it shortens
+/// the travel.
+pub fn two_opt(from: DVec2, entry: &[DVec2], exit: &[DVec2], tour: &mut [usize]) {
+    let n = tour.len();
+    if n < 2 {
+        return;
+    }
+    let d = |a: DVec2, b: DVec2| a.distance(b);
+    for _ in 0..PASSES {
+        // Forward and backward sums of the links inside the tour.
+        let mut fwd = vec![0.0; n];
+        let mut bwd = vec![0.0; n];
+        for k in 1..n {
+            fwd[k] = fwd[k - 1] + d(exit[tour[k - 1]], entry[tour[k]]);
+            bwd[k] = bwd[k - 1] + d(exit[tour[k]], entry[tour[k - 1]]);
+        }
+        let mut best: Option<(f64, usize, usize)> = None;
+        for i in 0..n - 1 {
+            let prev = if i == 0 { from } else { exit[tour[i - 1]] };
+            for j in i + 1..n {
+                let (ti, tj) = (tour[i], tour[j]);
+                let mut old = d(prev, entry[ti]) + fwd[j] - fwd[i];
+                let mut new = d(prev, entry[tj]) + bwd[j] - bwd[i];
+                if j + 1 < n {
+                    let next = entry[tour[j + 1]];
+                    old += d(exit[tj], next);
+                    new += d(exit[ti], next);
+                }
+                let gain = old - new;
+                if gain > GAIN && best.is_none_or(|(g, _, _)| gain > g) {
+                    best = Some((gain, i, j));
+                }
+            }
+        }
+        match best {
+            Some((_, i, j)) => tour[i..=j].reverse(),
+            None => return,
+        }
+    }
+}
+
+/// Or-opt on an open tour: a run of one to three items moved elsewhere in the same direction,
+/// kept when it shortens the travel.
+pub fn or_opt(from: DVec2, entry: &[DVec2], exit: &[DVec2], tour: &mut Vec<usize>) {
+    let n = tour.len();
+    if n < 3 {
+        return;
+    }
+    let d = |a: DVec2, b: DVec2| a.distance(b);
+    for _ in 0..PASSES {
+        let before = tour_travel(from, entry, exit, tour);
+        let mut improved = false;
+        'moves: for len in 1..=3.min(n - 1) {
+            for i in 0..=n - len {
+                // The run tour[i..i+len], taken out.
+                let prev = if i == 0 { from } else { exit[tour[i - 1]] };
+                let first = entry[tour[i]];
+                let last = exit[tour[i + len - 1]];
+                let next = tour.get(i + len).map(|&t| entry[t]);
+                let out_gain = d(prev, first) + next.map_or(0.0, |q| d(last, q))
+                    - next.map_or(0.0, |q| d(prev, q));
+                for j in 0..=n {
+                    // Insert before position j of the original tour (outside the run).
+                    if j >= i && j <= i + len {
+                        continue;
+                    }
+                    let a = if j == 0 { from } else { exit[tour[j - 1]] };
+                    let b = tour.get(j).map(|&t| entry[t]);
+                    let in_cost =
+                        d(a, first) + b.map_or(0.0, |q| d(last, q)) - b.map_or(0.0, |q| d(a, q));
+                    if out_gain - in_cost > GAIN {
+                        let run: Vec<usize> = tour.drain(i..i + len).collect();
+                        let at = if j > i { j - len } else { j };
+                        tour.splice(at..at, run);
+                        improved = true;
+                        break 'moves;
+                    }
+                }
+            }
+        }
+        if !improved {
+            return;
+        }
+        debug_assert!(tour_travel(from, entry, exit, tour) < before);
+    }
+}
+
+/// A contour offset by `r` to the right of its direction: edges shifted along their right
+/// normal, an arc about the vertex where the path turns left, the shifted lines' meeting point
+/// where it turns right. Returns the start and the moves; `closed` runs back to the start.
+pub fn offset_right(points: &[DVec2], closed: bool, r: f64) -> (DVec2, Vec<Seg>) {
+    let mut p: Vec<DVec2> = Vec::with_capacity(points.len());
+    for q in points {
+        if p.last() != Some(q) {
+            p.push(*q);
+        }
+    }
+    if closed && p.len() > 1 && p.first() == p.last() {
+        p.pop();
+    }
+    let n = p.len();
+    if n < 2 {
+        return (p.first().copied().unwrap_or(DVec2::ZERO), Vec::new());
+    }
+    let edges = if closed { n } else { n - 1 };
+    let normal: Vec<DVec2> = (0..edges)
+        .map(|k| {
+            let d = (p[(k + 1) % n] - p[k]).normalize();
+            DVec2::new(d.y, -d.x)
+        })
+        .collect();
+    // At vertex v between edges a (in) and b (out): where the incoming line ends, and the arc
+    // (if any) to where the outgoing one starts.
+    let corner = |v: usize, a: usize, b: usize| -> (DVec2, Option<Seg>) {
+        let (na, nb) = (normal[a], normal[b]);
+        let turn = DVec2::new(-na.y, na.x).perp_dot(DVec2::new(-nb.y, nb.x));
+        if r == 0.0 || turn.abs() < 1e-12 {
+            return (p[v] + nb * r, None);
+        }
+        if turn > 0.0 {
+            (
+                p[v] + na * r,
+                Some(Seg::Arc {
+                    to: p[v] + nb * r,
+                    centre: p[v],
+                    ccw: true,
+                }),
+            )
+        } else {
+            (p[v] + (na + nb) * (r / (1.0 + na.dot(nb))), None)
+        }
+    };
+    let mut segs = Vec::with_capacity(2 * n);
+    if closed {
+        let (meet0, arc0) = corner(0, n - 1, 0);
+        let start = arc0.map_or(meet0, |s| s.end());
+        for v in (1..n).chain([0]) {
+            let (meet, arc) = corner(v, (v + n - 1) % n, v % n);
+            segs.push(Seg::Line(meet));
+            segs.extend(arc);
+        }
+        (start, segs)
+    } else {
+        let start = p[0] + normal[0] * r;
+        for v in 1..n - 1 {
+            let (meet, arc) = corner(v, v - 1, v);
+            segs.push(Seg::Line(meet));
+            segs.extend(arc);
+        }
+        segs.push(Seg::Line(p[n - 1] + normal[n - 2] * r));
+        (start, segs)
+    }
+}
+
+/// A sheet's program: every tool path in order, and the rapid travel between them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SheetPlan {
+    pub paths: Vec<ToolPath>,
+    /// Plates (indices) in cutting order.
+    pub parts: Vec<usize>,
+    /// The etched polylines in order and direction (as the DXF draws them).
+    pub etch: Vec<Vec<DVec2>>,
+    /// Rapid travel from the origin through every path, mm.
+    pub rapid_mm: f64,
+    /// Rapid moves (one before each path).
+    pub rapids: usize,
+    /// Half the kerf the contours are offset by, mm.
+    pub offset: f64,
+}
+
+impl SheetPlan {
+    /// The rapid travel of the paths in their order, from the origin, mm.
+    pub fn travel(paths: &[ToolPath]) -> f64 {
+        let mut at = DVec2::ZERO;
+        let mut sum = 0.0;
+        for p in paths {
+            sum += at.distance(p.start);
+            at = p.end();
+        }
+        sum
+    }
+}
+
+/// The tool paths of one part as it is cut: holes in their drawn order, then the outer contour
+/// (or its pieces between micro-joints), offset by `r`, with the leads moved along.
+pub fn part_paths(index: usize, d: &Drawn, r: f64) -> Vec<ToolPath> {
+    let mut out = Vec::with_capacity(d.holes.len() + 1);
+    let lead = |k: usize| d.leads.get(k).copied();
+    for (k, h) in d.holes.iter().enumerate() {
+        let mut ring = crate::rationalize::plates::hole_polygon(h.centre, h.diameter);
+        ring[1..].reverse();
+        let (start, segs) = offset_right(&ring, true, r);
+        out.push(with_leads(
+            Op::Inner,
+            index,
+            ring[0],
+            start,
+            segs,
+            lead(2 * k),
+            lead(2 * k + 1),
+        ));
+    }
+    let base = 2 * d.holes.len();
+    let pieces = d.outer_pieces();
+    let closed = d.joints.is_empty();
+    let count = pieces.len();
+    for (k, piece) in pieces.iter().enumerate() {
+        let (start, segs) = offset_right(piece, closed, r);
+        let lead_in = if k == 0 { lead(base) } else { None };
+        let lead_out = if k + 1 == count { lead(base + 1) } else { None };
+        out.push(with_leads(
+            Op::Outer,
+            index,
+            piece[0],
+            start,
+            segs,
+            lead_in,
+            lead_out,
+        ));
+    }
+    out
+}
+
+/// A contour's path with its leads: the lead-in moved so that it ends where the offset contour
+/// starts, the lead-out leaving from where it ends in the drawn lead's direction.
+fn with_leads(
+    op: Op,
+    index: usize,
+    pierce: DVec2,
+    start: DVec2,
+    mut segs: Vec<Seg>,
+    lead_in: Option<[DVec2; 2]>,
+    lead_out: Option<[DVec2; 2]>,
+) -> ToolPath {
+    let end = segs.last().map_or(start, Seg::end);
+    let mut path = ToolPath {
+        op,
+        part: Some(index),
+        start,
+        segs: Vec::new(),
+    };
+    if let Some([a, b]) = lead_in {
+        let shift = start - pierce;
+        debug_assert!(b.distance(pierce) < 1e-9);
+        path.start = a + shift;
+        path.segs.push(Seg::Line(b + shift));
+    }
+    path.segs.append(&mut segs);
+    if let Some([a, b]) = lead_out {
+        path.segs.push(Seg::Line(end + (b - a)));
+    }
+    path
+}
+
+/// Neighbours each endpoint keeps for the etching's 2-opt.
+const NEIGHBOURS: usize = 10;
+
+/// A uniform grid over points, for nearest-neighbour queries.
+struct Grid {
+    lo: DVec2,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<usize>>,
+}
+
+impl Grid {
+    fn new(points: &[DVec2]) -> Grid {
+        let lo = points.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
+        let hi = points.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
+        let size = (hi - lo).max(DVec2::splat(1e-9));
+        // About two points a cell.
+        let cell = (size.x * size.y / (0.5 * points.len().max(1) as f64))
+            .sqrt()
+            .max(size.max_element() / 4096.0)
+            .max(1e-9);
+        let nx = ((size.x / cell) as usize + 1).min(4096);
+        let ny = ((size.y / cell) as usize + 1).min(4096);
+        let mut g = Grid {
+            lo,
+            cell,
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        };
+        for (i, p) in points.iter().enumerate() {
+            let k = g.key(*p);
+            g.cells[k].push(i);
+        }
+        g
+    }
+
+    fn coords(&self, p: DVec2) -> (usize, usize) {
+        let c = ((p - self.lo) / self.cell).max(DVec2::ZERO);
+        (
+            (c.x as usize).min(self.nx - 1),
+            (c.y as usize).min(self.ny - 1),
+        )
+    }
+
+    fn key(&self, p: DVec2) -> usize {
+        let (x, y) = self.coords(p);
+        y * self.nx + x
+    }
+
+    /// The `k` nearest points to `p` that `keep` accepts, nearest first (ties to the lower
+    /// index): rings of cells outwards until the ring is farther than the k-th found.
+    fn nearest(
+        &self,
+        points: &[DVec2],
+        p: DVec2,
+        k: usize,
+        keep: impl Fn(usize) -> bool,
+    ) -> Vec<usize> {
+        let (cx, cy) = self.coords(p);
+        let mut found: Vec<(f64, usize)> = Vec::new();
+        let rings = self.nx.max(self.ny);
+        for ring in 0..=rings {
+            // Points in cells at Chebyshev distance `ring` lie at least (ring − 1) cells away.
+            if found.len() >= k {
+                let far = found[k - 1].0;
+                let reach = (ring as f64 - 1.0).max(0.0) * self.cell;
+                if reach * reach > far {
+                    break;
+                }
+            }
+            let (x0, x1) = (cx.saturating_sub(ring), (cx + ring).min(self.nx - 1));
+            let (y0, y1) = (cy.saturating_sub(ring), (cy + ring).min(self.ny - 1));
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let edge = x + ring == cx || x == cx + ring || y + ring == cy || y == cy + ring;
+                    if !edge {
+                        continue;
+                    }
+                    for &i in &self.cells[y * self.nx + x] {
+                        if keep(i) {
+                            found.push((points[i].distance_squared(p), i));
+                        }
+                    }
+                }
+            }
+            found.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            found.truncate(k);
+            if ring >= self.nx && ring >= self.ny {
+                break;
+            }
+        }
+        found.into_iter().map(|(_, i)| i).collect()
+    }
+}
+
+/// Etched polylines as tool paths in marking order from `from`: a nearest-neighbour tour
+/// (each polyline entered at whichever end is nearer), then 2-opt moves over the ten nearest
+/// endpoints of each link's end (a stretch of the tour marked backwards, each polyline in it
+/// turned round), while one shortens the travel. Each polyline keeps its part (None for a
+/// label).
+pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<ToolPath> {
+    let live: Vec<usize> = (0..lines.len())
+        .filter(|&i| lines[i].1.len() >= 2)
+        .collect();
+    let n = live.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    // Endpoint 2i is polyline i's first point, 2i + 1 its last.
+    let ends: Vec<DVec2> = live
+        .iter()
+        .flat_map(|&i| {
+            let l = &lines[i].1;
+            [l[0], l[l.len() - 1]]
+        })
+        .collect();
+    let grid = Grid::new(&ends);
+    // Nearest neighbour: the tour as (polyline, turned round).
+    let mut tour: Vec<(usize, bool)> = Vec::with_capacity(n);
+    {
+        let mut left: Vec<bool> = vec![true; n];
+        let mut cells = grid.cells.clone();
+        let mut at = from;
+        for _ in 0..n {
+            let (cx, cy) = grid.coords(at);
+            let mut best: Option<(f64, usize)> = None;
+            for ring in 0..=grid.nx.max(grid.ny) {
+                if let Some((d, _)) = best {
+                    let reach = (ring as f64 - 1.0).max(0.0) * grid.cell;
+                    if reach * reach > d {
+                        break;
+                    }
+                }
+                let (x0, x1) = (cx.saturating_sub(ring), (cx + ring).min(grid.nx - 1));
+                let (y0, y1) = (cy.saturating_sub(ring), (cy + ring).min(grid.ny - 1));
+                for y in y0..=y1 {
+                    for x in x0..=x1 {
+                        let edge =
+                            x + ring == cx || x == cx + ring || y + ring == cy || y == cy + ring;
+                        if !edge {
+                            continue;
+                        }
+                        for &e in &cells[y * grid.nx + x] {
+                            let d = ends[e].distance_squared(at);
+                            if best.is_none_or(|(b, i)| d < b || (d == b && e < i)) {
+                                best = Some((d, e));
+                            }
+                        }
+                    }
+                }
+            }
+            let (_, e) = best.expect("an endpoint is left");
+            let item = e / 2;
+            left[item] = false;
+            for q in [2 * item, 2 * item + 1] {
+                let k = grid.key(ends[q]);
+                cells[k].retain(|&x| x != q);
+            }
+            let turned = e % 2 == 1;
+            at = ends[2 * item + usize::from(!turned)];
+            tour.push((item, turned));
+        }
+    }
+    // 2-opt over neighbour lists.
+    let near: Vec<Vec<usize>> = (0..2 * n)
+        .map(|e| grid.nearest(&ends, ends[e], NEIGHBOURS, |q| q / 2 != e / 2))
+        .collect();
+    let near_from = grid.nearest(&ends, from, NEIGHBOURS, |_| true);
+    let start = |t: &(usize, bool)| 2 * t.0 + usize::from(t.1);
+    let end = |t: &(usize, bool)| 2 * t.0 + usize::from(!t.1);
+    let mut pos = vec![0usize; n];
+    for (k, t) in tour.iter().enumerate() {
+        pos[t.0] = k;
+    }
+    let d = |a: DVec2, b: DVec2| a.distance(b);
+    for _ in 0..PASSES {
+        let mut improved = false;
+        for i in 0..n {
+            // The link into position i, from `x` (the origin or the end before it); new
+            // links from x to the end of a later polyline j.
+            let x = if i == 0 {
+                from
+            } else {
+                ends[end(&tour[i - 1])]
+            };
+            let cands = if i == 0 {
+                &near_from
+            } else {
+                &near[end(&tour[i - 1])]
+            };
+            let mut best: Option<(f64, usize)> = None;
+            for &q in cands {
+                let j = pos[q / 2];
+                if j < i || q != end(&tour[j]) {
+                    continue;
+                }
+                let si = ends[start(&tour[i])];
+                let ej = ends[q];
+                let mut gain = d(x, si) - d(x, ej);
+                if j + 1 < n {
+                    let sn = ends[start(&tour[j + 1])];
+                    gain += d(ej, sn) - d(si, sn);
+                }
+                if gain > GAIN && best.is_none_or(|(g, _)| gain > g) {
+                    best = Some((gain, j));
+                }
+            }
+            // New links from the start of a later polyline j + 1 back to the start of i.
+            for &q in &near[start(&tour[i])] {
+                let m = pos[q / 2];
+                if m <= i || q != start(&tour[m]) {
+                    continue;
+                }
+                let j = m - 1;
+                let si = ends[start(&tour[i])];
+                let ej = ends[end(&tour[j])];
+                let sn = ends[q];
+                let gain = d(x, si) + d(ej, sn) - d(x, ej) - d(si, sn);
+                if gain > GAIN && best.is_none_or(|(g, _)| gain > g) {
+                    best = Some((gain, j));
+                }
+            }
+            if let Some((_, j)) = best {
+                tour[i..=j].reverse();
+                for k in i..=j {
+                    tour[k].1 = !tour[k].1;
+                    pos[tour[k].0] = k;
+                }
+                improved = true;
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    tour.iter()
+        .map(|&(item, turned)| {
+            let (part, l) = &lines[live[item]];
+            let mut pts = l.clone();
+            if turned {
+                pts.reverse();
+            }
+            ToolPath {
+                op: Op::Etch,
+                part: *part,
+                start: pts[0],
+                segs: pts[1..].iter().map(|&q| Seg::Line(q)).collect(),
+            }
+        })
+        .collect()
+}
+
+/// The program of one sheet: the etching of `etch` (as [`order_etch`] takes it), then
+/// the parts (plate index and drawing, in the proposed order) with their contours offset by
+/// `r`. In [`CutOrder::Travel`] the parts are reordered on their exact entry and exit points
+/// (2-opt and Or-opt from the proposed order and from a plain nearest-neighbour tour, the
+/// shorter kept); in [`CutOrder::Spread`] the proposed order stands.
+pub fn plan_sheet(
+    parts: &[(usize, &Drawn)],
+    etch: &[(Option<usize>, Vec<DVec2>)],
+    r: f64,
+    order: CutOrder,
+) -> SheetPlan {
+    let mut paths = order_etch(etch, DVec2::ZERO);
+    let etched: Vec<Vec<DVec2>> = paths
+        .iter()
+        .map(|p| {
+            std::iter::once(p.start)
+                .chain(p.segs.iter().map(Seg::end))
+                .collect()
+        })
+        .collect();
+    let from = paths.last().map_or(DVec2::ZERO, ToolPath::end);
+    let groups: Vec<Vec<ToolPath>> = parts.iter().map(|(i, d)| part_paths(*i, d, r)).collect();
+    let entry: Vec<DVec2> = groups.iter().map(|g| g[0].start).collect();
+    let exit: Vec<DVec2> = groups.iter().map(|g| g[g.len() - 1].end()).collect();
+    let mut tour: Vec<usize> = (0..groups.len()).collect();
+    if order == CutOrder::Travel {
+        let mut nn = nearest_tour(from, &entry, &exit);
+        for t in [&mut tour, &mut nn] {
+            two_opt(from, &entry, &exit, t);
+            or_opt(from, &entry, &exit, t);
+        }
+        if tour_travel(from, &entry, &exit, &nn) < tour_travel(from, &entry, &exit, &tour) {
+            tour = nn;
+        }
+    }
+    let part_order: Vec<usize> = tour.iter().map(|&k| parts[k].0).collect();
+    let mut groups: Vec<Option<Vec<ToolPath>>> = groups.into_iter().map(Some).collect();
+    for &k in &tour {
+        paths.extend(groups[k].take().expect("each part once"));
+    }
+    let rapid_mm = SheetPlan::travel(&paths);
+    SheetPlan {
+        rapids: paths.len(),
+        paths,
+        parts: part_order,
+        etch: etched,
+        rapid_mm,
+        offset: r,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(at: DVec2, s: f64) -> Vec<DVec2> {
+        vec![
+            at,
+            at + DVec2::new(s, 0.0),
+            at + DVec2::new(s, s),
+            at + DVec2::new(0.0, s),
+        ]
+    }
+
+    #[test]
+    fn a_square_offset_outwards_keeps_its_corners_as_arcs() {
+        let (start, segs) = offset_right(&square(DVec2::ZERO, 10.0), true, 0.5);
+        assert_eq!(start, DVec2::new(0.0, -0.5));
+        // Four lines and four quarter arcs, back to the start.
+        assert_eq!(segs.len(), 8);
+        assert_eq!(segs.last().map(Seg::end), Some(start));
+        let path = ToolPath {
+            op: Op::Outer,
+            part: None,
+            start,
+            segs,
+        };
+        let expected = 40.0 + std::f64::consts::TAU * 0.5;
+        assert!((path.length() - expected).abs() < 1e-9, "{}", path.length());
+    }
+
+    #[test]
+    fn a_clockwise_ring_offset_inwards_meets_at_its_corners() {
+        let mut ring = square(DVec2::ZERO, 10.0);
+        ring[1..].reverse();
+        let (start, segs) = offset_right(&ring, true, 1.0);
+        assert_eq!(start, DVec2::new(1.0, 1.0));
+        assert_eq!(segs.len(), 4);
+        for s in &segs {
+            assert!(matches!(s, Seg::Line(_)));
+            let p = s.end();
+            assert!((p.x - 1.0).abs() < 1e-12 || (p.x - 9.0).abs() < 1e-12);
+            assert!((p.y - 1.0).abs() < 1e-12 || (p.y - 9.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_travel_tour_is_never_longer_than_nearest_neighbour() {
+        // A scattered field of points: 2-opt and Or-opt from the nearest-neighbour tour.
+        let mut pts = Vec::new();
+        let mut s = 7u64;
+        for _ in 0..120 {
+            s = crate::geom::mix64(s);
+            let x = (s % 3000) as f64;
+            s = crate::geom::mix64(s);
+            let y = (s % 1500) as f64;
+            pts.push(DVec2::new(x, y));
+        }
+        let nn = nearest_tour(DVec2::ZERO, &pts, &pts);
+        let mut t = nn.clone();
+        two_opt(DVec2::ZERO, &pts, &pts, &mut t);
+        or_opt(DVec2::ZERO, &pts, &pts, &mut t);
+        let (a, b) = (
+            tour_travel(DVec2::ZERO, &pts, &pts, &nn),
+            tour_travel(DVec2::ZERO, &pts, &pts, &t),
+        );
+        assert!(
+            b < 0.95 * a,
+            "2-opt {b:.0} mm against nearest neighbour {a:.0} mm"
+        );
+        let mut sorted = t.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..pts.len()).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn parts_are_pierced_at_a_corner_towards_their_neighbours() {
+        let a = square(DVec2::new(0.0, 0.0), 100.0);
+        let b = square(DVec2::new(200.0, 0.0), 100.0);
+        let shapes = [
+            PartShape {
+                outline: &a,
+                holes: &[],
+            },
+            PartShape {
+                outline: &b,
+                holes: &[],
+            },
+        ];
+        let o = order_parts(&shapes, DVec2::new(0.0, -50.0), CutOrder::Travel);
+        assert_eq!(o.parts, vec![0, 1]);
+        // The first part is pierced (and left) at its corner facing the second, which is
+        // pierced at its corner nearest to that.
+        assert_eq!(o.pierce, vec![1, 0]);
+    }
+}
