@@ -304,6 +304,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "cut_order",
             "job",
             "date",
+            "time",
         ],
         "solid" => &[
             "cell",
@@ -903,6 +904,7 @@ pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {
         },
         job: o.string("job")?,
         date: o.string("date")?,
+        time: o.f64("time")?.unwrap_or(d.time),
     })
 }
 

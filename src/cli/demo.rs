@@ -491,6 +491,7 @@ fn steel(out: &Path) -> Result<(Entry, Headline)> {
         post: None,
         nc_on: None,
         nc_off: None,
+        time: 2.0,
         output: dir.join("cut"),
         json: false,
     })?;

@@ -85,6 +85,11 @@ pub struct Args {
     /// stainless or carbon steel]
     #[arg(long)]
     pub speeds: Option<PathBuf>,
+    /// Work spent making the sheets denser after the fill (overlap minimisation: more parts
+    /// onto each sheet but the last), in seconds of a 2-core reference machine; counted as
+    /// work, so the same inputs give the same sheets on any machine
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    pub time: f64,
     /// Width of the cut, mm: the NC programs run half of it outside outer contours and inside
     /// holes (the DXFs keep the nominal contours and say so); less than the spacing
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -196,6 +201,7 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
             |p| p.display().to_string(),
         ),
         kerf: args.kerf,
+        time: args.time,
         cut_order: match args.cut_order {
             CutOrderArg::Travel => nest::CutOrder::Travel,
             CutOrderArg::Spread => nest::CutOrder::Spread,

@@ -676,7 +676,11 @@ impl Grid {
 /// endpoints of each link's end (a stretch of the tour marked backwards, each polyline in it
 /// turned round), while one shortens the travel. Each polyline keeps its part (None for a
 /// label).
-pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<ToolPath> {
+pub fn order_etch(
+    lines: &[(Option<usize>, Vec<DVec2>)],
+    from: DVec2,
+    improve: bool,
+) -> Vec<ToolPath> {
     let live: Vec<usize> = (0..lines.len())
         .filter(|&i| lines[i].1.len() >= 2)
         .collect();
@@ -720,7 +724,10 @@ pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<Too
                         }
                         for &e in &cells[y * grid.nx + x] {
                             let d = ends[e].distance_squared(at);
-                            if best.is_none_or(|(b, i)| d < b || (d == b && e < i)) {
+                            // Ties: a polyline's first point before any last point, then
+                            // the earlier polyline.
+                            let tie = |i: usize| (e % 2, e / 2) < (i % 2, i / 2);
+                            if best.is_none_or(|(b, i)| d < b || (d == b && tie(i))) {
                                 best = Some((d, e));
                             }
                         }
@@ -740,10 +747,15 @@ pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<Too
         }
     }
     // 2-opt over neighbour lists.
-    let near: Vec<Vec<usize>> = (0..2 * n)
+    let passes = if improve { PASSES } else { 0 };
+    let near: Vec<Vec<usize>> = (0..if improve { 2 * n } else { 0 })
         .map(|e| grid.nearest(&ends, ends[e], NEIGHBOURS, |q| q / 2 != e / 2))
         .collect();
-    let near_from = grid.nearest(&ends, from, NEIGHBOURS, |_| true);
+    let near_from = if improve {
+        grid.nearest(&ends, from, NEIGHBOURS, |_| true)
+    } else {
+        Vec::new()
+    };
     let start = |t: &(usize, bool)| 2 * t.0 + usize::from(t.1);
     let end = |t: &(usize, bool)| 2 * t.0 + usize::from(!t.1);
     let mut pos = vec![0usize; n];
@@ -751,7 +763,7 @@ pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<Too
         pos[t.0] = k;
     }
     let d = |a: DVec2, b: DVec2| a.distance(b);
-    for _ in 0..PASSES {
+    for _ in 0..passes {
         let mut improved = false;
         for i in 0..n {
             // The link into position i, from `x` (the origin or the end before it); new
@@ -807,6 +819,56 @@ pub fn order_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<Too
                 improved = true;
             }
         }
+        // Or-opt: one polyline moved (either way round) next to a near endpoint elsewhere.
+        for p in 0..n {
+            let t = tour[p];
+            let (sp, ep) = (ends[start(&t)], ends[end(&t)]);
+            let prev = if p == 0 {
+                from
+            } else {
+                ends[end(&tour[p - 1])]
+            };
+            let next = tour.get(p + 1).map(|u| ends[start(u)]);
+            let out_gain =
+                d(prev, sp) + next.map_or(0.0, |q| d(ep, q)) - next.map_or(0.0, |q| d(prev, q));
+            if out_gain <= GAIN {
+                continue;
+            }
+            // (gain, insert before this position of the tour without p, turned).
+            let mut best: Option<(f64, usize, bool)> = None;
+            for &q in near[2 * t.0].iter().chain(&near[2 * t.0 + 1]) {
+                let m = pos[q / 2];
+                // Where p would go: after m when q is m's end, before it when its start.
+                let after = q == end(&tour[m]);
+                let slot = if after { m + 1 } else { m };
+                // Neighbours of the slot once p is out.
+                let a_pos = (0..slot).rev().find(|&k| k != p);
+                let b_pos = (slot..n).find(|&k| k != p);
+                let a = a_pos.map_or(from, |k| ends[end(&tour[k])]);
+                let b = b_pos.map(|k| ends[start(&tour[k])]);
+                for turned in [false, true] {
+                    let (s2, e2) = if turned { (ep, sp) } else { (sp, ep) };
+                    let cost = d(a, s2) + b.map_or(0.0, |q| d(e2, q)) - b.map_or(0.0, |q| d(a, q));
+                    let gain = out_gain - cost;
+                    if gain > GAIN && best.is_none_or(|(g, _, _)| gain > g) {
+                        let at = if slot > p { slot - 1 } else { slot };
+                        best = Some((gain, at, turned));
+                    }
+                }
+            }
+            if let Some((_, at, turned)) = best {
+                let mut moved = tour.remove(p);
+                if turned {
+                    moved.1 = !moved.1;
+                }
+                tour.insert(at, moved);
+                let (lo, hi) = (p.min(at), p.max(at));
+                for k in lo..=hi {
+                    pos[tour[k].0] = k;
+                }
+                improved = true;
+            }
+        }
         if !improved {
             break;
         }
@@ -839,17 +901,68 @@ pub fn plan_sheet(
     r: f64,
     order: CutOrder,
 ) -> SheetPlan {
-    let mut paths = order_etch(etch, DVec2::ZERO);
+    let groups: Vec<Vec<ToolPath>> = parts.iter().map(|(i, d)| part_paths(*i, d, r)).collect();
+    // Two plans: the etching improved, and a plain nearest-neighbour tour over the improved
+    // order's polylines (whose end may suit the parts better); the shorter is kept. A
+    // nearest-neighbour tour over the polylines as drawn (ties to the first) then the parts is
+    // never shorter than the plan kept.
+    let improved = best_etch(etch, DVec2::ZERO);
+    let as_drawn: Vec<(Option<usize>, Vec<DVec2>)> =
+        improved.iter().map(|p| (p.part, points(p))).collect();
+    let plans = [improved, order_etch(&as_drawn, DVec2::ZERO, false)].map(|etch_paths| {
+        let from = etch_paths.last().map_or(DVec2::ZERO, ToolPath::end);
+        let tour = part_tour(&groups, from, order);
+        let mut paths = etch_paths;
+        paths.extend(tour.iter().flat_map(|&k| groups[k].iter().cloned()));
+        (SheetPlan::travel(&paths), paths, tour)
+    });
+    let [a, b] = plans;
+    let (rapid_mm, paths, tour) = if b.0 < a.0 { b } else { a };
     let etched: Vec<Vec<DVec2>> = paths
         .iter()
-        .map(|p| {
-            std::iter::once(p.start)
-                .chain(p.segs.iter().map(Seg::end))
-                .collect()
-        })
+        .filter(|p| p.op == Op::Etch)
+        .map(points)
         .collect();
-    let from = paths.last().map_or(DVec2::ZERO, ToolPath::end);
-    let groups: Vec<Vec<ToolPath>> = parts.iter().map(|(i, d)| part_paths(*i, d, r)).collect();
+    SheetPlan {
+        rapids: paths.len(),
+        paths,
+        parts: tour.iter().map(|&k| parts[k].0).collect(),
+        etch: etched,
+        rapid_mm,
+        offset: r,
+    }
+}
+
+/// A path's points: its start and each move's end.
+fn points(p: &ToolPath) -> Vec<DVec2> {
+    std::iter::once(p.start)
+        .chain(p.segs.iter().map(Seg::end))
+        .collect()
+}
+
+/// The etching improved ([`order_etch`]), then again from a nearest-neighbour tour over the
+/// result's polylines in their order and direction, while that shortens it (ties in a
+/// nearest-neighbour tour go by order, and the strokes of a tag share their end points, so each
+/// round starts from a different tour).
+fn best_etch(lines: &[(Option<usize>, Vec<DVec2>)], from: DVec2) -> Vec<ToolPath> {
+    let mut best = order_etch(lines, from, true);
+    for _ in 0..4 {
+        let again: Vec<(Option<usize>, Vec<DVec2>)> =
+            best.iter().map(|p| (p.part, points(p))).collect();
+        let next = order_etch(&again, from, true);
+        if SheetPlan::travel(&next) < SheetPlan::travel(&best) - GAIN {
+            best = next;
+        } else {
+            break;
+        }
+    }
+    best
+}
+
+/// The order of the parts' groups of paths from `from`: as given in [`CutOrder::Spread`]; in
+/// [`CutOrder::Travel`] the shorter of 2-opt and Or-opt from the order given and from a plain
+/// nearest-neighbour tour, on each group's exact entry and exit points.
+fn part_tour(groups: &[Vec<ToolPath>], from: DVec2, order: CutOrder) -> Vec<usize> {
     let entry: Vec<DVec2> = groups.iter().map(|g| g[0].start).collect();
     let exit: Vec<DVec2> = groups.iter().map(|g| g[g.len() - 1].end()).collect();
     let mut tour: Vec<usize> = (0..groups.len()).collect();
@@ -863,20 +976,7 @@ pub fn plan_sheet(
             tour = nn;
         }
     }
-    let part_order: Vec<usize> = tour.iter().map(|&k| parts[k].0).collect();
-    let mut groups: Vec<Option<Vec<ToolPath>>> = groups.into_iter().map(Some).collect();
-    for &k in &tour {
-        paths.extend(groups[k].take().expect("each part once"));
-    }
-    let rapid_mm = SheetPlan::travel(&paths);
-    SheetPlan {
-        rapids: paths.len(),
-        paths,
-        parts: part_order,
-        etch: etched,
-        rapid_mm,
-        offset: r,
-    }
+    tour
 }
 
 #[cfg(test)]
@@ -951,6 +1051,54 @@ mod tests {
         let mut sorted = t.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..pts.len()).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn the_etching_starts_as_a_plain_nearest_neighbour_tour() {
+        // Strokes scattered over a sheet, some sharing end points.
+        let mut s = 11u64;
+        let mut r = || {
+            s = crate::geom::mix64(s);
+            (s % 100_000) as f64 / 100.0
+        };
+        let lines: Vec<(Option<usize>, Vec<DVec2>)> = (0..400)
+            .map(|_| {
+                let a = DVec2::new(r(), 0.5 * r());
+                (None, vec![a, a + DVec2::new(r() * 0.01, r() * 0.01)])
+            })
+            .collect();
+        // Brute force: from wherever the last ended to the nearest end left.
+        let mut left: Vec<bool> = vec![true; lines.len()];
+        let mut at = DVec2::ZERO;
+        let mut brute = 0.0;
+        for _ in 0..lines.len() {
+            let mut best = (f64::INFINITY, 0, false);
+            for (i, (_, l)) in lines.iter().enumerate() {
+                if !left[i] {
+                    continue;
+                }
+                for (rev, e) in [(false, l[0]), (true, l[1])] {
+                    let d = at.distance(e);
+                    if d < best.0 {
+                        best = (d, i, rev);
+                    }
+                }
+            }
+            brute += best.0;
+            left[best.1] = false;
+            at = if best.2 {
+                lines[best.1].1[0]
+            } else {
+                lines[best.1].1[1]
+            };
+        }
+        let nn = SheetPlan::travel(&order_etch(&lines, DVec2::ZERO, false));
+        assert!(
+            (nn - brute).abs() < 1e-6,
+            "grid {nn} against brute force {brute}"
+        );
+        let better = SheetPlan::travel(&order_etch(&lines, DVec2::ZERO, true));
+        assert!(better < 0.95 * brute, "{better} against {brute}");
     }
 
     #[test]

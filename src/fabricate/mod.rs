@@ -13,6 +13,7 @@ pub mod nest;
 pub mod nest_file;
 pub mod plates_file;
 pub mod preview;
+pub mod separate;
 pub mod sl1;
 pub mod slice;
 pub mod solid;

@@ -81,6 +81,9 @@ pub struct NestOptions {
     pub seed: u64,
     /// Pair congruent quads turned 180°.
     pub pair: bool,
+    /// Work for making sheets denser after the fill, in seconds of the reference machine
+    /// (counted as work, so the result does not depend on the machine); 0 skips it.
+    pub time: f64,
 }
 
 impl NestOptions {
@@ -100,6 +103,7 @@ impl Default for NestOptions {
             tries: 4,
             seed: 1,
             pair: true,
+            time: 0.0,
         }
     }
 }
@@ -1146,7 +1150,12 @@ impl Nester for BottomLeft<'_> {
                 best = Some((sheets.len(), last, at));
             }
         }
-        let (sheets, _, at) = best.expect("at least one try");
+        let (sheets, _, mut at) = best.expect("at least one try");
+        let sheets = if opts.time > 0.0 && sheets > 1 {
+            self.densify(&items, &mut at, &container, opts)?
+        } else {
+            sheets
+        };
         let mut places = vec![Place::ORIGIN; parts.len()];
         for (item, &(sheet, s, pos)) in items.iter().zip(&at) {
             let shape = &item.shapes[s];
@@ -1160,6 +1169,140 @@ impl Nester for BottomLeft<'_> {
             }
         }
         Ok(Nesting { places, sheets })
+    }
+}
+
+impl BottomLeft<'_> {
+    /// Denser sheets (see [`crate::fabricate::separate`]): for each sheet but the last, items
+    /// from later sheets (the last sheet's first, smallest first) are put onto it where they
+    /// overlap least and the overlaps separated; an item that cannot be taken is not offered
+    /// again, nor anything at least as large both ways. Sheets left empty are dropped, and the
+    /// last sheet's items are filled again from its origin edge. Every sheet changed is
+    /// checked in jagua-rs's arithmetic before it is kept. Returns the number of sheets.
+    fn densify(
+        &self,
+        items: &[Item],
+        at: &mut Spots,
+        container: &Container,
+        opts: &NestOptions,
+    ) -> Result<usize, NestError> {
+        use crate::fabricate::separate::{entry, Form, Separation, Spot, EVALS_PER_SECOND};
+        let forms: Vec<Vec<Form>> = items
+            .iter()
+            .map(|it| it.shapes.iter().map(|s| Form::new(s.pts.clone())).collect())
+            .collect();
+        let budget = (opts.time * EVALS_PER_SECOND) as u64;
+        let per_try = budget / 8;
+        let mut used = 0u64;
+        let mut sheets = at.iter().map(|a| a.0).max().map_or(0, |m| m + 1);
+        let dims = |i: usize| {
+            let s = items[i].shapes[0].size;
+            DVec2::new(s.x.min(s.y), s.x.max(s.y))
+        };
+        let mut attempt = 0u64;
+        for k in 0..sheets.saturating_sub(1) {
+            let mut refused: Vec<DVec2> = Vec::new();
+            loop {
+                crate::stage::checkpoint(self.progress)?;
+                if used >= budget {
+                    break;
+                }
+                let mut later: Vec<usize> = (0..items.len())
+                    .filter(|&i| at[i].0 > k)
+                    .filter(|&i| {
+                        let d = dims(i);
+                        !refused
+                            .iter()
+                            .any(|r| r.x <= d.x + 1e-9 && r.y <= d.y + 1e-9)
+                    })
+                    .collect();
+                later.sort_by(|&a, &b| {
+                    at[b]
+                        .0
+                        .cmp(&at[a].0)
+                        .then(items[a].area.total_cmp(&items[b].area))
+                        .then(a.cmp(&b))
+                });
+                let Some(&c) = later.first() else { break };
+                let spots: Vec<Spot> = (0..items.len())
+                    .filter(|&i| at[i].0 == k)
+                    .map(|i| Spot {
+                        item: i,
+                        form: at[i].1,
+                        at: at[i].2,
+                    })
+                    .collect();
+                attempt += 1;
+                let seed = opts.seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                let new = entry(&forms, container.size, CLEAR, &spots, c, seed);
+                let mut all = spots;
+                all.push(new);
+                let fresh = all.len() - 1;
+                let mut sep = Separation::new(&forms, container.size, CLEAR, all, fresh, seed);
+                let done = sep.run(per_try.min(budget - used));
+                used += sep.work;
+                // Kept only when jagua-rs agrees that every item moved (or new) is clear of the
+                // rest, as the fill checks each item against those placed before it.
+                let checked = done && {
+                    let mut sheet = container.sheet();
+                    let moved: Vec<bool> = sep
+                        .spots
+                        .iter()
+                        .map(|s| s.item == c || (at[s.item].1, at[s.item].2) != (s.form, s.at))
+                        .collect();
+                    let mut ok = true;
+                    for (s, _) in sep.spots.iter().zip(&moved).filter(|(_, m)| !**m) {
+                        let shape = &items[s.item].shapes[s.form];
+                        ok &= sheet.place(shape, s.at, s.item as u32).is_ok();
+                    }
+                    for (s, _) in sep.spots.iter().zip(&moved).filter(|(_, m)| **m) {
+                        let shape = &items[s.item].shapes[s.form];
+                        ok = ok
+                            && !sheet.collides(shape, s.at)
+                            && sheet.place(shape, s.at, s.item as u32).is_ok();
+                    }
+                    ok
+                };
+                if checked {
+                    for s in &sep.spots {
+                        at[s.item] = (k, s.form, s.at);
+                    }
+                } else {
+                    refused.retain(|r| !(dims(c).x <= r.x && dims(c).y <= r.y));
+                    refused.push(dims(c));
+                }
+            }
+        }
+        // Drop empty sheets.
+        let mut count = vec![0usize; sheets];
+        for a in at.iter() {
+            count[a.0] += 1;
+        }
+        let mut renumber = vec![0usize; sheets];
+        let mut next = 0;
+        for (k, &c) in count.iter().enumerate() {
+            renumber[k] = next;
+            if c > 0 {
+                next += 1;
+            }
+        }
+        for a in at.iter_mut() {
+            a.0 = renumber[a.0];
+        }
+        sheets = next;
+        // The last sheet filled again from its origin edge, if that still takes one sheet.
+        let last: Vec<usize> = (0..items.len())
+            .filter(|&i| at[i].0 == sheets - 1)
+            .collect();
+        let mut order = last.clone();
+        order.sort_by(|&a, &b| items[b].area.total_cmp(&items[a].area).then(a.cmp(&b)));
+        let (refill, filled) = self.fill(items, &order, container, opts.seed ^ 0x5eed)?;
+        if filled.len() == 1 {
+            for &i in &last {
+                at[i] = (sheets - 1, refill[i].1, refill[i].2);
+            }
+        }
+        Ok(sheets)
     }
 }
 

@@ -97,7 +97,14 @@ pub struct Options {
     /// A date (or any short text) etched on each sheet's label. Default: none, so that the
     /// same inputs give the same bytes.
     pub date: Option<String>,
+    /// Work spent making the sheets denser after the fill, in seconds of the reference
+    /// machine (counted as work: the result does not depend on the machine's speed), from more
+    /// than 0 to [`MAX_TIME`]. Default 5.
+    pub time: f64,
 }
+
+/// The most `time`, s.
+pub const MAX_TIME: f64 = 600.0;
 
 impl Default for Options {
     fn default() -> Self {
@@ -125,6 +132,7 @@ impl Default for Options {
             cut_order: CutOrder::Travel,
             job: None,
             date: None,
+            time: 2.0,
         }
     }
 }
@@ -455,6 +463,7 @@ impl Options {
                 }
             }
         }
+        super::positive("time", self.time, MAX_TIME, "s")?;
         super::positive("micro_joint_below", self.micro_joint_below, 1e6, "mm")?;
         super::positive("micro_joint_width", self.micro_joint_width, 10.0, "mm")?;
         let joints = match self.micro_joints {
@@ -479,6 +488,7 @@ impl Options {
             tries: self.tries.unwrap_or_else(|| NestOptions::tries_for(plates)),
             seed: self.seed,
             pair: !self.no_pairs,
+            time: self.time,
         };
         if !(1..=MAX_TRIES).contains(&opts.tries) {
             return Err(OptionError::new(

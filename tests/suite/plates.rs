@@ -362,6 +362,9 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
         vec!["--cut-order", "random"],
         vec!["--job", ""],
         vec!["--date", "a date far too long for a label"],
+        vec!["--time", "0"],
+        vec!["--time", "NaN"],
+        vec!["--time", "1e9"],
     ] {
         let mut args = vec!["nest", s(&file), "-o", s(&out)];
         args.extend_from_slice(&bad);

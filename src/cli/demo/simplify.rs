@@ -130,6 +130,7 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         post: None,
         nc_on: None,
         nc_off: None,
+        time: 2.0,
         output: dir.join("cut"),
         json: false,
     })?;
