@@ -364,6 +364,8 @@ def main():
     ap.add_argument("--mark-on", default="M7")
     ap.add_argument("--mark-off", default="M9")
     ap.add_argument("--unit", type=float, default=0.01, help="ESSI unit, mm")
+    ap.add_argument("--table", action="store_true",
+                    help="print each sheet's rapid travel against the nearest-neighbour tour")
     args = ap.parse_args()
     folder = Path(args.folder)
     nest = json.load(open(folder / "nest.json"))
@@ -454,6 +456,10 @@ def main():
             nn_parts, _ = nn_travel(at, groups)
             nn_total = nn_marks + nn_parts + inside
             worst_ratio = max(worst_ratio, prog.rapid / max(nn_total, 1e-9))
+            if args.table:
+                print(f"{s['file']}: {len(s['parts'])} parts, {len(marks)} etched polylines, "
+                      f"rapid {prog.rapid / 1000:.1f} m, nearest neighbour {nn_total / 1000:.1f} m "
+                      f"({100 * prog.rapid / nn_total:.0f} %)")
             if prog.rapid > nn_total + rounding * max(prog.rapids, 1):
                 fail(f"{prog_path}: rapid travel {prog.rapid:.1f} mm, longer than a "
                      f"nearest-neighbour tour's {nn_total:.1f} mm")

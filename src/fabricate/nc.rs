@@ -176,6 +176,8 @@ pub fn post(name: &str) -> Option<Post> {
 #[derive(Clone, Debug, Default)]
 pub struct Heading {
     pub lines: Vec<String>,
+    /// Part names by plate index, for the comments before each part's paths.
+    pub names: Vec<String>,
 }
 
 /// A number as G-code writes it: 3 decimals, no negative zero.
@@ -232,11 +234,13 @@ pub fn gcode(plan: &SheetPlan, post: &Post, speeds: &SpeedRow, heading: &Heading
                 Op::Inner => "hole",
                 Op::Outer => "outer contour",
             };
-            let _ = writeln!(
-                out,
-                "({what}{})",
-                path.part.map_or(String::new(), |i| format!(" of part {i}"))
-            );
+            let part = |i: usize| {
+                heading.names.get(i).map_or_else(
+                    || format!(" of part {i}"),
+                    |n| format!(" of {}", comment(n)),
+                )
+            };
+            let _ = writeln!(out, "({what}{})", path.part.map_or(String::new(), part));
         }
         last_op = Some(path.op);
         last_part = Some(path.part);

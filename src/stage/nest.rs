@@ -1324,6 +1324,7 @@ pub fn write_nc(out: &Nested, dir: &Path, post: &Post) -> Result<Vec<String>, Er
                 ),
                 format!("kerf {} mm", out.kerf),
             ],
+            names: out.plates.iter().map(|p| p.id.clone()).collect(),
         };
         let name = sheet.file.trim_end_matches(".dxf").to_string() + "." + post.format.extension();
         let text = match post.format {
