@@ -564,6 +564,12 @@ fn steel(out: &Path) -> Result<(Entry, Headline)> {
     .map(|f| format!("calyx/{f}"))
     .collect();
     outputs.extend(nest.sheets.iter().map(|s| format!("calyx/cut/{}", s.file)));
+    // The LinuxCNC programs beside each sheet (0.3 mm kerf).
+    outputs.extend(
+        nest.sheets
+            .iter()
+            .map(|s| format!("calyx/cut/{}", s.file.replace(".dxf", ".ngc"))),
+    );
     let assembly = read_mesh(&dir.join("plates/assembly.stl"))?;
     write_mesh(&assembly, &dir.join("plates/assembly.png"), 1000)?;
     outputs.push("calyx/plates/assembly.png".into());
@@ -632,7 +638,7 @@ fn steel(out: &Path) -> Result<(Entry, Headline)> {
     };
     let entry = Entry {
         name: "Calyx: plates, bolted seams, welds and the cut plan".into(),
-        about: "`lamina size` on the Gauss-Newton axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 with etched tags and marks, remnants, cut times, the BOM with bolts and cores,                 nest.json and the OpenSCAD assembly"
+        about: "`lamina size` on the Gauss-Newton axes (a 3D frame of the plates, stainless 1.4404,                 self-weight, base fixed, `--deflection-limit L/500 --smooth --groups 7 --node-core tube:60.3,4`, seams as their two plies, the self-weight the plates as cut with their bolts and node cores: sizing.html,                 sizing.json and the CalculiX deck), then `lamina plates --sizing sizing.json`                 (the analysis' gauges, weld gap 1 mm, `--groups 7`,                 `--node-core tube:60.3,4`, bolts sized by the grip), then `lamina nest` on the                 cheapest of 3000 × 1500, 2000 × 1000 and 1000 × 1000 mm stock, margin 10 mm,                 spacing 5 mm, 2 mm lead-ins: the weld report, a cut DXF per sheet in cutting order                 (all etching first, parts on a short tour pierced at corners) with etched tags,                 marks and sheet labels, remnants, cut and rapid times, a LinuxCNC G-code program per                 sheet for a 0.3 mm kerf, the BOM with bolts and cores, nest.json and the OpenSCAD                 assembly"
             .into(),
         outputs,
         preview: "calyx/cut/sheets.svg".into(),

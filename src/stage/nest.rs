@@ -648,6 +648,10 @@ pub fn run(
         if let Some(j) = &opts.job {
             text = format!("{j} {text}");
         }
+        if opts.kerf > 0.0 {
+            // The contours drawn are nominal; the programs cut them offset by half of this.
+            text = format!("{text} KERF {}", crate::text::num(opts.kerf));
+        }
         if let Some(d) = &opts.date {
             text = format!("{text} {d}");
         }
