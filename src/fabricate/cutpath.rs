@@ -625,6 +625,21 @@ impl Grid {
         y * self.nx + x
     }
 
+    /// The cells at Chebyshev distance `ring` from cell (cx, cy), within the grid. Points in
+    /// them lie at least (ring − 1) cells from any point of that cell (or beyond the grid's
+    /// side it was clamped to).
+    fn ring(&self, (cx, cy): (usize, usize), ring: usize) -> impl Iterator<Item = usize> + '_ {
+        let (x0, x1) = (cx.saturating_sub(ring), (cx + ring).min(self.nx - 1));
+        let (y0, y1) = (cy.saturating_sub(ring), (cy + ring).min(self.ny - 1));
+        (y0..=y1).flat_map(move |y| {
+            (x0..=x1)
+                .filter(move |&x| {
+                    x + ring == cx || x == cx + ring || y + ring == cy || y == cy + ring
+                })
+                .map(move |x| y * self.nx + x)
+        })
+    }
+
     /// The `k` nearest points to `p` that `keep` accepts, nearest first (ties to the lower
     /// index): rings of cells outwards until the ring is farther than the k-th found.
     fn nearest(
@@ -634,7 +649,7 @@ impl Grid {
         k: usize,
         keep: impl Fn(usize) -> bool,
     ) -> Vec<usize> {
-        let (cx, cy) = self.coords(p);
+        let centre = self.coords(p);
         let mut found: Vec<(f64, usize)> = Vec::new();
         let rings = self.nx.max(self.ny);
         for ring in 0..=rings {
@@ -646,18 +661,10 @@ impl Grid {
                     break;
                 }
             }
-            let (x0, x1) = (cx.saturating_sub(ring), (cx + ring).min(self.nx - 1));
-            let (y0, y1) = (cy.saturating_sub(ring), (cy + ring).min(self.ny - 1));
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    let edge = x + ring == cx || x == cx + ring || y + ring == cy || y == cy + ring;
-                    if !edge {
-                        continue;
-                    }
-                    for &i in &self.cells[y * self.nx + x] {
-                        if keep(i) {
-                            found.push((points[i].distance_squared(p), i));
-                        }
+            for c in self.ring(centre, ring) {
+                for &i in &self.cells[c] {
+                    if keep(i) {
+                        found.push((points[i].distance_squared(p), i));
                     }
                 }
             }
@@ -700,11 +707,10 @@ pub fn order_etch(
     // Nearest neighbour: the tour as (polyline, turned round).
     let mut tour: Vec<(usize, bool)> = Vec::with_capacity(n);
     {
-        let mut left: Vec<bool> = vec![true; n];
         let mut cells = grid.cells.clone();
         let mut at = from;
         for _ in 0..n {
-            let (cx, cy) = grid.coords(at);
+            let centre = grid.coords(at);
             let mut best: Option<(f64, usize)> = None;
             for ring in 0..=grid.nx.max(grid.ny) {
                 if let Some((d, _)) = best {
@@ -713,30 +719,20 @@ pub fn order_etch(
                         break;
                     }
                 }
-                let (x0, x1) = (cx.saturating_sub(ring), (cx + ring).min(grid.nx - 1));
-                let (y0, y1) = (cy.saturating_sub(ring), (cy + ring).min(grid.ny - 1));
-                for y in y0..=y1 {
-                    for x in x0..=x1 {
-                        let edge =
-                            x + ring == cx || x == cx + ring || y + ring == cy || y == cy + ring;
-                        if !edge {
-                            continue;
-                        }
-                        for &e in &cells[y * grid.nx + x] {
-                            let d = ends[e].distance_squared(at);
-                            // Ties: a polyline's first point before any last point, then
-                            // the earlier polyline.
-                            let tie = |i: usize| (e % 2, e / 2) < (i % 2, i / 2);
-                            if best.is_none_or(|(b, i)| d < b || (d == b && tie(i))) {
-                                best = Some((d, e));
-                            }
+                for c in grid.ring(centre, ring) {
+                    for &e in &cells[c] {
+                        let d = ends[e].distance_squared(at);
+                        // Ties: a polyline's first point before any last point, then the
+                        // earlier polyline.
+                        let tie = |i: usize| (e % 2, e / 2) < (i % 2, i / 2);
+                        if best.is_none_or(|(b, i)| d < b || (d == b && tie(i))) {
+                            best = Some((d, e));
                         }
                     }
                 }
             }
             let (_, e) = best.expect("an endpoint is left");
             let item = e / 2;
-            left[item] = false;
             for q in [2 * item, 2 * item + 1] {
                 let k = grid.key(ends[q]);
                 cells[k].retain(|&x| x != q);
