@@ -306,9 +306,13 @@ fn taken_cells(size: DVec2, parts: &[Vec<DVec2>], spacing: f64) -> (Vec<bool>, u
     (taken, nx, ny)
 }
 
+/// The most grid cells a sheet may have for [`free_box`] to look for a label.
+pub const LABEL_CELLS: f64 = 16.0e6;
+
 /// Where a `want`-sized box (a label) fits on a sheet: `spacing` clear of every part, clear of
 /// the `avoid` rectangles, inside the `margin`; the lowest such place, then the leftmost, on the
-/// cell grid. Its lower-left corner, or None.
+/// cell grid. Its lower-left corner, or None (also for a sheet of more than [`LABEL_CELLS`]
+/// cells).
 pub fn free_box(
     size: DVec2,
     parts: &[Vec<DVec2>],
@@ -317,6 +321,11 @@ pub fn free_box(
     avoid: &[[DVec2; 2]],
     want: DVec2,
 ) -> Option<DVec2> {
+    // Sheets past 20 × 20 m (16 M cells) get no label: the summed table would take 64 MB.
+    let cells = (size.x / REMNANT_CELL).floor() * (size.y / REMNANT_CELL).floor();
+    if !(1.0..=LABEL_CELLS).contains(&cells) {
+        return None;
+    }
     let (mut taken, nx, ny) = taken_cells(size, parts, spacing);
     if nx == 0 || ny == 0 {
         return None;

@@ -99,7 +99,7 @@ pub struct Options {
     pub date: Option<String>,
     /// Work spent making the sheets denser after the fill, in seconds of the reference
     /// machine (counted as work: the result does not depend on the machine's speed), from more
-    /// than 0 to [`MAX_TIME`]. Default 5.
+    /// than 0 to [`MAX_TIME`]. Default 2.
     pub time: f64,
 }
 
