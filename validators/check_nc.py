@@ -278,7 +278,7 @@ def check_run(where, run, layer, pts, closed, r, lead_max, part_poly):
         body = part_poly
     else:
         body = Polygon(pts)
-    mids = [m for m in moves]
+    mids = list(moves)
     lead_in = lead_out = None
 
     def off_contour(p):

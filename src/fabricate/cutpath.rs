@@ -197,7 +197,7 @@ pub fn order_parts(parts: &[PartShape], from: DVec2, order: CutOrder) -> Order {
         let mut at = from;
         for (k, &i) in tour.iter().enumerate() {
             let p = &parts[i];
-            holes[i] = hole_tour(at, p.holes);
+            holes[i] = nearest_tour(at, p.holes, p.holes);
             let last = holes[i].last().map_or(at, |&h| p.holes[h]);
             let next = tour.get(k + 1).map(|&j| {
                 let q = &parts[j];
@@ -241,11 +241,6 @@ fn nearest_hole(holes: &[DVec2], from: DVec2) -> Option<DVec2> {
         a.distance_squared(from)
             .total_cmp(&b.distance_squared(from))
     })
-}
-
-/// Holes by nearest neighbour from `from`.
-fn hole_tour(from: DVec2, holes: &[DVec2]) -> Vec<usize> {
-    nearest_tour(from, holes, holes)
 }
 
 /// Successive parts far apart: the next part is the nearest of those at least a quarter of

@@ -72,7 +72,7 @@ pub struct Spot {
 /// edge normals), less [`GAP`]: ≤ 0 when they are clear.
 fn depth(a: &Form, pa: DVec2, b: &Form, pb: DVec2) -> f64 {
     let mut least = f64::INFINITY;
-    for (normals, _) in [(&a.normals, 0), (&b.normals, 1)] {
+    for normals in [&a.normals, &b.normals] {
         for &n in normals.iter() {
             let (mut a0, mut a1) = (f64::INFINITY, f64::NEG_INFINITY);
             for p in &a.pts {
