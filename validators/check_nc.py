@@ -19,12 +19,18 @@ Then:
   the run (sampled every 0.05 mm and at every vertex, arcs every 0.01 mm) lies half the kerf
   from the contour within 0.01 mm on its scrap side, and every point of the contour (sampled so) lies half the kerf from the run within 0.01 mm: the run is the contour offset by
   half the kerf, corners included;
+- common lines (nest.json's `common_lines`): exactly two closed outer contours lie half the
+  kerf off the whole line (sampled every 0.05 mm); the earlier one's run passes along the line
+  (within 0.01 mm), the later one's run starts and ends on it, and that run with the line
+  follows its whole contour as above;
 - inner contours are cut before the outer contour that holds them;
 - the rapid travel (from the origin, move by move) equals nest.json's `rapid_mm`, within the
   rounding of the coordinates written;
 - with `cut_order` travel, it is at most a nearest-neighbour tour's over the same runs: markings
   by nearest neighbour from the origin (each polyline from whichever end is nearer), then parts
-  by nearest neighbour (each entered at its first run's start, its runs as programmed).
+  by nearest neighbour (each entered at its first run's start, its runs as programmed; a common
+  line's second part, cut straight after the first, with the first).
+- Leads may be longer than the DXF's by what rounding to the ESSI unit adds (√2 units).
 """
 
 import argparse
@@ -269,8 +275,10 @@ def samples(points, step=0.25):
     return np.vstack([p[:1], p[idx] + seg[idx] * t[:, None]])
 
 
-def check_run(where, run, layer, pts, closed, r, lead_max, part_poly):
-    """The run reproduces the contour offset by r on its scrap side (leads aside)."""
+def check_run(where, run, layer, pts, closed, r, lead_max, part_poly, shared=None):
+    """The run reproduces the contour offset by r on its scrap side (leads aside); with
+    `shared` (a common line another run cuts), the run starts and ends on that line and the two
+    together follow the contour. Returns the run's path as a LineString."""
     tool, points, moves = run
     contour = LineString(pts + [pts[0]] if closed else pts)
     # The scrap side: outside the part (outer), inside the hole (inner).
@@ -322,11 +330,19 @@ def check_run(where, run, layer, pts, closed, r, lead_max, part_poly):
             k = int(np.argmax(wrong))
             fail(f"{where}: the path at ({s[k][0]:.3f}, {s[k][1]:.3f}) runs on the part's side")
     c = samples(pts + [pts[0]] if closed else pts)
-    d = shapely.distance(run_line, shapely.points(c))
+    cut = run_line
+    if shared is not None:
+        for end in (path_pts[0], path_pts[-1]):
+            if shared.distance(shapely.Point(end)) > TOL:
+                fail(f"{where}: the cut after a common line starts or ends at ({end[0]:.3f}, "
+                     f"{end[1]:.3f}), {shared.distance(shapely.Point(end)):.4f} mm off the line")
+        cut = shapely.union(run_line, shared)
+    d = shapely.distance(cut, shapely.points(c))
     k = int(np.argmax(np.abs(d - r)))
     if abs(d[k] - r) > TOL:
         fail(f"{where}: the contour at ({c[k][0]:.3f}, {c[k][1]:.3f}) is {d[k]:.4f} mm from the "
              f"path, not half the kerf {r} ± {TOL}: the path does not follow the whole contour")
+    return run_line
 
 
 def nn_travel(start, items):
@@ -385,7 +401,10 @@ def main():
             prog = read_essi(prog_path, args.unit)
             rounding = 2 * args.unit
         etch, cuts, leads = dxf_paths(dxf)
+        # The DXF's longest lead, and what rounding the program's coordinates can add to it:
+        # each end moves at most half a unit each way.
         lead_max = max((math.dist(p[0], p[-1]) for p in leads), default=0.0)
+        lead_max += math.sqrt(2) * args.unit if args.format == "essi" else 0.0
         marks = [run for run in prog.runs if run[0] == "marker"]
         torch = [run for run in prog.runs if run[0] == "torch"]
         first_cut = next((k for k, run in enumerate(prog.runs) if run[0] == "torch"), len(prog.runs))
@@ -420,10 +439,29 @@ def main():
             else:
                 outer_of.append((k, k + 1, Polygon(pts) if layer == "CUT_OUTER" else None))
                 k += 1
+        # Common lines (nest.json): the two closed outer contours half the kerf off the whole
+        # line; the earlier one's run cuts the line, the later one's runs from it round to it.
+        shared = {}
+        for c in s.get("common_lines", []):
+            line = LineString([c["from"], c["to"]])
+            on_line = shapely.points(samples([c["from"], c["to"]], 0.05))
+            near = [k for k, (layer, pts, closed) in enumerate(cuts)
+                    if layer == "CUT_OUTER" and closed
+                    and np.abs(shapely.distance(LineString(pts + [pts[0]]), on_line) - r).max() <= TOL]
+            if len(near) != 2:
+                fail(f"{prog_path}: common line {c['parts']} lies half the kerf off "
+                     f"{len(near)} outer contours, not 2")
+            shared[near[1]] = (line, on_line, near[0])
+        paths = {}
         for k, (run, (layer, pts, closed)) in enumerate(zip(torch, cuts)):
             poly = outer_of[k][2]
-            check_run(f"{prog_path} torch run {k} ({layer})", run, layer, pts, closed, r,
-                      lead_max, poly)
+            paths[k] = check_run(f"{prog_path} torch run {k} ({layer})", run, layer, pts, closed,
+                                 r, lead_max, poly, shared[k][0] if k in shared else None)
+        for k, (line, on_line, first) in shared.items():
+            d = shapely.distance(paths[first], on_line)
+            if d.max() > TOL:
+                fail(f"{prog_path}: torch run {first} passes {d.max():.4f} mm off the common line "
+                     f"that run {k} starts from")
         # Inner before outer: every hole inside an outer contour is cut before it.
         holes = [(k, Polygon(pts)) for k, (layer, pts, _) in enumerate(cuts) if layer == "CUT_INNER"]
         for k, (layer, _, _) in enumerate(cuts):
@@ -441,19 +479,24 @@ def main():
             items = [(run[1][0], run[1][-1], True) for run in marks]
             nn_marks, at = nn_travel((0.0, 0.0), items)
             # Parts: each hole's run grouped with the outer contour (or its pieces) that
-            # follows; the travel between a group's own runs is the same in any tour.
+            # follows; the travel between a group's own runs is the same in any tour. A common
+            # line's second part, cut straight after its first, joins the first's group.
             groups, inside, pending, prev = [], 0.0, None, None
             for k, run in enumerate(torch):
                 if pending is None:
-                    pending = [run[1][0], None]
+                    pending = [run[1][0], None, k]
                 else:
                     inside += math.dist(prev, run[1][0])
                 pending[1] = run[1][-1]
                 prev = run[1][-1]
                 if cuts[k][0] == "CUT_OUTER" and outer_of[k][1] == k + 1:
-                    groups.append((pending[0], pending[1], False))
+                    if k in shared and groups and groups[-1][2] == shared[k][2]:
+                        entry, exit_, _ = groups.pop()
+                        inside += math.dist(exit_, pending[0])
+                        pending[0] = entry
+                    groups.append((pending[0], pending[1], k))
                     pending = None
-            nn_parts, _ = nn_travel(at, groups)
+            nn_parts, _ = nn_travel(at, [(e, x, False) for e, x, _ in groups])
             nn_total = nn_marks + nn_parts + inside
             worst_ratio = max(worst_ratio, prog.rapid / max(nn_total, 1e-9))
             if args.table:

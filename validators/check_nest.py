@@ -17,8 +17,16 @@ with lamina.
 - Every placement's rotation is one of the allowed angles, bit for bit, and the part on the
   sheet is the plate's outline turned by it and moved by the offset (within 1e-6 mm).
 - Remnants lie on their sheet, at least the spacing from every part, at least the minimum size.
+  Where nest.json's first remnant runs right across the sheet, the rest of the sheet (the strip)
+  holds every part and nest.json's `strip` gives its direction, length and utilisation; without
+  such a remnant there is no `strip`.
 - Every part lies inside its sheet less the margin; any two parts on a sheet are at least the
-  spacing apart (shapely distances, an STRtree for neighbours).
+  spacing apart (shapely distances, an STRtree for neighbours), except the two parts of a
+  common line (nest.json's `common_lines`, `--common-line`): those are at least the kerf apart,
+  the line lies half the kerf off both parts at every point (sampled every 0.05 mm, within
+  0.003 mm) and each of its ends half the kerf straight off a corner of each (a whole side
+  shared), and
+  the line is counted once in the cut length (the DXFs draw both sides).
 - Parts in all sheets = BOM rows = plates in plates.json; the part areas match the plates'
   areas one to one; each BOM row's sheet and mass agree with the plate.
 - nest.json's utilisation per sheet and in total is recomputed from the DXF polygons, and its
@@ -34,10 +42,15 @@ import sys
 from pathlib import Path
 
 import ezdxf
+import numpy as np
+import shapely
 from ezdxf import recover
 from shapely import STRtree
 from shapely.geometry import LineString, Point, Polygon, box
 
+# A common line's parts: half the kerf off the line within this, mm (lamina pairs sides whose
+# ends meet within 0.002 mm).
+COMMON_TOL = 0.003
 STAINLESS = ("1.40", "1.41", "1.42", "1.43", "1.44", "1.45", "1.46")  # EN 10088 numbers
 
 
@@ -201,6 +214,13 @@ def main():
         gon = 0.5 * segments * r * r * math.sin(2 * math.pi / segments)
         return Polygon(p["outline"]).area - len(p["holes"]) * gon
     nest = json.load(open(folder / "nest.json"))
+    placement_of = {pl["id"]: pl for pl in nest["placements"]}
+
+    def placed_outline(pl):
+        a = pl["rotation_deg"]
+        c, sn = math.cos(math.radians(a)), math.sin(math.radians(a))
+        return Polygon([(c * x - sn * y + pl["offset"][0], sn * x + c * y + pl["offset"][1])
+                        for x, y in plates[pl["id"]]["outline"]])
     with open(folder / "bom.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     bom = [r for r in rows if r["kind"] == "plate"]
@@ -213,6 +233,7 @@ def main():
     worst_gap = math.inf
     strokes = 0
     sheet_area = width * height
+    last_strip = None
     for s in nest["sheets"]:
         width, height = s["size"]
         sheet_area = width * height
@@ -237,11 +258,57 @@ def main():
         # The cut and etched lengths nest.json gives (and times the machine by) are the ones
         # drawn: every contour as the polyline cut (holes as their polygons, micro-joint gaps
         # left out), and the lead lines.
+        # Common lines: two parts set the kerf apart along a whole side, the side cut once.
+        kerf = nest.get("kerf_mm", 0.0)
+        common_pairs = set()
+        common_cut = 0.0
+        for c in s.get("common_lines", []):
+            a_id, b_id = c["parts"]
+            twin = []
+            for pid in (a_id, b_id):
+                pl = placement_of.get(pid)
+                if pl is None or pl["sheet"] != s["file"]:
+                    fail(f"{s['file']}: common line {c['parts']}: {pid} is not on this sheet")
+                want = placed_outline(pl)
+                hits = [k for k, p in enumerate(parts)
+                        if p.exterior.hausdorff_distance(want.exterior) < 1e-6]
+                if len(hits) != 1:
+                    fail(f"{s['file']}: common line {c['parts']}: {pid} is not drawn once")
+                twin.append(hits[0])
+            line = LineString([c["from"], c["to"]])
+            if abs(line.length - c["length_mm"]) > 1e-9 * max(line.length, 1.0) or line.length <= 0:
+                fail(f"{s['file']}: common line {c['parts']}: length_mm {c['length_mm']}, "
+                     f"the line is {line.length}")
+            if not kerf > 0:
+                fail(f"{s['file']}: a common line without a kerf")
+            # Every point of the line (every 0.05 mm) lies half the kerf off both parts, and
+            # each end of it half the kerf off a corner of each: a whole side shared.
+            n = max(2, int(line.length / 0.05) + 1)
+            pts = shapely.points([line.interpolate(t, normalized=True).coords[0]
+                                  for t in np.linspace(0.0, 1.0, n)])
+            for k in twin:
+                d = shapely.distance(parts[k].exterior, pts)
+                if np.abs(d - kerf / 2).max() > COMMON_TOL:
+                    fail(f"{s['file']}: common line {c['parts']} runs {d.min():.4f}–{d.max():.4f} "
+                         f"mm off a part, not half the kerf {kerf / 2} ± {COMMON_TOL}")
+                corners = list(parts[k].exterior.coords)[:-1]
+                tx, ty = ((c["to"][0] - c["from"][0]) / line.length,
+                          (c["to"][1] - c["from"][1]) / line.length)
+                for end in (c["from"], c["to"]):
+                    q = min(corners, key=lambda q: math.dist(end, q))
+                    dx, dy = q[0] - end[0], q[1] - end[1]
+                    along, across = abs(dx * tx + dy * ty), abs(dx * ty - dy * tx)
+                    if along > COMMON_TOL or abs(across - kerf / 2) > COMMON_TOL:
+                        fail(f"{s['file']}: common line {c['parts']} ends {along:.4f} mm along "
+                             f"and {across:.4f} mm across from a part's corner: not a whole side")
+            common_pairs.add(frozenset(twin))
+            common_cut += line.length
         for key in ("cut", "etch"):
-            if abs(lengths[key] - s[f"{key}_mm"]) > 1e-9 * max(lengths[key], 1.0):
+            drawn_len = lengths[key] - (common_cut if key == "cut" else 0.0)
+            if abs(drawn_len - s[f"{key}_mm"]) > 1e-9 * max(drawn_len, 1.0):
                 fail(f"{s['file']}: nest.json's {key}_mm {s[f'{key}_mm']!r} but the DXF draws "
-                     f"{lengths[key]!r} mm")
-        total_cut += lengths["cut"]
+                     f"{drawn_len!r} mm" + (" less its common lines" if key == "cut" and common_cut else ""))
+        total_cut += lengths["cut"] - common_cut
         sheet_box = box(0, 0, width, height).buffer(1e-9)
         if len(remnants) != len(s["remnants"]):
             fail(f"{s['file']}: {len(remnants)} remnants drawn, nest.json lists {len(s['remnants'])}")
@@ -265,12 +332,46 @@ def main():
                 if j <= k:
                     continue
                 d = p.distance(parts[j])
+                if frozenset((k, j)) in common_pairs:
+                    if d < kerf - 1e-6:
+                        fail(f"{s['file']}: parts {k} and {j} on a common line are {d:.6f} mm "
+                             f"apart (< the kerf {kerf})")
+                    continue
                 worst_gap = min(worst_gap, d)
                 if d < args.spacing - 1e-9:
                     fail(f"{s['file']}: parts {k} and {j} are {d:.6f} mm apart (< {args.spacing})")
         used = sum(plate_area(plates[pid]) for pid in s["parts"])
         if abs(used / sheet_area - s["utilisation"]) > 1e-9:
             fail(f"{s['file']}: utilisation {s['utilisation']} but the plates give {used / sheet_area}")
+        # The strip: the sheet less a first remnant that runs right across it holds every
+        # part, and its utilisation is the plates' area over its area.
+        strip = None
+        if s["remnants"]:
+            (x0, y0), (x1, y1) = s["remnants"][0]
+            if not any(abs(r.bounds[0] - x0) < 1e-6 and abs(r.bounds[1] - y0) < 1e-6
+                       and abs(r.bounds[2] - x1) < 1e-6 and abs(r.bounds[3] - y1) < 1e-6
+                       for r in remnants):
+                fail(f"{s['file']}: nest.json's first remnant {s['remnants'][0]} is not drawn")
+            if x0 <= 0 and x1 >= width and y1 - y0 < height:
+                strip = ("y", box(0, 0 if y0 > 0 else y1, width, y0 if y0 > 0 else height))
+            elif y0 <= 0 and y1 >= height and x1 - x0 < width:
+                strip = ("x", box(0 if x0 > 0 else x1, 0, x0 if x0 > 0 else width, height))
+        got = s.get("strip")
+        if (strip is None) != (got is None):
+            fail(f"{s['file']}: nest.json's strip {got} but the first remnant gives "
+                 f"{strip and strip[1].bounds}")
+        if strip is not None:
+            along, rect = strip
+            length = rect.bounds[3] - rect.bounds[1] if along == "y" else rect.bounds[2] - rect.bounds[0]
+            if got["along"] != along or abs(got["length_mm"] - length) > 1e-9 * length:
+                fail(f"{s['file']}: strip {got}, the first remnant leaves {along} {length}")
+            for p in parts:
+                if not rect.buffer(1e-9).contains(p):
+                    fail(f"{s['file']}: a part leaves the strip {rect.bounds}")
+            if abs(used / rect.area - got["utilisation"]) > 1e-9:
+                fail(f"{s['file']}: strip utilisation {got['utilisation']}, the plates give "
+                     f"{used / rect.area}")
+            last_strip = (s["file"], length, used / rect.area)
         total_used += used
         total_stock += sheet_area
         all_areas.extend(Polygon(p.exterior).area for p in parts)
@@ -345,7 +446,10 @@ def main():
         f"rotations {'any' if allowed is None else 'exactly ' + args.rotations}, "
         f"closest pair {worst_gap:.3f} mm (spacing {args.spacing}), "
         f"utilisation {100 * total:.1f} %, {strokes} etched polylines, {n_remnants} remnants"
-        + (f", {n_joints} micro-joints on {jointed} parts" if args.micro_joints else "") + ")"
+        + (f", {nest['total']['common_lines']} common lines" if nest["total"].get("common_lines") else "")
+        + (f", {n_joints} micro-joints on {jointed} parts" if args.micro_joints else "")
+        + (f", last strip {last_strip[1]:.0f} mm at {100 * last_strip[2]:.1f} % on {last_strip[0]}"
+           if last_strip else "") + ")"
     )
 
 

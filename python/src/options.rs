@@ -302,6 +302,7 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "speeds",
             "kerf",
             "cut_order",
+            "common_line",
             "job",
             "date",
             "time",
@@ -902,6 +903,7 @@ pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {
                 )))
             }
         },
+        common_line: o.bool("common_line")?,
         job: o.string("job")?,
         date: o.string("date")?,
         time: o.f64("time")?.unwrap_or(d.time),

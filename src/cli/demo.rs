@@ -485,6 +485,7 @@ fn steel(out: &Path) -> Result<(Entry, Headline)> {
         no_pairs: false,
         kerf: 0.3,
         cut_order: super::nest::CutOrderArg::Travel,
+        common_line: false,
         job: Some("CALYX".into()),
         date: None,
         nc: Some(super::nest::NcArg::Gcode),

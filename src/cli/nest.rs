@@ -99,6 +99,11 @@ pub struct Args {
     /// to spread the heat on thin sheet)
     #[arg(long, value_enum, default_value_t = CutOrderArg::Travel)]
     pub cut_order: CutOrderArg,
+    /// Common-line cutting: congruent quads are paired the kerf apart along a whole side,
+    /// which is cut once (less cut length, one pierce fewer a pair); needs `--kerf`, not with
+    /// `--no-pairs` or `--micro-joints`
+    #[arg(long)]
+    pub common_line: bool,
     /// Job name, etched on every sheet's label (with sheet number, grade and thickness)
     #[arg(long)]
     pub job: Option<String>,
@@ -206,6 +211,7 @@ pub fn execute(args: &Args) -> Result<nest::Nested> {
             CutOrderArg::Travel => nest::CutOrder::Travel,
             CutOrderArg::Spread => nest::CutOrder::Spread,
         },
+        common_line: args.common_line,
         job: args.job.clone(),
         date: args.date.clone(),
     };
@@ -295,6 +301,20 @@ pub fn run(args: Args) -> Result<()> {
             100.0 * t.utilisation,
             t.remnants,
             t.laser_s / 60.0
+        );
+    }
+    if args.common_line {
+        let (lines, length) = (out.doc.total.common_lines, out.doc.total.common_mm);
+        let quads = out.plates.iter().filter(|p| p.outline.len() == 4).count();
+        outln!(
+            "  common lines: {lines} pair(s) of congruent quads share a side the {} mm kerf apart, {:.2} m cut once, {lines} pierce(s) fewer{}",
+            args.kerf,
+            length / 1000.0,
+            if lines == 0 {
+                format!(" ({quads} quad(s), none congruent with another or all paired at the spacing)")
+            } else {
+                String::new()
+            }
         );
     }
     if let Some(j) = out.joints {

@@ -72,6 +72,9 @@ pub enum Op {
     Inner,
     /// A part's outer contour, or one piece of it between micro-joints.
     Outer,
+    /// The rest of an outer contour after a common line: it starts in the line's kerf, so
+    /// there is nothing to pierce.
+    FromKerf,
 }
 
 /// One run with the beam on.
@@ -129,6 +132,10 @@ impl CutOrder {
 pub struct PartShape<'a> {
     pub outline: &'a [DVec2],
     pub holes: &'a [DVec2],
+    /// The outline vertices it may be pierced at (common-line pairs: the second part's cut
+    /// starts at its shared side's end, the first part's keeps off the shared side); None:
+    /// any corner worth piercing at.
+    pub pierce_at: Option<&'a [usize]>,
 }
 
 /// A proposed cut order for one sheet.
@@ -173,12 +180,112 @@ fn centroid(points: &[DVec2]) -> DVec2 {
     points.iter().copied().sum::<DVec2>() / points.len().max(1) as f64
 }
 
+/// Two parts that share a side the kerf apart, to be cut on a common line: the first's side
+/// `edge` (from its vertex `edge` to the next, counter-clockwise) is cut along the line half
+/// the kerf off it, which is also half the kerf off the second's side `other_edge`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CommonLine {
+    pub first: usize,
+    pub edge: usize,
+    pub second: usize,
+    pub other_edge: usize,
+    /// The line cut, mm on the sheet.
+    pub from: DVec2,
+    pub to: DVec2,
+}
+
+/// Outlines (counter-clockwise, on one sheet) that share a whole side `gap` apart: a side of
+/// one whose ends lie within `fit` of a side of another moved `gap` along its outward normal,
+/// the other's side running the other way. Each outline is in at most one pair; the first of a
+/// pair is the one listed first.
+pub fn common_lines(outlines: &[Vec<DVec2>], gap: f64, fit: f64) -> Vec<CommonLine> {
+    let boxes: Vec<(DVec2, DVec2)> = outlines
+        .iter()
+        .map(|o| {
+            o.iter()
+                .fold((DVec2::INFINITY, DVec2::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(*q), hi.max(*q))
+                })
+        })
+        .collect();
+    let mut by_x: Vec<usize> = (0..outlines.len()).collect();
+    by_x.sort_by(|&a, &b| boxes[a].0.x.total_cmp(&boxes[b].0.x).then(a.cmp(&b)));
+    let reach = gap + fit;
+    let mut taken = vec![false; outlines.len()];
+    let mut found = Vec::new();
+    for (pos, &i) in by_x.iter().enumerate() {
+        // Neighbours whose boxes come within reach, in x order after this one, then before.
+        let near = by_x[pos + 1..]
+            .iter()
+            .take_while(|&&j| boxes[j].0.x <= boxes[i].1.x + reach)
+            .chain(by_x[..pos].iter())
+            .copied()
+            .filter(|&j| {
+                boxes[j].1.x >= boxes[i].0.x - reach
+                    && boxes[j].0.y <= boxes[i].1.y + reach
+                    && boxes[j].1.y >= boxes[i].0.y - reach
+            });
+        let mut candidates: Vec<usize> = near.collect();
+        candidates.sort_unstable();
+        for j in candidates {
+            let (first, second) = (i.min(j), i.max(j));
+            if taken[first] || taken[second] || i > j {
+                continue;
+            }
+            let (a, b) = (&outlines[first], &outlines[second]);
+            let shared = (0..a.len()).find_map(|e| {
+                let (p, q) = (a[e], a[(e + 1) % a.len()]);
+                let d = q - p;
+                if d.length() <= 2.0 * fit {
+                    return None;
+                }
+                let n = DVec2::new(d.y, -d.x).normalize();
+                let (u, v) = (q + n * gap, p + n * gap);
+                (0..b.len())
+                    .find(|&f| b[f].distance(u) <= fit && b[(f + 1) % b.len()].distance(v) <= fit)
+                    .map(|f| (e, f, p + n * (0.5 * gap), q + n * (0.5 * gap)))
+            });
+            if let Some((edge, other_edge, from, to)) = shared {
+                taken[first] = true;
+                taken[second] = true;
+                found.push(CommonLine {
+                    first,
+                    edge,
+                    second,
+                    other_edge,
+                    from,
+                    to,
+                });
+            }
+        }
+    }
+    found.sort_by_key(|c| c.first);
+    found
+}
+
 /// Proposes the order of a sheet's parts, each part's pierce corner and the order of its
 /// holes, starting from `from` (where the etching ended). The final order is set by
 /// [`plan_sheet`] on the exact tool paths.
 pub fn order_parts(parts: &[PartShape], from: DVec2, order: CutOrder) -> Order {
     let n = parts.len();
-    let corner_sets: Vec<Vec<usize>> = parts.iter().map(|p| corners(p.outline)).collect();
+    let corner_sets: Vec<Vec<usize>> = parts
+        .iter()
+        .map(|p| {
+            let all = corners(p.outline);
+            match p.pierce_at {
+                Some(allowed) if !allowed.is_empty() => {
+                    let sharp: Vec<usize> =
+                        all.into_iter().filter(|k| allowed.contains(k)).collect();
+                    if sharp.is_empty() {
+                        allowed.to_vec()
+                    } else {
+                        sharp
+                    }
+                }
+                _ => all,
+            }
+        })
+        .collect();
     let reps: Vec<DVec2> = parts.iter().map(|p| centroid(p.outline)).collect();
     let tour = match order {
         CutOrder::Spread => spread(&reps, from),
@@ -522,11 +629,14 @@ pub fn part_paths(index: usize, d: &Drawn, r: f64) -> Vec<ToolPath> {
     let closed = d.joints.is_empty();
     let count = pieces.len();
     for (k, piece) in pieces.iter().enumerate() {
-        let (start, segs) = offset_right(piece, closed, r);
+        let (mut start, mut segs) = offset_right(piece, closed, r);
+        if d.common && closed {
+            (start, segs) = without_last_side(start, segs);
+        }
         let lead_in = if k == 0 { lead(base) } else { None };
         let lead_out = if k + 1 == count { lead(base + 1) } else { None };
         out.push(with_leads(
-            Op::Outer,
+            if d.common { Op::FromKerf } else { Op::Outer },
             index,
             piece[0],
             start,
@@ -536,6 +646,30 @@ pub fn part_paths(index: usize, d: &Drawn, r: f64) -> Vec<ToolPath> {
         ));
     }
     out
+}
+
+/// A closed offset path (as [`offset_right`] gives it) less its run along the last side: it
+/// starts where that run ends (at the first vertex's corner) and ends where it began.
+fn without_last_side(start: DVec2, mut segs: Vec<Seg>) -> (DVec2, Vec<Seg>) {
+    // The closed path ends with the line along the last side, then the first corner's arc
+    // (none at a right turn or without a kerf), which ends at the start.
+    let arc = match segs.last() {
+        Some(Seg::Arc { .. }) => segs.pop(),
+        _ => None,
+    };
+    match segs.pop() {
+        Some(Seg::Line(along_end)) => {
+            let mut out: Vec<Seg> = arc.into_iter().collect();
+            out.append(&mut segs);
+            (along_end, out)
+        }
+        other => {
+            // Not the shape offset_right gives: cut it whole.
+            segs.extend(other);
+            segs.extend(arc);
+            (start, segs)
+        }
+    }
 }
 
 /// A contour's path with its leads: the lead-in moved so that it ends where the offset contour
@@ -885,14 +1019,30 @@ pub fn order_etch(
 /// the parts (plate index and drawing, in the proposed order) with their contours offset by
 /// `r`. In [`CutOrder::Travel`] the parts are reordered on their exact entry and exit points
 /// (2-opt and Or-opt from the proposed order and from a plain nearest-neighbour tour, the
-/// shorter kept); in [`CutOrder::Spread`] the proposed order stands.
+/// shorter kept); in [`CutOrder::Spread`] the proposed order stands. `pairs` (positions in
+/// `parts`) are cut one straight after the other: the second starts in the first's kerf.
 pub fn plan_sheet(
     parts: &[(usize, &Drawn)],
+    pairs: &[(usize, usize)],
     etch: &[(Option<usize>, Vec<DVec2>)],
     r: f64,
     order: CutOrder,
 ) -> SheetPlan {
-    let groups: Vec<Vec<ToolPath>> = parts.iter().map(|(i, d)| part_paths(*i, d, r)).collect();
+    let mut paths_of: Vec<Vec<ToolPath>> =
+        parts.iter().map(|(i, d)| part_paths(*i, d, r)).collect();
+    // Units cut together: a part alone, or a pair, the second's paths after the first's.
+    let mut members: Vec<Vec<usize>> = (0..parts.len()).map(|k| vec![k]).collect();
+    for &(a, b) in pairs {
+        let second = std::mem::take(&mut paths_of[b]);
+        paths_of[a].extend(second);
+        members[a].push(b);
+        members[b].clear();
+    }
+    let (groups, members): (Vec<Vec<ToolPath>>, Vec<Vec<usize>>) = paths_of
+        .into_iter()
+        .zip(members)
+        .filter(|(_, m)| !m.is_empty())
+        .unzip();
     // Two plans: the etching improved, and a plain nearest-neighbour tour over the improved
     // order's polylines (whose end may suit the parts better); the shorter is kept. A
     // nearest-neighbour tour over the polylines as drawn (ties to the first) then the parts is
@@ -917,7 +1067,10 @@ pub fn plan_sheet(
     SheetPlan {
         rapids: paths.len(),
         paths,
-        parts: tour.iter().map(|&k| parts[k].0).collect(),
+        parts: tour
+            .iter()
+            .flat_map(|&k| members[k].iter().map(|&m| parts[m].0))
+            .collect(),
         etch: etched,
         rapid_mm,
         offset: r,
@@ -981,6 +1134,53 @@ mod tests {
             at + DVec2::new(s, s),
             at + DVec2::new(0.0, s),
         ]
+    }
+
+    #[test]
+    fn a_common_lines_second_part_is_cut_from_the_lines_end_round_to_its_start() {
+        // Two squares 0.4 apart along x: the right one's left side is the left one's right
+        // side moved by the gap, running the other way.
+        let a = square(DVec2::ZERO, 100.0);
+        let b = square(DVec2::new(100.4, 0.0), 100.0);
+        let found = common_lines(&[a.clone(), b.clone()], 0.4, 1e-6);
+        assert_eq!(found.len(), 1);
+        let c = found[0];
+        assert_eq!((c.first, c.edge, c.second), (0, 1, 1));
+        assert!(c.from.distance(DVec2::new(100.2, 0.0)) < 1e-12, "{c:?}");
+        assert!(c.to.distance(DVec2::new(100.2, 100.0)) < 1e-12, "{c:?}");
+        // The second square drawn from the shared side's end (its corner (100.4, 0)).
+        let mut outline = b.clone();
+        outline.rotate_left((c.other_edge + 1) % 4);
+        let d = Drawn {
+            outline,
+            common: true,
+            ..Default::default()
+        };
+        let paths = part_paths(1, &d, 0.2);
+        assert_eq!(paths.len(), 1);
+        assert_eq!(paths[0].op, Op::FromKerf);
+        // From the line's start round three sides (a quarter arc at each of the four corners)
+        // back onto the line's end.
+        assert!(
+            paths[0].start.distance(c.from) < 1e-12,
+            "{:?}",
+            paths[0].start
+        );
+        assert!(
+            paths[0].end().distance(c.to) < 1e-12,
+            "{:?}",
+            paths[0].end()
+        );
+        let expected = 300.0 + std::f64::consts::TAU * 0.2;
+        assert!(
+            (paths[0].length() - expected).abs() < 1e-9,
+            "{}",
+            paths[0].length()
+        );
+        assert_eq!(d.pierces(), 0);
+        assert!((d.cut_length() - 300.0).abs() < 1e-9);
+        // Too far apart: no common line.
+        assert!(common_lines(&[a, b], 0.3, 1e-6).is_empty());
     }
 
     #[test]
@@ -1100,10 +1300,12 @@ mod tests {
             PartShape {
                 outline: &a,
                 holes: &[],
+                pierce_at: None,
             },
             PartShape {
                 outline: &b,
                 holes: &[],
+                pierce_at: None,
             },
         ];
         let o = order_parts(&shapes, DVec2::new(0.0, -50.0), CutOrder::Travel);

@@ -56,6 +56,10 @@ pub struct Drawn {
     /// Micro-joints: uncut stretches of the outline, as arc lengths from its first point,
     /// increasing and apart.
     pub joints: Vec<[f64; 2]>,
+    /// Common-line cutting: the outline's last side (back into its first point) is cut by a
+    /// neighbour's contour, the kerf apart; this contour starts in that kerf (no pierce) and
+    /// stops where the side begins.
+    pub common: bool,
 }
 
 impl Drawn {
@@ -66,7 +70,8 @@ impl Drawn {
         let outer: f64 = (0..n)
             .map(|k| self.outline[k].distance(self.outline[(k + 1) % n]))
             .sum::<f64>()
-            - self.joints.iter().map(|[a, b]| b - a).sum::<f64>();
+            - self.joints.iter().map(|[a, b]| b - a).sum::<f64>()
+            - self.common_side();
         // Holes as the DXF cuts them: `HOLE_SEGMENTS`-gons on their circles.
         let n = crate::rationalize::plates::HOLE_SEGMENTS as f64;
         let inner: f64 = self
@@ -86,9 +91,18 @@ impl Drawn {
     }
 
     /// Pierces: one per contour, and one more after each micro-joint (the cut starts again
-    /// in solid metal on its far side).
+    /// in solid metal on its far side); none for an outer contour that starts in a common
+    /// line's kerf.
     pub fn pierces(&self) -> usize {
-        1 + self.holes.len() + self.joints.len()
+        usize::from(!self.common) + self.holes.len() + self.joints.len()
+    }
+
+    /// The length of the side a neighbour cuts (common-line cutting), else 0, mm.
+    pub fn common_side(&self) -> f64 {
+        match (self.common, self.outline.first(), self.outline.last()) {
+            (true, Some(a), Some(b)) => a.distance(*b),
+            _ => 0.0,
+        }
     }
 
     /// The outer contour as cut: the closed outline, or with micro-joints the open pieces

@@ -233,6 +233,7 @@ pub fn gcode(plan: &SheetPlan, post: &Post, speeds: &SpeedRow, heading: &Heading
                 Op::Etch => "etch",
                 Op::Inner => "hole",
                 Op::Outer => "outer contour",
+                Op::FromKerf => "outer contour from the common line's kerf, no pierce",
             };
             let part = |i: usize| {
                 heading.names.get(i).map_or_else(
@@ -251,7 +252,7 @@ pub fn gcode(plan: &SheetPlan, post: &Post, speeds: &SpeedRow, heading: &Heading
             (&post.on, &post.off, speeds.cut_mm_per_min)
         };
         let _ = writeln!(out, "{on}");
-        if post.dwell && path.op != Op::Etch && speeds.pierce_s > 0.0 {
+        if post.dwell && matches!(path.op, Op::Inner | Op::Outer) && speeds.pierce_s > 0.0 {
             let _ = writeln!(out, "G4 P{}", speeds.pierce_s);
         }
         let mut at = path.start;

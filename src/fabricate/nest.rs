@@ -58,6 +58,9 @@ const CLEAR: f64 = 2.0 * BACKOFF;
 const PAIR_WASTE: f64 = 0.04;
 /// Congruent: side lengths and diagonals equal within this, mm.
 const CONGRUENT: f64 = 0.05;
+/// A pair cut on a common line: the copy's edge ends lie this close to where the first quad's
+/// edge, moved by the gap, puts them, mm (well inside an NC check's 0.01 mm).
+pub const COMMON_FIT: f64 = 0.002;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Rotations {
@@ -81,6 +84,10 @@ pub struct NestOptions {
     pub seed: u64,
     /// Pair congruent quads turned 180°.
     pub pair: bool,
+    /// Common-line cutting: pairs of quads that are their own hulls are set this far apart
+    /// (the kerf) along a whole shared edge, which is then cut once; pairs whose edges do not
+    /// meet within [`COMMON_FIT`] keep the spacing. None: every pair keeps the spacing.
+    pub common_gap: Option<f64>,
     /// Work for making sheets denser after the fill, in seconds of the reference machine
     /// (counted as work, so the result does not depend on the machine); 0 skips it.
     pub time: f64,
@@ -103,6 +110,7 @@ impl Default for NestOptions {
             tries: 4,
             seed: 1,
             pair: true,
+            common_gap: None,
             time: 0.0,
         }
     }
@@ -168,6 +176,8 @@ pub enum NestError {
     Spacing(f64),
     #[error("a margin of {0} mm leaves nothing of the sheet")]
     NoRoom(f64),
+    #[error("a common line's gap (the kerf) must be above 0 and below the spacing ({} mm), got {}", num(*.1), num(*.0))]
+    CommonGap(f64, f64),
     #[error("rotation {0}° is not a finite angle")]
     Rotation(f64),
     #[error("the rotation list is empty")]
@@ -369,6 +379,11 @@ fn check(opts: &NestOptions) -> Result<(), NestError> {
     }
     if 2.0 * opts.margin >= s.x.min(s.y) {
         return Err(NestError::NoRoom(opts.margin));
+    }
+    if let Some(w) = opts.common_gap {
+        if !(w > 0.0 && w < opts.spacing) {
+            return Err(NestError::CommonGap(w, opts.spacing));
+        }
     }
     if let Rotations::Listed(r) = &opts.rotations {
         if r.is_empty() {
@@ -795,8 +810,10 @@ fn congruent(a: &[DVec2], b: &[DVec2]) -> Option<usize> {
 /// Two congruent quads, the second turned 180° and set against the edge of the first that
 /// wastes least, at least `gap` apart. With `exact`, the second quad's rotation is exactly
 /// 180° (the quads' frames may differ by a hair, or by a listed rotation too far to pair);
-/// otherwise whatever lays it exactly against the first. Returns the members and the pair's
-/// hull, if it wastes little.
+/// otherwise whatever lays it exactly against the first. With `common`, the copy is pushed
+/// straight off the edge only, and kept only where its edge's ends lie within [`COMMON_FIT`] of
+/// the first quad's, moved by the gap (a whole edge shared, to be cut once). Returns the
+/// members and the pair's hull, if it wastes little.
 fn pair(
     i: usize,
     a: &[DVec2],
@@ -804,6 +821,7 @@ fn pair(
     b: &[DVec2],
     gap: f64,
     exact: bool,
+    common: bool,
 ) -> Option<(Vec<Member>, Vec<DVec2>)> {
     let k = congruent(a, b)?;
     // Rigid motion taking b's corner k.. onto a's corners 0..: rotation by the edge angles.
@@ -832,7 +850,12 @@ fn pair(
         let normal = outward(q - p);
         let before = (p - a[(e + 3) % 4]).normalize();
         let after = (a[(e + 2) % 4] - q).normalize();
-        for dir in [normal, before, -before, after, -after] {
+        let dirs = if common {
+            vec![normal]
+        } else {
+            vec![normal, before, -before, after, -after]
+        };
+        for dir in dirs {
             let along = dir.dot(normal);
             if along < 0.2 {
                 continue;
@@ -856,6 +879,10 @@ fn pair(
                 placed = place(offset);
             }
             if convex_distance(a, &placed) < gap {
+                continue;
+            }
+            let meets = |target: DVec2| placed.iter().any(|q| q.distance(target) < COMMON_FIT);
+            if common && !(meets(p + normal * gap) && meets(q + normal * gap)) {
                 continue;
             }
             let mut all = a.to_vec();
@@ -882,7 +909,14 @@ fn pair(
 }
 
 impl BottomLeft<'_> {
-    fn items(&self, hulls: &[Vec<DVec2>], opts: &NestOptions) -> Vec<(Vec<Member>, Vec<DVec2>)> {
+    /// What is placed: pairs of congruent quads (on a common line where `own[i]` says part i
+    /// is its own hull and `opts.common_gap` asks for it), and single parts.
+    fn items(
+        &self,
+        hulls: &[Vec<DVec2>],
+        own: &[bool],
+        opts: &NestOptions,
+    ) -> Vec<(Vec<Member>, Vec<DVec2>)> {
         let single = |i: usize| {
             (
                 vec![Member {
@@ -921,10 +955,13 @@ impl BottomLeft<'_> {
                 let Some(list) = waiting.get_mut(&bucket) else {
                     continue;
                 };
-                let found = list
-                    .iter()
-                    .enumerate()
-                    .find_map(|(pos, &j)| pair(j, &hulls[j], i, h, gap, exact).map(|p| (pos, p)));
+                let found = list.iter().enumerate().find_map(|(pos, &j)| {
+                    let common = opts.common_gap.filter(|_| own[i] && own[j]);
+                    common
+                        .and_then(|w| pair(j, &hulls[j], i, h, w, exact, true))
+                        .or_else(|| pair(j, &hulls[j], i, h, gap, exact, false))
+                        .map(|p| (pos, p))
+                });
                 if let Some((pos, p)) = found {
                     list.remove(pos);
                     paired = Some(p);
@@ -1097,7 +1134,22 @@ impl Nester for BottomLeft<'_> {
         let d = 0.5 * opts.spacing + SLACK;
         let mut items = Vec::new();
         let mut too_large = Vec::new();
-        for (members, hull) in self.items(&hulls, opts) {
+        // A quad is its own hull when its outline has just the hull's four corners.
+        let own: Vec<bool> = parts
+            .iter()
+            .zip(&hulls)
+            .map(|(p, h)| {
+                h.len() == 4 && h.iter().all(|c| p.contains(c)) && {
+                    let mut distinct = p.clone();
+                    distinct.dedup();
+                    if distinct.len() > 1 && distinct.first() == distinct.last() {
+                        distinct.pop();
+                    }
+                    distinct.len() == 4
+                }
+            })
+            .collect();
+        for (members, hull) in self.items(&hulls, &own, opts) {
             if let Some(item) = make_item(members.clone(), &hull, &hulls, d, opts, &container)? {
                 items.push(item);
                 continue;
@@ -1456,12 +1508,21 @@ mod tests {
         // twice the area plus gap × leg.
         let t = convex_hull(&trapezoid(400.0, 100.0, 80.0));
         let gap = 5.0;
-        let (members, hull) = pair(0, &t, 1, &t, gap, true).expect("congruent quads pair");
+        let (members, hull) = pair(0, &t, 1, &t, gap, true, false).expect("congruent quads pair");
         assert_eq!(members.len(), 2);
         assert_eq!(hull.len(), 4, "{hull:?}");
         let leg = DVec2::new(80.0, 100.0).length();
         assert!((area(&hull) - (2.0 * area(&t) + gap * leg)).abs() < 1e-6);
-        assert!(pair(0, &t, 1, &convex_hull(&rect(400.0, 100.0)), gap, true).is_none());
+        assert!(pair(
+            0,
+            &t,
+            1,
+            &convex_hull(&rect(400.0, 100.0)),
+            gap,
+            true,
+            false
+        )
+        .is_none());
         let parts = vec![trapezoid(400.0, 100.0, 80.0); 40];
         let opts = NestOptions {
             sheet: DVec2::new(1500.0, 1000.0),
@@ -1484,6 +1545,52 @@ mod tests {
             "{} vs {}",
             paired.sheets,
             alone.sheets
+        );
+    }
+
+    #[test]
+    fn trapezoids_on_common_lines_share_a_whole_side_the_kerf_apart() {
+        let parts = vec![trapezoid(400.0, 100.0, 80.0); 40];
+        let opts = NestOptions {
+            sheet: DVec2::new(1500.0, 1000.0),
+            common_gap: Some(0.3),
+            ..Default::default()
+        };
+        let n = BottomLeft::default().nest(&parts, &opts).expect("fits");
+        let out = placed(&parts, &n);
+        let mut lines = 0;
+        for sheet in 0..n.sheets {
+            let on: Vec<usize> = (0..parts.len())
+                .filter(|&i| n.places[i].sheet == sheet)
+                .collect();
+            let outlines: Vec<Vec<DVec2>> = on.iter().map(|&i| out[i].clone()).collect();
+            let found = crate::fabricate::cutpath::common_lines(&outlines, 0.3, COMMON_FIT);
+            for (a, &i) in on.iter().enumerate() {
+                for (b, &j) in on.iter().enumerate().take(a) {
+                    let paired = found
+                        .iter()
+                        .any(|c| (c.first, c.second) == (b, a) || (c.first, c.second) == (a, b));
+                    let g = gap(&out[i], &out[j]);
+                    let least = if paired { 0.3 } else { opts.spacing };
+                    assert!(g >= least - 1e-9, "parts {i} and {j} are {g} apart");
+                }
+            }
+            for c in &found {
+                // The line cut runs half the kerf off the first part's side, as long as it.
+                let side = outlines[c.first][c.edge].distance(outlines[c.first][(c.edge + 1) % 4]);
+                assert!((c.from.distance(c.to) - side).abs() < 1e-9);
+            }
+            lines += found.len();
+        }
+        assert_eq!(lines, 20, "every trapezoid paired on a common line");
+        // A gap at or above the spacing is refused.
+        let wide = NestOptions {
+            common_gap: Some(5.0),
+            ..opts
+        };
+        assert_eq!(
+            BottomLeft::default().nest(&parts, &wide).unwrap_err(),
+            NestError::CommonGap(5.0, 5.0)
         );
     }
 

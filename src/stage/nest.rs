@@ -26,12 +26,12 @@ use serde::Serialize;
 use crate::analyze::material::is_stainless;
 use crate::fabricate::assembly::{axis_frame, write_scad_from_sheets, ScadCore, SheetPart};
 pub use crate::fabricate::cutpath::CutOrder;
-use crate::fabricate::cutpath::{order_parts, plan_sheet, PartShape, SheetPlan};
+use crate::fabricate::cutpath::{common_lines, order_parts, plan_sheet, PartShape, SheetPlan};
 use crate::fabricate::cutplan::{free_box, remnants, times, SpeedError, SpeedTable};
 use crate::fabricate::cutsheet::{chain, place_joints, write_sheet_dxf, Drawn, Hole};
 use crate::fabricate::nc::{self, Heading, Machine, NcFormat, Post};
 use crate::fabricate::nest::{
-    grown_hull, nest_families, BottomLeft, NestError, NestOptions, SLACK,
+    grown_hull, nest_families, BottomLeft, NestError, NestOptions, COMMON_FIT, SLACK,
 };
 pub use crate::fabricate::nest::{Place, Rotations, Stock};
 pub use crate::fabricate::plates_file::MaterialRecord;
@@ -91,6 +91,10 @@ pub struct Options {
     pub kerf: f64,
     /// How parts follow one another on a sheet. Default [`CutOrder::Travel`].
     pub cut_order: CutOrder,
+    /// Common-line cutting: congruent quads (each its own hull) are paired the kerf apart along
+    /// a whole side, which is cut once; the second part's contour starts in that kerf. Needs a
+    /// kerf, pairs, and no micro-joints. Default false.
+    pub common_line: bool,
     /// The job's name, etched on each sheet's label. Default: none (the label has the sheet
     /// number, grade and thickness).
     pub job: Option<String>,
@@ -130,6 +134,7 @@ impl Default for Options {
             speeds_name: "the built-in speed table".into(),
             kerf: 0.0,
             cut_order: CutOrder::Travel,
+            common_line: false,
             job: None,
             date: None,
             time: 2.0,
@@ -203,9 +208,9 @@ pub struct SheetInfo {
     pub area: f64,
     /// Free rectangles [lower-left, upper-right] left for later jobs.
     pub remnants: Vec<[DVec2; 2]>,
-    /// Cut length, mm (contours and leads, less micro-joints).
+    /// Cut length, mm (contours and leads, less micro-joints and common lines' second sides).
     pub cut_mm: f64,
-    /// Pierces: one per contour, one after each micro-joint.
+    /// Pierces: one per contour, one after each micro-joint, none for a common line's second part.
     pub pierces: usize,
     /// Etched length, mm.
     pub etch_mm: f64,
@@ -219,6 +224,8 @@ pub struct SheetInfo {
     pub rapid_mm: f64,
     /// The label etched on the sheet, None when no free place was found for it.
     pub label: Option<String>,
+    /// Common lines: the two plates (the first cut first) and the line cut once, mm.
+    pub common: Vec<([usize; 2], DVec2, DVec2)>,
 }
 
 /// Micro-joints as asked for.
@@ -450,6 +457,20 @@ impl Options {
                 ),
             ));
         }
+        if self.common_line {
+            let why = if self.kerf == 0.0 {
+                Some("needs a kerf (the gap cut once between the two parts)")
+            } else if self.no_pairs {
+                Some("pairs congruent quads, so it cannot go with no pairs")
+            } else if self.micro_joints.is_some() {
+                Some("cannot go with micro-joints (a common line's second part is cut from the first one's kerf)")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(OptionError::new("common_line", why.to_string()));
+            }
+        }
         for (name, text, most) in [("job", &self.job, 40), ("date", &self.date, 20)] {
             if let Some(t) = text {
                 if t.trim().is_empty()
@@ -488,6 +509,7 @@ impl Options {
             tries: self.tries.unwrap_or_else(|| NestOptions::tries_for(plates)),
             seed: self.seed,
             pair: !self.no_pairs,
+            common_gap: self.common_line.then_some(self.kerf),
             time: self.time,
         };
         if !(1..=MAX_TRIES).contains(&opts.tries) {
@@ -556,6 +578,7 @@ pub fn run(
                 time_s: (0.0, 0.0),
                 rapid_mm: 0.0,
                 label: None,
+                common: Vec::new(),
             }
         })
         .collect();
@@ -601,11 +624,31 @@ pub fn run(
                 )
             })
             .collect();
+        // Common lines: the first part of a pair is pierced off the shared side, the second
+        // at the shared side's end (its cut starts in the first one's kerf).
+        let common = if opts.common_line {
+            let outlines: Vec<Vec<DVec2>> = placed.iter().map(|(o, _)| o.clone()).collect();
+            common_lines(&outlines, opts.kerf, COMMON_FIT + 1e-9)
+        } else {
+            Vec::new()
+        };
+        let mut pierce_at: Vec<Option<Vec<usize>>> = vec![None; placed.len()];
+        for c in &common {
+            let n = placed[c.first].0.len();
+            pierce_at[c.first] = Some(
+                (0..n)
+                    .filter(|&v| v != c.edge && v != (c.edge + 1) % n)
+                    .collect(),
+            );
+            pierce_at[c.second] = Some(vec![(c.other_edge + 1) % placed[c.second].0.len()]);
+        }
         let shapes: Vec<PartShape> = placed
             .iter()
-            .map(|(o, h)| PartShape {
+            .zip(&pierce_at)
+            .map(|((o, h), at)| PartShape {
                 outline: o,
                 holes: h,
+                pierce_at: at.as_deref(),
             })
             .collect();
         let order = order_parts(&shapes, DVec2::ZERO, opts.cut_order);
@@ -617,9 +660,25 @@ pub fn run(
                 &order.holes[k],
                 opts.lead_in,
                 joints,
+                common.iter().any(|c| c.second == k),
             );
         }
         let proposed: Vec<usize> = order.parts.iter().map(|&k| sheet.parts[k]).collect();
+        let position = |k: usize| {
+            order
+                .parts
+                .iter()
+                .position(|&m| m == k)
+                .expect("every part is in the order")
+        };
+        let pairs: Vec<(usize, usize)> = common
+            .iter()
+            .map(|c| (position(c.first), position(c.second)))
+            .collect();
+        sheet.common = common
+            .iter()
+            .map(|c| ([sheet.parts[c.first], sheet.parts[c.second]], c.from, c.to))
+            .collect();
         let hulls: Vec<Vec<DVec2>> = proposed.iter().map(|&i| drawn[i].outline.clone()).collect();
         sheet.remnants = remnants(sheet.stock.size, &hulls, opts.spacing, opts.remnant_min);
         // Labels: each remnant's in its lower-left corner, the sheet's in the lowest free place.
@@ -669,7 +728,7 @@ pub fn run(
             Some(text.clone())
         });
         let parts: Vec<(usize, &Drawn)> = proposed.iter().map(|&i| (i, &drawn[i])).collect();
-        let plan = plan_sheet(&parts, &etch, 0.5 * opts.kerf, opts.cut_order);
+        let plan = plan_sheet(&parts, &pairs, &etch, 0.5 * opts.kerf, opts.cut_order);
         sheet.parts.clone_from(&plan.parts);
         sheet.rapid_mm = plan.rapid_mm;
         plans.push(plan);
@@ -753,6 +812,7 @@ fn on_sheet(
     hole_order: &[usize],
     lead: Option<f64>,
     joints: Option<Joints>,
+    common: bool,
 ) -> Drawn {
     let mut outline: Vec<DVec2> = p.outline.iter().map(|q| place.apply(*q)).collect();
     let n = outline.len();
@@ -778,12 +838,15 @@ fn on_sheet(
             leads.push([start - DVec2::X * len, start]);
             leads.push([start, start - DVec2::new(len, len).normalize() * len]);
         }
-        // The outline: along its first side into the corner, along its last side out.
-        let corner = outline[0];
-        let first = (outline[1] - corner).normalize();
-        let last = (corner - outline[n - 1]).normalize();
-        leads.push([corner - first * l, corner]);
-        leads.push([corner, corner + last * l]);
+        // The outline: along its first side into the corner, along its last side out. None
+        // on a common line's second part: its cut starts and ends in the first one's kerf.
+        if !common {
+            let corner = outline[0];
+            let first = (outline[1] - corner).normalize();
+            let last = (corner - outline[n - 1]).normalize();
+            leads.push([corner - first * l, corner]);
+            leads.push([corner, corner + last * l]);
+        }
     }
     let joints = match joints {
         Some(j) if j.applies(&p.outline) => place_joints(&outline, j.per_part, j.width, j.clear()),
@@ -795,6 +858,7 @@ fn on_sheet(
         etch: marks.etch,
         leads,
         joints,
+        common,
     }
 }
 
@@ -959,12 +1023,27 @@ pub struct Seconds {
     pub plasma: f64,
 }
 
+/// A line cut once between two parts (common-line cutting).
+#[derive(Clone, Debug, Serialize)]
+pub struct CommonDoc {
+    /// The line cut, half the kerf off each part's side.
+    pub from: [f64; 2],
+    /// Its length, mm: cut once instead of twice.
+    pub length_mm: f64,
+    /// The two plates: the first cut whole, the second from the line's end round to its start.
+    pub parts: [String; 2],
+    /// The line's other end.
+    pub to: [f64; 2],
+}
+
 /// One sheet.
 #[derive(Clone, Debug, Serialize)]
 pub struct SheetDoc {
+    /// Common lines on the sheet.
+    pub common_lines: Vec<CommonDoc>,
     /// Stock cost.
     pub cost: f64,
-    /// Cut length, mm (contours and leads, less micro-joints).
+    /// Cut length, mm (contours and leads, less micro-joints and common lines' second sides).
     pub cut_mm: f64,
     /// Etched length, mm.
     pub etch_mm: f64,
@@ -980,7 +1059,7 @@ pub struct SheetDoc {
     pub part_area_mm2: f64,
     /// The plates on it, by tag, in cutting order.
     pub parts: Vec<String>,
-    /// Pierces: one per contour, one after each micro-joint.
+    /// Pierces: one per contour, one after each micro-joint, none for a common line's second part.
     pub pierces: usize,
     /// Rapid travel, mm.
     pub rapid_mm: f64,
@@ -988,6 +1067,8 @@ pub struct SheetDoc {
     pub remnants: Vec<[[f64; 2]; 2]>,
     /// Size, mm.
     pub size: [f64; 2],
+    /// When the first remnant runs right across the sheet: the strip the parts use.
+    pub strip: Option<StripDoc>,
     /// Thickness, mm.
     pub thickness: f64,
     /// Machine time, s.
@@ -996,18 +1077,54 @@ pub struct SheetDoc {
     pub utilisation: f64,
 }
 
+/// The part of a sheet its parts use, when its first remnant runs right across it.
+#[derive(Clone, Debug, Serialize)]
+pub struct StripDoc {
+    /// "x" or "y": the direction the strip runs from the sheet's edge.
+    pub along: &'static str,
+    /// From the sheet's edge to the first remnant, mm.
+    pub length_mm: f64,
+    /// Part area over the strip's area.
+    pub utilisation: f64,
+}
+
+impl SheetInfo {
+    /// The strip left of (or below, or right of, or above) a first remnant that runs right
+    /// across the sheet.
+    pub fn strip(&self) -> Option<StripDoc> {
+        let [lo, hi] = *self.remnants.first()?;
+        let size = self.stock.size;
+        let (along, length, across) = if lo.x <= 0.0 && hi.x >= size.x {
+            ("y", size.y - (hi.y - lo.y), size.x)
+        } else if lo.y <= 0.0 && hi.y >= size.y {
+            ("x", size.x - (hi.x - lo.x), size.y)
+        } else {
+            return None;
+        };
+        (length > 0.0).then(|| StripDoc {
+            along,
+            length_mm: length,
+            utilisation: self.area / (length * across),
+        })
+    }
+}
+
 /// Every sheet together.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Total {
+    /// Common lines.
+    pub common_lines: usize,
+    /// Their length (cut once instead of twice), mm.
+    pub common_mm: f64,
     /// Stock cost.
     pub cost: f64,
-    /// Cut length, mm (contours and leads, less micro-joints).
+    /// Cut length, mm (contours and leads, less micro-joints and common lines' second sides).
     pub cut_mm: f64,
     /// Etched length, mm.
     pub etch_mm: f64,
     /// Area of the parts, mm².
     pub part_area_mm2: f64,
-    /// Pierces: one per contour, one after each micro-joint.
+    /// Pierces: one per contour, one after each micro-joint, none for a common line's second part.
     pub pierces: usize,
     /// Rapid travel, mm.
     pub rapid_mm: f64,
@@ -1035,11 +1152,13 @@ fn nest_doc(out: &Nested, opts: &NestOptions, asked: &Options) -> NestDoc {
         cut_order: asked.cut_order.name(),
         definitions: [
             ("bbox_min", "lower-left corner of the part's bounding box on the sheet"),
-            ("cut_mm", "outer and inner contours less micro-joints (and lead lines when asked for)"),
+            ("common_lines", "a side shared by two parts set the kerf apart (--common-line), cut once along the line half the kerf off both: the first part is cut whole, the second from the line's end round to its start, beginning in the first one's kerf (no pierce)"),
+            ("cut_mm", "outer and inner contours less micro-joints and less each common line's second side (and lead lines when asked for)"),
             ("micro_joints", "uncut bridges on the outer contour (gaps between its open pieces on CUT_OUTER, drawn across on JOINT), on parts whose bounding box's longer side is under below_mm"),
             ("offset", "sheet point = R(rotation_deg) · plate point + offset, the plate point in the plate's own frame (plates.json)"),
-            ("pierces", "one per contour, and one after each micro-joint"),
+            ("pierces", "one per contour, and one after each micro-joint; none for a common line's second part, whose cut starts in a kerf"),
             ("remnants", "free rectangles [lower-left, upper-right] at least remnant_min, the spacing clear of every part"),
+            ("strip", "when the first remnant runs right across the sheet: the rest of the sheet (from the edge it starts at, along x or y), its length and the part area over its area"),
             ("rapid_mm", "rapid travel of the NC program: from the sheet's origin to the first path, then from the end of each path (etching first, then each part's holes and outer contour, with leads, offset by half the kerf) to the start of the next; the return home is not counted"),
             ("time_s", "cut length over the cutting speed, a pierce time per contour, etched length over the marking speed, rapid travel over the rapid speed (speed_table)"),
         ]
@@ -1102,6 +1221,16 @@ fn nest_doc(out: &Nested, opts: &NestOptions, asked: &Options) -> NestDoc {
             .sheets
             .iter()
             .map(|s| SheetDoc {
+                common_lines: s
+                    .common
+                    .iter()
+                    .map(|([a, b], from, to)| CommonDoc {
+                        from: [from.x, from.y],
+                        length_mm: from.distance(*to),
+                        parts: [out.plates[*a].id.clone(), out.plates[*b].id.clone()],
+                        to: [to.x, to.y],
+                    })
+                    .collect(),
                 cost: s.stock.cost,
                 cut_mm: s.cut_mm + s.lead_mm,
                 etch_mm: s.etch_mm,
@@ -1119,6 +1248,7 @@ fn nest_doc(out: &Nested, opts: &NestOptions, asked: &Options) -> NestDoc {
                     .map(|[a, b]| [[a.x, a.y], [b.x, b.y]])
                     .collect(),
                 size: [s.stock.size.x, s.stock.size.y],
+                strip: s.strip(),
                 thickness: s.thickness,
                 time_s: Seconds {
                     laser: s.time_s.0,
@@ -1130,6 +1260,12 @@ fn nest_doc(out: &Nested, opts: &NestOptions, asked: &Options) -> NestDoc {
         spacing: opts.spacing,
         speed_table: out.speeds.clone(),
         total: Total {
+            common_lines: out.sheets.iter().map(|s| s.common.len()).sum(),
+            common_mm: out
+                .sheets
+                .iter()
+                .flat_map(|s| s.common.iter())
+                .fold(0.0, |sum, (_, a, b)| sum + a.distance(*b)),
             cost: out.sheets.iter().map(|s| s.stock.cost).sum(),
             cut_mm: out.sheets.iter().map(|s| s.cut_mm + s.lead_mm).sum(),
             etch_mm: out.sheets.iter().map(|s| s.etch_mm).sum(),

@@ -484,6 +484,7 @@ fn drawn(p: &Plate) -> (Drawn, Option<f64>) {
         etch: marks.etch,
         leads: Vec::new(),
         joints: Vec::new(),
+        common: false,
     };
     (part, marks.tag_height)
 }

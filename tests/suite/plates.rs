@@ -360,6 +360,9 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
         vec!["--nc", "gcode", "--nc-on", ""],
         vec!["--nc", "lasercut"],
         vec!["--cut-order", "random"],
+        vec!["--common-line"],
+        vec!["--common-line", "--kerf", "0.3", "--no-pairs"],
+        vec!["--common-line", "--kerf", "0.3", "--micro-joints", "2"],
         vec!["--job", ""],
         vec!["--date", "a date far too long for a label"],
         vec!["--time", "0"],
@@ -431,6 +434,65 @@ fn nc_programs_cut_what_the_sheets_draw_in_a_shorter_order() -> TestResult {
     // The DXFs stay nominal and say so.
     let dxf = std::fs::read_to_string(cut.join(sheets[0]["file"].as_str().ok_or("file")?))?;
     assert!(dxf.contains("nominal contours: the NC programs offset them by half the 0.4 mm kerf"));
+    Ok(())
+}
+
+#[test]
+fn common_lines_cut_a_shared_side_once_from_the_first_parts_kerf() -> TestResult {
+    let dir = tempfile::tempdir()?;
+    let axes = calyx_axes(dir.path(), &["--fix-normal", "z<1:0,0,1"])?;
+    let (plates_dir, _) = plates_of(dir.path(), &axes, &["--groups", "7"])?;
+    // Every quad twice: a congruent copy, as a symmetric structure's plates come.
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(plates_dir.join("plates.json"))?)?;
+    let list = doc["plates"].as_array().ok_or("plates")?.clone();
+    let mut twins = Vec::new();
+    for p in list {
+        let quad = p["outline"].as_array().is_some_and(|o| o.len() == 4);
+        twins.push(p.clone());
+        if quad {
+            let mut q = p;
+            q["id"] = format!("{}b", q["id"].as_str().ok_or("id")?).into();
+            twins.push(q);
+        }
+    }
+    doc["plates"] = twins.into();
+    let file = dir.path().join("twins.json");
+    std::fs::write(&file, serde_json::to_string(&doc)?)?;
+    let base = ["--tries", "1", "--kerf", "0.3", "--nc", "gcode"];
+    let (_, apart) = nest_of(dir.path(), &file, "apart", &base)?;
+    let mut args = base.to_vec();
+    args.push("--common-line");
+    let (cut, common) = nest_of(dir.path(), &file, "common", &args)?;
+    let total = |d: &serde_json::Value, k: &str| d["total"][k].as_f64().unwrap_or(f64::NAN);
+    let lines = total(&common, "common_lines");
+    assert!(lines >= 100.0, "{lines} common lines");
+    assert_eq!(total(&apart, "common_lines"), 0.0);
+    // The same contours less each shared side, one pierce fewer a pair.
+    let saved = total(&apart, "cut_mm") - total(&common, "cut_mm");
+    assert!(
+        (saved - total(&common, "common_mm")).abs() < 1e-6 * total(&apart, "cut_mm"),
+        "{saved} vs {}",
+        total(&common, "common_mm")
+    );
+    assert_eq!(total(&apart, "pierces") - total(&common, "pierces"), lines);
+    let mut from_kerf = 0;
+    for sheet in common["sheets"].as_array().ok_or("sheets")? {
+        let name = sheet["file"]
+            .as_str()
+            .ok_or("file")?
+            .replace(".dxf", ".ngc");
+        let text = std::fs::read_to_string(cut.join(name))?;
+        from_kerf += text
+            .lines()
+            .filter(|l| l.starts_with("(outer contour from the common line's kerf, no pierce"))
+            .count();
+        for c in sheet["common_lines"].as_array().ok_or("common_lines")? {
+            let len = c["length_mm"].as_f64().unwrap_or(0.0);
+            assert!(len > 10.0, "{c}");
+        }
+    }
+    assert_eq!(from_kerf as f64, lines);
     Ok(())
 }
 

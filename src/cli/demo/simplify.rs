@@ -124,6 +124,7 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         no_pairs: false,
         kerf: 0.0,
         cut_order: crate::cli::nest::CutOrderArg::Travel,
+        common_line: false,
         job: None,
         date: None,
         nc: None,
