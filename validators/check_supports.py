@@ -72,8 +72,9 @@ def main():
     a_rows = a[0].shape[0]
     r = np.nonzero(rows)[0]
     c = np.nonzero(cols)[0]
-    r0, r1 = max(r.min() - 2, 0), r.max() + 3
-    c0, c1 = max(c.min() - 2, 0), c.max() + 3
+    # A margin of two pixels, within the display (a part may touch its edge).
+    r0, r1 = max(r.min() - 2, 0), min(r.max() + 3, a[0].shape[0])
+    c0, c1 = max(c.min() - 2, 0), min(c.max() + 3, a[0].shape[1])
     part = np.zeros((n, r1 - r0, c1 - c0), dtype=bool)
     held = np.zeros_like(part)
     changed = 0

@@ -1,7 +1,8 @@
 """The density peer: sparrow (Gardeyn & Vanden Berghe 2025, irregular strip packing, MIT).
 
-sparrow is not on crates.io or PyPI; `scripts/peers/sparrow_setup DIR` builds it from a checkout
-of https://github.com/JeroenGar/sparrow that the developer provides. This script turns a lamina
+sparrow is not on crates.io or PyPI: build it from a checkout of
+https://github.com/JeroenGar/sparrow (`cargo build --release --features only_final_svg`), then
+run `sparrow -i INPUT -t SECONDS -s SEED`; it writes `output/final_<name>.json`. This script turns a lamina
 plates.json (one thickness) into sparrow's input (jagua-rs's strip packing JSON) the way lamina's
 nester sees the job: each plate's convex hull grown by half the spacing (an outer polygon of the
 round offset), the strip's height the sheet less the margins grown by half the spacing, the

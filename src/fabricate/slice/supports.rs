@@ -474,7 +474,7 @@ fn hold(
         match end {
             End::Model(h) => {
                 tally.to_model += 1;
-                land(model, &mut pieces, neck, h, rp);
+                land(model, &mut pieces, neck, h, rp, rt);
             }
             End::Plate => tops.push(neck),
         }
@@ -519,7 +519,7 @@ fn hold(
         match below.unwrap_or(End::Plate) {
             End::Model(h) => {
                 tally.to_model += 1;
-                land(model, &mut pieces, joint, h, rp);
+                land(model, &mut pieces, joint, h, rp, 0.5 * opts.tip);
             }
             End::Plate => tops.push(joint),
         }
@@ -563,15 +563,16 @@ fn descend(model: &dyn Held, from: DVec3) -> End {
 
 /// A pillar of radius `r` (no wider than the vein it lands on) from `top` down onto the solid,
 /// which it meets at height `h`: the pillar narrows over its last stretch to a ball half as
-/// wide as the vein, sunk into it, so no part of it hangs beside the vein (it would be an
-/// island).
-fn land(model: &dyn Held, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64) {
+/// wide as the vein (and half as wide as a tip of radius `rt`), sunk into it, so no part of it
+/// hangs beside the vein (it would be an island) and it touches the part over less than a
+/// tip's footprint, on a slope too.
+fn land(model: &dyn Held, pieces: &mut Vec<Piece>, top: DVec3, h: f64, r: f64, rt: f64) {
     let hit = DVec3::new(top.x, top.y, h);
     let inside = hit - DVec3::Z * 0.01;
     let vein = model.vein_radius(inside);
     // Never wider than the vein it stands on.
     let r = vein.map_or(r, |v| r.min(v));
-    let rl = vein.map_or(0.5 * r, |v| (0.5 * v).min(r));
+    let rl = vein.map_or(0.5 * r, |v| (0.5 * v).min(r)).min(0.5 * rt);
     let taper = (4.0 * r).min(0.5 * (top.z - h)).max(0.0);
     let foot = DVec3::new(top.x, top.y, h + taper);
     if top.z > foot.z {
