@@ -624,8 +624,9 @@ pub fn run(
                 )
             })
             .collect();
-        // Common lines: the first part of a pair is pierced off the shared side, the second
-        // at the shared side's end (its cut starts in the first one's kerf).
+        // Common lines: the first part of a pair is pierced at the corner before the shared
+        // side (off it, and one side from where the second part's cut starts), the second at
+        // the shared side's end (its cut starts in the first one's kerf).
         let common = if opts.common_line {
             let outlines: Vec<Vec<DVec2>> = placed.iter().map(|(o, _)| o.clone()).collect();
             common_lines(&outlines, opts.kerf, COMMON_FIT + 1e-9)
@@ -635,11 +636,7 @@ pub fn run(
         let mut pierce_at: Vec<Option<Vec<usize>>> = vec![None; placed.len()];
         for c in &common {
             let n = placed[c.first].0.len();
-            pierce_at[c.first] = Some(
-                (0..n)
-                    .filter(|&v| v != c.edge && v != (c.edge + 1) % n)
-                    .collect(),
-            );
+            pierce_at[c.first] = Some(vec![(c.edge + n - 1) % n]);
             pierce_at[c.second] = Some(vec![(c.other_edge + 1) % placed[c.second].0.len()]);
         }
         let shapes: Vec<PartShape> = placed
