@@ -86,8 +86,9 @@ pub struct Args {
     #[arg(long)]
     pub speeds: Option<PathBuf>,
     /// Work spent making the sheets denser after the fill (overlap minimisation: more parts
-    /// onto each sheet but the last), in seconds of a 2-core reference machine; counted as
-    /// work, so the same inputs give the same sheets on any machine
+    /// onto each sheet but the last; from 5 s a sheet, each sheet is first compressed along x
+    /// then y to free room), in seconds of a 2-core reference machine; counted as work, so
+    /// the same inputs give the same sheets on any machine
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub time: f64,
     /// Width of the cut, mm: the NC programs run half of it outside outer contours and inside

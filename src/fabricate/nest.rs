@@ -54,6 +54,16 @@ pub const SLACK: f64 = 0.01;
 const BACKOFF: f64 = 0.005;
 /// Starts keep this far off the container's walls, mm.
 const CLEAR: f64 = 2.0 * BACKOFF;
+/// A compression step: this fraction of the container's length at first, halved after each
+/// step that does not separate, down to [`COMPRESS_LEAST`] mm.
+const COMPRESS_STEP: f64 = 0.002;
+const COMPRESS_LEAST: f64 = 1.0;
+/// Seeds tried at a step before it is halved.
+const COMPRESS_TRIES: usize = 3;
+/// Compression runs on a sheet whose share of the work is at least this many pair
+/// evaluations (5 s of `time`).
+const COMPRESS_WORK: u64 = 50_000_000;
+
 /// A pair of quads is kept if its hull wastes less than this fraction of its area.
 const PAIR_WASTE: f64 = 0.04;
 /// Congruent: side lengths and diagonals equal within this, mm.
@@ -1225,8 +1235,10 @@ impl Nester for BottomLeft<'_> {
 }
 
 impl BottomLeft<'_> {
-    /// Denser sheets (see [`crate::fabricate::separate`]): for each sheet but the last, items
-    /// from later sheets (the last sheet's first, smallest first) are put onto it where they
+    /// Denser sheets (see [`crate::fabricate::separate`]): for each sheet but the last, given
+    /// work enough, the sheet is first compressed (its items separated into a room shorter
+    /// along x by a step at a time, the step shrinking while that fails and growing while it
+    /// succeeds), then items from later sheets (the last sheet's first, smallest first) are put onto it where they
     /// overlap least and the overlaps separated; an item that cannot be taken is not offered
     /// again, nor anything at least as large both ways. Sheets left empty are dropped, and the
     /// last sheet's items are filled again from its origin edge. Every sheet changed is
@@ -1253,6 +1265,84 @@ impl BottomLeft<'_> {
         };
         let mut attempt = 0u64;
         for k in 0..sheets.saturating_sub(1) {
+            // Compression first: the sheet's items pushed into a shorter room, a step at a
+            // time, while the separation clears every overlap (the room's far end freed).
+            // Half of this sheet's share of the work at most, the rest to fill the room freed;
+            // none when the share is too small to compress (a step takes millions of pair
+            // evaluations), so that short budgets go to filling alone. Along x first, then y.
+            let sheets_left = (sheets - 1 - k) as u64;
+            let share = (budget - used.min(budget)) / sheets_left.max(1);
+            let stop = if share >= COMPRESS_WORK {
+                used + share / 2
+            } else {
+                used
+            };
+            for axis in [DVec2::X, DVec2::Y] {
+                let longest = COMPRESS_STEP * container.size.dot(axis);
+                let mut step = longest;
+                let mut failed = 0;
+                let mut gained = 0;
+                while step >= COMPRESS_LEAST && used < stop {
+                    crate::stage::checkpoint(self.progress)?;
+                    let spots: Vec<Spot> = (0..items.len())
+                        .filter(|&i| at[i].0 == k)
+                        .map(|i| Spot {
+                            item: i,
+                            form: at[i].1,
+                            at: at[i].2,
+                        })
+                        .collect();
+                    let extent = spots
+                        .iter()
+                        .map(|s| (s.at + forms[s.item][s.form].size).dot(axis))
+                        .fold(0.0, f64::max)
+                        + CLEAR;
+                    attempt += 1;
+                    let seed = opts.seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                    let room = container.size - axis * (container.size.dot(axis) - extent + step);
+                    let known = spots.len();
+                    let mut sep = Separation::new(&forms, room, CLEAR, spots, known, seed);
+                    let done = sep.run((4 * per_try).min(stop.saturating_sub(used)));
+                    used += sep.work;
+                    // Kept when jagua-rs agrees that every item moved is clear of the rest
+                    // (those that stayed were checked when placed).
+                    let checked = done && {
+                        let mut sheet = container.sheet();
+                        let stayed = |s: &Spot| (at[s.item].1, at[s.item].2) == (s.form, s.at);
+                        let mut ok = true;
+                        for s in sep.spots.iter().filter(|s| stayed(s)) {
+                            let shape = &items[s.item].shapes[s.form];
+                            ok &= sheet.place(shape, s.at, s.item as u32).is_ok();
+                        }
+                        for s in sep.spots.iter().filter(|s| !stayed(s)) {
+                            let shape = &items[s.item].shapes[s.form];
+                            ok = ok
+                                && !sheet.collides(shape, s.at)
+                                && sheet.place(shape, s.at, s.item as u32).is_ok();
+                        }
+                        ok
+                    };
+                    if checked {
+                        for s in &sep.spots {
+                            at[s.item] = (k, s.form, s.at);
+                        }
+                        failed = 0;
+                        // Two steps in a row: a longer one.
+                        gained += 1;
+                        if gained % 2 == 0 {
+                            step = (1.5 * step).min(longest);
+                        }
+                    } else {
+                        gained = 0;
+                        // Another seed first, then a smaller step.
+                        failed += 1;
+                        if failed == COMPRESS_TRIES {
+                            step *= 0.5;
+                            failed = 0;
+                        }
+                    }
+                }
+            }
             let mut refused: Vec<DVec2> = Vec::new();
             loop {
                 crate::stage::checkpoint(self.progress)?;

@@ -4,6 +4,8 @@
 //! stay in collision (guided local search), as the best open strip-packing heuristics do
 //! (Gardeyn and Vanden Berghe's sparrow; Egeblad et al. before it). If the overlaps reach zero the
 //! sheet holds one more item; if not within the attempt's work, the sheet is left as it was.
+//! The same search compresses a sheet: its room made a little shorter, the items over the new
+//! wall separated back inside (sparrow's exploration, on a sheet of fixed width).
 //!
 //! Items are convex polygons (the nester's grown hulls), so the overlap of two is exact and
 //! cheap: the penetration depth along the separating axes (the edge normals of both); two items
@@ -105,7 +107,8 @@ pub struct Separation<'a> {
     room: DVec2,
     clear: f64,
     pub spots: Vec<Spot>,
-    /// Pair weights, by position in `spots` (upper triangle).
+    /// Pair weights, by position in `spots` (upper triangle; the diagonal weighs a spot's
+    /// excess over the walls).
     weights: Vec<f64>,
     /// Pair evaluations spent.
     pub work: u64,
@@ -134,7 +137,9 @@ impl<'a> Separation<'a> {
             room,
             clear,
             spots,
-            weights: vec![1.0; n * n],
+            weights: (0..n * n)
+                .map(|k| if k % (n + 1) == 0 { 2.0 } else { 1.0 })
+                .collect(),
             work: 0,
             rng: ChaCha8Rng::seed_from_u64(seed),
         }
@@ -144,21 +149,40 @@ impl<'a> Separation<'a> {
         &self.forms[s.item][s.form]
     }
 
-    /// How far a form at `at` leaves the container.
+    /// How far a form at `at` leaves the container (kept `clear` off its walls).
+    fn wall_by(&self, f: &Form, at: DVec2, clear: f64) -> f64 {
+        let lo = DVec2::splat(clear);
+        let hi = self.room - DVec2::splat(clear) - f.size;
+        let excess =
+            (lo - at).max(DVec2::ZERO).element_sum() + (at - hi).max(DVec2::ZERO).element_sum();
+        // A room that holds a form exactly leaves rounding's excess: none.
+        if excess > 1e-9 {
+            excess
+        } else {
+            0.0
+        }
+    }
+
     fn wall(&self, f: &Form, at: DVec2) -> f64 {
-        let lo = DVec2::splat(self.clear);
-        let hi = self.room - DVec2::splat(self.clear) - f.size;
-        (lo - at).max(DVec2::ZERO).element_sum() + (at - hi).max(DVec2::ZERO).element_sum()
+        self.wall_by(f, at, self.clear)
     }
 
     /// Weighted overlap of spot `k` moved to (form, at) with every other spot, and its wall
-    /// excess (weighted 2).
+    /// excess (weighted as a pair is, 2 at first: the walls of a room made shorter push as
+    /// hard as the neighbours they push against).
     fn cost(&mut self, k: usize, form: usize, at: DVec2) -> f64 {
         let f = &self.forms[self.spots[k].item][form];
         let unmoved = !self.moved[k] && form == self.spots[k].form && at == self.spots[k].at;
-        let mut sum = if unmoved { 0.0 } else { 2.0 * self.wall(f, at) };
-        let (lo, hi) = (at, at + f.size);
+        // A spot where it was given is clear of the walls the caller checked, not of a room
+        // made shorter since.
         let n = self.spots.len();
+        let mut sum = self.weights[k * n + k]
+            * if unmoved {
+                self.wall_by(f, at, 0.0)
+            } else {
+                self.wall(f, at)
+            };
+        let (lo, hi) = (at, at + f.size);
         // Box tests count a sixteenth of a pair evaluation each.
         self.work += (n as u64).div_ceil(16);
         for j in 0..n {
@@ -195,7 +219,7 @@ impl<'a> Separation<'a> {
             let w = if self.moved[i] {
                 self.wall(fa, a.at)
             } else {
-                0.0
+                self.wall_by(fa, a.at, 0.0)
             };
             if w > 0.0 {
                 total += w;
@@ -263,7 +287,7 @@ impl<'a> Separation<'a> {
         }
         // Refine: coordinate descent with halving steps.
         let mut step = 0.1 * self.forms[item][best.1].size.min_element();
-        while step > 0.02 && best.0 > 0.0 {
+        while step > 0.001 && best.0 > 0.0 {
             let mut moved = false;
             for dir in [DVec2::X, DVec2::NEG_X, DVec2::Y, DVec2::NEG_Y] {
                 let at = best.2 + dir * step;
@@ -323,10 +347,8 @@ impl<'a> Separation<'a> {
             let (_, pairs) = self.overlaps();
             let deepest = pairs.iter().map(|p| p.2).fold(0.0, f64::max);
             for (i, j, d) in pairs {
-                if i != j {
-                    let w = &mut self.weights[i * n + j];
-                    *w = (*w * (1.2 + 0.8 * d / deepest)).min(1e6);
-                }
+                let w = &mut self.weights[i * n + j];
+                *w = (*w * (1.2 + 0.8 * d / deepest)).min(1e6);
             }
         }
         false
@@ -383,6 +405,37 @@ mod tests {
         let a = square(10.0);
         assert!((depth(&a, DVec2::ZERO, &a, DVec2::new(7.0, 2.0)) - (3.0 + GAP)).abs() < 1e-12);
         assert!(depth(&a, DVec2::ZERO, &a, DVec2::new(10.0 + 2.0 * GAP, 0.0)) < 0.0);
+    }
+
+    #[test]
+    fn a_row_of_squares_is_compressed_into_a_shorter_room() {
+        // Four squares 1 apart in a row (clear, as the caller says), then a room 2 shorter:
+        // the last one is over the new wall, and the row closes up to make room.
+        let forms = vec![vec![square(10.0)]; 4];
+        let spots: Vec<Spot> = (0..4)
+            .map(|item| Spot {
+                item,
+                form: 0,
+                at: DVec2::new(0.01 + 11.0 * item as f64, 0.01),
+            })
+            .collect();
+        let room = DVec2::new(43.02 - 2.0, 10.02);
+        let mut sep = Separation::new(&forms, room, 0.01, spots, 4, 5);
+        let (total, pairs) = sep.overlaps();
+        assert_eq!(pairs.len(), 1, "only the wall: {pairs:?}");
+        // Measured to the wall itself: a spot the caller placed keeps no clearance of its own.
+        assert!((total - 1.99).abs() < 1e-9, "{total}");
+        let done = sep.run(10_000_000);
+        let (total, pairs) = sep.overlaps();
+        assert!(
+            done,
+            "{} evaluations, {total} left in {pairs:?}: {:?}",
+            sep.work, sep.spots
+        );
+        assert!(pairs.is_empty() && total == 0.0);
+        for s in &sep.spots {
+            assert!(s.at.x + 10.0 <= room.x - 0.01 + 1e-9, "{s:?}");
+        }
     }
 
     #[test]
