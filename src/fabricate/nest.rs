@@ -1304,24 +1304,7 @@ impl BottomLeft<'_> {
                     let mut sep = Separation::new(&forms, room, CLEAR, spots, known, seed);
                     let done = sep.run((4 * per_try).min(stop.saturating_sub(used)));
                     used += sep.work;
-                    // Kept when jagua-rs agrees that every item moved is clear of the rest
-                    // (those that stayed were checked when placed).
-                    let checked = done && {
-                        let mut sheet = container.sheet();
-                        let stayed = |s: &Spot| (at[s.item].1, at[s.item].2) == (s.form, s.at);
-                        let mut ok = true;
-                        for s in sep.spots.iter().filter(|s| stayed(s)) {
-                            let shape = &items[s.item].shapes[s.form];
-                            ok &= sheet.place(shape, s.at, s.item as u32).is_ok();
-                        }
-                        for s in sep.spots.iter().filter(|s| !stayed(s)) {
-                            let shape = &items[s.item].shapes[s.form];
-                            ok = ok
-                                && !sheet.collides(shape, s.at)
-                                && sheet.place(shape, s.at, s.item as u32).is_ok();
-                        }
-                        ok
-                    };
+                    let checked = done && confirmed(items, container, at, &sep.spots, None);
                     if checked {
                         for s in &sep.spots {
                             at[s.item] = (k, s.form, s.at);
@@ -1383,28 +1366,7 @@ impl BottomLeft<'_> {
                 let mut sep = Separation::new(&forms, container.size, CLEAR, all, fresh, seed);
                 let done = sep.run(per_try.min(budget - used));
                 used += sep.work;
-                // Kept only when jagua-rs agrees that every item moved (or new) is clear of the
-                // rest, as the fill checks each item against those placed before it.
-                let checked = done && {
-                    let mut sheet = container.sheet();
-                    let moved: Vec<bool> = sep
-                        .spots
-                        .iter()
-                        .map(|s| s.item == c || (at[s.item].1, at[s.item].2) != (s.form, s.at))
-                        .collect();
-                    let mut ok = true;
-                    for (s, _) in sep.spots.iter().zip(&moved).filter(|(_, m)| !**m) {
-                        let shape = &items[s.item].shapes[s.form];
-                        ok &= sheet.place(shape, s.at, s.item as u32).is_ok();
-                    }
-                    for (s, _) in sep.spots.iter().zip(&moved).filter(|(_, m)| **m) {
-                        let shape = &items[s.item].shapes[s.form];
-                        ok = ok
-                            && !sheet.collides(shape, s.at)
-                            && sheet.place(shape, s.at, s.item as u32).is_ok();
-                    }
-                    ok
-                };
+                let checked = done && confirmed(items, container, at, &sep.spots, Some(c));
                 if checked {
                     for s in &sep.spots {
                         at[s.item] = (k, s.form, s.at);
@@ -1446,6 +1408,32 @@ impl BottomLeft<'_> {
         }
         Ok(sheets)
     }
+}
+
+/// Whether jagua-rs agrees that every spot moved from where `at` has it (or the new item
+/// `new`) is clear of the rest, as the fill checks each item against those placed before it
+/// (the spots that stayed were checked when placed).
+fn confirmed(
+    items: &[Item],
+    container: &Container,
+    at: &Spots,
+    spots: &[crate::fabricate::separate::Spot],
+    new: Option<usize>,
+) -> bool {
+    let mut sheet = container.sheet();
+    let stayed = |s: &&crate::fabricate::separate::Spot| {
+        Some(s.item) != new && (at[s.item].1, at[s.item].2) == (s.form, s.at)
+    };
+    let mut ok = true;
+    for s in spots.iter().filter(stayed) {
+        let shape = &items[s.item].shapes[s.form];
+        ok &= sheet.place(shape, s.at, s.item as u32).is_ok();
+    }
+    for s in spots.iter().filter(|s| !stayed(s)) {
+        let shape = &items[s.item].shapes[s.form];
+        ok = ok && !sheet.collides(shape, s.at) && sheet.place(shape, s.at, s.item as u32).is_ok();
+    }
+    ok
 }
 
 /// An item of these members (their hull `hull`) grown by `d`, at every allowed rotation that
