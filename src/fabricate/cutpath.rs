@@ -214,22 +214,20 @@ pub fn common_lines(outlines: &[Vec<DVec2>], gap: f64, fit: f64) -> Vec<CommonLi
     let mut taken = vec![false; outlines.len()];
     let mut found = Vec::new();
     for (pos, &i) in by_x.iter().enumerate() {
-        // Neighbours whose boxes come within reach, in x order after this one, then before.
-        let near = by_x[pos + 1..]
+        // Neighbours later in x order whose boxes come within reach (a pair is met from the
+        // one whose box starts first).
+        let mut candidates: Vec<usize> = by_x[pos + 1..]
             .iter()
-            .take_while(|&&j| boxes[j].0.x <= boxes[i].1.x + reach)
-            .chain(by_x[..pos].iter())
             .copied()
+            .take_while(|&j| boxes[j].0.x <= boxes[i].1.x + reach)
             .filter(|&j| {
-                boxes[j].1.x >= boxes[i].0.x - reach
-                    && boxes[j].0.y <= boxes[i].1.y + reach
-                    && boxes[j].1.y >= boxes[i].0.y - reach
-            });
-        let mut candidates: Vec<usize> = near.collect();
+                boxes[j].0.y <= boxes[i].1.y + reach && boxes[j].1.y >= boxes[i].0.y - reach
+            })
+            .collect();
         candidates.sort_unstable();
         for j in candidates {
             let (first, second) = (i.min(j), i.max(j));
-            if taken[first] || taken[second] || i > j {
+            if taken[first] || taken[second] {
                 continue;
             }
             let (a, b) = (&outlines[first], &outlines[second]);

@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{RTree, AABB};
 
+use crate::fabricate::separate::Spot;
 use crate::geom::convex_distance;
 use crate::text::num;
 
@@ -1250,7 +1251,7 @@ impl BottomLeft<'_> {
         container: &Container,
         opts: &NestOptions,
     ) -> Result<usize, NestError> {
-        use crate::fabricate::separate::{entry, Form, Separation, Spot, EVALS_PER_SECOND};
+        use crate::fabricate::separate::{entry, Form, Separation, EVALS_PER_SECOND};
         let forms: Vec<Vec<Form>> = items
             .iter()
             .map(|it| it.shapes.iter().map(|s| Form::new(s.pts.clone())).collect())
@@ -1284,21 +1285,14 @@ impl BottomLeft<'_> {
                 let mut gained = 0;
                 while step >= COMPRESS_LEAST && used < stop {
                     crate::stage::checkpoint(self.progress)?;
-                    let spots: Vec<Spot> = (0..items.len())
-                        .filter(|&i| at[i].0 == k)
-                        .map(|i| Spot {
-                            item: i,
-                            form: at[i].1,
-                            at: at[i].2,
-                        })
-                        .collect();
+                    let spots = sheet_spots(at, k);
                     let extent = spots
                         .iter()
                         .map(|s| (s.at + forms[s.item][s.form].size).dot(axis))
                         .fold(0.0, f64::max)
                         + CLEAR;
                     attempt += 1;
-                    let seed = opts.seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                    let seed = attempt_seed(opts.seed, attempt);
                     let room = container.size - axis * (container.size.dot(axis) - extent + step);
                     let known = spots.len();
                     let mut sep = Separation::new(&forms, room, CLEAR, spots, known, seed);
@@ -1349,16 +1343,9 @@ impl BottomLeft<'_> {
                         .then(a.cmp(&b))
                 });
                 let Some(&c) = later.first() else { break };
-                let spots: Vec<Spot> = (0..items.len())
-                    .filter(|&i| at[i].0 == k)
-                    .map(|i| Spot {
-                        item: i,
-                        form: at[i].1,
-                        at: at[i].2,
-                    })
-                    .collect();
+                let spots = sheet_spots(at, k);
                 attempt += 1;
-                let seed = opts.seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15);
+                let seed = attempt_seed(opts.seed, attempt);
                 let new = entry(&forms, container.size, CLEAR, &spots, c, seed);
                 let mut all = spots;
                 all.push(new);
@@ -1410,6 +1397,24 @@ impl BottomLeft<'_> {
     }
 }
 
+/// The items on sheet `k` where `at` has them.
+fn sheet_spots(at: &Spots, k: usize) -> Vec<Spot> {
+    at.iter()
+        .enumerate()
+        .filter(|(_, a)| a.0 == k)
+        .map(|(i, a)| Spot {
+            item: i,
+            form: a.1,
+            at: a.2,
+        })
+        .collect()
+}
+
+/// A separation attempt's own seed.
+fn attempt_seed(seed: u64, attempt: u64) -> u64 {
+    seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
+
 /// Whether jagua-rs agrees that every spot moved from where `at` has it (or the new item
 /// `new`) is clear of the rest, as the fill checks each item against those placed before it
 /// (the spots that stayed were checked when placed).
@@ -1417,13 +1422,11 @@ fn confirmed(
     items: &[Item],
     container: &Container,
     at: &Spots,
-    spots: &[crate::fabricate::separate::Spot],
+    spots: &[Spot],
     new: Option<usize>,
 ) -> bool {
     let mut sheet = container.sheet();
-    let stayed = |s: &&crate::fabricate::separate::Spot| {
-        Some(s.item) != new && (at[s.item].1, at[s.item].2) == (s.form, s.at)
-    };
+    let stayed = |s: &&Spot| Some(s.item) != new && (at[s.item].1, at[s.item].2) == (s.form, s.at);
     let mut ok = true;
     for s in spots.iter().filter(stayed) {
         let shape = &items[s.item].shapes[s.form];
