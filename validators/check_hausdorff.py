@@ -3,6 +3,7 @@ the exact surface of the veins within the tolerance of each other, both ways.
 
     check_hausdorff.py SOLID.stl --report solid.json --network NET.json
                        [--tolerance T] [--samples 200000] [--min-reduction 0] [--cell C]
+                       [--volume-tolerance 0.001] [--volume-samples 1e6] [--balance 0.2]
 
 The exact solid is rebuilt from the network alone: each edge the hull of a ball at each end
 (lamina's documented end-radius rule, from check_solid), scaled by the report's scale, stood up
@@ -30,6 +31,17 @@ z = 0 (as `solid` places it). Checks:
   grid points, where the mesher must look closer (the marched mesh bridges it); with
   --excuse-gaps those points are reported and not failed (the check before the mesher split
   cells at gaps);
+- the volume (trimesh) within --volume-tolerance of the exact union's, three standard errors
+  of the estimate included: each hull's volume is exact (the frustum of the tangent cone and
+  two caps), and points drawn in a box about its axis, one uniformly in each cell of a k^3
+  grid of it, kept inside it, count for it where no hull of a lower index holds them; four
+  independent estimates give the mean and its standard error;
+- the mesh on both sides of the surface: of its 45 points a triangle, weighted by area, the
+  share inside the solid within 0.5 +- --balance (a mesh whose corners sit on the surface and
+  chords under it lies mostly inside);
+- what an STL's 32-bit corners and a slicer's plate make of it: no edge shorter than T/100 nor
+  triangle lower than that, no vertex below z = 0, and manifold3d with float32 corners keeps
+  every triangle, in the report's parts, with its genus;
 - with --min-reduction R, the report's marched triangles are at least R times the mesh's.
 T defaults to the report's simplified.tolerance_mm. Veins only. Exit 0 pass, 1 fail.
 """
@@ -266,12 +278,13 @@ def surface_samples(cones, hulls, n, rng):
         u = (b - a) / L
         sin = (ra - rb) / L
         cos = np.sqrt(1 - sin * sin)
-        # Tangent circles: on each ball at -r sin along the axis, radius r cos.
-        ca, cb = a - u * ra * sin, b - u * rb * sin
+        # Tangent circles: on each ball at r sin along the axis (towards b), radius r cos;
+        # each ball's cap lies beyond its circle.
+        ca, cb = a + u * ra * sin, b + u * rb * sin
         slant = np.hypot(np.linalg.norm(cb - ca), ra * cos - rb * cos)
         lateral = np.pi * (ra * cos + rb * cos) * slant
-        cap_a = 2 * np.pi * ra * ra * (1 - sin)
-        cap_b = 2 * np.pi * rb * rb * (1 + sin)
+        cap_a = 2 * np.pi * ra * ra * (1 + sin)
+        cap_b = 2 * np.pi * rb * rb * (1 - sin)
         parts.append(("cone", (a, b, ra, rb, u, sin, cos, ca, cb)))
         areas.append(lateral + cap_a + cap_b)
     areas = np.array(areas)
@@ -288,8 +301,8 @@ def surface_samples(cones, hulls, n, rng):
             continue
         a, b, ra, rb, u, sin, cos, ca, cb = data
         # Rejection on the caps, area-weighted on the lateral surface.
-        w = np.array([np.pi * (ra + rb) * cos * np.linalg.norm(cb - ca),
-                      2 * np.pi * ra * ra * (1 - sin), 2 * np.pi * rb * rb * (1 + sin)])
+        w = np.array([np.pi * (ra + rb) * cos * np.hypot(np.linalg.norm(cb - ca), (ra - rb) * cos),
+                      2 * np.pi * ra * ra * (1 + sin), 2 * np.pi * rb * rb * (1 - sin)])
         which = rng.choice(3, size=m, p=w / w.sum())
         e1 = np.cross(u, [1, 0, 0] if abs(u[0]) < 0.9 else [0, 1, 0])
         e1 /= np.linalg.norm(e1)
@@ -313,11 +326,82 @@ def surface_samples(cones, hulls, n, rng):
                 while sum(len(g) for g in got) < mk:
                     d = rng.normal(size=(mk * 2, 3))
                     d /= np.linalg.norm(d, axis=1, keepdims=True)
-                    keep = (d @ u) >= -sin if side > 0 else (d @ u) <= -sin
+                    keep = (d @ u) >= sin if side > 0 else (d @ u) <= sin
                     got.append(c + d[keep] * r)
                 pts.append(np.concatenate(got)[:mk])
     p = np.concatenate(pts)
     return p[hulls.union(p) >= -1e-9]
+
+
+def hull_volume(a, b, ra, rb):
+    """Exact volume of the hull of two balls: the frustum of their tangent cone and two caps."""
+    L = np.linalg.norm(b - a)
+    if L <= abs(ra - rb):
+        return 4 / 3 * np.pi * max(ra, rb) ** 3
+    s = (ra - rb) / L
+    # The tangent circles lie r s along the axis from each centre (towards b), of radius
+    # r sqrt(1 - s^2); each ball's cap beyond its circle.
+    h = L * (1 - s * s)
+    frustum = np.pi * h * (ra * ra + ra * rb + rb * rb) * (1 - s * s) / 3
+    cap = lambda r, t: np.pi * t * t * (3 * r - t) / 3
+    return frustum + cap(ra, ra * (1 + s)) + cap(rb, rb * (1 - s))
+
+
+def union_volume(cones, hulls, n, rng, runs=4):
+    """The union's volume by sampling each hull on its own (whose volume is exact): points
+    drawn in a box about its axis, one uniformly in each cell of a k x k x k grid of it, and
+    kept inside it, count 1/m for it where m hulls hold them (so a region m hulls share is
+    counted once in all, and a hull mostly inside others weighs about 1/2, not 0 or 1). `runs`
+    independent estimates of about n points each: returns (their mean, its standard error)."""
+    vols = np.array([hull_volume(*c) for c in cones])
+    A, B, RA, RB = hulls.A, hulls.B, hulls.RA, hulls.RB
+    L = np.linalg.norm(B - A, axis=1)
+    u = (B - A) / np.where(L > 0, L, 1)[:, None]
+    u[L == 0] = [1.0, 0.0, 0.0]
+    e1 = np.cross(u, np.where(np.abs(u[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]))
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(u, e1)
+    R = np.maximum(RA, RB)
+    lo, hi = np.minimum(-RA, L - RB), np.maximum(L + RB, RA)
+    box = (hi - lo) * 4 * R * R
+    # Each hull's neighbours (bounding spheres that meet), as CSR.
+    tree = cKDTree(hulls.centre)
+    near = tree.query_ball_point(hulls.centre, hulls.bound + hulls.bound.max())
+    lower = [[j for j in near[i] if j != i and np.linalg.norm(hulls.centre[i] - hulls.centre[j])
+              <= hulls.bound[i] + hulls.bound[j]] for i in range(len(cones))]
+    start = np.concatenate([[0], np.cumsum([len(x) for x in lower])]).astype(np.int64)
+    flat = np.array([j for x in lower for j in x], np.int64)
+    k = np.maximum(4, np.round(np.cbrt(n * box / box.sum()))).astype(np.int64)
+    count = k ** 3
+    estimates = []
+    for _ in range(runs):
+        inside = np.zeros(len(cones))
+        owned = np.zeros(len(cones))
+        first = 0
+        while first < len(cones):
+            last = first + max(1, int(np.searchsorted(np.cumsum(count[first:]), 1_000_000)))
+            ids = np.arange(first, min(last, len(cones)))
+            first = ids[-1] + 1
+            h = np.repeat(ids, count[ids])
+            # Each point's cell in its hull's grid.
+            c = np.arange(len(h)) - np.repeat(np.cumsum(count[ids]) - count[ids], count[ids])
+            kh = k[h]
+            x = (np.stack([c % kh, c // kh % kh, c // (kh * kh)], 1) + rng.random((len(h), 3))) \
+                / kh[:, None]
+            p = (A[h] + u[h] * (lo[h] + x[:, 0] * (hi[h] - lo[h]))[:, None]
+                 + e1[h] * (R[h] * (2 * x[:, 1] - 1))[:, None]
+                 + e2[h] * (R[h] * (2 * x[:, 2] - 1))[:, None])
+            keep = hulls.distance(p, h) <= 0
+            p, h = p[keep], h[keep]
+            np.add.at(inside, h, 1)
+            cnt = start[h + 1] - start[h]
+            pt = np.repeat(np.arange(len(h)), cnt)
+            offset = np.arange(len(pt)) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+            other = flat[start[h][pt] + offset]
+            m = 1 + np.bincount(pt[hulls.distance(p[pt], other) <= 0], minlength=len(h))
+            np.add.at(owned, h, 1 / m)
+        estimates.append(float((vols * owned / np.maximum(inside, 1)).sum()))
+    return float(np.mean(estimates)), float(np.std(estimates, ddof=1) / np.sqrt(runs))
 
 
 def slot_width(p, hulls):
@@ -353,18 +437,21 @@ def dense_worst(T, hulls, tol, n=8):
     a triangle holds several), then the worst of them improved by a local search inside the
     triangle (projected steps on the barycentric weights): per triangle, the most its points
     lie outside the union (the distance there) and the deepest they lie inside one hull (a
-    lower bound of the distance to the surface). Returns (outside, inside, weights of each)."""
+    lower bound of the distance to the surface). Returns (outside, inside, weights of each,
+    and the share of each triangle's points inside the union)."""
     W = lattice(n)
     out = np.full(len(T), -np.inf)
     deep = np.full(len(T), -np.inf)
     wo = np.zeros((len(T), 3))
     wi = np.zeros((len(T), 3))
+    held = np.zeros(len(T))
     step = max(1, 400000 // len(W))
     for s in range(0, len(T), step):
         part = T[s:s + step]
         P = np.einsum("mk,fkd->fmd", W, part).reshape(-1, 3)
         d = hulls.union(P).reshape(len(part), len(W))
         out[s:s + step], deep[s:s + step] = d.max(1), (-d).max(1)
+        held[s:s + step] = (d < 0).mean(1)
         wo[s:s + step], wi[s:s + step] = W[d.argmax(1)], W[d.argmin(1)]
     # Local search from the worst sample, on triangles within half the tolerance of failing:
     # a move of the weights by h along each of six directions, kept when it is worse, h halved
@@ -390,7 +477,7 @@ def dense_worst(T, hulls, tol, n=8):
             best = np.maximum(best, v[np.arange(len(idx)), k])
             h = np.where(better, h, h / 2)
         value[idx], w[idx] = best, cur
-    return out, deep, wo, wi
+    return out, deep, wo, wi, held
 
 
 def main():
@@ -403,6 +490,13 @@ def main():
     ap.add_argument("--min-reduction", type=float, default=0.0)
     ap.add_argument("--cell", type=float, help="the mesher's grid cell (default: the report's)")
     ap.add_argument("--show", type=int, default=0, help="list this many of the worst gap points")
+    ap.add_argument("--volume-tolerance", type=float, default=0.001,
+                    help="the mesh's volume within this fraction of the exact union's, the "
+                         "estimate's three standard errors included")
+    ap.add_argument("--volume-samples", type=float, default=1e6,
+                    help="points drawn in the hulls' boxes for each of 4 volume estimates")
+    ap.add_argument("--balance", type=float, default=0.2,
+                    help="the share of the mesh's points inside the solid within 0.5 +- this")
     ap.add_argument("--excuse-gaps", action="store_true",
                     help="points over T in gaps narrower than the cell's diagonal do not fail")
     a = ap.parse_args()
@@ -467,7 +561,7 @@ def main():
                             f"{int((rest > tol).sum())} points over")
     # Every triangle's interior, densely: outside the union its distance is exact; inside one
     # hull deeper than T a point is surely farther than T from the surface.
-    dout, ddeep, wo, wi = dense_worst(T, hulls, tol)
+    dout, ddeep, wo, wi, held = dense_worst(T, hulls, tol)
     for name, v, w in (("outside", dout, wo), ("inside", ddeep, wi)):
         k = int(np.argmax(v))
         worst[f"dense {name}"] = float(v[k])
@@ -477,15 +571,39 @@ def main():
                 f"triangle {k} (of {len(F)}) has a point {v[k] * 1000:.2f} um {name} the "
                 f"surface > {tol * 1000:.2f} um at ({q[0]:.4f}, {q[1]:.4f}, {q[2]:.4f}); "
                 f"{int((v > tol).sum())} triangles over")
-    # What an STL's 32-bit corners and a slicer's plate make of it (reported, not failed):
-    # edges shorter than T/100, triangles lower than that, vertices below the plate, and the
-    # parts manifold3d sees with float32 corners.
     e = np.stack([np.linalg.norm(T[:, (k + 1) % 3] - T[:, k], axis=1) for k in range(3)], 1)
-    height = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1) / e.max(1)
-    shape = (f"{int((e < tol / 100).sum()) // 2} edges shorter than T/100, "
-             f"{int((height < tol / 100).sum())} triangles lower than that, lowest vertex "
-             f"{V[:, 2].min() * 1000:.4f} um, manifold3d (float32) {len(m.decompose())} part(s) "
+    area2 = np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    height = area2 / e.max(1)
+    shorts, lows = int((e < tol / 100).sum()) // 2, int((height < tol / 100).sum())
+    parts = len(m.decompose())
+    shape = (f"{shorts} edges shorter than T/100, {lows} triangles lower than that, lowest "
+             f"vertex {V[:, 2].min() * 1000:.4f} um, manifold3d (float32) {parts} part(s) "
              f"of {m.num_tri()} of {len(F)} triangles, genus {m.genus()}")
+    # What an STL's 32-bit corners and a slicer's plate make of it: no edge shorter than T/100
+    # nor triangle lower (they round to nothing), nothing below the plate, and manifold3d with
+    # float32 corners keeping every triangle in the report's parts and genus.
+    if shorts or lows:
+        failures.append(f"{shorts} edges shorter than T/100 and {lows} triangles lower than that")
+    if V[:, 2].min() < 0:
+        failures.append(f"a vertex {-V[:, 2].min() * 1000:.4f} um below the plate (z = 0)")
+    if (parts, m.num_tri(), m.genus()) != (report["parts"], len(F), report["genus"]):
+        failures.append(f"manifold3d with float32 corners: {parts} part(s), {m.num_tri()} of "
+                        f"{len(F)} triangles, genus {m.genus()}; the report says "
+                        f"{report['parts']} part(s), genus {report['genus']}")
+    # Volume against the exact union's (sampled hull by hull), and the mesh on both sides of
+    # the surface: the area-weighted share of its points inside the solid.
+    exact, error = union_volume(cones, hulls, int(a.volume_samples), rng)
+    off = (mesh.volume - exact) / exact
+    inside = float((held * area2).sum() / area2.sum())
+    balance = (f"volume {mesh.volume:.6g} mm3 against the exact union's {exact:.6g} +- "
+               f"{error:.2g} mm3 ({off * 100:+.4f} %), {inside * 100:.1f} % of the mesh inside "
+               f"the solid")
+    if abs(off) + 3 * error / exact > a.volume_tolerance:
+        failures.append(f"volume {off * 100:+.4f} % (+- {3 * error / exact * 100:.4f} %) off "
+                        f"the exact union's, over {a.volume_tolerance * 100:g} %")
+    if abs(inside - 0.5) > a.balance:
+        failures.append(f"{inside * 100:.1f} % of the mesh lies inside the solid, outside "
+                        f"{(0.5 - a.balance) * 100:g}-{(0.5 + a.balance) * 100:g} %")
     mesh_to_surface, surface_to_mesh = worst["mesh to surface"], worst["surface to mesh"]
     marched = simplified.get("marched", 0)
     reduction = marched / max(len(F), 1)
@@ -497,7 +615,7 @@ def main():
           f"{surface_to_mesh * 1000:.2f} um at {len(surf)} points; tolerance {tol * 1000:.2f} um; "
           f"each triangle at 45 points and searched from its worst: "
           f"{worst['dense outside'] * 1000:.2f} um outside at most, "
-          f"{worst['dense inside'] * 1000:.2f} um deep in one vein at most; {shape}")
+          f"{worst['dense inside'] * 1000:.2f} um deep in one vein at most; {shape}; {balance}")
     if slots:
         print(f"check_hausdorff: beyond the tolerance in gaps between facing veins narrower "
               f"than {narrow * 1000:.1f} um (the cell's diagonal; marching bridges them"

@@ -128,13 +128,19 @@ fn simplifying_keeps_the_solid_closed_and_its_volume_with_far_fewer_triangles() 
         simple.triangles.len(),
         full.triangles.len()
     );
-    // Every vertex stays within the tolerance of the surface, so the volume within area × T.
+    // Both are fitted to the surface on average, not only within T of it: the volumes agree
+    // to 0.1 % (a mesh with its corners on the surface and its chords under it, as simplified
+    // meshes were, is 0.6 % smaller here).
     let (vf, vs) = (
         full.check_manifold().volume.ok_or("volume")?,
         topo.volume.ok_or("volume")?,
     );
-    let area = rf["area_mm2"].as_f64().ok_or("area")?;
-    assert!((vf - vs).abs() <= area * 0.025, "volume {vs} vs {vf}");
+    assert!((vf - vs).abs() <= 1e-3 * vf, "volume {vs} vs {vf}");
+    let fitted = rs["simplified"]["fitted"].as_u64().ok_or("fitted")?;
+    assert!(
+        fitted as usize > simple.positions.len() / 2,
+        "{fitted} fitted"
+    );
     for bad in ["0", "-1", "NaN", "5"] {
         let flag = format!("--tolerance={bad}");
         let o = lamina(&[

@@ -64,7 +64,7 @@ pub fn fit(
 }
 
 /// `fit` in so many passes; `stop` is asked for every vertex and triangle measured.
-fn fit_passes(
+pub(super) fn fit_passes(
     mesh: &mut TriMesh,
     field: &Field,
     bounds: (DVec3, DVec3),

@@ -483,6 +483,7 @@ pub fn solid_of(
                 tol,
                 (spacing, min_radius),
                 Some(floor),
+                bounds,
                 progress,
             )
             .ok_or(SolidError::March(MarchError::Cancelled))?;

@@ -42,12 +42,26 @@
 //!   and r the thinnest vein's radius).
 //!
 //! *Tidying.* Then every edge shorter than a hundredth of the tolerance is collapsed to its
-//! midpoint, and the longest edge of every triangle lower than that is flipped, where the mesh
-//! stays a closed 2-manifold, no triangle turns over and (for a flip) the two triangles get
-//! higher; rounds go on until none is left that can be. An STL's 32-bit corners would merge
-//! the ends of such an edge or flatten such a triangle. What cannot be (ends with three
-//! neighbours in common: a tiny handle; a sliver whose flip makes another) stays. The plate:
-//! no vertex is left below the solid's lowest point.
+//! midpoint, the longest edge of every triangle lower than that is flipped, and every vertex
+//! whose neighbours all lie within that distance of one plane (or, with three neighbours, that
+//! lies within ten times that of theirs: a spike) goes into its nearest neighbour, where the
+//! mesh stays a closed 2-manifold, no triangle turns over and (for a flip) the two
+//! triangles get higher; rounds go on until none is left that can be. An STL's 32-bit corners
+//! would merge the ends of such an edge or flatten such a triangle, and a reader that merges
+//! coplanar triangles (manifold3d) removes a flat vertex itself, pinching the mesh where its
+//! triangles fold. The plate: no vertex is left below the solid's lowest point.
+//!
+//! *Fitting.* The simplified mesh has its corners on the surface and its chords under a vein by
+//! up to the tolerance: left so, it is smaller than the solid (the 12,700-node leaf by 0.69 %;
+//! 70 % of it lies inside). Its vertices are moved along their normals so its triangles lie on
+//! the surface on average (`fit`, two passes), except where a move takes a triangle out of the
+//! tolerance by the last check's own test: those triangles' vertices go back (`fit_held`).
+//!
+//! *Pushing apart.* What tidying could not remove (an edge whose ends have three neighbours in
+//! common: collapsing it would pinch a handle; a sliver whose flip makes another) is pushed
+//! apart: the ends of a short edge along it, the apex of a low triangle away from its longest
+//! edge in its plane, to half as long again as a hundredth of the tolerance (`spread`), and
+//! again after the last check if its splits made any.
 //!
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
@@ -566,6 +580,14 @@ pub struct Simplified {
     /// lower than that) flipped, before the last check (`tidy`).
     pub short_edges_collapsed: usize,
     pub slivers_flipped: usize,
+    /// Vertices moved to fit the mesh to the surface on average (`fit_held`), and those put
+    /// back because the move took a triangle out of the tolerance.
+    pub fitted: usize,
+    pub fit_put_back: usize,
+    /// Vertices pushed apart where an edge was still shorter than a hundredth of the
+    /// tolerance, or a triangle lower (`spread`), and such triangles left at the end.
+    pub pushed_apart: usize,
+    pub slivers_left: usize,
     /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
     pub gaps_left: usize,
     /// Tetrahedra at the finest split still spanning the very end of a sharp crotch (which
@@ -585,6 +607,7 @@ pub fn simplify(
     tol: f64,
     (spacing, radius): (f64, f64),
     floor: Option<(usize, f64)>,
+    bounds: (DVec3, DVec3),
     progress: &dyn crate::stage::Progress,
 ) -> Option<Simplified> {
     let marched = mesh.triangles.len();
@@ -660,18 +683,43 @@ pub fn simplify(
             mesh.triangles.len()
         );
     }
-    if let Some((axis, value)) = floor {
-        for p in &mut mesh.positions {
-            p[axis] = p[axis].max(value);
+    let at_floor = |mesh: &mut TriMesh| {
+        if let Some((axis, value)) = floor {
+            for p in &mut mesh.positions {
+                p[axis] = p[axis].max(value);
+            }
         }
+    };
+    at_floor(mesh);
+    let (fitted, fit_put_back) = fit_held(mesh, field, bounds, tol, &at_floor);
+    let (mut pushed_apart, _) = spread(mesh, tol);
+    at_floor(mesh);
+    if debug {
+        eprintln!(
+            "fitted: {fitted} vertices moved, {fit_put_back} put back, {pushed_apart} pushed \
+             apart, {:.2} s",
+            clock.elapsed().as_secs_f64()
+        );
     }
-    let unheld = touch_up(mesh, field, tol);
-    if let Some((axis, value)) = floor {
-        // What the last check's splits put below it by a rounding.
-        for p in &mut mesh.positions {
-            p[axis] = p[axis].max(value);
+    let mut unheld = touch_up(mesh, field, tol);
+    // What fitting and the last check's splits made short, low or flat: tidied or pushed
+    // apart, and checked again.
+    let (mut collapsed, mut flipped) = (collapsed, flipped);
+    for _ in 0..RETIDY_ROUNDS {
+        let (c, f) = tidy(mesh, tol);
+        let (pushed, _) = spread(mesh, tol);
+        if c + f + pushed == 0 {
+            break;
         }
+        collapsed += c;
+        flipped += f;
+        pushed_apart += pushed;
+        at_floor(mesh);
+        unheld = touch_up(mesh, field, tol);
     }
+    let slivers_left = defects(mesh, COINCIDENT * tol).1;
+    // What the last check's splits put below the plate by a rounding.
+    at_floor(mesh);
     if debug {
         eprintln!("after the last check: {} short edges", shorts(mesh));
     }
@@ -691,6 +739,10 @@ pub fn simplify(
         unheld,
         short_edges_collapsed: collapsed,
         slivers_flipped: flipped,
+        fitted,
+        fit_put_back,
+        pushed_apart,
+        slivers_left,
         ..Simplified::default()
     })
 }
@@ -776,12 +828,7 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
 /// each edge whose midpoint is not near split at the surface, for up to `TOUCH_ROUNDS` rounds.
 /// Returns how many triangles are still off.
 fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
-    // Room for the rounding of vertices to 32-bit floats (two units in the last place).
-    let extent = mesh
-        .positions
-        .iter()
-        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    let limit = tol - 2.0 * extent * f64::from(f32::EPSILON);
+    let limit = proof_limit(mesh, tol);
     let step = 0.01 * tol;
     for round in 0..=TOUCH_ROUNDS {
         let positions = &mesh.positions;
@@ -822,20 +869,96 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
     0
 }
 
+/// The tolerance the last check proves: `tol` less room for the rounding of vertices to 32-bit
+/// floats (two units in the last place).
+fn proof_limit(mesh: &TriMesh, tol: f64) -> f64 {
+    let extent = mesh
+        .positions
+        .iter()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    tol - 2.0 * extent * f64::from(f32::EPSILON)
+}
+
+/// Passes of `fit_held`.
+const FIT_PASSES: usize = 2;
+/// Rounds of putting vertices back in one pass of `fit_held`.
+const FIT_ROUNDS: usize = 8;
+
+/// Fits the simplified mesh to the surface on average (`fit`: its vertices lie on the surface
+/// and its chords under a vein by up to the tolerance, so it is smaller than the solid), but
+/// not where that takes a triangle out of the tolerance: after each pass the last check's test
+/// looks at every triangle, and the vertices of one it finds off go back to where they were
+/// (rounds until none does). `floor` is applied after each move. Returns (vertices moved and
+/// left moved, vertices put back).
+fn fit_held(
+    mesh: &mut TriMesh,
+    field: &Field,
+    bounds: (DVec3, DVec3),
+    tol: f64,
+    floor: &dyn Fn(&mut TriMesh),
+) -> (usize, usize) {
+    let limit = proof_limit(mesh, tol);
+    let start = mesh.positions.clone();
+    let mut back = vec![false; start.len()];
+    for _ in 0..FIT_PASSES {
+        let before = mesh.positions.clone();
+        super::fit::fit_passes(mesh, field, bounds, 1, &|| false);
+        floor(mesh);
+        for _ in 0..FIT_ROUNDS {
+            let positions = &mesh.positions;
+            let off: Vec<u32> = mesh
+                .triangles
+                .par_iter()
+                .map_init(Vec::new, |near, t| {
+                    if t.iter()
+                        .all(|&v| positions[v as usize] == before[v as usize])
+                    {
+                        return None;
+                    }
+                    let p = t.map(|v| positions[v as usize]);
+                    (field.off(&p, limit, near) || field.deep(&p, limit, near)).then_some(*t)
+                })
+                .flatten()
+                .flatten()
+                .collect();
+            let mut put = 0;
+            for v in off {
+                let v = v as usize;
+                if mesh.positions[v] != before[v] {
+                    mesh.positions[v] = before[v];
+                    back[v] = true;
+                    put += 1;
+                }
+            }
+            if put == 0 {
+                break;
+            }
+        }
+    }
+    let moved = (0..start.len())
+        .filter(|&v| mesh.positions[v] != start[v])
+        .count();
+    (moved, back.iter().filter(|&&b| b).count())
+}
+
 /// Rounds of `tidy`.
 const TIDY_ROUNDS: usize = 40;
 
-/// Collapses every edge shorter than `COINCIDENT · tol` to its midpoint and flips the longest
-/// edge of every triangle lower than that (a sliver with no short edge), where the mesh stays a
-/// closed 2-manifold and no triangle turns over: an STL's 32-bit corners would merge the ends of
-/// such an edge, or flatten such a triangle, and a reader would see a mesh that is not closed.
-/// A collapse moves its two vertices by less than half that length; the last check follows.
-/// Returns (edges collapsed, edges flipped).
+/// Collapses every edge shorter than `COINCIDENT · tol` to its midpoint, flips the longest edge
+/// of every triangle lower than that (a sliver with no short edge), and removes every vertex
+/// whose triangles all lie within that distance of one plane (`tidy_flat`), where the mesh
+/// stays a closed 2-manifold and no triangle turns over: an STL's 32-bit corners would merge the
+/// ends of such an edge, or flatten such a triangle, and a reader would see a mesh that is not
+/// closed; a reader that merges coplanar triangles into faces (manifold3d does, to 6 nm at
+/// 50 mm) removes such a vertex itself, and where its triangles fold can pinch the mesh. A
+/// collapse moves the surface by less than that length; the last check follows. Returns (edges
+/// collapsed and flat vertices removed, edges flipped).
 fn tidy(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
     let short = COINCIDENT * tol;
     let (mut collapsed, mut flipped) = (0, 0);
     for _ in 0..TIDY_ROUNDS {
         let (c, f) = (tidy_collapse(mesh, short), tidy_flip(mesh, short));
+        let c = c + tidy_flat(mesh, short);
         collapsed += c;
         flipped += f;
         if c + f == 0 {
@@ -844,6 +967,127 @@ fn tidy(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
     }
     mesh.drop_unused();
     (collapsed, flipped)
+}
+
+/// A vertex with three neighbours within this many `COINCIDENT · tol` of their plane is a
+/// spike `tidy_flat` removes (the last check follows).
+const SPIKE: f64 = 10.0;
+
+/// Rounds of tidying again after the last check.
+const RETIDY_ROUNDS: usize = 3;
+
+/// Rounds of `spread`.
+const SPREAD_ROUNDS: usize = 8;
+
+/// Pushes apart what `tidy` could not remove: the ends of each edge shorter than `COINCIDENT ·
+/// tol` move apart along it, and the apex of each triangle lower than that moves away from its
+/// longest edge in its plane, until the edge or height is half as long again (a move of at
+/// most 3/4 of `COINCIDENT · tol`), unless that turns a triangle around the vertex by more
+/// than 60°; rounds until none is left. The mesh keeps its topology (where a collapse would
+/// not: ends with three neighbours in common); the last check follows. Returns (edges and
+/// triangles pushed, those left).
+fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
+    let short = COINCIDENT * tol;
+    let mut pushed = 0;
+    for _ in 0..SPREAD_ROUNDS {
+        let (moves, _) = defects(mesh, short);
+        if moves.is_empty() {
+            break;
+        }
+        let at = around(mesh);
+        let mut step = vec![DVec3::ZERO; mesh.positions.len()];
+        // A vertex asked to move by several defects takes the longest move.
+        let mut listed: Vec<u32> = Vec::new();
+        for (v, d) in moves {
+            let s = &mut step[v as usize];
+            if *s == DVec3::ZERO {
+                listed.push(v);
+            }
+            if d.length_squared() > s.length_squared() {
+                *s = d;
+            }
+        }
+        listed.sort_unstable();
+        let mut made = 0;
+        for v in listed {
+            // No triangle around it may turn by more than 60°, nor over (a sliver's own
+            // normal is rough: it may turn): else half the move, or a quarter.
+            let keeps = |to: DVec3| {
+                at[v as usize].iter().all(|&f| {
+                    let t = mesh.triangles[f as usize];
+                    let p = mesh.corners(&t);
+                    let q = t.map(|w| {
+                        if w == v {
+                            to
+                        } else {
+                            mesh.positions[w as usize]
+                        }
+                    });
+                    let (before, after) = (normal(p), normal(q));
+                    let lens = before.length() * after.length();
+                    let sliver = before.length() < short * short;
+                    lens > 0.0 && before.dot(after) >= if sliver { 0.0 } else { 0.5 * lens }
+                })
+            };
+            let from = mesh.positions[v as usize];
+            if let Some(to) = [1.0, 0.5, 0.25]
+                .into_iter()
+                .map(|f| from + f * step[v as usize])
+                .find(|&to| keeps(to))
+            {
+                mesh.positions[v as usize] = to;
+                made += 1;
+            }
+        }
+        pushed += made;
+        if made == 0 {
+            break;
+        }
+    }
+    (pushed, defects(mesh, short).1)
+}
+
+/// The moves that would push apart each edge shorter than `short` and each triangle lower than
+/// it to half as long again (see `spread`), and how many triangles have one.
+fn defects(mesh: &TriMesh, short: f64) -> (Vec<(u32, DVec3)>, usize) {
+    let want = 1.5 * short;
+    let mut moves = Vec::new();
+    let mut count = 0;
+    for t in &mesh.triangles {
+        let p = mesh.corners(t);
+        let len = |k: usize| p[k].distance(p[(k + 1) % 3]);
+        let k = (0..3)
+            .min_by(|&i, &j| len(i).total_cmp(&len(j)))
+            .unwrap_or(0);
+        let (a, b) = ((k + 1) % 3, k);
+        if len(k) < short {
+            count += 1;
+            // Apart along the edge (or, where its ends coincide, along the next edge), from
+            // the one of its two triangles that runs along it from the lower vertex.
+            let along = (p[a] - p[b])
+                .try_normalize()
+                .or_else(|| (p[(k + 2) % 3] - p[b]).try_normalize());
+            if let Some(d) = along.filter(|_| t[b] < t[a]) {
+                let step = 0.5 * (want - len(k)) * d;
+                moves.push((t[a], step));
+                moves.push((t[b], -step));
+            }
+            continue;
+        }
+        let j = (0..3)
+            .max_by(|&i, &j| len(i).total_cmp(&len(j)))
+            .unwrap_or(0);
+        let height = normal(p).length() / len(j);
+        if height < short {
+            count += 1;
+            // The apex c of (a, b, c) moves to its side of ab, in the plane.
+            let (a, b, c) = (j, (j + 1) % 3, (j + 2) % 3);
+            if let Some(u) = normal(p).cross(p[b] - p[a]).try_normalize() {
+                moves.push((t[c], (want - height) * u));
+            }
+        }
+    }
+    (moves, count)
 }
 
 /// Each vertex's triangles.
@@ -958,6 +1202,160 @@ fn tidy_collapse(mesh: &mut TriMesh, short: f64) -> usize {
         made += 1;
         // b's triangles are a's now (the lists are rebuilt next pass; nothing here reads
         // a's list again: a is touched).
+    }
+    let mut k = 0;
+    mesh.triangles.retain(|_| {
+        k += 1;
+        !dead[k - 1]
+    });
+    made
+}
+
+/// One pass of removing flat vertices: a vertex whose neighbours all lie within `short` of the
+/// plane of its largest triangle, or that has three neighbours and lies within `SPIKE · short`
+/// of their plane (a spike, its triangles facing every way: manifold3d removes those too), goes
+/// into its nearest neighbour for which the mesh stays a closed 2-manifold (the link
+/// condition, three neighbours left), no triangle turns over (where the triangles fold, fewer
+/// face against the largest; a spike becomes one triangle) and none vanishes. Returns how many
+/// were removed.
+fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
+    let at = around(mesh);
+    let mut dead = vec![false; mesh.triangles.len()];
+    // Vertices whose triangles changed this pass: they wait for the next.
+    let mut touched = vec![false; mesh.positions.len()];
+    let mut made = 0;
+    // A vertex's neighbours, in order.
+    fn ring_of(at: &[Vec<u32>], triangles: &[[u32; 3]], v: u32, dead: &[bool]) -> Vec<u32> {
+        let mut r: Vec<u32> = at[v as usize]
+            .iter()
+            .filter(|&&f| !dead[f as usize])
+            .flat_map(|&f| triangles[f as usize])
+            .filter(|&w| w != v)
+            .collect();
+        r.sort_unstable();
+        r.dedup();
+        r
+    }
+    let height = |p: [DVec3; 3]| {
+        let longest = (0..3)
+            .map(|k| p[k].distance(p[(k + 1) % 3]))
+            .fold(0.0, f64::max);
+        normal(p).length() / longest.max(1e-300)
+    };
+    for v in 0..mesh.positions.len() as u32 {
+        if touched[v as usize] || at[v as usize].is_empty() {
+            continue;
+        }
+        let faces: Vec<u32> = at[v as usize]
+            .iter()
+            .copied()
+            .filter(|&f| !dead[f as usize])
+            .collect();
+        let largest = faces.iter().copied().max_by(|&f, &g| {
+            let area = |k: u32| normal(mesh.corners(&mesh.triangles[k as usize])).length();
+            area(f).total_cmp(&area(g)).then(g.cmp(&f))
+        });
+        let Some(n) =
+            largest.and_then(|f| normal(mesh.corners(&mesh.triangles[f as usize])).try_normalize())
+        else {
+            continue;
+        };
+        let at_v = mesh.positions[v as usize];
+        let ring = ring_of(&at, &mesh.triangles, v, &dead);
+        let flat = ring.len() >= 3
+            && ring
+                .iter()
+                .all(|&w| ((mesh.positions[w as usize] - at_v).dot(n)).abs() < short);
+        // A spike: three triangles round a vertex within SPIKE · short of its neighbours'
+        // plane, replaced by the triangle of those three (which faces as the three do on the
+        // whole: their area vectors add up to its own).
+        let spike = ring.len() == 3 && {
+            let r = [ring[0], ring[1], ring[2]].map(|w| mesh.positions[w as usize]);
+            normal(r)
+                .try_normalize()
+                .is_some_and(|m| (at_v - r[0]).dot(m).abs() < SPIKE * short)
+        };
+        if !flat && !spike {
+            continue;
+        }
+        // Its neighbours, nearest first.
+        let mut order = ring.clone();
+        order.sort_by(|&a, &b| {
+            let d = |w: u32| mesh.positions[w as usize].distance_squared(at_v);
+            d(a).total_cmp(&d(b)).then(a.cmp(&b))
+        });
+        // (A touched neighbour's list of triangles is out of date.)
+        for w in order.into_iter().filter(|&w| !touched[w as usize]) {
+            let shared: Vec<u32> = faces
+                .iter()
+                .copied()
+                .filter(|&f| mesh.triangles[f as usize].contains(&w))
+                .collect();
+            let rw = ring_of(&at, &mesh.triangles, w, &dead);
+            let common = ring.iter().filter(|x| rw.binary_search(x).is_ok()).count();
+            if shared.len() != 2 || common != 2 || ring.len() + rw.len() < 7 {
+                continue;
+            }
+            let opposite: Vec<u32> = shared
+                .iter()
+                .flat_map(|&f| mesh.triangles[f as usize])
+                .filter(|&x| x != v && x != w)
+                .collect();
+            if opposite
+                .iter()
+                .any(|&x| ring_of(&at, &mesh.triangles, x, &dead).len() < 4)
+            {
+                continue;
+            }
+            let to = mesh.positions[w as usize];
+            let moved = |f: u32| {
+                let t = mesh.triangles[f as usize];
+                t.map(|x| {
+                    if x == v {
+                        to
+                    } else {
+                        mesh.positions[x as usize]
+                    }
+                })
+            };
+            let left = || faces.iter().copied().filter(|f| !shared.contains(f));
+            // (A triangle left low is pushed apart after, by `spread`.)
+            if left().any(|f| height(moved(f)).is_nan() || height(moved(f)) <= 0.0) {
+                continue;
+            }
+            // No triangle turns over; or, where the fan folds (some of it faces against its
+            // largest triangle), fewer of its triangles do after than before.
+            let turns = left().any(|f| {
+                let before = normal(mesh.corners(&mesh.triangles[f as usize]));
+                normal(moved(f)).dot(before) <= 0.0
+            });
+            let against = |p: [DVec3; 3]| normal(p).dot(n) < 0.0;
+            let folded_before = faces
+                .iter()
+                .filter(|&&f| against(mesh.corners(&mesh.triangles[f as usize])))
+                .count();
+            let folded_after = left().filter(|&f| against(moved(f))).count();
+            if turns && folded_after >= folded_before && !spike {
+                continue;
+            }
+            for &f in &shared {
+                dead[f as usize] = true;
+            }
+            for &f in &faces {
+                if !dead[f as usize] {
+                    for x in mesh.triangles[f as usize].iter_mut() {
+                        if *x == v {
+                            *x = w;
+                        }
+                    }
+                }
+            }
+            for x in ring.iter().chain(&rw).chain([&v, &w]) {
+                touched[*x as usize] = true;
+            }
+            made += 1;
+            break;
+        }
     }
     let mut k = 0;
     mesh.triangles.retain(|_| {
@@ -1988,6 +2386,95 @@ mod tests {
         let topo = m.check_manifold();
         assert!(topo.is_manifold() && topo.closed);
         assert!((m.signed_volume() - volume).abs() < 1e-6);
+    }
+
+    #[test]
+    fn tidy_removes_a_vertex_whose_triangles_lie_in_one_plane() {
+        // A box with one face's triangle split at its centre: a vertex in a flat fan, its
+        // edges long, its triangles not low; and one at a box corner, which is not flat.
+        let mut m = TriMesh::cuboid(DVec3::ZERO, DVec3::ONE);
+        let t = m.triangles[0];
+        let v = m.positions.len() as u32;
+        let p = m.corners(&t);
+        m.positions.push((p[0] + p[1] + p[2]) / 3.0);
+        m.triangles[0] = [t[0], t[1], v];
+        m.triangles.push([t[1], t[2], v]);
+        m.triangles.push([t[2], t[0], v]);
+        let volume = m.signed_volume();
+        let (collapsed, _) = tidy(&mut m, 1e-3);
+        assert_eq!(collapsed, 1);
+        assert_eq!((m.triangles.len(), m.positions.len()), (12, 8));
+        let topo = m.check_manifold();
+        assert!(topo.is_manifold() && topo.closed);
+        assert!((m.signed_volume() - volume).abs() < 1e-12);
+        // Nothing more: no corner of a box is flat.
+        assert_eq!(tidy(&mut m, 1e-3), (0, 0));
+        // The centre lifted out of the face by five hundredths of the tolerance: not flat,
+        // but a spike of three triangles, removed.
+        let t = m.triangles[0];
+        let p = m.corners(&t);
+        let lift = normal(p).normalize() * 5.0 * COINCIDENT * 1e-3;
+        m.positions.push((p[0] + p[1] + p[2]) / 3.0 + lift);
+        m.triangles[0] = [t[0], t[1], v];
+        m.triangles.push([t[1], t[2], v]);
+        m.triangles.push([t[2], t[0], v]);
+        assert_eq!(tidy(&mut m, 1e-3).0, 1);
+        assert_eq!((m.triangles.len(), m.positions.len()), (12, 8));
+        assert!(m.check_manifold().closed);
+    }
+
+    #[test]
+    fn spread_pushes_a_short_edge_and_a_sliver_apart_and_keeps_the_topology() {
+        let tol = 1e-3;
+        let short = COINCIDENT * tol;
+        // A box whose first triangle is split at a point near one of its points: three
+        // triangles around it, one with a short edge or two low ones.
+        let split_at = |at: &dyn Fn([DVec3; 3]) -> DVec3| {
+            let mut m = TriMesh::cuboid(DVec3::ZERO, DVec3::ONE);
+            let t = m.triangles[0];
+            let v = m.positions.len() as u32;
+            m.positions.push(at(m.corners(&t)));
+            m.triangles[0] = [t[0], t[1], v];
+            m.triangles.push([t[1], t[2], v]);
+            m.triangles.push([t[2], t[0], v]);
+            m
+        };
+        let near_corner =
+            |p: [DVec3; 3]| p[0] + ((p[0] + p[1] + p[2]) / 3.0 - p[0]).normalize() * 1e-6;
+        // 1 nm off the middle of the first edge, towards the triangle.
+        let near_edge = |p: [DVec3; 3]| {
+            let mid = 0.5 * (p[0] + p[1]);
+            mid + ((p[0] + p[1] + p[2]) / 3.0 - mid).normalize() * 1e-6
+        };
+        for (name, at) in [
+            ("short edge", &near_corner as &dyn Fn([DVec3; 3]) -> DVec3),
+            ("sliver", &near_edge),
+        ] {
+            let mut m = split_at(at);
+            let volume = m.signed_volume();
+            assert!(defects(&m, short).1 > 0, "{name}");
+            let (pushed, left) = spread(&mut m, tol);
+            assert!(
+                pushed > 0 && left == 0,
+                "{name}: {pushed} pushed, {left} left"
+            );
+            assert_eq!(defects(&m, short).1, 0, "{name}");
+            assert_eq!((m.triangles.len(), m.positions.len()), (14, 9), "{name}");
+            let topo = m.check_manifold();
+            assert!(topo.is_manifold() && topo.closed, "{name}");
+            // No vertex moved by more than 3/4 of `short`: the volume (area 6) within that.
+            assert!(
+                (m.signed_volume() - volume).abs() <= 6.0 * 0.75 * short,
+                "{name}"
+            );
+            assert!(
+                m.positions[..8]
+                    .iter()
+                    .zip(&TriMesh::cuboid(DVec3::ZERO, DVec3::ONE).positions)
+                    .all(|(p, q)| p.distance(*q) <= 0.75 * short),
+                "{name}"
+            );
+        }
     }
 
     #[test]
