@@ -344,5 +344,19 @@ pub fn run(args: Args) -> Result<()> {
             out.cores.len()
         );
     }
+    let unlabelled: Vec<&str> = out
+        .sheets
+        .iter()
+        .filter(|s| s.label.is_none())
+        .map(|s| s.file.as_str())
+        .collect();
+    if !unlabelled.is_empty() {
+        errln!(
+            "lamina: {} sheet(s) carry no label: no free place in their scrap took it at any \
+             height ({}; nest.json gives their label as null)",
+            unlabelled.len(),
+            unlabelled.join(", ")
+        );
+    }
     Ok(())
 }

@@ -323,6 +323,40 @@ fn a_plate_larger_than_the_sheet_and_bad_spacing_exit_2_with_nothing_written() -
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
     assert!(err.contains("fit no 500 × 400 mm sheet"), "{err}");
+    // Narrow sheets full of long plates leave some no room for a long label: it says which.
+    let narrow = dir.path().join("narrow");
+    let job = [
+        "--job",
+        "A JOB NAME TOO LONG FOR A NARROW SHEET",
+        "--tries",
+        "1",
+        "--time",
+        "0.1",
+    ];
+    let o = lamina(
+        &[
+            &["nest", s(&file), "--sheet", "700x300", "-o", s(&narrow)],
+            &job[..],
+        ]
+        .concat(),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(narrow.join("nest.json"))?)?;
+    let bare: Vec<&str> = doc["sheets"]
+        .as_array()
+        .ok_or("sheets")?
+        .iter()
+        .filter(|s| s["label"].is_null())
+        .filter_map(|s| s["file"].as_str())
+        .collect();
+    let said = stderr(&o);
+    assert!(!bare.is_empty(), "every sheet took the label");
+    assert!(
+        said.contains(&format!("{} sheet(s) carry no label", bare.len()))
+            && bare.iter().all(|f| said.contains(f)),
+        "{said}"
+    );
     let long = plates["plates"]
         .as_array()
         .ok_or("plates")?
