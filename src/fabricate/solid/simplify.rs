@@ -60,8 +60,9 @@
 //! *Pushing apart.* What tidying could not remove (an edge whose ends have three neighbours in
 //! common: collapsing it would pinch a handle; a sliver whose flip makes another) is pushed
 //! apart: the ends of a short edge along it, the apex of a low triangle away from its longest
-//! edge in its plane, to half as long again as a hundredth of the tolerance (`spread`), and
-//! again after the last check if its splits made any.
+//! edge in its plane, to half as long again as a hundredth of the tolerance (`spread`). After
+//! the last check, what fitting and its splits left short, low or flat is tidied and pushed
+//! apart again, and checked again (up to `RETIDY_ROUNDS` times).
 //!
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
@@ -598,7 +599,8 @@ pub struct Simplified {
 /// Refines and simplifies `mesh` (closed, 2-manifold, oriented, vertices on the surface of
 /// `field`, edges at most `spacing` long) so it stays within `tol` of the surface, whose least
 /// radius of curvature is about `radius`, and no vertex below `floor` (coordinate `axis` at
-/// least `value`: the plate the solid stands on). `progress` counts passes; asked to stop, the
+/// least `value`: the plate the solid stands on); then fits it to the surface on average, no
+/// vertex leaving `bounds` (the solid's exact box). `progress` counts passes; asked to stop, the
 /// simplification ends after the pass it is in (the mesh stays within `tol`: every collapse
 /// was checked), and `None` is returned.
 pub fn simplify(
@@ -692,6 +694,9 @@ pub fn simplify(
     };
     at_floor(mesh);
     let (fitted, fit_put_back) = fit_held(mesh, field, bounds, tol, &at_floor);
+    if progress.cancelled() {
+        return None;
+    }
     let (mut pushed_apart, _) = spread(mesh, tol);
     at_floor(mesh);
     if debug {
