@@ -753,6 +753,11 @@ fn print_refuses_bad_flags_and_networks_leaving_nothing() -> TestResult {
         (&["--lamina", "0.3"][..], "outline"),
         (&["--copies", "0"][..], "--copies"),
         (&["--fit", "1e6"][..], "the printer builds at most"),
+        // Bounded before anything is sized from it (it printed a 300-digit height).
+        (
+            &["--fit", "1e308"][..],
+            "--fit 1e308 mm is more than 1000000 mm",
+        ),
     ] {
         let mut args = vec!["print", &net, "-o", out_s];
         args.extend_from_slice(flags);

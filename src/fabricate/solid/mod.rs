@@ -158,6 +158,11 @@ pub enum SolidError {
     )]
     CellTooLarge(f64),
     #[error(
+        "fit= {} mm is more than {} mm: give the longest side of the print in mm",
+        crate::text::num(*.0), crate::text::num(MAX_FIT)
+    )]
+    FitTooLarge(f64),
+    #[error(
         "lamina= needs the blade outline, which venation stores in meta.parameters.outline; \
          this network has {0}"
     )]
@@ -260,6 +265,9 @@ impl Shapes {
 /// within the grid arithmetic.
 pub const MAX_CELL: f64 = 1e6;
 
+/// The largest `fit=`, mm (a kilometre: what any printer or mill takes, with room).
+pub const MAX_FIT: f64 = 1e6;
+
 /// Checks the network and the options and builds the pieces of its solid.
 pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> {
     positive("cell=", opts.cell)?;
@@ -278,6 +286,9 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
         if let Some(v) = v {
             positive(what, v)?;
         }
+    }
+    if let Some(fit) = opts.fit.filter(|&f| f > MAX_FIT) {
+        return Err(SolidError::FitTooLarge(fit));
     }
     if let Some(t) = opts.tolerance {
         if t > 10.0 * opts.cell {
