@@ -379,7 +379,8 @@ def union_volume(cones, hulls, n, rng, runs=4):
         owned = np.zeros(len(cones))
         first = 0
         while first < len(cones):
-            last = first + max(1, int(np.searchsorted(np.cumsum(count[first:]), 1_000_000)))
+            # About 200,000 points a chunk: each meets every neighbour of its hull.
+            last = first + max(1, int(np.searchsorted(np.cumsum(count[first:]), 200_000)))
             ids = np.arange(first, min(last, len(cones)))
             first = ids[-1] + 1
             h = np.repeat(ids, count[ids])
