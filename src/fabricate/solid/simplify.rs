@@ -1111,6 +1111,14 @@ fn normal(p: [DVec3; 3]) -> DVec3 {
     (p[1] - p[0]).cross(p[2] - p[0])
 }
 
+/// A triangle's height over its longest side.
+fn height(p: [DVec3; 3]) -> f64 {
+    let longest = (0..3)
+        .map(|k| p[k].distance(p[(k + 1) % 3]))
+        .fold(0.0, f64::max);
+    normal(p).length() / longest.max(1e-300)
+}
+
 /// One pass of short-edge collapses; returns how many were made.
 fn tidy_collapse(mesh: &mut TriMesh, short: f64) -> usize {
     let at = around(mesh);
@@ -1241,12 +1249,6 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
         r.dedup();
         r
     }
-    let height = |p: [DVec3; 3]| {
-        let longest = (0..3)
-            .map(|k| p[k].distance(p[(k + 1) % 3]))
-            .fold(0.0, f64::max);
-        normal(p).length() / longest.max(1e-300)
-    };
     for v in 0..mesh.positions.len() as u32 {
         if touched[v as usize] || at[v as usize].is_empty() {
             continue;
@@ -1372,12 +1374,6 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
 
 /// One pass of flips of the longest edge of triangles lower than `short`; returns how many.
 fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
-    let height = |p: [DVec3; 3]| {
-        let longest = (0..3)
-            .map(|k| p[k].distance(p[(k + 1) % 3]))
-            .fold(0.0, f64::max);
-        normal(p).length() / longest.max(1e-300)
-    };
     // Directed edges: (from, to) → the triangle that runs along it.
     let key = |a: u32, b: u32| (a as u64) << 32 | b as u64;
     let mut edge: HashMap<u64, u32, Quick> =
