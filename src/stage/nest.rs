@@ -511,6 +511,7 @@ impl Options {
             pair: !self.no_pairs,
             common_gap: self.common_line.then_some(self.kerf),
             time: self.time,
+            pack_last: true,
         };
         if !(1..=MAX_TRIES).contains(&opts.tries) {
             return Err(OptionError::new(
