@@ -88,7 +88,9 @@ pub struct Args {
     /// Work spent making the sheets denser after the fill (overlap minimisation: more parts
     /// onto each sheet but the last; from 5 s a sheet, each sheet is first compressed along x
     /// then y to free room), in seconds of a 2-core reference machine; counted as work, so
-    /// the same inputs give the same sheets on any machine
+    /// the same inputs give the same sheets on any machine. Then the last sheet of each
+    /// thickness is packed into a strip from its origin edge (leaving one rectangle across
+    /// the sheet), compressed with another S/N of work for N sheets
     #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub time: f64,
     /// Width of the cut, mm: the NC programs run half of it outside outer contours and inside

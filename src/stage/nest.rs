@@ -103,7 +103,8 @@ pub struct Options {
     pub date: Option<String>,
     /// Work spent making the sheets denser after the fill, in seconds of the reference
     /// machine (counted as work: the result does not depend on the machine's speed), from more
-    /// than 0 to [`MAX_TIME`]. Default 2.
+    /// than 0 to [`MAX_TIME`]; the last sheet of each family is then packed into a strip from
+    /// its origin edge with another `time / N` for N sheets. Default 2.
     pub time: f64,
 }
 
