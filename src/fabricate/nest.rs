@@ -1328,12 +1328,12 @@ impl BottomLeft<'_> {
             } else {
                 used
             };
+            let work = Work {
+                stop,
+                per_try,
+                seed: opts.seed,
+            };
             for axis in [DVec2::X, DVec2::Y] {
-                let work = Work {
-                    stop,
-                    per_try,
-                    seed: opts.seed,
-                };
                 self.compress(
                     items,
                     &forms,
