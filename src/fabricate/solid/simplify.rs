@@ -1637,6 +1637,9 @@ struct Collapse {
 /// The whole mesh between sweeps.
 struct Whole {
     positions: Vec<DVec3>,
+    /// Each vertex's quadric; empty before the first sweep, whose bricks sum their own
+    /// vertices' planes (at ~100 bytes a vertex, the marched mesh's would be most of the
+    /// memory), after which the vertices left are numbered anew.
     quadrics: Vec<Quadric>,
     triangles: Vec<[u32; 3]>,
     /// Surface points the mesh must stay near, and the triangle that keeps each.
@@ -1653,14 +1656,9 @@ impl Whole {
     /// Takes the mesh's vertices and triangles (`finish` puts the simplified ones back).
     fn new(mesh: &mut TriMesh) -> Whole {
         let n = mesh.positions.len();
-        let mut quadrics = vec![Quadric::default(); n];
         let mut owner = vec![u32::MAX; n];
         for (k, t) in mesh.triangles.iter().enumerate() {
-            let p = t.map(|v| mesh.positions[v as usize]);
-            let c = (p[1] - p[0]).cross(p[2] - p[0]);
-            let q = Quadric::plane(c.normalize_or_zero(), p[0], 0.5 * c.length());
             for &v in t {
-                quadrics[v as usize] = quadrics[v as usize].add(&q);
                 if owner[v as usize] == u32::MAX {
                     owner[v as usize] = k as u32;
                 }
@@ -1675,7 +1673,7 @@ impl Whole {
             .unzip();
         Whole {
             positions: std::mem::take(&mut mesh.positions),
-            quadrics,
+            quadrics: Vec::new(),
             triangles: std::mem::take(&mut mesh.triangles),
             live: witness.len(),
             witness,
@@ -1719,6 +1717,21 @@ impl Whole {
             self.triangles.len(),
             self.owner.iter().enumerate().map(|(w, &t)| (t, w as u32)),
         );
+        // The first sweep: the held vertices' quadrics from all their triangles (the bricks
+        // sum their free vertices' own), in triangle order as a brick sums them.
+        let first = self.quadrics.is_empty();
+        let mut held_quadrics: HashMap<u32, Quadric, Quick> = HashMap::with_hasher(Quick);
+        if first {
+            for t in &self.triangles {
+                if t.iter().any(|&v| held[v as usize]) {
+                    let q = plane_of(t.map(|v| self.positions[v as usize]));
+                    for &v in t.iter().filter(|&&v| held[v as usize]) {
+                        let e = held_quadrics.entry(v).or_default();
+                        *e = e.add(&q);
+                    }
+                }
+            }
+        }
         let whole = &*self;
         let done: Vec<Done> = bricks
             .par_iter()
@@ -1736,17 +1749,21 @@ impl Whole {
         let mut made = 0;
         for d in done {
             made += d.made;
-            let first = triangles.len() as u32;
+            let start = triangles.len() as u32;
             triangles.extend(d.triangles);
             for (g, p, q) in d.moved {
                 self.positions[g as usize] = p;
-                self.quadrics[g as usize] = q;
+                if first {
+                    held_quadrics.insert(g, q);
+                } else {
+                    self.quadrics[g as usize] = q;
+                }
             }
             for g in d.changed {
                 self.changed[g as usize] = sweep;
             }
             for (w, t) in d.owners {
-                self.owner[w as usize] = first + t;
+                self.owner[w as usize] = start + t;
             }
             for e in d.rejected {
                 self.rejected.insert(e, sweep);
@@ -1754,7 +1771,50 @@ impl Whole {
         }
         self.triangles = triangles;
         self.live -= made;
+        if first {
+            self.renumber(held_quadrics);
+        }
         made
+    }
+
+    /// After the first sweep: the vertices still in use numbered anew (in their order), with
+    /// their quadrics (`quadrics`: every one of them, by old number).
+    fn renumber(&mut self, mut quadrics: HashMap<u32, Quadric, Quick>) {
+        let n = self.positions.len();
+        let mut index = vec![u32::MAX; n];
+        for t in &self.triangles {
+            for &v in t {
+                index[v as usize] = 0;
+            }
+        }
+        let mut next = 0u32;
+        for i in index.iter_mut().filter(|i| **i == 0) {
+            *i = next;
+            next += 1;
+        }
+        let keep = |i: usize| index[i] != u32::MAX;
+        self.positions = (0..n)
+            .filter(|&i| keep(i))
+            .map(|i| self.positions[i])
+            .collect();
+        self.changed = (0..n)
+            .filter(|&i| keep(i))
+            .map(|i| self.changed[i])
+            .collect();
+        self.quadrics = (0..n as u32)
+            .filter(|&i| keep(i as usize))
+            .map(|i| quadrics.remove(&i).unwrap_or_default())
+            .collect();
+        for t in &mut self.triangles {
+            *t = t.map(|v| index[v as usize]);
+        }
+        self.rejected = std::mem::take(&mut self.rejected)
+            .into_iter()
+            .filter_map(|(e, when)| {
+                let (a, b) = (index[(e >> 32) as usize], index[e as u32 as usize]);
+                (a != u32::MAX && b != u32::MAX).then(|| (edge_key(a, b), when))
+            })
+            .collect();
     }
 
     /// The simplified mesh, its unused vertices dropped.
@@ -1843,6 +1903,8 @@ struct Brick {
     /// Edges the whole rejected in an earlier sweep and when, for those within this brick.
     before: HashMap<u64, u32, Quick>,
     before_changed: Vec<u32>,
+    /// Quadrics summed here (the first sweep): every free vertex's is handed back.
+    fresh: bool,
 }
 
 impl Brick {
@@ -1897,7 +1959,21 @@ impl Brick {
                 .iter()
                 .map(|&g| whole.positions[g as usize])
                 .collect(),
-            quadrics: global.iter().map(|&g| whole.quadrics[g as usize]).collect(),
+            quadrics: if whole.quadrics.is_empty() {
+                // The first sweep: a free vertex's triangles are all here (a held one's
+                // quadric is not used).
+                let mut q = vec![Quadric::default(); n];
+                for t in &triangles {
+                    let plane = plane_of(t.map(|v| whole.positions[global[v as usize] as usize]));
+                    for &v in t {
+                        q[v as usize] = q[v as usize].add(&plane);
+                    }
+                }
+                q
+            } else {
+                global.iter().map(|&g| whole.quadrics[g as usize]).collect()
+            },
+            fresh: whole.quadrics.is_empty(),
             least: global
                 .iter()
                 .map(|&g| field.least(whole.positions[g as usize]))
@@ -2142,15 +2218,18 @@ impl Brick {
                 triangles.push(t.map(|v| self.global[v as usize]));
             }
         }
+        // Only vertices still in use: those collapsed away are no triangle's any more (in
+        // the first sweep most of them, whose quadrics alone would be ~100 bytes each).
+        let alive = |l: usize| !self.stars[l].is_empty();
         let moved = (0..self.global.len())
-            .filter(|&l| self.changed[l] && !self.held[l])
+            .filter(|&l| (self.changed[l] || self.fresh) && !self.held[l] && alive(l))
             .map(|l| (self.global[l], self.positions[l], self.quadrics[l]))
             .collect();
         Done {
             triangles,
             moved,
             changed: (0..self.global.len())
-                .filter(|&l| self.changed[l])
+                .filter(|&l| self.changed[l] && alive(l))
                 .map(|l| self.global[l])
                 .collect(),
             owners: self
@@ -2217,6 +2296,12 @@ impl Brick {
         self.made += 1;
         ring
     }
+}
+
+/// A triangle's plane, weighted by its area.
+fn plane_of(p: [DVec3; 3]) -> Quadric {
+    let c = (p[1] - p[0]).cross(p[2] - p[0]);
+    Quadric::plane(c.normalize_or_zero(), p[0], 0.5 * c.length())
 }
 
 /// 1 for an equilateral triangle, 0 for a flat one.
