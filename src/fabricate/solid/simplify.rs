@@ -615,12 +615,16 @@ pub fn simplify(
     let marched = mesh.triangles.len();
     let debug = std::env::var_os("LAMINA_DEBUG_SIMPLIFY").is_some();
     let clock = std::time::Instant::now();
+    if debug {
+        eprintln!("marched: {} triangles, peak {}", marched, peak_memory());
+    }
     refine(mesh, field, tol);
     if debug {
         eprintln!(
-            "refined: {} triangles, {:.2} s",
+            "refined: {} triangles, {:.2} s, peak {}",
             mesh.triangles.len(),
-            clock.elapsed().as_secs_f64()
+            clock.elapsed().as_secs_f64(),
+            peak_memory()
         );
     }
     let refined = mesh.triangles.len();
@@ -652,9 +656,11 @@ pub fn simplify(
         let made = whole.sweep(&limits, sweeps as u32, side.max(1e-9), phase);
         if debug {
             eprintln!(
-                "sweep {sweeps}: {made} collapses, {} triangles, bricks of {side:.3} mm, {:.2} s",
+                "sweep {sweeps}: {made} collapses, {} triangles, bricks of {side:.3} mm, {:.2} s, \
+                 peak {}",
                 whole.triangles.len(),
-                clock.elapsed().as_secs_f64()
+                clock.elapsed().as_secs_f64(),
+                peak_memory()
             );
         }
         progress.set(sweeps as u64);
@@ -750,6 +756,18 @@ pub fn simplify(
         slivers_left,
         ..Simplified::default()
     })
+}
+
+/// The process's peak resident memory so far (Linux; for `LAMINA_DEBUG_SIMPLIFY`).
+fn peak_memory() -> String {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .map(|v| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
@@ -1711,6 +1729,7 @@ impl Whole {
         let mut bricks: Vec<&[u32]> = order
             .chunk_by(|&x, &y| keys[x as usize] == keys[y as usize])
             .collect();
+        drop((keys, home));
         // The biggest first, so the last to start are short.
         bricks.sort_by_key(|b| std::cmp::Reverse(b.len()));
         let by_owner = group(
@@ -1745,7 +1764,7 @@ impl Whole {
         drop(by_owner);
 
         // Stitch: each brick's triangles, in brick order; vertices off the borders moved.
-        let mut triangles = Vec::with_capacity(self.triangles.len());
+        let mut triangles = Vec::with_capacity(done.iter().map(|d| d.triangles.len()).sum());
         let mut made = 0;
         for d in done {
             made += d.made;
