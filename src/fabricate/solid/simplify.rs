@@ -178,47 +178,63 @@ impl<'a> Field<'a> {
                 cell *= 2.0;
                 continue;
             }
-            let cells = dims[0] * dims[1] * dims[2];
-            let index = |i: usize, j: usize, k: usize| (i * dims[1] + j) * dims[2] + k;
-            let mut count = vec![0u32; cells + 1];
-            // A piece is listed in the cells of its box whose centre is within reach of it
-            // and half the cell's diagonal (the pieces are 1-Lipschitz).
-            let near = reach + 0.5 * 3f64.sqrt() * cell;
-            let each = |f: &mut dyn FnMut(usize, usize)| {
-                for (n, &(a, b)) in boxes.iter().enumerate() {
-                    let [(i0, i1), (j0, j1), (k0, k1)] = range(a, b);
-                    for i in i0..=i1 {
-                        for j in j0..=j1 {
-                            for k in k0..=k1 {
-                                let centre =
-                                    lo + (DVec3::new(i as f64, j as f64, k as f64) + 0.5) * cell;
-                                if prims[n].eval(centre, near) <= near {
-                                    f(index(i, j, k), n);
-                                }
+            let pieces: Vec<(u32, [(usize, usize); 3])> = boxes
+                .iter()
+                .enumerate()
+                .map(|(n, &(a, b))| (n as u32, range(a, b)))
+                .collect();
+            return Field::build(prims, reach, lo, cell, dims, &pieces);
+        }
+    }
+
+    /// The grid of cells `cell` wide from `lo`, `dims` of them, listing each of `pieces` (with
+    /// the cells its grown box covers) in the cells whose centre is within `reach` of it and
+    /// half the cell's diagonal (the pieces are 1-Lipschitz).
+    fn build(
+        prims: &'a [Primitive],
+        reach: f64,
+        lo: DVec3,
+        cell: f64,
+        dims: [usize; 3],
+        pieces: &[(u32, [(usize, usize); 3])],
+    ) -> Field<'a> {
+        let cells = dims[0] * dims[1] * dims[2];
+        let index = |i: usize, j: usize, k: usize| (i * dims[1] + j) * dims[2] + k;
+        let mut count = vec![0u32; cells + 1];
+        let near = reach + 0.5 * 3f64.sqrt() * cell;
+        let each = |f: &mut dyn FnMut(usize, u32)| {
+            for &(n, [(i0, i1), (j0, j1), (k0, k1)]) in pieces {
+                for i in i0..=i1 {
+                    for j in j0..=j1 {
+                        for k in k0..=k1 {
+                            let centre =
+                                lo + (DVec3::new(i as f64, j as f64, k as f64) + 0.5) * cell;
+                            if prims[n as usize].eval(centre, near) <= near {
+                                f(index(i, j, k), n);
                             }
                         }
                     }
                 }
-            };
-            each(&mut |c, _| count[c + 1] += 1);
-            for c in 0..cells {
-                count[c + 1] += count[c];
             }
-            let mut fill = count.clone();
-            let mut list = vec![0u32; count[cells] as usize];
-            each(&mut |c, n| {
-                list[fill[c] as usize] = n as u32;
-                fill[c] += 1;
-            });
-            return Field {
-                prims,
-                reach,
-                lo,
-                cell,
-                dims,
-                start: count,
-                list,
-            };
+        };
+        each(&mut |c, _| count[c + 1] += 1);
+        for c in 0..cells {
+            count[c + 1] += count[c];
+        }
+        let mut fill = count.clone();
+        let mut list = vec![0u32; count[cells] as usize];
+        each(&mut |c, n| {
+            list[fill[c] as usize] = n;
+            fill[c] += 1;
+        });
+        Field {
+            prims,
+            reach,
+            lo,
+            cell,
+            dims,
+            start: count,
+            list,
         }
     }
 
@@ -254,13 +270,14 @@ impl<'a> Field<'a> {
     /// The pieces that may be within `reach` of `p`.
     fn pieces(&self, p: DVec3) -> &[u32] {
         let c = ((p - self.lo) / self.cell).floor();
-        if c.min_element() < 0.0 {
+        let outside = c.min_element() < 0.0
+            || c.x >= self.dims[0] as f64
+            || c.y >= self.dims[1] as f64
+            || c.z >= self.dims[2] as f64;
+        if outside {
             return &[];
         }
         let (i, j, k) = (c.x as usize, c.y as usize, c.z as usize);
-        if i >= self.dims[0] || j >= self.dims[1] || k >= self.dims[2] {
-            return &[];
-        }
         let at = (i * self.dims[1] + j) * self.dims[2] + k;
         &self.list[self.start[at] as usize..self.start[at + 1] as usize]
     }
@@ -1856,6 +1873,16 @@ impl Whole {
     }
 }
 
+/// Working space of `Brick::check`, kept between checks.
+#[derive(Default)]
+struct Scratch {
+    ring_a: Vec<u32>,
+    ring_b: Vec<u32>,
+    around: Vec<u32>,
+    stars: Vec<u32>,
+    new: Vec<(u32, [DVec3; 3])>,
+}
+
 /// What a brick hands back: its live triangles (whole indices), the vertices it moved, the
 /// stars it changed, each witness's triangle (among its live ones), the edges it rejected.
 struct Done {
@@ -2064,6 +2091,10 @@ impl Brick {
             }
         }
         let mut tried = std::collections::HashSet::with_hasher(Quick);
+        // How many of each vertex's edges are in `tried` (or were, for a vertex collapsed
+        // away): an edge neither of whose ends has one is not looked up.
+        let mut rejects = vec![0u32; self.positions.len()];
+        let mut scratch = Scratch::default();
         while let Some(Reverse((_, a, b, va, vb))) = heap.pop() {
             if version[a as usize] != va || version[b as usize] != vb {
                 continue;
@@ -2071,9 +2102,12 @@ impl Brick {
             if self.stars[a as usize].is_empty() || self.stars[b as usize].is_empty() {
                 continue;
             }
-            match self.check(limits, a, b) {
+            match self.check(limits, a, b, &mut scratch) {
                 None => {
-                    tried.insert(edge_key(a, b));
+                    if tried.insert(edge_key(a, b)) {
+                        rejects[a as usize] += 1;
+                        rejects[b as usize] += 1;
+                    }
                 }
                 Some(c) => {
                     let ring = self.apply(&c);
@@ -2084,9 +2118,18 @@ impl Brick {
                         push(&mut heap, self, &version, a, v);
                     }
                     for &v in &ring {
+                        if rejects[v as usize] == 0 {
+                            continue;
+                        }
                         for &t in &self.stars[v as usize] {
                             for &w in &self.triangles[t as usize] {
-                                if w != v && w != a && tried.remove(&edge_key(v, w)) {
+                                if w != v
+                                    && w != a
+                                    && rejects[w as usize] > 0
+                                    && tried.remove(&edge_key(v, w))
+                                {
+                                    rejects[v as usize] -= 1;
+                                    rejects[w as usize] -= 1;
                                     push(&mut heap, self, &version, v, w);
                                 }
                             }
@@ -2105,29 +2148,37 @@ impl Brick {
         self.rejected.sort_unstable();
     }
 
-    /// Checks collapsing `b` into `a` (see the module notes).
-    fn check(&self, limits: &Limits, a: u32, b: u32) -> Option<Collapse> {
+    /// Checks collapsing `b` into `a` (see the module notes); `scratch` is working space.
+    fn check(&self, limits: &Limits, a: u32, b: u32, scratch: &mut Scratch) -> Option<Collapse> {
         let (sa, sb) = (&self.stars[a as usize], &self.stars[b as usize]);
-        let ring = |s: &[u32], me: u32| {
-            let mut r: Vec<u32> = s
-                .iter()
-                .flat_map(|&t| self.triangles[t as usize])
-                .filter(|&v| v != me)
-                .collect();
+        let ring = |s: &[u32], me: u32, r: &mut Vec<u32>| {
+            r.clear();
+            r.extend(
+                s.iter()
+                    .flat_map(|&t| self.triangles[t as usize])
+                    .filter(|&v| v != me),
+            );
             r.sort_unstable();
             r.dedup();
-            r
         };
-        let (ra, rb) = (ring(sa, a), ring(sb, b));
+        let Scratch {
+            ring_a: ra,
+            ring_b: rb,
+            around,
+            stars,
+            new,
+        } = scratch;
+        ring(sa, a, ra);
+        ring(sb, b, rb);
         let common = ra.iter().filter(|v| rb.binary_search(v).is_ok()).count();
         // `a` is in b's ring and b in a's; the two across the edge are common.
         if common != 2 {
             return None;
         }
-        let mut around: Vec<u32> = ra.iter().chain(&rb).copied().collect();
+        around.clear();
+        around.extend(ra.iter().chain(rb.iter()).filter(|&&v| v != a && v != b));
         around.sort_unstable();
         around.dedup();
-        around.retain(|&v| v != a && v != b);
         if around.len() < 3 {
             return None;
         }
@@ -2142,14 +2193,15 @@ impl Brick {
             return None;
         }
 
-        let mut stars: Vec<u32> = sa.iter().chain(sb).copied().collect();
+        stars.clear();
+        stars.extend(sa.iter().chain(sb));
         stars.sort_unstable();
         stars.dedup();
         // The triangles that stay, as they will be.
-        let mut new: Vec<(u32, [DVec3; 3])> = Vec::with_capacity(stars.len());
+        new.clear();
         let mut gone = 0;
         let cos_max = 70f64.to_radians().cos();
-        for &t in &stars {
+        for &t in stars.iter() {
             let tri = self.triangles[t as usize];
             if tri.contains(&a) && tri.contains(&b) {
                 gone += 1;
@@ -2182,12 +2234,12 @@ impl Brick {
         if !field.near(to, tol) {
             return None;
         }
-        for &v in &around {
+        for &v in around.iter() {
             if !field.near(0.5 * (to + self.positions[v as usize]), tol) {
                 return None;
             }
         }
-        for (_, p) in &new {
+        for (_, p) in new.iter() {
             if !field.near((p[0] + p[1] + p[2]) / 3.0, tol) {
                 return None;
             }
@@ -2207,7 +2259,7 @@ impl Brick {
         }
         // The surface near the mesh.
         let mut witnesses = Vec::new();
-        for &t in &stars {
+        for &t in stars.iter() {
             for &w in &self.kept[t as usize] {
                 let x = self.witness[w as usize];
                 // Any triangle within the tolerance keeps it: first the one that replaces
