@@ -1823,10 +1823,8 @@ impl Whole {
                 index[v as usize] = 0;
             }
         }
-        let mut next = 0u32;
-        for i in index.iter_mut().filter(|i| **i == 0) {
-            *i = next;
-            next += 1;
+        for (next, i) in index.iter_mut().filter(|i| **i == 0).enumerate() {
+            *i = next as u32;
         }
         let keep = |i: usize| index[i] != u32::MAX;
         self.positions = (0..n)
