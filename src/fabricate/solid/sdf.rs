@@ -268,6 +268,18 @@ impl Prism {
         self.with_across(across, p.z)
     }
 
+    /// An upper bound on the value over the triangle `t`: the value is at most the sum of its
+    /// in-plane and height parts where they are positive, the first bounded by
+    /// `Polygon::outside_bound` and the second, convex, by its largest at the corners.
+    pub fn bound_over(&self, t: &[DVec3; 3]) -> f64 {
+        let (mid, half) = (0.5 * (self.z0 + self.z1), 0.5 * (self.z1 - self.z0));
+        let up = t
+            .iter()
+            .map(|p| ((p.z - mid).abs() - half).max(0.0))
+            .fold(0.0, f64::max);
+        up + self.outline.outside_bound(t.map(|p| p.truncate()))
+    }
+
     /// The value at height `z` where the in-plane signed distance is `across` (lets a caller
     /// reuse one in-plane distance for a whole column of points).
     pub fn with_across(&self, across: f64, z: f64) -> f64 {
@@ -359,6 +371,50 @@ impl Polygon {
         &self.points
     }
 
+    /// An upper bound on how far any point of the triangle `t` is outside the polygon (0
+    /// inside). The distance to one edge is convex, so its largest value at the corners bounds
+    /// it over the triangle, and the least such bound over the edges bounds the distance to the
+    /// polygon (outside it is the least over the edges, inside it is 0). And it is 0 when the
+    /// corners are inside and no edge meets the triangle's sides: the outline, a closed curve
+    /// crossing no side, would otherwise lie wholly inside the triangle, putting its corners
+    /// outside.
+    pub fn outside_bound(&self, t: [DVec2; 3]) -> f64 {
+        let n = self.points.len();
+        let lo = t[0].min(t[1]).min(t[2]);
+        let hi = t[0].max(t[1]).max(t[2]);
+        let (c0, r0) = bucket(lo, self.lo, self.cell, self.cols, self.rows);
+        let (c1, r1) = bucket(hi, self.lo, self.cell, self.cols, self.rows);
+        // The edges listed in the buckets the triangle's box meets: every edge that meets the
+        // triangle passes through one of them.
+        let near: Vec<u32> = if (c1 - c0 + 1) * (r1 - r0 + 1) > n {
+            (0..n as u32).collect()
+        } else {
+            let mut near: Vec<u32> = (r0..=r1)
+                .flat_map(|r| (c0..=c1).map(move |c| r * self.cols + c))
+                .flat_map(|k| &self.edges[self.start[k] as usize..self.start[k + 1] as usize])
+                .copied()
+                .collect();
+            near.sort_unstable();
+            near.dedup();
+            near
+        };
+        let mut best = f64::INFINITY;
+        let mut crossed = false;
+        for e in near {
+            let (a, b) = (self.points[e as usize], self.points[(e as usize + 1) % n]);
+            let far = t
+                .iter()
+                .map(|&p| segment_distance(p, a, b))
+                .fold(0.0, f64::max);
+            best = best.min(far);
+            crossed = crossed || (0..3).any(|k| segments_meet(t[k], t[(k + 1) % 3], a, b));
+        }
+        if !crossed && t.iter().all(|&p| self.contains(p)) {
+            return 0.0;
+        }
+        best
+    }
+
     /// Signed distance to the boundary (negative inside), exact where its size is below
     /// `reach` (at most the bucket size), `±reach` beyond.
     pub fn signed_distance(&self, p: DVec2, reach: f64) -> f64 {
@@ -400,6 +456,13 @@ impl Polygon {
         }
         inside
     }
+}
+
+/// Whether two segments meet, touching or overlapping counted (so a caller relying on "they do
+/// not" is safe).
+fn segments_meet(p: DVec2, q: DVec2, a: DVec2, b: DVec2) -> bool {
+    let side = |o: DVec2, d: DVec2, x: DVec2| (d - o).perp_dot(x - o);
+    side(p, q, a) * side(p, q, b) <= 0.0 && side(a, b, p) * side(a, b, q) <= 0.0
 }
 
 /// Compressed rows from (bucket, edge) pairs: `start` has one entry more than there are buckets.

@@ -66,7 +66,8 @@
 //!
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
-//! holds the whole triangle; else the triangle is quartered, down to 1/1024 of its side, until
+//! holds the whole triangle, and so does the lamina's prism by a bound of its own: the
+//! triangle's footprint inside the outline, or its corners near one edge of it; else the triangle is quartered, down to 1/1024 of its side, until
 //! each quarter is so held by a piece near it, or a corner is found out). Inside: no point
 //! deeper than the tolerance in any one piece (a triangle lying on one vein but crossing a
 //! thinner one that joins it): the tangent plane of a convex piece's distance bounds it from
@@ -306,7 +307,8 @@ impl<'a> Field<'a> {
     /// Whether one convex piece among `near` (the two pieces least at each corner) is within
     /// `tol` of all three corners of triangle `p`: a convex piece's distance is convex, and the
     /// union's is at most each piece's, so then no point of the triangle is more than `tol`
-    /// outside.
+    /// outside. (The lamina's prism is left to the last check's `piece_holds`: its bound costs
+    /// a walk along the outline, too slow for every collapse.)
     fn one_holds(&self, p: &[DVec3; 3], near: [[u32; 2]; 3], tol: f64) -> bool {
         let tried = near.as_flattened();
         tried.iter().enumerate().any(|(k, &n)| {
@@ -316,6 +318,16 @@ impl<'a> Field<'a> {
                         && p.iter().all(|&v| piece.eval(v, self.reach) <= tol)
                 })
         })
+    }
+
+    /// Whether no point of triangle `p` is more than `tol` outside `piece`: a convex piece's
+    /// value over the triangle is at most its largest at the corners; the lamina's prism, whose
+    /// outline may be concave, has a bound of its own (`Prism::bound_over`).
+    fn piece_holds(&self, piece: &Primitive, p: &[DVec3; 3], tol: f64) -> bool {
+        match piece {
+            Primitive::Prism(s) => s.bound_over(p) <= tol,
+            _ => p.iter().all(|&v| piece.eval(v, self.reach) <= tol),
+        }
     }
 
     /// Whether the triangle `p`, whose corners and centre are within `tol` of the surface, is
@@ -349,8 +361,9 @@ impl<'a> Field<'a> {
     /// first (more than `limit` out: off); then, as in `holds`, one convex piece within
     /// `limit` of all three corners holds the whole triangle (a convex piece's distance is
     /// at most its largest value at the corners, and the union's at most each piece's); a
-    /// triangle no one piece holds (across a crease) is cut into four, and each quarter must
-    /// be held by a piece near the triangle or cut again, down to `HELD_DEPTH` times (quarters
+    /// triangle no one piece holds (across a crease, or on the lamina's prism) is cut into
+    /// four, and each quarter must be held by a piece near the triangle (`piece_holds`; the
+    /// whole triangle first) or cut again, down to `HELD_DEPTH` times (quarters
     /// 1/1024 of the triangle's side), at most `HELD_QUARTERS` of them; what is not held by
     /// then counts as off.
     fn off(&self, p: &[DVec3; 3], limit: f64, near: &mut Vec<u32>) -> bool {
@@ -363,7 +376,6 @@ impl<'a> Field<'a> {
         let lo = p[0].min(p[1]).min(p[2]);
         let hi = p[0].max(p[1]).max(p[2]);
         self.pieces_in(lo, hi, near);
-        near.retain(|&n| !matches!(self.prims[n as usize], Primitive::Prism(_)));
         let mut stack: Vec<([DVec3; 3], u32)> = vec![(*p, 0)];
         let mut looked = 0usize;
         while let Some((t, depth)) = stack.pop() {
@@ -371,10 +383,9 @@ impl<'a> Field<'a> {
             if looked > HELD_QUARTERS {
                 return true;
             }
-            let held = near.iter().any(|&n| {
-                let piece = &self.prims[n as usize];
-                t.iter().all(|&v| piece.eval(v, self.reach) <= limit)
-            });
+            let held = near
+                .iter()
+                .any(|&n| self.piece_holds(&self.prims[n as usize], &t, limit));
             if held {
                 continue;
             }
@@ -2412,7 +2423,8 @@ fn point_triangle(x: DVec3, p: &[DVec3; 3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fabricate::solid::sdf::RoundCone;
+    use crate::fabricate::solid::sdf::{Polygon, Prism, RoundCone};
+    use glam::DVec2;
 
     /// Two veins of radius 1 crossing at right angles, along x and y.
     fn cross() -> Vec<Primitive> {
@@ -2445,6 +2457,75 @@ mod tests {
         let corners_near = notch.iter().all(|&v| field.eval(v).abs() < tol);
         assert!(corners_near);
         assert!(!field.holds(&notch, least(&notch), tol));
+    }
+
+    #[test]
+    fn the_last_check_proves_a_triangle_on_a_concave_lamina_held_or_finds_it_off() {
+        // An L-shaped lamina 0.3 thick, its top at z = 0: (2, 2)–(4, 4) cut out.
+        let outline = [
+            (0.0, 0.0),
+            (4.0, 0.0),
+            (4.0, 2.0),
+            (2.0, 2.0),
+            (2.0, 4.0),
+            (0.0, 4.0),
+        ];
+        let outline = Polygon::new(outline.map(|(x, y)| DVec2::new(x, y)).to_vec(), 1.0);
+        let prims = vec![Primitive::Prism(Prism {
+            outline,
+            z0: -0.3,
+            z1: 0.0,
+        })];
+        let field = Field::new(&prims, 0.5);
+        let (tol, mut near) = (0.01, Vec::new());
+        let top = [
+            DVec3::new(0.5, 0.5, 0.0),
+            DVec3::new(3.0, 0.5, 0.0),
+            DVec3::new(0.5, 3.0, 0.0),
+        ];
+        assert!(
+            !field.off(&top, tol, &mut near),
+            "on the top face, inside the outline"
+        );
+        let wall = [
+            DVec3::new(4.0, 0.5, -0.1),
+            DVec3::new(4.0, 1.5, -0.1),
+            DVec3::new(4.0, 1.0, -0.25),
+        ];
+        assert!(
+            !field.off(&wall, tol, &mut near),
+            "on a side along one edge"
+        );
+        // Its corners inside, but its side (3.5, 1.5)–(1.5, 3.5) crosses the notch, 0.71 out at
+        // (2.5, 2.5).
+        let across = [
+            DVec3::new(3.5, 1.5, 0.0),
+            DVec3::new(1.5, 3.5, 0.0),
+            DVec3::new(1.5, 1.5, 0.0),
+        ];
+        assert!(field.off(&across, tol, &mut near), "across the notch");
+        // The bound is never below the distance at any point of a triangle.
+        let Primitive::Prism(prism) = &prims[0] else {
+            unreachable!()
+        };
+        for i in 0..12 {
+            for j in 0..12 {
+                let c = DVec3::new(-1.0 + 0.5 * i as f64, -1.0 + 0.5 * j as f64, 0.05);
+                let t = [
+                    c,
+                    c + DVec3::new(1.3, 0.2, 0.0),
+                    c + DVec3::new(0.4, 1.1, -0.2),
+                ];
+                let bound = prism.bound_over(&t);
+                for a in 0..=10 {
+                    for b in 0..=10 - a {
+                        let (u, v) = (a as f64 / 10.0, b as f64 / 10.0);
+                        let x = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
+                        assert!(prism.eval(x, 10.0) <= bound + 1e-12, "{t:?} at {x}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
