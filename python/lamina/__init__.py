@@ -522,7 +522,9 @@ def solid(positions: Any, edges: Any = None, node_radius: Any = None, edge_radiu
           *, cell: Optional[float] = None, units: Optional[str] = None, progress: Progress = None,
           **options: Any) -> dict:
     """The closed, 2-manifold mesh of the network's veins (each edge a cone between its nodes'
-    spheres), meshed on a grid of ``cell``. Returns ``mesh`` and ``report``."""
+    spheres), meshed on a grid of ``cell`` and simplified to within ``tolerance`` (default a
+    quarter cell; ``tolerance=False`` keeps every marched triangle, as ``--full``). Returns
+    ``mesh`` and ``report``."""
     units = _units(units, positions)
     k = scale_of(units)
     data = network_bytes(network(positions, edges, None, node_radius, edge_radius), k)

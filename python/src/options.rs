@@ -964,14 +964,19 @@ fn solid_shape(o: &mut Opts) -> PyResult<stage::solid::Shape> {
 pub fn solid(o: &mut Opts) -> PyResult<stage::solid::Options> {
     let d = stage::solid::Options::default();
     let cell = o.f64("cell")?.unwrap_or(d.cell);
-    // tolerance=True: a quarter cell, as the flag without a value.
+    // As the command: simplified to a quarter cell unless told (tolerance=False: every
+    // marched triangle, as --full).
     let tolerance = match o.take("tolerance")? {
-        None => None,
+        None => Some(0.25 * cell),
         Some(v) if v.is_instance_of::<pyo3::types::PyBool>() => {
             v.extract::<bool>()?.then_some(0.25 * cell)
         }
         Some(v) => Some(v.extract::<f64>().map_err(|_| {
-            crate::error("tolerance= must be a distance in mm, or True for a quarter cell".into())
+            crate::error(
+                "tolerance= must be a distance in mm, True for a quarter cell or False for \
+                 every marched triangle"
+                    .into(),
+            )
         })?),
     };
     Ok(stage::solid::Options {

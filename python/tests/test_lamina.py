@@ -623,8 +623,8 @@ PAPER = {"X": "F[-X]F[+X]-X", "F": "FF"}
 
 
 def long_solid():
-    # About 4 s and 5 M triangles here.
-    return lamina.read_network(SMALL_LOOP), dict(cell=0.015)
+    # About 4 s and 5 M triangles here (marched only: tolerance=False, as --full).
+    return lamina.read_network(SMALL_LOOP), dict(cell=0.015, tolerance=False)
 
 
 @pytest.fixture

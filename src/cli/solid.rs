@@ -23,11 +23,15 @@ pub struct Args {
     /// Grid cell of the mesher, mm (default: the DMP-SL pixel)
     #[arg(long, default_value_t = DEFAULT_CELL)]
     pub cell: f64,
-    /// Simplify the mesh to within this distance of the exact surface, mm (without a value: a
-    /// quarter of the cell, a quarter pixel by default); without the flag every marched
-    /// triangle is kept
+    /// The mesh written is simplified to within this distance of the exact surface, mm
+    /// (default, and the flag without a value: a quarter of the cell, a quarter pixel by
+    /// default)
     #[arg(long, value_name = "MM", num_args = 0..=1)]
     pub tolerance: Option<Option<f64>>,
+    /// Write every marched triangle (fitted to the surface on average) instead of the
+    /// simplified mesh: many more triangles, made faster
+    #[arg(long, conflicts_with = "tolerance")]
+    pub full: bool,
     #[command(flatten)]
     pub shape: ShapeArgs,
     #[command(flatten)]
@@ -187,7 +191,7 @@ pub fn run(args: Args) -> Result<()> {
     let net = args.weld.network(&args.network)?.network;
     let opts = solid::Options {
         cell: args.cell,
-        tolerance: args.tolerance.map(|t| t.unwrap_or(0.25 * args.cell)),
+        tolerance: (!args.full).then(|| args.tolerance.flatten().unwrap_or(0.25 * args.cell)),
         shape: args.shape.shape(args.supports.options()?)?,
     };
     let made = solid::run(&net, &opts, &Bar::new())

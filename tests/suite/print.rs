@@ -113,7 +113,7 @@ fn simplifying_keeps_the_solid_closed_and_its_volume_with_far_fewer_triangles() 
         run_ok(&args)?;
         Ok((read_mesh(&out)?, json(&report)?))
     };
-    let (full, rf) = made(None, "full")?;
+    let (full, rf) = made(Some("--full"), "full")?;
     let (simple, rs) = made(Some("--tolerance=0.025"), "simple")?;
     assert!(rf["simplified"].is_null());
     // Cells split where veins come close only add triangles to the marched mesh.
@@ -189,7 +189,7 @@ fn simplifying_keeps_gaps_between_veins_open() -> TestResult {
     let dir = tempfile::tempdir()?;
     let net = fixture("networks/near_miss.json");
     let net = net.to_str().ok_or("path")?;
-    let (marched, rm) = solid_of(dir.path(), net, &[], "marched")?;
+    let (marched, rm) = solid_of(dir.path(), net, &["--full"], "marched")?;
     assert_eq!(
         marched.check_manifold().genus,
         Some(2),
