@@ -298,6 +298,9 @@ fn a_leaf_with_lamina_and_base_stands_up_as_one_part() -> TestResult {
         "--upright",
         "--cell",
         "0.08",
+        // The marched mesh: simplified, this leaf takes ~40 s in a test build (its lamina's
+        // proof is unit-tested in `simplify`; 10.7 s in release, BENCHMARKS.md).
+        "--full",
         "-o",
         stl.to_str().ok_or("p")?,
         "--report",

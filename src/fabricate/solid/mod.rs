@@ -43,7 +43,7 @@
 //! 1/16 of the cell); then the mesh is refined where chords cut creases, simplified by edge
 //! collapse within that distance of the exact surface (`simplify`), and every triangle is
 //! checked whole at the end, with a proof either way (`simplify`'s last check). Measured by `validators/check_hausdorff.py`: the 12,700-node leaf
-//! at 50 mm, 13.8 M marched triangles → 263 k in 79 s (BENCHMARKS.md).
+//! at 50 mm, 14.4 M marched triangles → 257 k in 79–81 s and 1.30 GiB (BENCHMARKS.md).
 //!
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
 //! so both put the solid on the same pixels.
