@@ -67,8 +67,9 @@
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
 //! holds the whole triangle, and so does the lamina's prism by a bound of its own: the
-//! triangle's footprint inside the outline, or its corners near one edge of it; else the triangle is quartered, down to 1/1024 of its side, until
-//! each quarter is so held by a piece near it, or a corner is found out). Inside: no point
+//! triangle's footprint inside the outline, or its corners near one edge of it; else the
+//! triangle is quartered, down to 1/1024 of its side, until each quarter is so held by a piece
+//! near it, or a corner is found out). Inside: no point
 //! deeper than the tolerance in any one piece (a triangle lying on one vein but crossing a
 //! thinner one that joins it): the tangent plane of a convex piece's distance bounds it from
 //! below over the triangle, and Frank–Wolfe steps settle the few the plane does not. A
