@@ -407,7 +407,8 @@ impl Polygon {
                 .map(|&p| segment_distance(p, a, b))
                 .fold(0.0, f64::max);
             best = best.min(far);
-            crossed = crossed || (0..3).any(|k| segments_meet(t[k], t[(k + 1) % 3], a, b));
+            crossed =
+                crossed || (0..3).any(|k| crate::geom::segments_touch(t[k], t[(k + 1) % 3], a, b));
         }
         if !crossed && t.iter().all(|&p| self.contains(p)) {
             return 0.0;
@@ -456,13 +457,6 @@ impl Polygon {
         }
         inside
     }
-}
-
-/// Whether two segments meet, touching or overlapping counted (so a caller relying on "they do
-/// not" is safe).
-fn segments_meet(p: DVec2, q: DVec2, a: DVec2, b: DVec2) -> bool {
-    let side = |o: DVec2, d: DVec2, x: DVec2| (d - o).perp_dot(x - o);
-    side(p, q, a) * side(p, q, b) <= 0.0 && side(a, b, p) * side(a, b, q) <= 0.0
 }
 
 /// Compressed rows from (bucket, edge) pairs: `start` has one entry more than there are buckets.

@@ -2471,7 +2471,8 @@ mod tests {
             (2.0, 4.0),
             (0.0, 4.0),
         ];
-        let outline = Polygon::new(outline.map(|(x, y)| DVec2::new(x, y)).to_vec(), 1.0);
+        // Buckets of 8, so the value is exact out to 8 (the bound is checked against it).
+        let outline = Polygon::new(outline.map(|(x, y)| DVec2::new(x, y)).to_vec(), 8.0);
         let prims = vec![Primitive::Prism(Prism {
             outline,
             z0: -0.3,
