@@ -2818,23 +2818,23 @@ mod tests {
 
     #[test]
     fn the_edge_heap_pops_in_order_whatever_came_in_between() {
-        // A fixed pseudo-random stream of keys, some equal; pushes and pops interleaved.
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
+        use rand::{Rng, SeedableRng};
+        // Seeded keys, many equal; pushes and pops interleaved.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut key = || {
+            (
+                rng.random_range(0..97u64),
+                rng.random_range(0..5u32),
+                rng.random_range(0..5u32),
+            )
         };
-        let first: Vec<(u64, u32, u32)> = (0..1000)
-            .map(|_| (next() % 97, (next() % 5) as u32, (next() % 5) as u32))
-            .collect();
+        let first: Vec<(u64, u32, u32)> = (0..1000).map(|_| key()).collect();
         let mut heap = Heap::from(first.clone());
         let mut all = first;
         let mut popped = Vec::new();
         for round in 0..3000 {
             if round % 3 == 2 {
-                let k = (next() % 97, (next() % 5) as u32, (next() % 5) as u32);
+                let k = key();
                 heap.push(k);
                 all.push(k);
             } else if let Some(k) = heap.pop() {
