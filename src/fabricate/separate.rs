@@ -34,7 +34,8 @@ pub const GAP: f64 = 0.005;
 pub const EVALS_PER_SECOND: f64 = 1.0e7;
 /// Each round of moves is made by this many workers at once (on as many threads), from the
 /// same arrangement in different orders; the one with the least weighted loss is kept
-/// (sparrow's). Work counts the busiest worker's (the round's time on as many cores).
+/// (sparrow's). Work counts every worker's, so a budget buys the same evaluations on any
+/// number of cores.
 const WORKERS: usize = 2;
 /// Rounds without a new (substantially) least total overlap that make a strike.
 const STALL: usize = 40;
@@ -76,11 +77,7 @@ impl Form {
                 (e.length() > 1e-12).then(|| DVec2::new(e.y, -e.x).normalize())
             })
             .collect();
-        let area = 0.5
-            * (0..n)
-                .map(|k| pts[k].perp_dot(pts[(k + 1) % n]))
-                .sum::<f64>()
-                .abs();
+        let area = crate::rationalize::plates::polygon_area(&pts).abs();
         Form {
             pts,
             size: hi - lo,
