@@ -68,7 +68,7 @@ const COMPRESS_LEAST: f64 = 1.0;
 const COMPRESS_TRIES: usize = 3;
 /// Compression runs on a sheet whose share of the work is at least this many pair
 /// evaluations (5 s of `time`).
-const COMPRESS_WORK: u64 = 50_000_000;
+const COMPRESS_WORK: u64 = (5.0 * crate::fabricate::separate::EVALS_PER_SECOND) as u64;
 /// Bisection steps for the last sheet's strip, each way (one fill each).
 const STRIP_STEPS: usize = 8;
 
@@ -1319,8 +1319,8 @@ impl BottomLeft<'_> {
             // Compression first: the sheet's items pushed into a shorter room, a step at a
             // time, while the separation clears every overlap (the room's far end freed).
             // Half of this sheet's share of the work at most, the rest to fill the room freed;
-            // none when the share is too small to compress (a step takes millions of pair
-            // evaluations), so that short budgets go to filling alone. Along x first, then y.
+            // none when the share is too small to compress (under 5 s of work), so that short
+            // budgets go to filling alone. Along x first, then y.
             let sheets_left = (sheets - 1 - k) as u64;
             let share = (budget - used.min(budget)) / sheets_left.max(1);
             let stop = if share >= COMPRESS_WORK {

@@ -10,8 +10,12 @@
 //! wall separated back inside (sparrow's exploration, on a sheet of fixed width).
 //!
 //! Items are convex polygons (the nester's grown hulls), so the overlap of two is exact and
-//! cheap: the penetration depth along the separating axes (the edge normals of both); two items
-//! are clear when an axis separates them by at least [`GAP`]. The container is a rectangle; an
+//! cheap: the penetration depth along the separating axes (the edge normals of both, each
+//! polygon's extent along its own known in advance); two items are clear when an axis
+//! separates them by at least [`GAP`]. An item's neighbours are found in a uniform grid of
+//! cells about an item wide, and a place's loss stops being summed once it exceeds the best
+//! place found so far (sparrow's early exit). Box tests against every item were most of the
+//! work counted before the grid. The container is a rectangle; an
 //! item's excess over its walls counts as overlap too. A collision's loss is its depth plus a
 //! small floor ([`EPSILON`] of the larger item), times a size penalty (sparrow's: the geometric
 //! mean of the square roots of the two areas), so that large items are moved apart first and
@@ -29,9 +33,10 @@ use rayon::prelude::*;
 /// Two items are clear when an axis separates them by at least this, mm (the nester's slide
 /// backoff; jagua-rs confirms every result in its own arithmetic).
 pub const GAP: f64 = 0.005;
-/// Pair evaluations per second of budget: about what one core of the reference machine (2
-/// cores, 2026) does; a budget is work, so results do not depend on the machine.
-pub const EVALS_PER_SECOND: f64 = 1.0e7;
+/// Pair evaluations per second of budget: what the 2-core machine of BENCHMARKS.md (2026-11-29)
+/// does with both cores, the two workers of a round counted; a budget is work, so results do
+/// not depend on the machine.
+pub const EVALS_PER_SECOND: f64 = 5.0e6;
 /// Each round of moves is made by this many workers at once (on as many threads), from the
 /// same arrangement in different orders; the one with the least weighted loss is kept
 /// (sparrow's). Work counts every worker's, so a budget buys the same evaluations on any
@@ -58,8 +63,10 @@ const LOCAL: usize = 24;
 pub struct Form {
     pub pts: Vec<DVec2>,
     pub size: DVec2,
-    /// Unit edge normals.
-    normals: Vec<DVec2>,
+    /// Unit edge normals, one per direction (an edge parallel to an earlier one adds none: the
+    /// overlap of two projections on −n is their overlap on n), with the polygon's extent
+    /// along each.
+    axes: Vec<Axis>,
     /// The square root of its area's square root (the size penalty's factor), and its box's
     /// diagonal.
     root: f64,
@@ -71,17 +78,24 @@ impl Form {
         let lo = pts.iter().fold(DVec2::INFINITY, |m, q| m.min(*q));
         let hi = pts.iter().fold(DVec2::NEG_INFINITY, |m, q| m.max(*q));
         let n = pts.len();
-        let normals = (0..n)
-            .filter_map(|k| {
-                let e = pts[(k + 1) % n] - pts[k];
-                (e.length() > 1e-12).then(|| DVec2::new(e.y, -e.x).normalize())
-            })
-            .collect();
+        let mut axes: Vec<Axis> = Vec::with_capacity(n);
+        for k in 0..n {
+            let e = pts[(k + 1) % n] - pts[k];
+            if e.length() <= 1e-12 {
+                continue;
+            }
+            let normal = DVec2::new(e.y, -e.x).normalize();
+            if axes.iter().any(|a| a.normal.perp_dot(normal).abs() < 1e-12) {
+                continue;
+            }
+            let (lo, hi) = extent(&pts, normal);
+            axes.push(Axis { normal, lo, hi });
+        }
         let area = crate::rationalize::plates::polygon_area(&pts).abs();
         Form {
             pts,
             size: hi - lo,
-            normals,
+            axes,
             root: area.sqrt().sqrt(),
             diameter: (hi - lo).length(),
         }
@@ -96,30 +110,49 @@ pub struct Spot {
     pub at: DVec2,
 }
 
+/// A separating axis of a form: an edge normal and the form's extent along it.
+#[derive(Clone, Copy, Debug)]
+struct Axis {
+    normal: DVec2,
+    lo: f64,
+    hi: f64,
+}
+
+/// The least and greatest of `pts` projected on `n`.
+fn extent(pts: &[DVec2], n: DVec2) -> (f64, f64) {
+    pts.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            let t = p.dot(n);
+            (lo.min(t), hi.max(t))
+        })
+}
+
 /// How deep `a` at `pa` and `b` at `pb` overlap (least projection overlap over both polygons'
-/// edge normals), less [`GAP`]: ≤ 0 when they are clear.
+/// edge normals), less [`GAP`]: ≤ 0 when they are clear. Each form's extent along its own
+/// axes is known; only the other one is projected.
 fn depth(a: &Form, pa: DVec2, b: &Form, pb: DVec2) -> f64 {
+    // In a's frame: b is at `d`.
+    let d = pb - pa;
     let mut least = f64::INFINITY;
-    for normals in [&a.normals, &b.normals] {
-        for &n in normals.iter() {
-            let (mut a0, mut a1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in &a.pts {
-                let t = (*p + pa).dot(n);
-                a0 = a0.min(t);
-                a1 = a1.max(t);
+    for axis in &a.axes {
+        let (b0, b1) = extent(&b.pts, axis.normal);
+        let off = d.dot(axis.normal);
+        let o = (axis.hi - b0 - off).min(b1 + off - axis.lo);
+        if o < least {
+            least = o;
+            if least + GAP <= 0.0 {
+                return least + GAP;
             }
-            let (mut b0, mut b1) = (f64::INFINITY, f64::NEG_INFINITY);
-            for p in &b.pts {
-                let t = (*p + pb).dot(n);
-                b0 = b0.min(t);
-                b1 = b1.max(t);
-            }
-            let o = (a1 - b0).min(b1 - a0);
-            if o < least {
-                least = o;
-                if least + GAP <= 0.0 {
-                    return least + GAP;
-                }
+        }
+    }
+    for axis in &b.axes {
+        let (a0, a1) = extent(&a.pts, axis.normal);
+        let off = d.dot(axis.normal);
+        let o = (a1 - axis.lo - off).min(axis.hi + off - a0);
+        if o < least {
+            least = o;
+            if least + GAP <= 0.0 {
+                return least + GAP;
             }
         }
     }
@@ -136,6 +169,101 @@ fn loss(d: f64, f: &Form, g: &Form) -> f64 {
 /// Pairs in collision and their unweighted loss: (i, j, loss), a wall excess as (i, i).
 type Pairs = Vec<(usize, usize, f64)>;
 
+/// The spots by the cells of a uniform grid over the room that their boxes (grown by [`GAP`])
+/// cover, so that a form's neighbours are looked for in the cells its box covers, not among all
+/// the spots. Boxes beyond the room count in its edge cells.
+#[derive(Clone)]
+struct Grid {
+    cell: f64,
+    cols: u32,
+    rows: u32,
+    cells: Vec<Vec<u32>>,
+    /// Each spot's cells: [x0, y0, x1, y1], inclusive.
+    range: Vec<[u32; 4]>,
+}
+
+/// The most cells a grid has along either side.
+const GRID_MOST: u32 = 256;
+
+impl Grid {
+    /// A grid over `room` whose cells are about as large as the spots' boxes on average.
+    fn new(forms: &[Vec<Form>], room: DVec2, spots: &[Spot]) -> Grid {
+        let mean = spots
+            .iter()
+            .map(|s| forms[s.item][s.form].size.max_element())
+            .sum::<f64>()
+            / spots.len().max(1) as f64;
+        let cell = mean.max(room.max_element() / GRID_MOST as f64).max(1e-6);
+        let count = |v: f64| ((v / cell).ceil() as u32).clamp(1, GRID_MOST);
+        let (cols, rows) = (count(room.x), count(room.y));
+        let mut grid = Grid {
+            cell,
+            cols,
+            rows,
+            cells: vec![Vec::new(); (cols * rows) as usize],
+            range: vec![[0; 4]; spots.len()],
+        };
+        for (k, s) in spots.iter().enumerate() {
+            grid.insert(k, s.at, s.at + forms[s.item][s.form].size);
+        }
+        grid
+    }
+
+    /// The cells a box from `lo` to `hi` (grown by [`GAP`]) covers.
+    fn cover(&self, lo: DVec2, hi: DVec2) -> [u32; 4] {
+        let at = |v: f64, most: u32| ((v / self.cell).floor().max(0.0) as u32).min(most - 1);
+        [
+            at(lo.x - GAP, self.cols),
+            at(lo.y - GAP, self.rows),
+            at(hi.x + GAP, self.cols),
+            at(hi.y + GAP, self.rows),
+        ]
+    }
+
+    fn insert(&mut self, k: usize, lo: DVec2, hi: DVec2) {
+        let r = self.cover(lo, hi);
+        self.range[k] = r;
+        for y in r[1]..=r[3] {
+            for x in r[0]..=r[2] {
+                self.cells[(y * self.cols + x) as usize].push(k as u32);
+            }
+        }
+    }
+
+    fn remove(&mut self, k: usize) {
+        let r = self.range[k];
+        for y in r[1]..=r[3] {
+            for x in r[0]..=r[2] {
+                let cell = &mut self.cells[(y * self.cols + x) as usize];
+                if let Some(at) = cell.iter().position(|&j| j as usize == k) {
+                    cell.swap_remove(at);
+                }
+            }
+        }
+    }
+
+    /// The spots whose cells meet those of the box from `lo` to `hi`, each once (in the first
+    /// cell both cover), into `out`; returns how many entries were looked at.
+    fn near(&self, lo: DVec2, hi: DVec2, out: &mut Vec<usize>) -> u64 {
+        out.clear();
+        let q = self.cover(lo, hi);
+        let mut looked = 0;
+        for y in q[1]..=q[3] {
+            for x in q[0]..=q[2] {
+                let cell = &self.cells[(y * self.cols + x) as usize];
+                looked += cell.len() as u64;
+                for &j in cell {
+                    let r = self.range[j as usize];
+                    if x == r[0].max(q[0]) && y == r[1].max(q[1]) {
+                        out.push(j as usize);
+                    }
+                }
+            }
+        }
+        looked
+    }
+}
+
 /// A sheet being separated.
 #[derive(Clone)]
 pub struct Separation<'a> {
@@ -146,7 +274,8 @@ pub struct Separation<'a> {
     pub spots: Vec<Spot>,
     /// Pair weights, by position in `spots` (upper triangle; the diagonal weighs a spot's
     /// excess over the walls).
-    weights: Vec<f64>,
+    /// (Shared with the round's workers, who only read them.)
+    weights: std::sync::Arc<Vec<f64>>,
     /// Pair evaluations spent.
     pub work: u64,
     /// Whether a spot has left where it was given (the new item has): pairs of spots that
@@ -154,6 +283,9 @@ pub struct Separation<'a> {
     moved: Vec<bool>,
     /// The keys of the weights above 1 (the pairs that have been in collision).
     heavy: Vec<usize>,
+    grid: Grid,
+    /// Neighbours found in the grid (kept to spare an allocation per look).
+    near: Vec<usize>,
     rng: ChaCha8Rng,
 }
 
@@ -170,16 +302,21 @@ impl<'a> Separation<'a> {
     ) -> Separation<'a> {
         let n = spots.len();
         let moved = (0..n).map(|k| k >= known).collect();
+        let grid = Grid::new(forms, room, &spots);
         Separation {
+            grid,
+            near: Vec::with_capacity(n),
             moved,
             heavy: (0..n).map(|k| k * (n + 1)).collect(),
             forms,
             room,
             clear,
             spots,
-            weights: (0..n * n)
-                .map(|k| if k % (n + 1) == 0 { 2.0 } else { 1.0 })
-                .collect(),
+            weights: std::sync::Arc::new(
+                (0..n * n)
+                    .map(|k| if k % (n + 1) == 0 { 2.0 } else { 1.0 })
+                    .collect(),
+            ),
             work: 0,
             rng: ChaCha8Rng::seed_from_u64(seed),
         }
@@ -209,8 +346,10 @@ impl<'a> Separation<'a> {
 
     /// Weighted loss of spot `k` moved to (form, at) with every other spot, and of its wall
     /// excess (weighted as a pair is, 2 at first: the walls of a room made shorter push as
-    /// hard as the neighbours they push against).
-    fn cost(&mut self, k: usize, form: usize, at: DVec2) -> f64 {
+    /// hard as the neighbours they push against); once it reaches `bound` the rest is not
+    /// looked at (sparrow's early exit: a place worse than the best so far needs no exact
+    /// loss), and what is returned is at least `bound`.
+    fn cost(&mut self, k: usize, form: usize, at: DVec2, bound: f64) -> f64 {
         let f = &self.forms[self.spots[k].item][form];
         let unmoved = !self.moved[k] && form == self.spots[k].form && at == self.spots[k].at;
         // A spot where it was given is clear of the walls the caller checked, not of a room
@@ -222,29 +361,51 @@ impl<'a> Separation<'a> {
             } else {
                 self.wall(f, at)
             };
+        if sum >= bound {
+            return sum;
+        }
         let (lo, hi) = (at, at + f.size);
-        // Box tests count a sixteenth of a pair evaluation each.
-        self.work += (n as u64).div_ceil(16);
-        for j in 0..n {
-            if j == k || (unmoved && !self.moved[j]) {
-                continue;
-            }
-            let s = self.spots[j];
-            let g = self.form(&s);
-            // Boxes apart by more than the gap: clear.
-            if s.at.x > hi.x + GAP
-                || s.at.y > hi.y + GAP
-                || s.at.x + g.size.x < lo.x - GAP
-                || s.at.y + g.size.y < lo.y - GAP
-            {
-                continue;
-            }
-            self.work += 1;
-            let d = depth(f, at, g, s.at);
-            if d > 0.0 {
-                sum += self.weights[k.min(j) * n + k.max(j)] * loss(d, f, g);
+        // The spots of the cells the box covers, each once (in the first cell both cover).
+        let grid = &self.grid;
+        let q = grid.cover(lo, hi);
+        let mut looked = 0u64;
+        let mut evaluated = 0u64;
+        'cells: for y in q[1]..=q[3] {
+            for x in q[0]..=q[2] {
+                let cell = &grid.cells[(y * grid.cols + x) as usize];
+                looked += cell.len() as u64;
+                for &j in cell {
+                    let j = j as usize;
+                    let r = grid.range[j];
+                    if x != r[0].max(q[0]) || y != r[1].max(q[1]) {
+                        continue;
+                    }
+                    if j == k || (unmoved && !self.moved[j]) {
+                        continue;
+                    }
+                    let s = self.spots[j];
+                    let g = self.form(&s);
+                    // Boxes apart by more than the gap: clear.
+                    if s.at.x > hi.x + GAP
+                        || s.at.y > hi.y + GAP
+                        || s.at.x + g.size.x < lo.x - GAP
+                        || s.at.y + g.size.y < lo.y - GAP
+                    {
+                        continue;
+                    }
+                    evaluated += 1;
+                    let d = depth(f, at, g, s.at);
+                    if d > 0.0 {
+                        sum += self.weights[k.min(j) * n + k.max(j)] * loss(d, f, g);
+                        if sum >= bound {
+                            break 'cells;
+                        }
+                    }
+                }
             }
         }
+        // Entries looked at in the grid count a sixteenth of a pair evaluation each.
+        self.work += evaluated + looked.div_ceil(16);
         sum
     }
 
@@ -254,8 +415,7 @@ impl<'a> Separation<'a> {
         let n = self.spots.len();
         let mut total = 0.0;
         let mut pairs = Vec::new();
-        // Box tests count a sixteenth of a pair evaluation each.
-        self.work += (n * n / 2).div_ceil(16) as u64;
+        let mut near = std::mem::take(&mut self.near);
         for i in 0..n {
             let a = self.spots[i];
             let fa = self.form(&a);
@@ -268,7 +428,11 @@ impl<'a> Separation<'a> {
                 total += w;
                 pairs.push((i, i, w));
             }
-            for j in i + 1..n {
+            let looked = self.grid.near(a.at, a.at + fa.size, &mut near);
+            // Entries looked at and box tests count a sixteenth of a pair evaluation each.
+            self.work += (looked + near.len() as u64).div_ceil(16);
+            near.sort_unstable();
+            for &j in near.iter().filter(|&&j| j > i) {
                 if !self.moved[i] && !self.moved[j] {
                     continue;
                 }
@@ -290,6 +454,7 @@ impl<'a> Separation<'a> {
                 }
             }
         }
+        self.near = near;
         (total, pairs)
     }
 
@@ -299,7 +464,11 @@ impl<'a> Separation<'a> {
         let item = self.spots[k].item;
         let forms = self.forms[item].len();
         let here = self.spots[k];
-        let mut best = (self.cost(k, here.form, here.at), here.form, here.at);
+        let mut best = (
+            self.cost(k, here.form, here.at, f64::INFINITY),
+            here.form,
+            here.at,
+        );
         let mut tries: Vec<(usize, DVec2)> = Vec::with_capacity(forms * GLOBAL + LOCAL);
         for form in 0..forms {
             let span =
@@ -324,7 +493,7 @@ impl<'a> Separation<'a> {
             tries.push((form, here.at + u * 2.0 * scale));
         }
         for (form, at) in tries {
-            let c = self.cost(k, form, at);
+            let c = self.cost(k, form, at, best.0);
             if c < best.0 {
                 best = (c, form, at);
             }
@@ -335,7 +504,7 @@ impl<'a> Separation<'a> {
             let mut moved = false;
             for dir in [DVec2::X, DVec2::NEG_X, DVec2::Y, DVec2::NEG_Y] {
                 let at = best.2 + dir * step;
-                let c = self.cost(k, best.1, at);
+                let c = self.cost(k, best.1, at, best.0);
                 if c < best.0 {
                     best = (c, best.1, at);
                     moved = true;
@@ -347,9 +516,12 @@ impl<'a> Separation<'a> {
         }
         if best.1 != here.form || best.2 != here.at {
             self.moved[k] = true;
+            self.spots[k].form = best.1;
+            self.spots[k].at = best.2;
+            self.grid.remove(k);
+            let size = self.forms[item][best.1].size;
+            self.grid.insert(k, best.2, best.2 + size);
         }
-        self.spots[k].form = best.1;
-        self.spots[k].at = best.2;
     }
 
     /// Moves items until nothing overlaps (true), or the work runs out or the search gives up
@@ -403,6 +575,7 @@ impl<'a> Separation<'a> {
             }
             self.spots.clone_from(&best.0);
             self.moved.clone_from(&best.1);
+            self.grid = Grid::new(self.forms, self.room, &self.spots);
             (total, pairs) = self.overlaps();
         }
     }
@@ -429,7 +602,7 @@ impl<'a> Separation<'a> {
                     order.swap(k, j);
                 }
                 for k in order {
-                    if w.cost(k, w.spots[k].form, w.spots[k].at) > 0.0 {
+                    if w.cost(k, w.spots[k].form, w.spots[k].at, f64::MIN_POSITIVE) > 0.0 {
                         w.relocate(k);
                     }
                 }
@@ -450,6 +623,7 @@ impl<'a> Separation<'a> {
         let (_, total, pairs, w) = best;
         self.spots = w.spots;
         self.moved = w.moved;
+        self.grid = w.grid;
         (total, pairs)
     }
 
@@ -460,7 +634,8 @@ impl<'a> Separation<'a> {
         // `pairs` come in order of i, then j: their keys are sorted.
         let hit: Vec<usize> = pairs.iter().map(|&(i, j, _)| i * n + j).collect();
         self.work += (self.heavy.len() as u64).div_ceil(16);
-        let weights = &mut self.weights;
+        // The workers are gone: no copy is made.
+        let weights = std::sync::Arc::make_mut(&mut self.weights);
         self.heavy.retain(|&k| {
             if hit.binary_search(&k).is_ok() {
                 return true;
@@ -528,6 +703,70 @@ mod tests {
         let a = square(10.0);
         assert!((depth(&a, DVec2::ZERO, &a, DVec2::new(7.0, 2.0)) - (3.0 + GAP)).abs() < 1e-12);
         assert!(depth(&a, DVec2::ZERO, &a, DVec2::new(10.0 + 2.0 * GAP, 0.0)) < 0.0);
+    }
+
+    #[test]
+    fn the_grid_finds_every_box_within_the_gap_once() {
+        // Boxes of several sizes scattered over and past a room, some touching within the
+        // gap: the grid's neighbours of each box are exactly those a test against every box
+        // finds (each once), also after boxes move.
+        let forms: Vec<Vec<Form>> = [3.0, 7.5, 12.0, 40.0]
+            .iter()
+            .map(|&s| vec![square(s)])
+            .collect();
+        let room = DVec2::new(100.0, 60.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut spots: Vec<Spot> = (0..120)
+            .map(|k| Spot {
+                item: k % 4,
+                form: 0,
+                at: DVec2::new(
+                    rng.random_range(-20.0..110.0),
+                    rng.random_range(-20.0..70.0),
+                ),
+            })
+            .collect();
+        // Two boxes GAP / 2 apart: neighbours.
+        spots[0].at = DVec2::new(10.0, 10.0);
+        spots[1].at = DVec2::new(13.0 + 0.5 * GAP, 10.0);
+        let mut grid = Grid::new(&forms, room, &spots);
+        let size = |s: &Spot| forms[s.item][s.form].size;
+        for round in 0..2 {
+            for (i, a) in spots.iter().enumerate() {
+                let (lo, hi) = (a.at, a.at + size(a));
+                let mut near = Vec::new();
+                grid.near(lo, hi, &mut near);
+                near.sort_unstable();
+                let mut all: Vec<usize> = spots
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, b)| {
+                        b.at.x <= hi.x + GAP
+                            && b.at.y <= hi.y + GAP
+                            && b.at.x + size(b).x >= lo.x - GAP
+                            && b.at.y + size(b).y >= lo.y - GAP
+                    })
+                    .map(|(j, _)| j)
+                    .collect();
+                all.sort_unstable();
+                // The grid may offer boxes a little further off (its cells), never miss one,
+                // and never offer one twice.
+                assert!(near.windows(2).all(|w| w[0] < w[1]), "{i}: {near:?}");
+                for j in &all {
+                    assert!(
+                        near.binary_search(j).is_ok(),
+                        "round {round}, {i} misses {j}"
+                    );
+                }
+            }
+            assert!(grid.range.len() == spots.len());
+            // Move every third box and update the grid as a move does.
+            for k in (0..spots.len()).step_by(3) {
+                spots[k].at += DVec2::new(17.0, -9.0);
+                grid.remove(k);
+                grid.insert(k, spots[k].at, spots[k].at + size(&spots[k]));
+            }
+        }
     }
 
     #[test]
