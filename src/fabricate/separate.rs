@@ -29,6 +29,7 @@ use glam::DVec2;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 
 /// Two items are clear when an axis separates them by at least this, mm (the nester's slide
 /// backoff; jagua-rs confirms every result in its own arithmetic).
@@ -242,10 +243,9 @@ impl Grid {
         }
     }
 
-    /// The spots whose cells meet those of the box from `lo` to `hi`, each once (in the first
-    /// cell both cover), into `out`; returns how many entries were looked at.
-    fn near(&self, lo: DVec2, hi: DVec2, out: &mut Vec<usize>) -> u64 {
-        out.clear();
+    /// Calls `f` on each spot whose cells meet those of the box from `lo` to `hi`, once (in
+    /// the first cell both cover), until `f` breaks; returns how many entries were looked at.
+    fn visit(&self, lo: DVec2, hi: DVec2, mut f: impl FnMut(usize) -> ControlFlow<()>) -> u64 {
         let q = self.cover(lo, hi);
         let mut looked = 0;
         for y in q[1]..=q[3] {
@@ -254,14 +254,22 @@ impl Grid {
                 looked += cell.len() as u64;
                 for &j in cell {
                     let r = self.range[j as usize];
-                    if x == r[0].max(q[0]) && y == r[1].max(q[1]) {
-                        out.push(j as usize);
+                    if x == r[0].max(q[0]) && y == r[1].max(q[1]) && f(j as usize).is_break() {
+                        return looked;
                     }
                 }
             }
         }
         looked
     }
+}
+
+/// Whether the box from `lo` to `hi` and a form's box at `at` are apart by more than [`GAP`].
+fn boxes_apart(lo: DVec2, hi: DVec2, at: DVec2, g: &Form) -> bool {
+    at.x > hi.x + GAP
+        || at.y > hi.y + GAP
+        || at.x + g.size.x < lo.x - GAP
+        || at.y + g.size.y < lo.y - GAP
 }
 
 /// A sheet being separated.
@@ -365,45 +373,26 @@ impl<'a> Separation<'a> {
             return sum;
         }
         let (lo, hi) = (at, at + f.size);
-        // The spots of the cells the box covers, each once (in the first cell both cover).
-        let grid = &self.grid;
-        let q = grid.cover(lo, hi);
-        let mut looked = 0u64;
         let mut evaluated = 0u64;
-        'cells: for y in q[1]..=q[3] {
-            for x in q[0]..=q[2] {
-                let cell = &grid.cells[(y * grid.cols + x) as usize];
-                looked += cell.len() as u64;
-                for &j in cell {
-                    let j = j as usize;
-                    let r = grid.range[j];
-                    if x != r[0].max(q[0]) || y != r[1].max(q[1]) {
-                        continue;
-                    }
-                    if j == k || (unmoved && !self.moved[j]) {
-                        continue;
-                    }
-                    let s = self.spots[j];
-                    let g = self.form(&s);
-                    // Boxes apart by more than the gap: clear.
-                    if s.at.x > hi.x + GAP
-                        || s.at.y > hi.y + GAP
-                        || s.at.x + g.size.x < lo.x - GAP
-                        || s.at.y + g.size.y < lo.y - GAP
-                    {
-                        continue;
-                    }
-                    evaluated += 1;
-                    let d = depth(f, at, g, s.at);
-                    if d > 0.0 {
-                        sum += self.weights[k.min(j) * n + k.max(j)] * loss(d, f, g);
-                        if sum >= bound {
-                            break 'cells;
-                        }
-                    }
+        let looked = self.grid.visit(lo, hi, |j| {
+            if j == k || (unmoved && !self.moved[j]) {
+                return ControlFlow::Continue(());
+            }
+            let s = self.spots[j];
+            let g = self.form(&s);
+            if boxes_apart(lo, hi, s.at, g) {
+                return ControlFlow::Continue(());
+            }
+            evaluated += 1;
+            let d = depth(f, at, g, s.at);
+            if d > 0.0 {
+                sum += self.weights[k.min(j) * n + k.max(j)] * loss(d, f, g);
+                if sum >= bound {
+                    return ControlFlow::Break(());
                 }
             }
-        }
+            ControlFlow::Continue(())
+        });
         // Entries looked at in the grid count a sixteenth of a pair evaluation each.
         self.work += evaluated + looked.div_ceil(16);
         sum
@@ -428,7 +417,11 @@ impl<'a> Separation<'a> {
                 total += w;
                 pairs.push((i, i, w));
             }
-            let looked = self.grid.near(a.at, a.at + fa.size, &mut near);
+            near.clear();
+            let looked = self.grid.visit(a.at, a.at + fa.size, |j| {
+                near.push(j);
+                ControlFlow::Continue(())
+            });
             // Entries looked at and box tests count a sixteenth of a pair evaluation each.
             self.work += (looked + near.len() as u64).div_ceil(16);
             near.sort_unstable();
@@ -438,11 +431,7 @@ impl<'a> Separation<'a> {
                 }
                 let b = self.spots[j];
                 let fb = self.form(&b);
-                if b.at.x > a.at.x + fa.size.x + GAP
-                    || b.at.y > a.at.y + fa.size.y + GAP
-                    || b.at.x + fb.size.x < a.at.x - GAP
-                    || b.at.y + fb.size.y < a.at.y - GAP
-                {
+                if boxes_apart(a.at, a.at + fa.size, b.at, fb) {
                     continue;
                 }
                 self.work += 1;
@@ -735,7 +724,10 @@ mod tests {
             for (i, a) in spots.iter().enumerate() {
                 let (lo, hi) = (a.at, a.at + size(a));
                 let mut near = Vec::new();
-                grid.near(lo, hi, &mut near);
+                grid.visit(lo, hi, |j| {
+                    near.push(j);
+                    ControlFlow::Continue(())
+                });
                 near.sort_unstable();
                 let mut all: Vec<usize> = spots
                     .iter()
