@@ -481,6 +481,100 @@ def dense_worst(T, hulls, tol, n=8):
     return out, deep, wo, wi, held
 
 
+def point_triangle(p, a, b, c):
+    """Distance from each p[i] to triangle (a[i], b[i], c[i]), exact (the closest point by the
+    Voronoi regions of the corners, edges and face)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = (ab * ap).sum(1), (ac * ap).sum(1)
+    bp = p - b
+    d3, d4 = (ab * bp).sum(1), (ac * bp).sum(1)
+    cp = p - c
+    d5, d6 = (ab * cp).sum(1), (ac * cp).sum(1)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # The face, then each edge and corner where its region holds p (later ones win).
+        denom = va + vb + vc
+        q = a + ab * (vb / denom)[:, None] + ac * (vc / denom)[:, None]
+        bc_t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        for region, point in (
+            ((vc <= 0) & (d1 >= 0) & (d3 <= 0), a + ab * (d1 / (d1 - d3))[:, None]),
+            ((vb <= 0) & (d2 >= 0) & (d6 <= 0), a + ac * (d2 / (d2 - d6))[:, None]),
+            ((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), b + (c - b) * bc_t[:, None]),
+            ((d1 <= 0) & (d2 <= 0), a),
+            ((d3 >= 0) & (d4 <= d3), b),
+            ((d6 >= 0) & (d5 <= d6), c),
+        ):
+            q = np.where(region[:, None], point, q)
+    # A degenerate triangle (no face region): its nearest edge or corner.
+    bad = ~np.isfinite(q).all(1)
+    if bad.any():
+        seg = [segment_distance(p[bad], u[bad], v[bad]) for u, v in ((a, b), (b, c), (c, a))]
+        out = np.linalg.norm(p - np.where(bad[:, None], p, q), axis=1)
+        out[bad] = np.minimum.reduce(seg)
+        return out
+    return np.linalg.norm(p - q, axis=1)
+
+
+def segment_distance(p, a, b):
+    ab = b - a
+    t = np.clip(((p - a) * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0, 1)
+    return np.linalg.norm(p - a - ab * t[:, None], axis=1)
+
+
+def mesh_distance(V, F, p, pieces=100_000, chunk=2_000_000):
+    """Unsigned distance from each p[i] to the triangle mesh (V, F), exact. Each triangle is
+    cut in two at the middle of its longest side until no piece reaches farther than `small`
+    from its centre (`small` chosen so there are at most about `pieces` of them); the nearest
+    few pieces' exact distance bounds a point's from above, so only pieces whose centre is
+    within that bound plus `small` can hold a nearer point: those are found in a k-d tree of
+    the centres and measured exactly."""
+    T = V[F]
+
+    def reach_of(t):
+        return np.linalg.norm(t - t.mean(1)[:, None], axis=2).max(1)
+
+    def halves(t):
+        # Corners turned so that the longest side is 0-1, then cut at its middle.
+        side = np.stack([np.linalg.norm(t[:, (k + 1) % 3] - t[:, k], axis=1) for k in range(3)], 1)
+        k = side.argmax(1)
+        idx = np.stack([k, (k + 1) % 3, (k + 2) % 3], 1)
+        t = np.take_along_axis(t, idx[:, :, None], axis=1)
+        m = (t[:, 0] + t[:, 1]) / 2
+        return np.concatenate([np.stack([t[:, 0], m, t[:, 2]], 1),
+                               np.stack([m, t[:, 1], t[:, 2]], 1)])
+
+    def cut(small):
+        tri = T
+        done = []
+        while len(tri):
+            big = reach_of(tri) > small
+            done.append(tri[~big])
+            if sum(len(d) for d in done) + 2 * big.sum() > pieces:
+                return None
+            tri = halves(tri[big])
+        return np.concatenate(done)
+
+    small = max(float(np.median(reach_of(T))) / 2, 1e-9)
+    while (tri := cut(small)) is None:
+        small *= 1.5
+    tree = cKDTree(tri.mean(1))
+    _, first = tree.query(p, k=min(4, len(tri)))
+    first = first.reshape(len(p), -1)
+    best = np.min([point_triangle(p, *tri[first[:, j]].transpose(1, 0, 2))
+                   for j in range(first.shape[1])], axis=0)
+    for s in range(0, len(p), chunk // 16):
+        q = p[s:s + chunk // 16]
+        hits = tree.query_ball_point(q, best[s:s + len(q)] + small + 1e-12)
+        counts = np.fromiter((len(h) for h in hits), np.int64, len(hits))
+        point = np.repeat(np.arange(len(q)), counts)
+        piece = np.concatenate([np.asarray(h, np.int64) for h in hits if h] or [np.zeros(0, int)])
+        for c in range(0, len(point), chunk):
+            pi, ti = point[c:c + chunk], piece[c:c + chunk]
+            d = point_triangle(q[pi], tri[ti, 0], tri[ti, 1], tri[ti, 2])
+            np.minimum.at(best, s + pi, d)
+    return best
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("mesh")
@@ -538,7 +632,7 @@ def main():
     out = np.concatenate([distance_bound(c, hulls, tol)
                           for c in np.array_split(pts, max(1, len(pts) // 200000))])
     surf = surface_samples(cones, hulls, a.samples, rng)
-    _, dist, _ = trimesh.proximity.closest_point(mesh, surf)
+    dist = mesh_distance(V, F, surf)
 
     # Beyond the tolerance in a gap narrower than that: reported apart.
     slots, worst = [], {}

@@ -20,7 +20,8 @@ import zipfile
 
 import numpy as np
 from PIL import Image
-from scipy import ndimage
+
+from islands import island_sizes
 
 
 def fail(msg):
@@ -54,20 +55,13 @@ def main():
     pixel = float(printer["display_width"]) / int(printer["display_pixels_x"])
     height = float(config["layerheight"])
     islands, grey_sum, below = [], 0.0, None
-    eight = np.ones((3, 3), dtype=bool)
     for k, n in enumerate(names):
-        image = np.array(Image.open(io.BytesIO(z.read(n))).convert("L"))
+        image = Image.open(io.BytesIO(z.read(n)))
+        image = np.asarray(image if image.mode == "L" else image.convert("L"))
         grey_sum += image.sum(dtype=np.float64) / 255.0
         lit = image >= 128
         if below is not None:
-            labels, count = ndimage.label(lit, structure=eight)
-            if count:
-                held = np.zeros(count + 1, dtype=bool)
-                held[np.unique(labels[below & lit])] = True
-                sizes = np.bincount(labels.ravel(), minlength=count + 1)
-                for c in range(1, count + 1):
-                    if not held[c]:
-                        islands.append((k, int(sizes[c])))
+            islands.extend((k, size) for size in island_sizes(lit, below))
         below = lit
     volume = grey_sum * pixel * pixel * height / 1000.0
     report = json.load(open(args.report))

@@ -31,6 +31,8 @@ import zipfile
 import numpy as np
 from scipy import ndimage
 
+from islands import dilated, island_mask, island_sizes
+
 
 def layers(path):
     z = zipfile.ZipFile(path)
@@ -88,26 +90,17 @@ def main():
     if changed:
         problems.append(f"{changed} lit part pixels differ with supports")
     # Islands of the held print: 8-connected lit regions with nothing lit below.
-    islands = 0
-    for k in range(1, n):
-        lab, m = ndimage.label(held[k], structure=np.ones((3, 3)))
-        if m:
-            held_below = ndimage.maximum(held[k - 1], lab, index=np.arange(1, m + 1))
-            islands += int((np.asarray(held_below) == 0).sum())
+    islands = sum(len(island_sizes(held[k], held[k - 1])) for k in range(1, n))
     if islands:
         problems.append(f"{islands} island(s) with supports")
     # The bare print's islands, each as its first layer's pixels: a tip may hold one anywhere
     # on it (a wide island is held at several points).
     island_first = np.zeros_like(part)
     for k in range(1, n):
-        lab, m = ndimage.label(part[k], structure=np.ones((3, 3)))
-        if m:
-            below_lit = np.asarray(ndimage.maximum(part[k - 1], lab, index=np.arange(1, m + 1)))
-            free = np.concatenate([[False], below_lit == 0])
-            island_first[k] = free[lab]
+        island_first[k] = island_mask(part[k], part[k - 1])
     support = held & ~part
-    near_part = ndimage.binary_dilation(part, structure=np.array(
-        [np.zeros((3, 3)), np.ones((3, 3)), np.zeros((3, 3))], dtype=bool))
+    # The part grown by a pixel within each layer.
+    near_part = dilated(part)
     # Right above or below: the part in the next or previous layer, same pixel.
     vertical = np.zeros_like(part)
     vertical[:-1] |= part[1:]

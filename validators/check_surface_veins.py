@@ -1,10 +1,10 @@
-"""Checks veins grown on a surface, independently of lamina (numpy and trimesh only).
+"""Checks veins grown on a surface, independently of lamina (numpy, scipy and trimesh).
 
     check_surface_veins.py MESH NETWORK.json [--report REPORT.json] [--max-degree 3]
                            [--mesh-edges] [--tree]
 
-- every node lies on the mesh: its distance to the nearest triangle (brute force over all
-  triangles, numpy) is at most 1e-6 of the mesh's bounding-box diagonal;
+- every node lies on the mesh: its distance to the nearest triangle (exact, numpy: every triangle
+  that can be nearest measured) is at most 1e-6 of the mesh's bounding-box diagonal;
 - every node's stored normal is a unit vector on the same side as the nearest face's normal;
 - no node has more than --max-degree edges;
 - --mesh-edges: every edge joins two mesh vertices that share a triangle side (geodesic veins);
@@ -18,13 +18,19 @@ import sys
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 
 from graph_parts import component_count
 
 
 def closest_distances(points, tris):
-    """Distance from each point to the nearest triangle (n x 3 points, t x 3 x 3 triangles), and
-    the index of that triangle."""
+    """Distance from each point to the nearest triangle (n x 3 points, t x 3 x 3 triangles), the
+    index of that triangle (the lowest of equally near ones), and the triangles' unit normals.
+    Exact, as a brute force over all triangles would give: a triangle's distance is at least
+    its centre's less its reach (centre to farthest corner), so once the nearest few centres'
+    triangles bound a point's distance from above, only triangles whose centre lies within that
+    bound plus their reach can be nearer (found in k-d trees of the centres, a tree for each
+    size class of triangle), and only those are measured."""
     a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
     ab, ac = b - a, c - a
     normal = np.cross(ab, ac)
@@ -34,27 +40,54 @@ def closest_distances(points, tris):
     d00, d01, d11 = (ab * ab).sum(1), (ab * ac).sum(1), (ac * ac).sum(1)
     denom = d00 * d11 - d01 * d01
     denom[denom == 0] = 1.0
-    best = np.full(len(points), np.inf)
-    arg = np.zeros(len(points), dtype=int)
-    for start in range(0, len(points), 32):
-        p = points[start:start + 32][:, None, :]  # m x 1 x 3
-        ap = p - a[None]
-        h = (ap * unit[None]).sum(2)  # signed plane distance, m x t
-        q = ap - h[..., None] * unit[None]
-        d20, d21 = (q * ab[None]).sum(2), (q * ac[None]).sum(2)
-        v = (d11 * d20 - d01 * d21) / denom
-        w = (d00 * d21 - d01 * d20) / denom
+
+    def pair(p, t):
+        """Distance from p[i] to triangle t[i]: its plane inside it, else its nearest side."""
+        ap = p - a[t]
+        h = (ap * unit[t]).sum(1)
+        q = ap - h[:, None] * unit[t]
+        d20, d21 = (q * ab[t]).sum(1), (q * ac[t]).sum(1)
+        v = (d11[t] * d20 - d01[t] * d21) / denom[t]
+        w = (d00[t] * d21 - d01[t] * d20) / denom[t]
         inside = (v >= 0) & (w >= 0) & (v + w <= 1)
         dist = np.where(inside, np.abs(h), np.inf)
         for s, e in ((a, b), (b, c), (c, a)):
-            se = e - s
+            se = e[t] - s[t]
             ll = (se * se).sum(1)
             ll[ll == 0] = 1.0
-            t = np.clip(((p - s[None]) * se[None]).sum(2) / ll, 0.0, 1.0)
-            foot = s[None] + t[..., None] * se[None]
-            dist = np.minimum(dist, np.linalg.norm(p - foot, axis=2))
-        best[start:start + 32] = dist.min(1)
-        arg[start:start + 32] = dist.argmin(1)
+            u = np.clip(((p - s[t]) * se).sum(1) / ll, 0.0, 1.0)
+            foot = s[t] + u[:, None] * se
+            dist = np.minimum(dist, np.linalg.norm(p - foot, axis=1))
+        return dist
+
+    centre = tris.mean(1)
+    reach = np.linalg.norm(tris - centre[:, None], axis=2).max(1)
+    slack = 1e-9 * (1.0 + np.abs(tris).max())
+    _, near = cKDTree(centre).query(points, k=min(8, len(tris)))
+    near = near.reshape(len(points), -1)
+    upper = np.min([pair(points, near[:, j]) for j in range(near.shape[1])], axis=0)
+    level = np.floor(np.log2(np.maximum(reach, 1e-300) / max(reach.max(), 1e-300)))
+    level = np.maximum(level, -8)
+    found_p, found_t = [], []
+    for g in np.unique(level):
+        group = np.flatnonzero(level == g)
+        hits = cKDTree(centre[group]).query_ball_point(points, upper + reach[group].max() + slack)
+        counts = np.fromiter((len(h) for h in hits), np.int64, len(hits))
+        if counts.sum():
+            found_p.append(np.repeat(np.arange(len(points)), counts))
+            found_t.append(group[np.concatenate([np.asarray(h, np.int64) for h in hits if h])])
+    pi, ti = np.concatenate(found_p), np.concatenate(found_t)
+    d = np.concatenate([pair(points[pi[s:s + 1_000_000]], ti[s:s + 1_000_000])
+                        for s in range(0, len(pi), 1_000_000)])
+    # Per point: the least distance, the lowest triangle among equals.
+    order = np.lexsort((ti, d, pi))
+    pi, ti, d = pi[order], ti[order], d[order]
+    first = np.ones(len(pi), bool)
+    first[1:] = pi[1:] != pi[:-1]
+    best = np.full(len(points), np.inf)
+    arg = np.zeros(len(points), dtype=int)
+    best[pi[first]] = d[first]
+    arg[pi[first]] = ti[first]
     return best, arg, unit
 
 

@@ -1029,8 +1029,9 @@ impl BottomLeft<'_> {
         out
     }
 
-    /// Items in `order`, each onto the first sheet that takes it (a new one if none does);
-    /// `counted`: the parts told to the progress bar (which counts each try's).
+    /// Items in `order`, each onto the first sheet that takes it (a new one if none does, up
+    /// to `most` sheets: `None` as soon as an item needs one more); `counted`: the parts told
+    /// to the progress bar (which counts each try's).
     fn fill(
         &self,
         items: &[Item],
@@ -1038,7 +1039,8 @@ impl BottomLeft<'_> {
         container: &Container,
         seed: u64,
         counted: bool,
-    ) -> Result<(Spots, Vec<Sheet>), NestError> {
+        most: usize,
+    ) -> Result<Option<(Spots, Vec<Sheet>)>, NestError> {
         let mut sheets: Vec<Sheet> = Vec::new();
         let mut at = vec![(0, 0, DVec2::ZERO); items.len()];
         for (n, &i) in order.iter().enumerate() {
@@ -1084,6 +1086,9 @@ impl BottomLeft<'_> {
                 }
             }
             if !done {
+                if sheets.len() >= most {
+                    return Ok(None);
+                }
                 let mut sheet = container.sheet();
                 let mut rng = ChaCha8Rng::seed_from_u64(seed ^ ((n as u64) << 20));
                 let (s, pos) = self
@@ -1101,7 +1106,7 @@ impl BottomLeft<'_> {
                 sheets.push(sheet);
             }
         }
-        Ok((at, sheets))
+        Ok(Some((at, sheets)))
     }
 
     /// The best resting place on this sheet over rotations and starts: (shape, position).
@@ -1243,13 +1248,16 @@ impl Nester for BottomLeft<'_> {
                 .collect();
             let mut order: Vec<usize> = (0..items.len()).collect();
             order.sort_by(|&a, &b| keys[b].total_cmp(&keys[a]).then(a.cmp(&b)));
-            let (at, sheets) = self.fill(
-                &items,
-                &order,
-                &container,
-                opts.seed ^ (t as u64) << 40,
-                true,
-            )?;
+            let (at, sheets) = self
+                .fill(
+                    &items,
+                    &order,
+                    &container,
+                    opts.seed ^ (t as u64) << 40,
+                    true,
+                    usize::MAX,
+                )?
+                .expect("no limit on the sheets");
             let last = sheets
                 .iter()
                 .map(|s| container.size.x * container.size.y - s.free)
@@ -1557,8 +1565,9 @@ impl BottomLeft<'_> {
                     config: container.config,
                 };
                 let seed = work.seed ^ 0x5eed;
-                let filled = match self.fill(items, &order, &room, seed, false) {
-                    Ok((spots, filled)) => (filled.len() == 1).then_some(spots),
+                // A fill that needs a second sheet stops there: the room is too short.
+                let filled = match self.fill(items, &order, &room, seed, false, 1) {
+                    Ok(filled) => filled.map(|(spots, _)| spots),
                     // An item that lies on no start of the empty room: too short.
                     Err(NestError::Engine(..)) => None,
                     Err(e) => return Err(e),
@@ -1825,6 +1834,46 @@ mod tests {
         assert!(a < b, "strip {a} mm² packed, {b} mm² filled");
         let again = BottomLeft::default().nest(&parts, &opts).expect("fits");
         assert_eq!(again.places, packed.places);
+    }
+
+    #[test]
+    fn a_fill_held_to_one_sheet_stops_where_it_needs_a_second_and_is_otherwise_the_same() {
+        // 900 × 700 blocks, 10 mm apart: six to a 3000 × 1500 sheet, so eight need two.
+        let opts = NestOptions {
+            sheet: DVec2::new(3000.0, 1500.0),
+            margin: 0.0,
+            spacing: 10.0,
+            ..Default::default()
+        };
+        let container = Container::new(&opts);
+        let hulls = vec![rect(900.0, 700.0); 8];
+        let d = 0.5 * opts.spacing + SLACK;
+        let items: Vec<Item> = (0..hulls.len())
+            .map(|part| {
+                let member = Member {
+                    part,
+                    angle: 0.0,
+                    offset: DVec2::ZERO,
+                };
+                make_item(vec![member], &hulls[part], &hulls, d, &opts, &container)
+                    .expect("a shape")
+                    .expect("fits the sheet")
+            })
+            .collect();
+        let nester = BottomLeft::default();
+        let fill = |order: &[usize], most| {
+            nester
+                .fill(&items, order, &container, 1, false, most)
+                .expect("no engine error")
+        };
+        let all: Vec<usize> = (0..8).collect();
+        let (_, sheets) = fill(&all, usize::MAX).expect("no limit");
+        assert_eq!(sheets.len(), 2);
+        assert!(fill(&all, 1).is_none());
+        let (free, _) = fill(&all[..6], usize::MAX).expect("no limit");
+        let (held, sheets) = fill(&all[..6], 1).expect("six fit one sheet");
+        assert_eq!(sheets.len(), 1);
+        assert_eq!(held, free);
     }
 
     #[test]
