@@ -60,6 +60,8 @@ def closest_distances(points, tris):
             dist = np.minimum(dist, np.linalg.norm(p - foot, axis=1))
         return dist
 
+    if len(points) == 0:
+        return np.zeros(0), np.zeros(0, dtype=int), unit
     centre = tris.mean(1)
     reach = np.linalg.norm(tris - centre[:, None], axis=2).max(1)
     slack = 1e-9 * (1.0 + np.abs(tris).max())
