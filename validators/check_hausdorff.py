@@ -521,13 +521,14 @@ def segment_distance(p, a, b):
     return np.linalg.norm(p - a - ab * t[:, None], axis=1)
 
 
-def mesh_distance(V, F, p, pieces=100_000, chunk=2_000_000):
+def mesh_distance(V, F, p, pieces=100_000, batch=125_000, chunk=2_000_000):
     """Unsigned distance from each p[i] to the triangle mesh (V, F), exact. Each triangle is
     cut in two at the middle of its longest side until no piece reaches farther than `small`
     from its centre (`small` chosen so there are at most about `pieces` of them); the nearest
     few pieces' exact distance bounds a point's from above, so only pieces whose centre is
     within that bound plus `small` can hold a nearer point: those are found in a k-d tree of
-    the centres and measured exactly."""
+    the centres and measured exactly, `batch` points and `chunk` (point, piece) pairs at a
+    time."""
     T = V[F]
 
     def reach_of(t):
@@ -562,8 +563,8 @@ def mesh_distance(V, F, p, pieces=100_000, chunk=2_000_000):
     first = first.reshape(len(p), -1)
     best = np.min([point_triangle(p, *tri[first[:, j]].transpose(1, 0, 2))
                    for j in range(first.shape[1])], axis=0)
-    for s in range(0, len(p), chunk // 16):
-        q = p[s:s + chunk // 16]
+    for s in range(0, len(p), batch):
+        q = p[s:s + batch]
         hits = tree.query_ball_point(q, best[s:s + len(q)] + small + 1e-12)
         counts = np.fromiter((len(h) for h in hits), np.int64, len(hits))
         point = np.repeat(np.arange(len(q)), counts)
