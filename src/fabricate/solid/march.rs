@@ -16,13 +16,13 @@
 //! these keep every vertex at least about `h/100` from every other and no triangle degenerate,
 //! even after rounding to the 32-bit floats of an STL file (checked again after meshing).
 
-use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::quick::{QuickMap, QuickSet};
 use super::sdf::Primitive;
 use crate::mesh::TriMesh;
 
@@ -276,7 +276,7 @@ pub fn mesh_union(
         marched.crotch_ends = refine.crotches;
         let cells = std::mem::take(&mut refine.cells);
         // Only cells something was cut in count as refined.
-        let mut cut: HashSet<[usize; 3]> = HashSet::new();
+        let mut cut: QuickSet<[usize; 3]> = QuickSet::default();
         for t in refine.tets.iter().filter(|t| t.alive) {
             if t.v.iter().any(|p| adapt::grid_point(*p).is_none()) {
                 let lo = [0, 1, 2].map(|a| t.v.iter().map(|p| p[a]).min().unwrap_or(0));
@@ -297,9 +297,9 @@ pub fn mesh_union(
                 .cells
                 .iter()
                 .map(|c| pack(c.map(|x| x / B)))
-                .collect::<HashSet<u64>>(),
+                .collect::<QuickSet<u64>>(),
         ),
-        None => (None, HashSet::new()),
+        None => (None, QuickSet::default()),
     };
     let parts: Vec<Result<Vec<[u32; 3]>, MarchError>> = (0..bricks.len())
         .into_par_iter()
@@ -344,7 +344,7 @@ pub fn mesh_union(
 struct Split {
     positions: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
-    cells: HashSet<[usize; 3]>,
+    cells: QuickSet<[usize; 3]>,
 }
 
 /// The grid's pieces and signs, for `adapt`.
@@ -391,7 +391,7 @@ fn fine_triangles<F: adapt::Field>(
     count: usize,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), MarchError> {
     let mut positions = Vec::new();
-    let mut made: HashMap<(adapt::Pt, adapt::Pt), u32> = HashMap::new();
+    let mut made: QuickMap<(adapt::Pt, adapt::Pt), u32> = QuickMap::default();
     let mut out = Vec::new();
     for id in 0..refine.tets.len() {
         let t = refine.tets[id];
@@ -769,7 +769,7 @@ fn triangles(
     keys: &[u64],
     offsets: &[usize],
     i: usize,
-    skip: Option<&HashSet<[usize; 3]>>,
+    skip: Option<&QuickSet<[usize; 3]>>,
 ) -> Result<Vec<[u32; 3]>, MarchError> {
     let brick = &bricks[i];
     let base = unpack(brick.key).map(|c| c * B);

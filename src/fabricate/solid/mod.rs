@@ -50,6 +50,7 @@
 
 mod fit;
 mod march;
+mod quick;
 pub mod sdf;
 pub mod simplify;
 

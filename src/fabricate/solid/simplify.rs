@@ -86,6 +86,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::quick::Quick;
 use super::sdf::Primitive;
 use crate::mesh::TriMesh;
 
@@ -1536,35 +1537,6 @@ fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) ->
     }
     mesh.triangles = out;
     first
-}
-
-/// A quick hash for edge keys (the std hasher resists attacks this does not need).
-#[derive(Clone, Copy, Default)]
-struct Quick;
-
-impl std::hash::BuildHasher for Quick {
-    type Hasher = QuickHasher;
-    fn build_hasher(&self) -> QuickHasher {
-        QuickHasher(0)
-    }
-}
-
-struct QuickHasher(u64);
-
-impl std::hash::Hasher for QuickHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(8) ^ b as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        }
-    }
-    fn write_u64(&mut self, k: u64) {
-        self.0 = (self.0 ^ k)
-            .wrapping_mul(0x9e37_79b9_7f4a_7c15)
-            .rotate_left(29);
-    }
 }
 
 /// Triangle `t` cut at the midpoints `m[k]` of its edges `(t[k], t[k + 1])`, same orientation.

@@ -28,11 +28,11 @@
 //! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
 //! `eps / SCALE` below zero.
 
-use std::collections::{HashMap, HashSet};
 
 use glam::DVec3;
 
 use super::{corner, outward_cos, Grid, MarchError, FACING, TETS};
+use crate::fabricate::solid::quick::{QuickMap, QuickSet};
 use crate::fabricate::solid::sdf::{golden, Primitive};
 
 /// A point in fine units: `SCALE` per grid cell.
@@ -98,13 +98,13 @@ pub(super) struct Adapt<'a, F: Field> {
     /// How far the mesh may stray from the surface, mm.
     tol: f64,
     eps: f64,
-    samples: HashMap<Pt, Sample>,
+    samples: QuickMap<Pt, Sample>,
     pub tets: Vec<Tet>,
-    edges: HashMap<(Pt, Pt), Vec<u32>>,
-    pub cells: HashSet<[usize; 3]>,
+    edges: QuickMap<(Pt, Pt), Vec<u32>>,
+    pub cells: QuickSet<[usize; 3]>,
     work: Vec<u32>,
     /// Pairs of pieces told apart (a gap between them) or not.
-    apart: HashMap<(u32, u32), bool>,
+    apart: QuickMap<(u32, u32), bool>,
     /// Tetrahedra that still bridge a gap between veins that do not touch, at the finest level
     /// or past the budget.
     pub left: usize,
@@ -122,12 +122,12 @@ impl<'a, F: Field> Adapt<'a, F> {
             field,
             band,
             eps: 0.01 * grid.h,
-            samples: HashMap::new(),
+            samples: QuickMap::default(),
             tets: Vec::new(),
-            edges: HashMap::new(),
-            cells: HashSet::new(),
+            edges: QuickMap::default(),
+            cells: QuickSet::default(),
             work: Vec::new(),
-            apart: HashMap::new(),
+            apart: QuickMap::default(),
             left: 0,
             crotches: 0,
         }
@@ -598,7 +598,7 @@ mod tests {
             let id = live[(seed >> 33) as usize % live.len()];
             adapt.refine(id, 0).unwrap();
         }
-        let mut faces: HashMap<[Pt; 3], usize> = HashMap::new();
+        let mut faces: QuickMap<[Pt; 3], usize> = QuickMap::default();
         let mut total = 0i128;
         for t in adapt.tets.iter().filter(|t| t.alive) {
             total += volume(&t.v);
