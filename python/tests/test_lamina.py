@@ -880,6 +880,9 @@ def test_slice_drops_collapsed_triangles_and_welds_on_request():
         lamina.slice(mesh, weld=0.001, weld_rel=1e-6, **small)
     with pytest.raises(lamina.LaminaError, match="weld_rel= must be"):
         lamina.slice(mesh, weld_rel=0.9, **small)
+    # No mesh at all is refused, not sliced into one blank layer.
+    with pytest.raises(lamina.LaminaError, match="models= none given"):
+        lamina.slice([], **small)
 
 
 def test_slice_supports_any_mesh_as_the_command_does(tmp_path):

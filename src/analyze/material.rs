@@ -121,7 +121,10 @@ impl Material {
         ];
         for (name, v, lo, hi) in checks {
             if !(v >= lo && v <= hi) {
-                return Err(err(format!("{name} must be from {lo} to {hi}, got {v}")));
+                return Err(err(format!(
+                    "{name} must be from {lo} to {hi}, got {}",
+                    crate::text::num(v)
+                )));
             }
         }
         if m.fu < m.fy {

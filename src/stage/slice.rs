@@ -144,34 +144,32 @@ impl Default for JobOptions {
     }
 }
 
+/// The fastest build speed taken, mm/h: a hundred metres an hour, far past any resin printer.
+const MAX_SPEED: f64 = 1e5;
+
 impl JobOptions {
     /// Every job option checked.
     pub fn check(&self) -> Result<(), OptionError> {
-        for (what, v) in [("resin_cost", self.resin_cost), ("density", self.density)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(OptionError::new(
-                    what,
-                    format!("must be a number ≥ 0, got {v}"),
-                ));
-            }
-        }
+        // A price per litre (free resin allowed), a density between foam and the densest
+        // metal-filled resin, a gap between copies no wider than a printer's plate.
+        super::in_range("resin_cost", self.resin_cost, 0.0, 1e6, "per litre")?;
+        super::in_range("density", self.density, 0.1, 30.0, "g/mL")?;
         if let Some(v) = self.speed {
-            if !(v.is_finite() && v > 0.0) {
+            if !(v.is_finite() && v > 0.0 && v <= MAX_SPEED) {
                 return Err(OptionError::new(
                     "speed",
-                    format!("must be a positive number of mm/h, got {v}"),
+                    format!(
+                        "must be a positive number of mm/h, at most {}, got {}",
+                        crate::text::num(MAX_SPEED),
+                        crate::text::num(v)
+                    ),
                 ));
             }
         }
         if self.copies == 0 {
             return Err(OptionError::new("copies", "must be at least 1"));
         }
-        if !(self.gap.is_finite() && self.gap >= 0.0) {
-            return Err(OptionError::new(
-                "gap",
-                format!("must be a number of mm ≥ 0, got {}", self.gap),
-            ));
-        }
+        super::in_range("gap", self.gap, 0.0, 1000.0, "mm")?;
         Ok(())
     }
 }
@@ -306,6 +304,10 @@ pub fn run(
     on_layer: Option<OnLayer>,
     progress: &dyn Progress,
 ) -> Result<Sliced, Error> {
+    if models.is_empty() {
+        // An empty plate would be a job of one blank layer and a box of no extent.
+        return Err(OptionError::new("models", "none given: slice needs at least one mesh").into());
+    }
     let job = &opts.job;
     job.check()?;
     let printer = &job.printer;
@@ -643,5 +645,55 @@ impl Report {
     /// print.json's text.
     pub fn json(&self) -> String {
         serde_json::to_string_pretty(self).expect("reports serialise") + "\n"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_model_is_refused_and_nothing_is_written() {
+        let mut archive = std::io::Cursor::new(Vec::new());
+        let got = run(
+            &[],
+            &Options::default(),
+            &mut archive,
+            None,
+            &crate::stage::Quiet,
+        );
+        match got {
+            Err(Error::Option(e)) => assert_eq!(e.option, "models"),
+            other => panic!(
+                "expected a refusal, got {:?}",
+                other.map(|s| s.report.layers)
+            ),
+        }
+        assert!(archive.into_inner().is_empty());
+    }
+
+    #[test]
+    fn job_figures_out_of_range_are_refused_naming_the_option() {
+        let bad: [(&str, fn(&mut JobOptions)); 6] = [
+            ("resin_cost", |j| j.resin_cost = 1e300),
+            ("resin_cost", |j| j.resin_cost = -1.0),
+            ("density", |j| j.density = 0.0),
+            ("speed", |j| j.speed = Some(f64::NAN)),
+            ("speed", |j| j.speed = Some(1e300)),
+            ("gap", |j| j.gap = f64::INFINITY),
+        ];
+        for (option, spoil) in bad {
+            let mut job = JobOptions::default();
+            spoil(&mut job);
+            assert_eq!(job.check().map_err(|e| e.option), Err(option));
+        }
+        let mut fine = JobOptions {
+            resin_cost: 0.0,
+            speed: Some(25.0),
+            ..JobOptions::default()
+        };
+        assert_eq!(fine.check(), Ok(()));
+        fine.density = 30.0;
+        assert_eq!(fine.check(), Ok(()));
     }
 }

@@ -321,6 +321,51 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
             ],
             "--iterations",
         ),
+        // A print job's figures: bounded, and said in short form (not 300 digits).
+        (
+            vec![
+                "print".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("p.sl1"),
+                "--resin-cost".into(),
+                "1e300".into(),
+            ],
+            "--resin-cost must be from 0 to 1000000 per litre, got 1e300",
+        ),
+        (
+            vec![
+                "print".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("p.sl1"),
+                "--density".into(),
+                "0".into(),
+            ],
+            "--density must be from 0.1 to 30 g/mL, got 0",
+        ),
+        (
+            vec![
+                "print".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("p.sl1"),
+                "--speed".into(),
+                "1e300".into(),
+            ],
+            "--speed must be a positive number of mm/h, at most 100000, got 1e300",
+        ),
+        (
+            vec![
+                "solid".into(),
+                loop_json.into(),
+                "-o".into(),
+                out("s.stl"),
+                "--tolerance".into(),
+                "1e300".into(),
+            ],
+            "--tolerance 1e300 mm is more than ten cells",
+        ),
     ];
     for (args, flag) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();

@@ -91,7 +91,10 @@ impl Default for SupportOptions {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SupportError {
-    #[error("support_{what}= must be a positive number of mm (at most 100), got {value}")]
+    #[error(
+        "support_{what}= must be a positive number of mm (at most 100), got {}",
+        crate::text::num(*.value)
+    )]
     Option { what: &'static str, value: f64 },
     #[error(
         "the solid is {0} × {1} pixels across, more than 16384: supports need its layers at the \

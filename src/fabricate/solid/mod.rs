@@ -116,8 +116,9 @@ pub struct Base {
 #[derive(Debug, thiserror::Error)]
 pub enum SolidError {
     #[error(
-        "tolerance= {tolerance} mm is more than ten cells ({cell} mm): the mesh would lose the \
-         veins' shape; use a smaller tolerance= or a larger cell="
+        "tolerance= {} mm is more than ten cells ({} mm): the mesh would lose the veins' \
+         shape; use a smaller tolerance= or a larger cell=",
+        crate::text::num(*.tolerance), crate::text::num(*.cell)
     )]
     ToleranceTooLarge { tolerance: f64, cell: f64 },
     #[error(
@@ -127,9 +128,10 @@ pub enum SolidError {
     )]
     Vanished { thickest: f64, cell: f64 },
     #[error(
-        "at cell= {cell} mm the shapes' surface ({area:.0} mm²) would take about \
+        "at cell= {} mm the shapes' surface ({area:.0} mm²) would take about \
          {triangles:.2e} triangles, more than {MAX_TRIANGLES:e}: use a larger cell= or a \
-         smaller fit= (or is a node far from the others?)"
+         smaller fit= (or is a node far from the others?)",
+        crate::text::num(*.cell)
     )]
     TooManyTriangles {
         triangles: f64,
@@ -151,7 +153,7 @@ pub enum SolidError {
          with widths (venation and veins write Murray widths)"
     )]
     NoRadius(usize),
-    #[error("{what} must be a positive number of mm, got {value}")]
+    #[error("{what} must be a positive number of mm, got {}", crate::text::num(*.value))]
     NotPositive { what: &'static str, value: f64 },
     #[error(
         "cell= {} mm is more than {} mm: give a grid cell below the veins' radius",
@@ -168,7 +170,10 @@ pub enum SolidError {
          this network has {0}"
     )]
     NoOutline(String),
-    #[error("lamina= needs a flat network (all nodes at one z); node {node} is at z = {z}")]
+    #[error(
+        "lamina= needs a flat network (all nodes at one z); node {node} is at z = {}",
+        crate::text::num(*.z)
+    )]
     NotFlat { node: usize, z: f64 },
     #[error(transparent)]
     March(#[from] MarchError),

@@ -28,7 +28,6 @@
 //! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
 //! `eps / SCALE` below zero.
 
-
 use glam::DVec3;
 
 use super::{corner, outward_cos, Grid, MarchError, FACING, TETS};
