@@ -674,7 +674,8 @@ mod tests {
 
     #[test]
     fn job_figures_out_of_range_are_refused_naming_the_option() {
-        let bad: [(&str, fn(&mut JobOptions)); 6] = [
+        type Spoil = fn(&mut JobOptions);
+        let bad: [(&str, Spoil); 6] = [
             ("resin_cost", |j| j.resin_cost = 1e300),
             ("resin_cost", |j| j.resin_cost = -1.0),
             ("density", |j| j.density = 0.0),
