@@ -10,7 +10,7 @@
 //!   container.
 //! - Congruent quads are paired first: two copies, the second turned 180°, joined along the edge
 //!   that leaves the least waste (a trapezoid and its turned copy make a parallelogram). A pair
-//!   is kept only if its hull wastes under [`PAIR_WASTE`] of its area.
+//!   is kept only if its hull wastes under `PAIR_WASTE` of its area.
 //! - Items go largest first onto the first sheet that takes them (first fit decreasing); a
 //!   sheet that refused an item is not offered anything at least as large in both dimensions. On a
 //!   sheet, each allowed rotation is tried from sampled starts: next to the box corners of

@@ -17,7 +17,7 @@
 //! place found so far (sparrow's early exit). Box tests against every item were most of the
 //! work counted before the grid. The container is a rectangle; an
 //! item's excess over its walls counts as overlap too. A collision's loss is its depth plus a
-//! small floor ([`EPSILON`] of the larger item), times a size penalty (sparrow's: the geometric
+//! small floor (`EPSILON` of the larger item), times a size penalty (sparrow's: the geometric
 //! mean of the square roots of the two areas), so that large items are moved apart first and
 //! small ones fill in around them: with depth alone the Calyx plates' strip came out 7 % longer
 //! (2,440 mm against 2,280 with the penalty, before decay and strikes; BENCHMARKS.md).
@@ -516,10 +516,10 @@ impl<'a> Separation<'a> {
     /// Moves items until nothing overlaps (true), or the work runs out or the search gives up
     /// (false). Rounds move every item in collision (in a seeded random order) to its least
     /// weighted overlap place; after each, the weights of pairs still in collision grow (the
-    /// deepest the most) and the others decay towards 1. A strike is [`STALL`] rounds without
-    /// a new least overlap (a new least that is not [`SUBSTANTIAL`] does not reset the count);
+    /// deepest the most) and the others decay towards 1. A strike is `STALL` rounds without
+    /// a new least overlap (a new least that is not `SUBSTANTIAL` does not reset the count);
     /// after each the items go back to the least overlapping arrangement seen, weights kept, and
-    /// [`STRIKES`] strikes in a row without a substantial gain end the search (sparrow's
+    /// `STRIKES` strikes in a row without a substantial gain end the search (sparrow's
     /// separator).
     pub fn run(&mut self, budget: u64) -> bool {
         let (mut total, mut pairs) = self.overlaps();

@@ -211,7 +211,7 @@ impl Nurbs<'_> {
         Ok(())
     }
 
-    /// The curve over its parameter range [knots[degree], knots[n]], both ends included.
+    /// The curve over its parameter range `[knots[degree], knots[n]]`, both ends included.
     pub fn flatten(&self, tol: f64) -> Result<Vec<DVec3>, CurveError> {
         let (p, n) = (self.degree, self.control.len());
         self.check()?;

@@ -44,7 +44,7 @@ pub struct Face {
     /// Nodes in boundary order (counter-clockwise about the normals for a cell). A vein that
     /// ends inside the face is walked out and back, so its nodes appear twice.
     pub nodes: Vec<u32>,
-    /// Edges in the same order as `nodes`: edge k joins nodes[k] and nodes[k + 1].
+    /// Edges in the same order as `nodes`: edge k joins `nodes[k]` and `nodes[k + 1]`.
     pub edges: Vec<u32>,
     /// Edges walked in both directions: veins that end inside the face, or bridges.
     pub inner_edges: Vec<u32>,

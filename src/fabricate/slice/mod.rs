@@ -634,7 +634,7 @@ pub fn slice<E>(
     slice_held(models, &[], placed, printer, sink)
 }
 
-/// [`slice`] with each model's supports (`supports[k]` for model k, in its frame with its
+/// [`slice()`] with each model's supports (`supports[k]` for model k, in its frame with its
 /// lowest point at z = 0, as [`supports::plan_mesh`] plans them), drawn after the meshes where
 /// they leave pixels unlit.
 pub fn slice_held<E>(

@@ -390,7 +390,7 @@ fn chain(v: u32, pairs: &[(u32, u32)]) -> Result<Vec<u32>, GraphError> {
 }
 
 /// Triangles joining loop `x` (run forwards) to loop `y` (run backwards), `x.len() + y.len()` of
-/// them, starting at the pair (x[0], y[0]) and advancing the loops evenly (for equal loops: an
+/// them, starting at the pair `(x[0], y[0])` and advancing the loops evenly (for equal loops: an
 /// antiprism), so every cell gains one or two cross edges.
 pub fn zip_loops(x: &[u32], y: &[u32]) -> Vec<[u32; 3]> {
     let (nx, ny) = (x.len(), y.len());

@@ -8,7 +8,7 @@
 //! - [`program`]: the bud language of the paper's Figure 8.
 //! - [`sim`]: buds and their time-sharing scheduler, tropism, bud splitting, line buds, holes
 //!   and the collision freeze.
-//! - [`skin`]: the form as a mesh, each cell's texture made geometry, with no self-intersection.
+//! - [`skin()`]: the form as a mesh, each cell's texture made geometry, with no self-intersection.
 //!
 //! Guarantees: after every operation the graph is a closed oriented triangulated surface of
 //! genus equal to the holes grown (`check()` verifies it; `GrowthOptions::verify` runs it after

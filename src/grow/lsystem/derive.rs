@@ -73,7 +73,7 @@ pub fn derive(
 /// Symbols emitted between two questions to `stop`.
 const STOP_EVERY: u64 = 1 << 16;
 
-/// [`derive`], asking `stop` every 65,536 symbols and ending with `DeriveError::Cancelled`
+/// [`derive()`], asking `stop` every 65,536 symbols and ending with `DeriveError::Cancelled`
 /// when it says so.
 pub fn derive_until(
     grammar: &Grammar,
