@@ -56,7 +56,10 @@ impl Handle {
 
     fn snapshot(&self) -> (&'static str, String, u64, Option<u64>) {
         let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        (s.0, s.2.clone(), self.done.load(Ordering::Relaxed), s.1)
+        // A stage's total is an estimate (the nester's counts its tries' fills): `done` never
+        // passes it.
+        let done = self.done.load(Ordering::Relaxed);
+        (s.0, s.2.clone(), s.1.map_or(done, |t| done.min(t)), s.1)
     }
 }
 

@@ -56,6 +56,12 @@ impl lamina::stage::Progress for Bar {
     }
 
     fn set(&self, done: u64) {
+        // A stage's total is an estimate (the nester's counts its tries' fills): the bar stops
+        // at its end rather than pass 100 %.
+        let done = match self.bar.length() {
+            Some(len) if len > 0 => done.min(len),
+            _ => done,
+        };
         self.bar.set_position(done);
     }
 
@@ -68,4 +74,24 @@ impl lamina::stage::Progress for Bar {
 /// their own loops.
 pub fn bar(_stage: &'static str, len: Option<u64>) -> ProgressBar {
     ProgressBar::with_draw_target(len, indicatif::ProgressDrawTarget::stderr())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lamina::stage::Progress;
+
+    #[test]
+    fn the_bar_stops_at_its_total_when_a_stage_counts_past_its_estimate() {
+        let bar = Bar::new();
+        bar.begin("nesting", Some(10));
+        bar.set(7);
+        assert_eq!(bar.bar.position(), 7);
+        bar.set(15);
+        assert_eq!(bar.bar.position(), 10);
+        // A spinner has no total to stop at.
+        bar.begin("meshing", None);
+        bar.set(15);
+        assert_eq!(bar.bar.position(), 15);
+    }
 }
