@@ -57,9 +57,10 @@ impl Handle {
     fn snapshot(&self) -> (&'static str, String, u64, Option<u64>) {
         let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         // A stage's total is an estimate (the nester's counts its tries' fills): `done` never
-        // passes it.
+        // passes it, as the command line's bar stops at its end (a total of 0 is none).
         let done = self.done.load(Ordering::Relaxed);
-        (s.0, s.2.clone(), s.1.map_or(done, |t| done.min(t)), s.1)
+        let most = s.1.filter(|&t| t > 0).unwrap_or(u64::MAX);
+        (s.0, s.2.clone(), done.min(most), s.1)
     }
 }
 
