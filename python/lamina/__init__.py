@@ -495,8 +495,10 @@ def nest(plates: Any, *, sheet: Optional[str] = None, out: Optional[PathLike] = 
          progress: Progress = None, **options: Any) -> dict:
     """Nest the plates on stock sheets (``sheet="3000x1500"``, or ``stock=`` with costs). With
     ``out``, the cut DXFs, bom.csv, nest.json, assembly.scad and sheets.svg go into that
-    folder. Returns ``nest`` (nest.json; ``placements`` as columns), ``bom`` (CSV text),
-    ``svg``, ``outlines`` (each plate as cut on its sheet, by id) and ``files``."""
+    folder. With ``nc="gcode"`` or ``"essi"`` (``post=``, ``nc_on=``, ``nc_off=`` as the
+    command's flags), every sheet's NC program too. Returns ``nest`` (nest.json; ``placements``
+    as columns), ``bom`` (CSV text), ``svg``, ``outlines`` (each plate as cut on its sheet, by
+    id), ``nc`` (program text by file name; empty without ``nc=``) and ``files``."""
     if isinstance(plates, dict) and "plates" in plates and isinstance(plates["plates"], dict):
         doc = plates["plates"]
     elif isinstance(plates, (str, os.PathLike)):

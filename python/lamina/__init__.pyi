@@ -126,6 +126,7 @@ class Nested(TypedDict):
     bom: str
     svg: str
     outlines: Dict[str, npt.NDArray[np.float64]]
+    nc: Dict[str, str]
     files: List[str]
     notes: List[str]
     units: str

@@ -1119,6 +1119,7 @@ fn nest<'py>(
             .map_err(|e| error(e.to_string()))?;
     let mut o = Opts::new(&options, "nest");
     let mut opts = options::nest(&mut o)?;
+    let post = options::nc_post(&mut o)?;
     o.finish()?;
     if let Some(m) = material {
         opts.material = m;
@@ -1127,10 +1128,14 @@ fn nest<'py>(
         stage::nest::run(records, cores, &opts, h)
     })?;
     let bom = stage::nest::bom_csv(&cut);
+    let programs = match &post {
+        Some(post) => stage::nest::nc_programs(&cut, post).map_err(|e| error(e.to_string()))?,
+        None => Vec::new(),
+    };
     let mut files = Vec::new();
     if let Some(dir) = &out {
         files = py
-            .detach(|| write_nest(&cut, &bom, dir))
+            .detach(|| write_nest(&cut, &bom, &programs, dir))
             .map_err(|e| error(e.to_string()))?;
     }
     let d = PyDict::new(py);
@@ -1143,15 +1148,21 @@ fn nest<'py>(
         outlines.set_item(&p.id, f64_array(py, &xy, &[drawn.outline.len(), 2])?)?;
     }
     d.set_item("outlines", outlines)?;
+    let nc = PyDict::new(py);
+    for (name, text) in &programs {
+        nc.set_item(name, text)?;
+    }
+    d.set_item("nc", nc)?;
     d.set_item("files", PyList::new(py, files)?)?;
     d.set_item("notes", notes(py, &[])?)?;
     Ok(d)
 }
 
-/// What `lamina nest` writes, into `dir`.
+/// What `lamina nest` writes, into `dir` (with the NC programs made, if any).
 fn write_nest(
     cut: &stage::nest::Nested,
     bom: &str,
+    programs: &[(String, String)],
     dir: &Path,
 ) -> Result<Vec<String>, Box<dyn std::error::Error + Send + Sync>> {
     use lamina::files::write_atomic;
@@ -1159,6 +1170,10 @@ fn write_nest(
     std::fs::create_dir_all(dir)?;
     stage::nest::write_sheets(cut, dir)?;
     let mut files: Vec<String> = cut.sheets.iter().map(|s| s.file.clone()).collect();
+    for (name, text) in programs {
+        write_atomic(&dir.join(name), |w| w.write_all(text.as_bytes()))?;
+        files.push(name.clone());
+    }
     if cut.joints.is_none() {
         stage::nest::write_assembly(cut, &dir.join("assembly.scad"))?;
         files.push("assembly.scad".into());

@@ -306,6 +306,10 @@ pub fn names(function: &str) -> &'static [&'static str] {
             "job",
             "date",
             "time",
+            "nc",
+            "post",
+            "nc_on",
+            "nc_off",
         ],
         "solid" => &[
             "cell",
@@ -822,6 +826,37 @@ pub fn plates(o: &mut Opts) -> PyResult<stage::plates::Options> {
         )?,
         material: material(o)?,
     })
+}
+
+/// The NC post-processor asked for by `nc=` (`gcode` or `essi`), `post=`, `nc_on=`, `nc_off=`.
+pub fn nc_post(o: &mut Opts) -> PyResult<Option<lamina::fabricate::nc::Post>> {
+    use lamina::fabricate::nc::{post_for, NcFormat, PostError};
+    let format = o.string("nc")?;
+    let (name, on, off) = (o.string("post")?, o.string("nc_on")?, o.string("nc_off")?);
+    let Some(format) = format else {
+        if let Some(key) = [("post", &name), ("nc_on", &on), ("nc_off", &off)]
+            .iter()
+            .find_map(|(k, v)| v.is_some().then_some(k))
+        {
+            return Err(crate::error(format!(
+                "{key}= needs nc= (\"gcode\" or \"essi\")"
+            )));
+        }
+        return Ok(None);
+    };
+    let format = NcFormat::parse(&format).ok_or_else(|| {
+        crate::error(format!("nc= must be \"gcode\" or \"essi\", got {format:?}"))
+    })?;
+    post_for(format, name.as_deref(), on.as_deref(), off.as_deref())
+        .map(Some)
+        .map_err(|e| {
+            let key = match e {
+                PostError::Unknown { .. } => "post",
+                PostError::BadOn(_) => "nc_on",
+                PostError::BadOff(_) => "nc_off",
+            };
+            crate::error(format!("{key}= {e}"))
+        })
 }
 
 pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {

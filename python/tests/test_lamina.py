@@ -349,10 +349,10 @@ def steel(tmp_path_factory, solved):
     plates = lamina.plates(solved, sizing=sizing, groups=7, out=out)
     cli(tmp, "plates", "axes.json", "--sizing", "sizing.json", "--groups", 7, "-o", "plates",
         ok=(0, 1))
-    cut = lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5, lead_in=2,
-                      out=tmp / "py-cut")
+    cut = lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5, lead_in=2, nc="gcode",
+                      post="qtplasmac", out=tmp / "py-cut")
     cli(tmp, "nest", "plates/plates.json", "--sheet", "3000x1500", "--margin", 10, "--spacing",
-        5, "--lead-in", 2, "-o", "cut")
+        5, "--lead-in", 2, "--nc", "gcode", "--post", "qtplasmac", "-o", "cut")
     return tmp, sizing, plates, cut
 
 
@@ -402,6 +402,21 @@ def test_nest_equals_cli(steel):
     assert got == want
     assert cut["bom"].encode() == want["bom.csv"]
     assert sorted(cut["files"]) == sorted(want)
+    # The NC programs in memory, as the command wrote them: one per sheet.
+    programs = {k: v for k, v in want.items() if k.endswith(".ngc")}
+    assert len(programs) == len(cut["nest"]["sheets"]) > 0
+    assert {k: v.encode() for k, v in cut["nc"].items()} == programs
+    # Without nc= there are none; a post without nc=, or one of the other format, is refused.
+    plates = file_json(tmp / "plates" / "plates.json")
+    assert lamina.nest(plates, sheet="3000x1500", tries=1)["nc"] == {}
+    with pytest.raises(lamina.LaminaError, match=r"^post= needs nc="):
+        lamina.nest(plates, post="linuxcnc")
+    with pytest.raises(lamina.LaminaError, match=r"^post= `essi` is not a gcode post"):
+        lamina.nest(plates, nc="gcode", post="essi")
+    with pytest.raises(lamina.LaminaError, match=r'^nc= must be "gcode" or "essi"'):
+        lamina.nest(plates, nc="dxf")
+    with pytest.raises(lamina.LaminaError, match=r"^nc_on= give 1 to 80 printable"):
+        lamina.nest(plates, nc="essi", nc_on="")
 
 
 # Printing.

@@ -11,7 +11,7 @@ use glam::DVec2;
 use serde_json::json;
 
 use lamina::fabricate::cutplan::SpeedTable;
-use lamina::fabricate::nc::{self, NcFormat, Post};
+use lamina::fabricate::nc::{self, NcFormat, Post, PostError};
 use lamina::fabricate::plates_file::read_plates;
 use lamina::files::write_atomic;
 use lamina::stage::nest::{self, parse_rotations, parse_sheet, parse_stock, Rotations, Stock};
@@ -140,38 +140,24 @@ fn post(args: &Args) -> Result<Option<Post>> {
     let Some(format) = args.nc else {
         return Ok(None);
     };
-    let (format, default) = match format {
-        NcArg::Gcode => (NcFormat::Gcode, "linuxcnc"),
-        NcArg::Essi => (NcFormat::Essi, "essi"),
+    let format = match format {
+        NcArg::Gcode => NcFormat::Gcode,
+        NcArg::Essi => NcFormat::Essi,
     };
-    let name = args.post.as_deref().unwrap_or(default);
-    let names: Vec<&str> = nc::posts()
-        .into_iter()
-        .filter(|p| p.format == format)
-        .map(|p| p.name)
-        .collect();
-    let mut post = nc::post(name)
-        .filter(|p| p.format == format)
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "--post: `{name}` is not a {} post-processor; known: {}",
-                format.name(),
-                names.join(", ")
-            )
-        })?;
-    for (flag, value, slot) in [
-        ("--nc-on", &args.nc_on, &mut post.on),
-        ("--nc-off", &args.nc_off, &mut post.off),
-    ] {
-        if let Some(v) = value {
-            if v.trim().is_empty() || v.len() > 80 || v.chars().any(char::is_control) {
-                return Err(anyhow::anyhow!(
-                    "{flag}: give 1 to 80 printable characters, got {v:?}"
-                ));
-            }
-            slot.clone_from(v);
-        }
-    }
+    let post = nc::post_for(
+        format,
+        args.post.as_deref(),
+        args.nc_on.as_deref(),
+        args.nc_off.as_deref(),
+    )
+    .map_err(|e| {
+        let flag = match e {
+            PostError::Unknown { .. } => "--post",
+            PostError::BadOn(_) => "--nc-on",
+            PostError::BadOff(_) => "--nc-off",
+        };
+        anyhow::anyhow!("{flag}: {e}")
+    })?;
     Ok(Some(post))
 }
 

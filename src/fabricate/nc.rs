@@ -42,6 +42,74 @@ impl NcFormat {
             NcFormat::Essi => "esi",
         }
     }
+
+    /// The post-processor used when none is named.
+    pub fn default_post(self) -> &'static str {
+        match self {
+            NcFormat::Gcode => "linuxcnc",
+            NcFormat::Essi => "essi",
+        }
+    }
+
+    /// The format by its name (`gcode` or `essi`).
+    pub fn parse(name: &str) -> Option<NcFormat> {
+        [NcFormat::Gcode, NcFormat::Essi]
+            .into_iter()
+            .find(|f| f.name() == name)
+    }
+}
+
+/// Why a post-processor could not be had as asked.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PostError {
+    #[error("`{name}` is not a {format} post-processor; known: {known}")]
+    Unknown {
+        name: String,
+        format: &'static str,
+        known: String,
+    },
+    /// A torch-on or torch-off line that is empty, too long or has control characters.
+    #[error("give 1 to 80 printable characters, got {0:?}")]
+    BadOn(String),
+    #[error("give 1 to 80 printable characters, got {0:?}")]
+    BadOff(String),
+}
+
+/// The post-processor `name` (the format's default when `None`) writing `format`, with its
+/// torch-on and torch-off lines (codes for ESSI) replaced by `on` and `off` where given.
+pub fn post_for(
+    format: NcFormat,
+    name: Option<&str>,
+    on: Option<&str>,
+    off: Option<&str>,
+) -> Result<Post, PostError> {
+    let name = name.unwrap_or(format.default_post());
+    let mut post = post(name)
+        .filter(|p| p.format == format)
+        .ok_or_else(|| PostError::Unknown {
+            name: name.to_string(),
+            format: format.name(),
+            known: posts()
+                .into_iter()
+                .filter(|p| p.format == format)
+                .map(|p| p.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        })?;
+    let fits = |v: &str| !v.trim().is_empty() && v.len() <= 80 && !v.chars().any(char::is_control);
+    if let Some(v) = on {
+        if !fits(v) {
+            return Err(PostError::BadOn(v.to_string()));
+        }
+        post.on = v.to_string();
+    }
+    if let Some(v) = off {
+        if !fits(v) {
+            return Err(PostError::BadOff(v.to_string()));
+        }
+        post.off = v.to_string();
+    }
+    Ok(post)
 }
 
 /// Which speed table rows set the feeds.
@@ -392,6 +460,40 @@ pub fn essi(plan: &SheetPlan, post: &Post, heading: &Heading) -> String {
 mod tests {
     use super::*;
     use crate::fabricate::cutpath::ToolPath;
+
+    #[test]
+    fn a_post_is_had_by_format_and_name_with_its_torch_lines_replaced_where_asked() {
+        let g = post_for(NcFormat::Gcode, None, None, None).unwrap();
+        assert_eq!((g.name, g.format), ("linuxcnc", NcFormat::Gcode));
+        let e = post_for(NcFormat::Essi, None, Some("7"), Some("8")).unwrap();
+        assert_eq!((e.name, e.on.as_str(), e.off.as_str()), ("essi", "7", "8"));
+        let q = post_for(NcFormat::Gcode, Some("qtplasmac"), Some("M3 $0 S77"), None).unwrap();
+        assert_eq!(
+            (q.on.as_str(), q.off),
+            ("M3 $0 S77", post("qtplasmac").unwrap().off)
+        );
+        // A post of the other format, an unknown one, and torch lines that do not fit.
+        let wrong = post_for(NcFormat::Essi, Some("linuxcnc"), None, None).unwrap_err();
+        assert_eq!(
+            wrong.to_string(),
+            "`linuxcnc` is not a essi post-processor; known: essi, essi-0.1mm"
+        );
+        assert!(matches!(
+            post_for(NcFormat::Gcode, Some("fanuc"), None, None),
+            Err(PostError::Unknown { .. })
+        ));
+        assert_eq!(
+            post_for(NcFormat::Gcode, None, Some(" "), None),
+            Err(PostError::BadOn(" ".into()))
+        );
+        assert_eq!(
+            post_for(NcFormat::Gcode, None, None, Some("M5\nM2")),
+            Err(PostError::BadOff("M5\nM2".into()))
+        );
+        assert!(post_for(NcFormat::Gcode, None, Some(&"M".repeat(81)), None).is_err());
+        assert_eq!(NcFormat::parse("essi"), Some(NcFormat::Essi));
+        assert_eq!(NcFormat::parse("ESSI"), None);
+    }
 
     fn plan() -> SheetPlan {
         let paths = vec![ToolPath {

@@ -1442,6 +1442,20 @@ pub fn write_sheets(out: &Nested, dir: &Path) -> Result<(), WriteError> {
 /// NC programs for every sheet, `sheet-NN-Tmm.ngc` (G-code) or `.esi` (ESSI) beside its DXF,
 /// by the post-processor given; returns the files' names.
 pub fn write_nc(out: &Nested, dir: &Path, post: &Post) -> Result<Vec<String>, Error> {
+    let mut files = Vec::new();
+    for (name, text) in nc_programs(out, post)? {
+        crate::files::write_atomic(&dir.join(&name), |w| {
+            std::io::Write::write_all(w, text.as_bytes())
+        })
+        .map_err(Error::Write)?;
+        files.push(name);
+    }
+    Ok(files)
+}
+
+/// Every sheet's NC program by the post-processor given, in memory: (file name, as
+/// `write_nc` names it; the program).
+pub fn nc_programs(out: &Nested, post: &Post) -> Result<Vec<(String, String)>, Error> {
     let count = out.sheets.len();
     let mut files = Vec::with_capacity(count);
     for (n, (sheet, plan)) in out.sheets.iter().zip(&out.plans).enumerate() {
@@ -1480,11 +1494,7 @@ pub fn write_nc(out: &Nested, dir: &Path, post: &Post) -> Result<Vec<String>, Er
             }
             NcFormat::Essi => nc::essi(plan, post, &heading),
         };
-        crate::files::write_atomic(&dir.join(&name), |w| {
-            std::io::Write::write_all(w, text.as_bytes())
-        })
-        .map_err(Error::Write)?;
-        files.push(name);
+        files.push((name, text));
     }
     Ok(files)
 }
