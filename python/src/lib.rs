@@ -1170,10 +1170,8 @@ fn write_nest(
     std::fs::create_dir_all(dir)?;
     stage::nest::write_sheets(cut, dir)?;
     let mut files: Vec<String> = cut.sheets.iter().map(|s| s.file.clone()).collect();
-    for (name, text) in programs {
-        write_atomic(&dir.join(name), |w| w.write_all(text.as_bytes()))?;
-        files.push(name.clone());
-    }
+    stage::nest::write_programs(programs, dir)?;
+    files.extend(programs.iter().map(|(name, _)| name.clone()));
     if cut.joints.is_none() {
         stage::nest::write_assembly(cut, &dir.join("assembly.scad"))?;
         files.push("assembly.scad".into());

@@ -1442,15 +1442,20 @@ pub fn write_sheets(out: &Nested, dir: &Path) -> Result<(), WriteError> {
 /// NC programs for every sheet, `sheet-NN-Tmm.ngc` (G-code) or `.esi` (ESSI) beside its DXF,
 /// by the post-processor given; returns the files' names.
 pub fn write_nc(out: &Nested, dir: &Path, post: &Post) -> Result<Vec<String>, Error> {
-    let mut files = Vec::new();
-    for (name, text) in nc_programs(out, post)? {
-        crate::files::write_atomic(&dir.join(&name), |w| {
+    let programs = nc_programs(out, post)?;
+    write_programs(&programs, dir)?;
+    Ok(programs.into_iter().map(|(name, _)| name).collect())
+}
+
+/// Programs made by `nc_programs`, each into its file in `dir`.
+pub fn write_programs(programs: &[(String, String)], dir: &Path) -> Result<(), Error> {
+    for (name, text) in programs {
+        crate::files::write_atomic(&dir.join(name), |w| {
             std::io::Write::write_all(w, text.as_bytes())
         })
         .map_err(Error::Write)?;
-        files.push(name);
     }
-    Ok(files)
+    Ok(())
 }
 
 /// Every sheet's NC program by the post-processor given, in memory: (file name, as
