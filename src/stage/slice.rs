@@ -395,6 +395,16 @@ pub fn run(
                 source,
             })?;
         }
+        // Supports only widen a model's box: one that does not fit bare is refused before
+        // they are planned (minutes on a model far too large), as the bare slice refuses it.
+        arrange_held(
+            &scaled,
+            &[],
+            printer,
+            job.copies,
+            job.gap,
+            opts.keep_position,
+        )?;
         for m in &scaled {
             // Supports are planned on closed shells only.
             slicer::check_closed(m)?;

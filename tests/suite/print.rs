@@ -1010,6 +1010,25 @@ fn slice_supports_any_closed_mesh_and_leaves_its_lit_pixels_as_they_are() -> Tes
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("colored_patch.obj"), "{}", stderr(&o));
     assert!(!out.exists());
+    // A mesh too large for the printer is refused as the bare slice refuses it, with the scale
+    // that would fit, before supports are planned for it.
+    let big = fixture("surfaces/touching_cubes.stl");
+    let refusals = [&[][..], &["--supports"][..]].map(|more| {
+        let mut args = vec!["slice", big.to_str().unwrap_or("?"), "--scale", "12", "-o"];
+        args.push(out.to_str().unwrap_or("?"));
+        args.extend(more);
+        lamina(&args)
+    });
+    for o in &refusals {
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(o));
+        assert!(
+            stderr(o).contains("or less it would (--scale)"),
+            "{}",
+            stderr(o)
+        );
+    }
+    assert_eq!(stderr(&refusals[0]), stderr(&refusals[1]));
+    assert!(!out.exists());
     Ok(())
 }
 

@@ -172,6 +172,19 @@ fn every_solid_of_an_ascii_stl_is_read() -> TestResult {
 }
 
 #[test]
+fn an_ascii_stl_in_capitals_after_a_byte_order_mark_is_read() -> TestResult {
+    // `SOLID … FACET NORMAL …` in E notation with CRLF ends, as admesh's sample block.stl and
+    // older CAD exporters write it.
+    let v = info(&[&path("surfaces/upper_case.stl")?])?;
+    assert_eq!(v["triangles"], 12);
+    assert_eq!(v["import"]["bodies"], 1);
+    assert_eq!(v["topology"]["closed"], true);
+    assert_eq!(v["topology"]["genus"], 0);
+    assert!(close(&v["topology"]["volume"], 1000.0, 1e-6));
+    Ok(())
+}
+
+#[test]
 fn jittered_cad_corners_read_open_and_weld_closed() -> TestResult {
     let stl = path("surfaces/cad_jitter.stl")?;
     let raw = info(&[&stl])?;

@@ -31,7 +31,7 @@ fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
             soup(&bytes)
         });
     }
-    if !bytes.starts_with(b"solid") {
+    if !ascii_start(&bytes) {
         let detail = if len >= 84 {
             let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
             format!(
@@ -50,6 +50,27 @@ fn read_as(path: &Path, weld: bool) -> Result<TriMesh, ReadError> {
     read_ascii(path, &bytes)
 }
 
+/// Whether `bytes` open as an ASCII STL: `solid` in any case (older CAD exporters write
+/// `SOLID … FACET NORMAL …`), after a UTF-8 byte-order mark and blank space, if any.
+fn ascii_start(bytes: &[u8]) -> bool {
+    let b = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let b = &b[b.iter().take_while(|c| c.is_ascii_whitespace()).count()..];
+    b.len() >= 5 && b[..5].eq_ignore_ascii_case(b"solid")
+}
+
+/// The ASCII STL keywords, as `read_ascii` matches them (in any case).
+const KEYWORDS: [&str; 9] = [
+    "solid", "endsolid", "facet", "normal", "outer", "loop", "vertex", "endloop", "endfacet",
+];
+
+/// `word` as the keyword it spells in any case, or "" when it is none.
+fn keyword(word: &str) -> &'static str {
+    KEYWORDS
+        .into_iter()
+        .find(|k| word.eq_ignore_ascii_case(k))
+        .unwrap_or("")
+}
+
 /// Bytes of a file's start that decide its layout: the 84-byte header and 1 KiB after it.
 const HEAD: usize = 84 + 1024;
 
@@ -66,7 +87,7 @@ fn binary_layout(head: &[u8], len: u64) -> Option<(u64, u64)> {
     if trailing == 0 {
         return Some((n, 0));
     }
-    let text = head.starts_with(b"solid") && !head[84..].contains(&0);
+    let text = ascii_start(head) && !head[84..].contains(&0);
     (n > 0 && trailing < 50 && !text).then_some((n, trailing))
 }
 
@@ -83,9 +104,11 @@ pub fn trailing_bytes(path: &Path) -> Option<(u64, u64)> {
 
 /// An ASCII STL: every `solid … endsolid` block (CAD programs write one per body), corners at
 /// the same point (with −0 read as +0) joined. Facets with more than three vertices are fanned.
+/// Keywords are read in any case.
 fn read_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh, ReadError> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| ReadError::file(path, format!("ASCII STL is not valid UTF-8: {e}")))?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut corners: Vec<DVec3> = Vec::new();
     let mut triangles: Vec<[u32; 3]> = Vec::new();
     let mut facet: Vec<u32> = Vec::new();
@@ -93,15 +116,16 @@ fn read_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh, ReadError> {
     for (i, line) in text.lines().enumerate() {
         let bad = |msg: String| ReadError::line(path, i + 1, msg);
         let words: Vec<&str> = line.split_whitespace().collect();
-        match words.as_slice() {
-            [] | ["solid", ..] | ["endsolid", ..] | ["outer", "loop"] => {}
-            ["facet", "normal", ..] => {
+        let key = |k: usize| words.get(k).map_or("", |w| keyword(w));
+        match (key(0), key(1), words.len()) {
+            (_, _, 0) | ("solid", ..) | ("endsolid", ..) | ("outer", "loop", 2) => {}
+            ("facet", "normal", _) => {
                 in_facet = true;
                 facet.clear();
             }
-            ["vertex", x, y, z] if in_facet => {
+            ("vertex", _, 4) if in_facet => {
                 let mut p = [0.0; 3];
-                for (slot, w) in p.iter_mut().zip([x, y, z]) {
+                for (slot, w) in p.iter_mut().zip(&words[1..]) {
                     *slot = w
                         .parse::<f64>()
                         .ok()
@@ -116,8 +140,8 @@ fn read_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh, ReadError> {
                 facet.push(corners.len() as u32);
                 corners.push(DVec3::from_array(p));
             }
-            ["endloop"] => {}
-            ["endfacet"] => {
+            ("endloop", _, 1) => {}
+            ("endfacet", _, 1) => {
                 if facet.len() < 3 {
                     return Err(bad(format!("a facet with {} vertices", facet.len())));
                 }
@@ -148,7 +172,7 @@ fn read_ascii(path: &Path, bytes: &[u8]) -> Result<TriMesh, ReadError> {
 
 /// Bodies in an ASCII STL (its `solid` blocks); `None` for binary STL, which has no bodies.
 pub fn ascii_solids(bytes: &[u8]) -> Option<usize> {
-    if !bytes.starts_with(b"solid") {
+    if !ascii_start(bytes) {
         return None;
     }
     if binary_layout(&bytes[..bytes.len().min(HEAD)], bytes.len() as u64).is_some() {
@@ -157,7 +181,10 @@ pub fn ascii_solids(bytes: &[u8]) -> Option<usize> {
     let text = String::from_utf8_lossy(bytes);
     Some(
         text.lines()
-            .filter(|l| l.trim_start().starts_with("solid"))
+            .filter(|l| {
+                let l = l.trim_start_matches('\u{feff}');
+                l.split_whitespace().next().map(keyword) == Some("solid")
+            })
             .count(),
     )
 }
