@@ -193,7 +193,15 @@ impl JobArgs {
         if let Some(path) = &self.report {
             write_json(path, &report)?;
         }
-        tell(&report, &sliced.estimate, printer, output, self.json)
+        let e = &sliced.estimate;
+        tell(
+            &report,
+            e,
+            printer,
+            output,
+            self.json,
+            self.report.as_deref(),
+        )
     }
 }
 
@@ -271,13 +279,16 @@ pub fn run(args: Args) -> Result<()> {
     args.job.finish(&sliced, &opts.job.printer, &args.output)
 }
 
-/// Says what a sliced job is: the summary (or print.json with `json`) on stdout, and its islands.
+/// Says what a sliced job is: the summary (or print.json with `json`) on stdout, and its
+/// islands, with where they are listed (`report_path`, where print.json was written) and, when
+/// the job had no supports, that `--supports` holds them.
 pub fn tell(
     report: &slice::Report,
     e: &Estimate,
     printer: &Printer,
     output: &Path,
     json: bool,
+    report_path: Option<&Path>,
 ) -> Result<()> {
     if json {
         outln!("{}", serde_json::to_string_pretty(report)?);
@@ -305,11 +316,21 @@ pub fn tell(
     }
     // Islands are said even with --json (on stderr then): a print fails at each.
     let count = report.island_count;
+    let listed = match (json, report_path) {
+        (true, _) => "see \"islands\" in the JSON".to_string(),
+        (false, Some(path)) => format!("see \"islands\" in {}", path.display()),
+        (false, None) => "--report FILE lists them".to_string(),
+    };
+    let hold = if report.supports.is_none() {
+        "; --supports holds them"
+    } else {
+        ""
+    };
     let line = match report.islands.first() {
         None => "no islands: every region of every layer stands on the one below".to_string(),
         Some(i) => format!(
             "{count} islands (regions cured in free resin, touching nothing in the layer below): \
-             the first at layer {} ({:.2}, {:.2}) mm, {:.3} mm²; see \"islands\" in the report",
+             the first at layer {} ({:.2}, {:.2}) mm, {:.3} mm²; {listed}{hold}",
             i.layer, i.x_mm, i.y_mm, i.area_mm2
         ),
     };

@@ -530,10 +530,15 @@ fn a_post_that_stops_short_of_the_plate_starts_an_island() -> TestResult {
             assert_eq!(i["layer"], 20);
             let area = i["area_mm2"].as_f64().ok_or("area")?;
             assert!((area - 4.0).abs() < 0.2, "the post's 2 × 2 mm: {area}");
+            // Where they are listed, and what holds them.
+            let said = common::stdout(&o);
+            let listed = format!(
+                "see \"islands\" in {}; --supports holds them",
+                report.display()
+            );
             assert!(
-                common::stdout(&o).contains("1 islands"),
-                "{}",
-                common::stdout(&o)
+                said.contains("1 islands") && said.contains(&listed),
+                "{said}"
             );
         }
         // Read back: the same islands, exit 1 when there are any.
