@@ -16,7 +16,7 @@ use serde::Serialize;
 use crate::fabricate::slice::shapes::Placed;
 pub use crate::fabricate::slice::supports::SupportOptions;
 use crate::fabricate::slice::supports::{plan, SupportError, SupportReport};
-use crate::fabricate::slice::Printer;
+use crate::fabricate::slice::{fitting_scale, Printer};
 use crate::fabricate::solid::{shapes, solid_of, Shapes, SolidError, SolidOptions};
 pub use crate::fabricate::solid::{Base, SolidReport, DEFAULT_CELL};
 use crate::stage::Progress;
@@ -154,14 +154,45 @@ pub fn shapes_with_supports(
     Ok((pieces, Some(r), notes))
 }
 
+/// A line saying that the solid does not fit `printer` (the DMP-SL, whose pixel is the default
+/// cell) and the `fit` that would, when it does not: `print` shrinks such a network itself, but
+/// a mesh written at this size would be refused by `slice`.
+fn too_big_to_print(pieces: &Shapes, upright: bool, printer: &Printer) -> Option<String> {
+    let longest = pieces.scale * pieces.drawn_size;
+    let (lo, hi) = Placed::new(pieces.clone(), upright).bounds();
+    let size = hi - lo;
+    let factor = fitting_scale(size, printer);
+    if !(factor.is_finite() && factor < 1.0 && longest > 0.0) {
+        return None;
+    }
+    let area = printer.area();
+    // Rounded down to 0.1 mm: a lamina or a base does not scale with `fit`, so it is a guide.
+    let fit = (10.0 * factor * longest).floor() / 10.0;
+    Some(format!(
+        "{:.1} × {:.1} × {:.1} mm does not fit the DMP-SL printer ({:.1} × {:.1} mm display, \
+         {} mm tall): fit= {} would (`print` scales a network to fit by itself)",
+        size.x,
+        size.y,
+        size.z,
+        area.x,
+        area.y,
+        crate::text::num(printer.max_height_mm),
+        crate::text::num(fit)
+    ))
+}
+
 /// Meshes `net`. `progress` follows the meshing and simplification and stops them between
 /// bricks and passes.
 pub fn run(net: &Network, opts: &Options, progress: &dyn Progress) -> Result<Made, Error> {
     let mut solid_opts = opts.shape.solid_options(opts.cell);
     solid_opts.tolerance = opts.tolerance;
     // Supports are planned at the DMP-SL's pixel and layer.
-    let (pieces, supports, notes) =
-        shapes_with_supports(net, &solid_opts, &opts.shape, &Printer::default(), progress)?;
+    let printer = Printer::default();
+    let (pieces, supports, mut notes) =
+        shapes_with_supports(net, &solid_opts, &opts.shape, &printer, progress)?;
+    if let Some(note) = too_big_to_print(&pieces, opts.shape.upright, &printer) {
+        notes.insert(0, note);
+    }
     let made = solid_of(net, &solid_opts, pieces, progress)?;
     let warnings = made.report.warnings.clone();
     Ok(Made {

@@ -745,6 +745,34 @@ fn print_sizes_a_network_to_the_display_and_says_so() -> TestResult {
     let o = lamina(&["solid", &short, "-o", "x.stl", "--fit", "auto"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("only print sizes to its display"));
+
+    // But it says when what it writes would not fit the printer, and the --fit that would;
+    // at that fit it says nothing (`vein` writes vein.json: the long vein again, then the short).
+    let long = vein(dir.path(), [0.0, 0.0, 0.0], [200.0, 0.0, 0.0], 1.0)?;
+    let stl = dir.path().join("vein.stl");
+    let stl_s = stl.to_str().ok_or("p")?;
+    let coarse = ["--cell", "0.5", "--full", "-o", stl_s];
+    let o = lamina(&[&["solid", &long][..], &coarse].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let e = stderr(&o);
+    let note = "202.0 × 2.0 × 2.0 mm does not fit the DMP-SL printer (67.2 × 37.8 mm display, \
+                100 mm tall): --fit ";
+    let fit = e
+        .split(note)
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .ok_or_else(|| format!("no note in: {e}"))?;
+    let o = lamina(&[&["solid", &long, "--fit", fit][..], &coarse].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        !stderr(&o).contains("does not fit"),
+        "--fit {fit}: {}",
+        stderr(&o)
+    );
+    let short = vein(dir.path(), [0.0, 0.0, 0.0], [10.0, 0.0, 0.0], 0.3)?;
+    let o = lamina(&[&["solid", &short][..], &coarse].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("does not fit"), "{}", stderr(&o));
     Ok(())
 }
 
