@@ -198,6 +198,19 @@ fn jittered_cad_corners_read_open_and_weld_closed() -> TestResult {
     assert_eq!(welded["topology"]["vertices"], 8);
     assert_eq!(welded["topology"]["genus"], 0);
     assert_eq!(welded["import"]["weld"]["merged"], 28);
+    // The slicer refuses it as it is, naming the flag that closes it, and slices it welded.
+    let dir = tempfile::tempdir()?;
+    let sl1 = dir.path().join("jitter.sl1");
+    let sl1 = sl1.to_str().ok_or("path")?;
+    let o = lamina(&["slice", &stl, "-o", sl1]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("36 edge(s) are not matched") && e.contains("--weld MM"),
+        "{e}"
+    );
+    let o = lamina(&["slice", &stl, "--weld", "1e-3", "-o", sl1]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     Ok(())
 }
 

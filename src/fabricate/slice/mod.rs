@@ -167,7 +167,8 @@ pub enum SliceError {
     Empty(PathBuf),
     #[error(
         "{}: not a closed mesh: {count} edge(s) are not matched by an edge running the other \
-         way (one from {a:?} to {b:?}); the slicer needs closed shells",
+         way (one from {a:?} to {b:?}); the slicer needs closed shells (corners a hair apart, \
+         as CAD exports leave them, are joined by weld= MM)",
         path.display()
     )]
     Open {
