@@ -194,15 +194,9 @@ pub fn run(args: Args) -> Result<()> {
         tolerance: (!args.full).then(|| args.tolerance.flatten().unwrap_or(0.25 * args.cell)),
         shape: args.shape.shape(args.supports.options()?)?,
     };
-    // Said before the meshing, which may take minutes, and not again after it.
-    let early =
-        solid::fit_note(&net, &opts).with_context(|| format!("{}", args.network.display()))?;
-    if let Some(n) = &early {
-        errln!("lamina: {n}");
-    }
     let made = solid::run(&net, &opts, &Bar::new())
         .with_context(|| format!("{}", args.network.display()))?;
-    for n in made.notes.iter().filter(|&n| Some(n) != early.as_ref()) {
+    for n in &made.notes {
         errln!("lamina: {n}");
     }
     write_mesh(&made.mesh, &args.output, 1024)?;

@@ -154,29 +154,12 @@ pub fn shapes_with_supports(
     Ok((pieces, Some(r), notes))
 }
 
-/// The line [`run`] puts first in its notes when the solid (supports aside) would not fit the
-/// DMP-SL printer, whose pixel is the default cell: its size and the `fit` that would fit it.
-/// `print` shrinks such a network itself, but `slice` refuses a mesh written at that size.
-/// Found without meshing, for a caller that says it before the minutes meshing may take.
-pub fn fit_note(net: &Network, opts: &Options) -> Result<Option<String>, Error> {
-    // With the tolerance and the supports' options, so that every option is checked before the
-    // note is made.
-    let mut solid_opts = opts.shape.solid_options(opts.cell);
-    solid_opts.tolerance = opts.tolerance;
-    let pieces = shapes(net, &solid_opts)?;
-    if let Some(s) = &opts.shape.supports {
-        s.check()?;
-    }
-    Ok(too_big_to_print(
-        pieces,
-        opts.shape.upright,
-        &Printer::default(),
-    ))
-}
-
-fn too_big_to_print(pieces: Shapes, upright: bool, printer: &Printer) -> Option<String> {
+/// A line saying that the solid does not fit `printer` (the DMP-SL, whose pixel is the default
+/// cell) and the `fit` that would, when it does not: `print` shrinks such a network itself, but
+/// a mesh written at this size would be refused by `slice`.
+fn too_big_to_print(pieces: &Shapes, upright: bool, printer: &Printer) -> Option<String> {
     let longest = pieces.scale * pieces.drawn_size;
-    let (lo, hi) = Placed::new(pieces, upright).bounds();
+    let (lo, hi) = Placed::new(pieces.clone(), upright).bounds();
     let size = hi - lo;
     let factor = fitting_scale(size, printer);
     if !(factor.is_finite() && factor < 1.0 && longest > 0.0) {
@@ -207,7 +190,7 @@ pub fn run(net: &Network, opts: &Options, progress: &dyn Progress) -> Result<Mad
     let printer = Printer::default();
     let (pieces, supports, mut notes) =
         shapes_with_supports(net, &solid_opts, &opts.shape, &printer, progress)?;
-    if let Some(note) = fit_note(net, opts)? {
+    if let Some(note) = too_big_to_print(&pieces, opts.shape.upright, &printer) {
         notes.insert(0, note);
     }
     let made = solid_of(net, &solid_opts, pieces, progress)?;

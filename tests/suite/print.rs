@@ -757,7 +757,6 @@ fn print_sizes_a_network_to_the_display_and_says_so() -> TestResult {
     let e = stderr(&o);
     let note = "202.0 × 2.0 × 2.0 mm does not fit the DMP-SL printer (67.2 × 37.8 mm display, \
                 100 mm tall): --fit ";
-    assert_eq!(e.matches("does not fit").count(), 1, "said once: {e}");
     let fit = e
         .split(note)
         .nth(1)
