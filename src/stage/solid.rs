@@ -70,7 +70,8 @@ pub struct Made {
     pub report: Report,
     /// Warnings (veins thinner than the cell, gaps left bridged, islands left), one line each.
     pub warnings: Vec<String>,
-    /// What the supports did, one line (when asked for).
+    /// Notes, one line each: that the solid does not fit the DMP-SL printer (and the `fit` that
+    /// would), what the supports did (when asked for).
     pub notes: Vec<String>,
 }
 
