@@ -830,7 +830,7 @@ pub fn plates(o: &mut Opts) -> PyResult<stage::plates::Options> {
 
 /// The NC post-processor asked for by `nc=` (`gcode` or `essi`), `post=`, `nc_on=`, `nc_off=`.
 pub fn nc_post(o: &mut Opts) -> PyResult<Option<lamina::fabricate::nc::Post>> {
-    use lamina::fabricate::nc::{post_for, NcFormat, PostError};
+    use lamina::fabricate::nc::{post_for, NcFormat};
     let format = o.string("nc")?;
     let (name, on, off) = (o.string("post")?, o.string("nc_on")?, o.string("nc_off")?);
     let Some(format) = format else {
@@ -849,14 +849,7 @@ pub fn nc_post(o: &mut Opts) -> PyResult<Option<lamina::fabricate::nc::Post>> {
     })?;
     post_for(format, name.as_deref(), on.as_deref(), off.as_deref())
         .map(Some)
-        .map_err(|e| {
-            let key = match e {
-                PostError::Unknown { .. } => "post",
-                PostError::BadOn(_) => "nc_on",
-                PostError::BadOff(_) => "nc_off",
-            };
-            crate::error(format!("{key}= {e}"))
-        })
+        .map_err(|e| crate::error(format!("{}= {e}", e.field())))
 }
 
 pub fn nest(o: &mut Opts) -> PyResult<stage::nest::Options> {

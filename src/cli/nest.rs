@@ -11,7 +11,7 @@ use glam::DVec2;
 use serde_json::json;
 
 use lamina::fabricate::cutplan::SpeedTable;
-use lamina::fabricate::nc::{self, NcFormat, Post, PostError};
+use lamina::fabricate::nc::{self, NcFormat, Post};
 use lamina::fabricate::plates_file::read_plates;
 use lamina::files::write_atomic;
 use lamina::stage::nest::{self, parse_rotations, parse_sheet, parse_stock, Rotations, Stock};
@@ -150,14 +150,7 @@ fn post(args: &Args) -> Result<Option<Post>> {
         args.nc_on.as_deref(),
         args.nc_off.as_deref(),
     )
-    .map_err(|e| {
-        let flag = match e {
-            PostError::Unknown { .. } => "--post",
-            PostError::BadOn(_) => "--nc-on",
-            PostError::BadOff(_) => "--nc-off",
-        };
-        anyhow::anyhow!("{flag}: {e}")
-    })?;
+    .map_err(|e| anyhow::anyhow!("--{}: {e}", e.field().replace('_', "-")))?;
     Ok(Some(post))
 }
 

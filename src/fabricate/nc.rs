@@ -75,6 +75,17 @@ pub enum PostError {
     BadOff(String),
 }
 
+impl PostError {
+    /// The option it is about, as a field name: `post`, `nc_on` or `nc_off`.
+    pub fn field(&self) -> &'static str {
+        match self {
+            PostError::Unknown { .. } => "post",
+            PostError::BadOn(_) => "nc_on",
+            PostError::BadOff(_) => "nc_off",
+        }
+    }
+}
+
 /// The post-processor `name` (the format's default when `None`) writing `format`, with its
 /// torch-on and torch-off lines (codes for ESSI) replaced by `on` and `off` where given.
 pub fn post_for(

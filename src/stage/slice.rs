@@ -395,8 +395,9 @@ pub fn run(
                 source,
             })?;
         }
-        // Supports only widen a model's box: one that does not fit bare is refused before
-        // they are planned (minutes on a model far too large), as the bare slice refuses it.
+        // Supports are planned on closed shells only (`arrange_held` checks each), and only
+        // widen a model's box: one that does not fit bare is refused before they are planned
+        // (minutes on a model far too large), as the bare slice refuses it.
         arrange_held(
             &scaled,
             &[],
@@ -406,8 +407,6 @@ pub fn run(
             opts.keep_position,
         )?;
         for m in &scaled {
-            // Supports are planned on closed shells only.
-            slicer::check_closed(m)?;
             let planned = plan_mesh(&m.mesh, printer, s, progress).map_err(|e| match e {
                 SupportError::Cancelled(_) => Error::Cancelled,
                 source => Error::Supports {
