@@ -528,7 +528,9 @@ def mesh_distance(V, F, p, pieces=100_000, batch=125_000, chunk=2_000_000):
     few pieces' exact distance bounds a point's from above, so only pieces whose centre is
     within that bound plus `small` can hold a nearer point: those are found in a k-d tree of
     the centres and measured exactly, `batch` points and `chunk` (point, piece) pairs at a
-    time."""
+    time. Never fewer pieces than twice the triangles: a mesh of more triangles than `pieces`
+    could never be cut within it, and the search for `small` would not end."""
+    pieces = max(pieces, 2 * len(F))
     T = V[F]
 
     def reach_of(t):
