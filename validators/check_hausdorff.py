@@ -27,7 +27,7 @@ z = 0 (as `solid` places it). Checks:
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - both ways, a point beyond T in a gap between facing veins (outward directions more than
   120 degrees apart) narrower than the mesher's cell diagonal (sqrt(3) x --cell, default the
-  report's) fails like any other, and is also counted apart: such a gap can fall between the
+  report's march_cell_mm, the grid it marched on, else its cell_mm) fails like any other, and is also counted apart: such a gap can fall between the
   grid points, where the mesher must look closer (the marched mesh bridges it); with
   --excuse-gaps those points are reported and not failed (the check before the mesher split
   cells at gaps);
@@ -615,7 +615,7 @@ def main():
         tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
     if m.status() != manifold3d.Error.NoError:
         failures.append(f"manifold3d: {m.status()}")
-    cell = a.cell if a.cell is not None else report["cell_mm"]
+    cell = a.cell if a.cell is not None else report.get("march_cell_mm", report["cell_mm"])
     # A gap between facing veins narrower than the longest edge of the mesher's tetrahedra
     # (the cell's diagonal) can fall between its grid points: marching bridges it.
     narrow = 3 ** 0.5 * cell

@@ -20,7 +20,9 @@ pub struct Args {
     /// Output mesh (.stl binary, .obj)
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Grid cell of the mesher, mm (default: the DMP-SL pixel)
+    /// Grid cell of the mesher, mm (default: the DMP-SL pixel). The compact mesh is marched at
+    /// twice the cell when every piece (veins, lamina, base) is at least four cells thick and
+    /// no supports are added, split as fine where veins come close
     #[arg(long, default_value_t = DEFAULT_CELL)]
     pub cell: f64,
     /// The mesh written is simplified to within this distance of the exact surface, mm
@@ -216,8 +218,14 @@ pub fn run(args: Args) -> Result<()> {
             r.parts,
             r.genus
         );
+        let marched = if r.march_cell_mm != r.cell_mm {
+            format!(" (marched at {} mm)", lamina::text::num(r.march_cell_mm))
+        } else {
+            String::new()
+        };
         outln!(
-            "  {:.1} × {:.1} × {:.1} mm, volume {:.1} mm³ ({:.3} mL), cell {} mm, scale {:.4}",
+            "  {:.1} × {:.1} × {:.1} mm, volume {:.1} mm³ ({:.3} mL), cell {} mm{marched}, scale \
+             {:.4}",
             size[0],
             size[1],
             size[2],

@@ -43,7 +43,9 @@ pub struct Shape {
 /// How the solid is meshed. `Default` is the command's defaults.
 #[derive(Clone, Debug)]
 pub struct Options {
-    /// Grid cell of the mesher, mm. Default: the DMP-SL pixel, 0.035.
+    /// Grid cell of the mesher, mm. Default: the DMP-SL pixel, 0.035. With `tolerance` the mesh
+    /// is marched at twice the cell when every piece is at least four cells thick and no supports
+    /// are added (split as fine where veins come close; the report's `march_cell_mm`).
     pub cell: f64,
     /// Simplify to within this of the exact surface, mm. Default: every marched triangle kept.
     pub tolerance: Option<f64>,

@@ -28,8 +28,6 @@ use crate::mesh::TriMesh;
 
 mod adapt;
 
-pub use adapt::FINEST;
-
 /// Cells per brick side.
 const B: usize = 8;
 /// Points per brick side.
@@ -129,15 +127,15 @@ pub struct Marched {
     pub crotch_ends: usize,
 }
 
-/// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance), cells where
-/// a gap between veins, or the narrow crotch between two that meet at a sharp angle, may be
-/// narrower than the grid are split finer until no tetrahedron bridges it by more than the
-/// tolerance allows (`adapt`). `progress` counts bricks as they finish (from several threads)
+/// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance and the finest
+/// split, as cells per grid cell along a side), cells where a gap between veins, or the narrow
+/// crotch between two that meet at a sharp angle, may be narrower than the grid are split finer
+/// until no tetrahedron bridges it by more than the tolerance allows (`adapt`). `progress` counts bricks as they finish (from several threads)
 /// and stops the meshing with `MarchError::Cancelled` when asked: the bricks left are skipped.
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,
-    gaps: Option<f64>,
+    gaps: Option<(f64, u32)>,
     progress: &dyn crate::stage::Progress,
 ) -> Result<(TriMesh, Marched), MarchError> {
     let band = 2.0 * h;
@@ -231,7 +229,7 @@ pub fn mesh_union(
                 .iter()
                 .map(|&p| &prims[p as usize])
                 .collect();
-            let b = evaluate(&grid, *key, &own, band, gaps);
+            let b = evaluate(&grid, *key, &own, band, gaps.map(|(tol, _)| tol));
             tick();
             b
         })
@@ -255,14 +253,14 @@ pub fn mesh_union(
     // Where veins come close: bisected tetrahedra replace those cells' own.
     let mut marched = Marched::default();
     let mut fine: Option<Split> = None;
-    if let Some(tol) = gaps {
+    if let Some(split) = gaps {
         let field = GridField {
             groups: &groups,
             members: &members,
             bricks: &bricks,
             keys: &keys,
         };
-        let mut refine = adapt::Adapt::new(&grid, prims, &field, band, tol);
+        let mut refine = adapt::Adapt::new(&grid, prims, &field, band, split);
         for b in &bricks {
             let base = unpack(b.key).map(|c| c * B);
             for &c in &b.close {

@@ -37,13 +37,16 @@
 //! tetrahedron: the marched mesh bridges the gap between them (the report's genus says so).
 //!
 //! The mesh is as fine as the cell everywhere, flat lamina included: a 50 mm leaf with its
-//! lamina is millions of triangles. With `tolerance` the grid is first split finer where the
-//! marched mesh would miss by more than the tolerance allows: gaps between veins that do not
-//! touch, sharp crotches where veins meet, chords on the wrong side (`march::adapt`, down to
-//! 1/16 of the cell); then the mesh is refined where chords cut creases, simplified by edge
-//! collapse within that distance of the exact surface (`simplify`), and every triangle is
-//! checked whole at the end, with a proof either way (`simplify`'s last check). Measured by `validators/check_hausdorff.py`: the 12,700-node leaf
-//! at 50 mm, 14.4 M marched triangles → 257 k in 79–81 s and 1.30 GiB (BENCHMARKS.md).
+//! lamina is millions of triangles. With `tolerance` the grid is twice the cell when every
+//! piece is at least four cells thick and no supports are added (`COARSE`), and it is first
+//! split finer where the marched mesh would miss by more than the tolerance allows: gaps
+//! between veins that do not touch, sharp crotches where veins meet, chords on the wrong side
+//! (`march::adapt`, down to 1/16 of the cell whatever the grid); then the mesh is refined where
+//! chords cut creases, simplified by edge collapse within that distance of the exact surface
+//! (`simplify`), and every triangle is checked whole at the end, with a proof either way
+//! (`simplify`'s last check). The 12,700-node leaf at 50 mm: 4.59 M marched triangles → 282 k
+//! in 52 s and 1.32 GB (14.4 M → 257 k in 147 s marched at the cell, on the same host), within
+//! the tolerance by `validators/check_hausdorff.py` (BENCHMARKS.md).
 //!
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
 //! so both put the solid on the same pixels.
@@ -72,6 +75,17 @@ const MAX_TRIANGLES: f64 = 6e7;
 
 /// The default cell: the DMP-SL printer's pixel, mm.
 pub const DEFAULT_CELL: f64 = 0.035;
+/// The compact mesh (`tolerance`) is marched on a grid `COARSE` times the cell when every piece
+/// is at least twice that grid's cell thick (`Primitive::half_thickness`), and `march::adapt`
+/// splits it as much finer where it must (`FINEST` · `COARSE` cells per marched cell), so the
+/// narrowest gap told apart is the same: a quarter of the triangles to march and simplify (the
+/// 12,700-node leaf at 50 mm: 147 s → about 50 s), the tolerance held as before. Not with
+/// supports: where a tree's pillars stand on their discs on the plate, the finishing steps
+/// left vertices there that an STL's 32-bit floats merge (as they do at `cell` 0.1 mm and
+/// `tolerance` 0.0125 mm, an eighth of the grid, without this).
+const COARSE: u32 = 2;
+/// How much finer than the cell `march::adapt` splits, along a side.
+const FINEST: u32 = 16;
 
 #[derive(Clone, Debug)]
 pub struct SolidOptions {
@@ -196,6 +210,12 @@ pub struct Solid {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SolidReport {
     pub cell_mm: f64,
+    /// The grid the mesh was marched on: the cell, or `COARSE` times it for the compact mesh
+    /// where every vein is that thick, split down to `finest_split_mm` where veins come close.
+    pub march_cell_mm: f64,
+    /// The finest split of the marching grid where veins come close, mm (0 for the full mesh,
+    /// which is not split).
+    pub finest_split_mm: f64,
     /// Factor the network was scaled by (`--fit`), 1 otherwise.
     pub scale: f64,
     pub vertices: usize,
@@ -461,7 +481,20 @@ pub fn solid_of(
             cell: opts.cell,
         });
     }
-    let (mut mesh, marched) = march::mesh_union(&prims, opts.cell, opts.tolerance, progress)?;
+    // Every piece counts: a lamina or a base may be thinner than the veins.
+    let thinnest = prims
+        .iter()
+        .map(Primitive::half_thickness)
+        .fold(f64::INFINITY, f64::min);
+    let coarse =
+        opts.tolerance.is_some() && added == 0 && thinnest >= f64::from(COARSE) * opts.cell;
+    let (march_cell, finest) = if coarse {
+        (f64::from(COARSE) * opts.cell, COARSE * FINEST)
+    } else {
+        (opts.cell, FINEST)
+    };
+    let gaps = opts.tolerance.map(|tol| (tol, finest));
+    let (mut mesh, marched) = march::mesh_union(&prims, march_cell, gaps, progress)?;
     if mesh.triangles.is_empty() {
         let thickest = ends.iter().flatten().copied().fold(0.0, f64::max);
         return Err(SolidError::Vanished {
@@ -489,9 +522,9 @@ pub fn solid_of(
     let simplified = match opts.tolerance {
         None => None,
         Some(tol) => {
-            let field = simplify::Field::new(&prims, opts.cell + 4.0 * tol);
+            let field = simplify::Field::new(&prims, march_cell + 4.0 * tol);
             // A marched edge spans at most a cell's diagonal.
-            let spacing = 3f64.sqrt() * opts.cell;
+            let spacing = 3f64.sqrt() * march_cell;
             // The plate, in the shapes' frame: placed z = 0 (+y stands up when upright).
             let floor = (if opts.upright { 1 } else { 2 }, -shift.z);
             let mut done = simplify::simplify(
@@ -540,12 +573,11 @@ pub fn solid_of(
     }
     if let Some(s) = simplified.as_ref().filter(|s| s.gaps_left > 0) {
         warnings.push(format!(
-            "{} places still join veins that do not touch (tetrahedra at the finest split, 1/{} \
-             of the cell, or cells past the splitting budget): there the mesh bridges a gap \
-             narrower than about {:.2} µm or one not looked at",
+            "{} places still join veins that do not touch (tetrahedra at the finest split, {:.2} \
+             µm, or cells past the splitting budget): there the mesh bridges a gap narrower \
+             than about that or one not looked at",
             s.gaps_left,
-            march::FINEST,
-            1000.0 * opts.cell / march::FINEST as f64
+            1000.0 * march_cell / f64::from(finest)
         ));
     }
     let genus = topo.genus.unwrap_or(0);
@@ -572,6 +604,11 @@ pub fn solid_of(
     }
     let report = SolidReport {
         cell_mm: opts.cell,
+        march_cell_mm: march_cell,
+        finest_split_mm: match opts.tolerance {
+            Some(_) => march_cell / f64::from(finest),
+            None => 0.0,
+        },
         cavities_filled: cavities,
         scale,
         vertices: mesh.positions.len(),
@@ -800,6 +837,61 @@ mod tests {
             assert!((height - 5.0).abs() < 0.1, "z {z}: height {height}");
             assert_eq!((made.report.parts, made.report.genus), (1, 0));
         }
+    }
+
+    /// Seven pairs of bars of radius `r` along x, each pair's two `gap` mm apart, the pairs
+    /// 1 mm apart in z and shifted in y by sevenths of 0.1 mm, so that grid points of cells up
+    /// to that size fall on both sides of some of the gaps.
+    fn bar_pairs(r: f64, gap: f64) -> Network {
+        let node = |x: f64, y: f64, z: f64| Node {
+            p: DVec3::new(x, y, z),
+            normal: None,
+            radius: r,
+        };
+        let mut net = Network::default();
+        for k in 0..7 {
+            let (y, z) = (0.1 * k as f64 / 7.0, (2.0 * r + 1.0) * k as f64);
+            for y in [y, y + 2.0 * r + gap] {
+                let a = net.nodes.len() as u32;
+                net.nodes.push(node(0.0, y, z));
+                net.nodes.push(node(3.0, y, z));
+                net.edges.push(Edge {
+                    a,
+                    b: a + 1,
+                    radius: r,
+                });
+            }
+        }
+        net
+    }
+
+    #[test]
+    fn the_compact_mesh_is_marched_coarser_where_the_veins_allow_and_tells_gaps_apart_as_finely() {
+        let cell = 0.05;
+        let at = |net: &Network, tolerance: Option<f64>| {
+            let opts = SolidOptions {
+                cell,
+                tolerance,
+                ..Default::default()
+            };
+            solid(net, &opts, &crate::stage::Quiet).unwrap().report
+        };
+        // Veins 0.2 mm in radius, 5 µm apart: the compact mesh marches at 0.1 mm and splits
+        // down to 0.1 / 32 mm, so every pair stays apart; marching at 0.05 mm unsplit
+        // (`--full`) bridges some of the gaps.
+        let bars = bar_pairs(0.2, 0.005);
+        let compact = at(&bars, Some(cell / 4.0));
+        assert_eq!(compact.march_cell_mm, 2.0 * cell);
+        assert!((compact.finest_split_mm - cell / 16.0).abs() < 1e-12);
+        assert_eq!((compact.parts, compact.network_parts), (14, 14));
+        let full = at(&bars, None);
+        assert_eq!((full.march_cell_mm, full.finest_split_mm), (cell, 0.0));
+        assert!(full.parts < 14, "marching at the cell bridges 5 µm gaps");
+        // Veins thinner than twice the cell: marched at the cell.
+        let thin = at(&bar_pairs(0.08, 0.005), Some(cell / 4.0));
+        assert_eq!(thin.march_cell_mm, cell);
+        assert!((thin.finest_split_mm - cell / 16.0).abs() < 1e-12);
+        assert_eq!(thin.parts, 14);
     }
 
     #[test]

@@ -36,6 +36,16 @@ impl Primitive {
         }
     }
 
+    /// Half the piece's least thickness: a cone's lesser end radius, a cylinder's radius or half
+    /// its height, half a prism's height (its outline may be narrower still).
+    pub fn half_thickness(&self) -> f64 {
+        match self {
+            Primitive::Cone(c) => c.ra.min(c.rb),
+            Primitive::Prism(s) => 0.5 * (s.z1 - s.z0).abs(),
+            Primitive::Cylinder(c) => c.radius.min(0.5 * c.height.abs()),
+        }
+    }
+
     /// Signed distance at `p`; values beyond `reach` may be reported as `±reach` (the sign is
     /// always right).
     pub fn eval(&self, p: DVec3, reach: f64) -> f64 {

@@ -619,7 +619,8 @@ pub struct Simplified {
     /// tolerance, or a triangle lower (`spread`), and such triangles left at the end.
     pub pushed_apart: usize,
     pub slivers_left: usize,
-    /// Tetrahedra that still bridged such a gap at the finest split (1/16 of the cell).
+    /// Tetrahedra that still bridged such a gap at the finest split
+    /// (`SolidReport::finest_split_mm`).
     pub gaps_left: usize,
     /// Tetrahedra at the finest split still spanning the very end of a sharp crotch (which
     /// narrows to nothing where two veins meet) by more than half the tolerance.

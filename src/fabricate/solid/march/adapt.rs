@@ -26,7 +26,7 @@
 //! a face two tetrahedra share.
 //!
 //! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
-//! `eps / SCALE` below zero.
+//! `eps / FINE_EPS` below zero.
 
 use glam::DVec3;
 
@@ -38,13 +38,16 @@ use crate::fabricate::solid::sdf::{golden, Primitive};
 pub(super) type Pt = [i64; 3];
 
 /// Bisections are possible down to cells `1 / SCALE` of the grid's. Three cuts halve a cell, so
-/// `LEVELS` cuts reach 1/16 of the grid cell (2.2 µm at 35 µm); `SCALE` leaves room for the
-/// few extra cuts that keeping neighbours matched can ask.
-pub(super) const SCALE: i64 = 64;
-const LEVELS: u8 = 12;
-/// The finest split, as cells per grid cell along a side: `2^(LEVELS / 3)`.
-pub const FINEST: usize = 1 << (LEVELS / 3);
-/// The most tetrahedra made (about 300 bytes each with their edges and corners); past it no
+/// `3 log2(finest)` cuts reach `1 / finest` of the grid cell (16: 2.2 µm at 35 µm; 32 at 70
+/// µm, as fine); `SCALE` leaves room for the few extra cuts that keeping neighbours matched can
+/// ask.
+pub(super) const SCALE: i64 = 256;
+/// The finest split `Adapt` may be asked for, as cells per grid cell along a side.
+pub const MAX_FINEST: u32 = 32;
+/// Finer corners than the grid's count as inside this many times closer to zero than grid
+/// corners (`eps_at`).
+const FINE_EPS: f64 = 64.0;
+/// The most tetrahedra made (about 200 bytes each with their edges and corners); past it no
 /// more cells are brought in and no more bisected, and what is left is counted.
 const MAX_TETS: usize = 6_000_000;
 
@@ -73,6 +76,11 @@ pub(super) struct Tet {
     pub alive: bool,
 }
 
+/// Two corner numbers as one key, the lower first.
+fn pair(a: u32, b: u32) -> u64 {
+    (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
+}
+
 fn edge_key(a: Pt, b: Pt) -> (Pt, Pt) {
     if a <= b {
         (a, b)
@@ -99,7 +107,13 @@ pub(super) struct Adapt<'a, F: Field> {
     eps: f64,
     samples: QuickMap<Pt, Sample>,
     pub tets: Vec<Tet>,
-    edges: QuickMap<(Pt, Pt), Vec<u32>>,
+    /// Each corner's number, for `edges`.
+    ids: QuickMap<Pt, u32>,
+    /// The live tetrahedra around each edge, by its corners' numbers (`pair`): two u32 keys
+    /// instead of two points take half the memory of the largest map here.
+    edges: QuickMap<u64, Vec<u32>>,
+    /// Cuts down to the finest split: `3 log2(finest)`.
+    levels: u8,
     pub cells: QuickSet<[usize; 3]>,
     work: Vec<u32>,
     /// Pairs of pieces told apart (a gap between them) or not.
@@ -113,8 +127,17 @@ pub(super) struct Adapt<'a, F: Field> {
 }
 
 impl<'a, F: Field> Adapt<'a, F> {
-    pub fn new(grid: &'a Grid, prims: &'a [Primitive], field: &'a F, band: f64, tol: f64) -> Self {
+    /// Splits down to `1 / finest` of the grid's cell (a power of two, at most `MAX_FINEST`).
+    pub fn new(
+        grid: &'a Grid,
+        prims: &'a [Primitive],
+        field: &'a F,
+        band: f64,
+        (tol, finest): (f64, u32),
+    ) -> Self {
+        let finest = finest.clamp(1, MAX_FINEST).next_power_of_two();
         Adapt {
+            levels: 3 * finest.trailing_zeros() as u8,
             grid,
             tol,
             prims,
@@ -123,6 +146,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             eps: 0.01 * grid.h,
             samples: QuickMap::default(),
             tets: Vec::new(),
+            ids: QuickMap::default(),
             edges: QuickMap::default(),
             cells: QuickSet::default(),
             work: Vec::new(),
@@ -158,7 +182,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         if p.iter().all(|c| c % SCALE == 0) {
             self.eps
         } else {
-            self.eps / SCALE as f64
+            self.eps / FINE_EPS
         }
     }
 
@@ -205,13 +229,20 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
     }
 
+    /// The key of the edge from `a` to `b` in `edges`, numbering new corners.
+    fn edge_id(&mut self, a: Pt, b: Pt) -> u64 {
+        let next = self.ids.len() as u32;
+        let a = *self.ids.entry(a).or_insert(next);
+        let next = self.ids.len() as u32;
+        let b = *self.ids.entry(b).or_insert(next);
+        pair(a, b)
+    }
+
     fn add(&mut self, t: Tet) {
         let id = self.tets.len() as u32;
         for (a, b) in pairs() {
-            self.edges
-                .entry(edge_key(t.v[a], t.v[b]))
-                .or_default()
-                .push(id);
+            let key = self.edge_id(t.v[a], t.v[b]);
+            self.edges.entry(key).or_default().push(id);
         }
         self.tets.push(t);
         self.work.push(id);
@@ -222,8 +253,12 @@ impl<'a, F: Field> Adapt<'a, F> {
         t.alive = false;
         let v = t.v;
         for (a, b) in pairs() {
-            if let Some(list) = self.edges.get_mut(&edge_key(v[a], v[b])) {
+            let key = self.edge_id(v[a], v[b]);
+            if let Some(list) = self.edges.get_mut(&key) {
                 list.retain(|&u| u != id);
+                if list.is_empty() {
+                    self.edges.remove(&key);
+                }
             }
         }
     }
@@ -278,7 +313,10 @@ impl<'a, F: Field> Adapt<'a, F> {
                 self.bring([0, 1, 2].map(|a| g[a] - o[a]));
             }
         }
-        self.edges.get(&e).cloned().unwrap_or_default()
+        match (self.ids.get(&p), self.ids.get(&q)) {
+            (Some(&a), Some(&b)) => self.edges.get(&pair(a, b)).cloned().unwrap_or_default(),
+            _ => Vec::new(),
+        }
     }
 
     fn bisect(&mut self, id: u32) -> Result<(), MarchError> {
@@ -340,7 +378,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             let Some(why) = self.bridges(id) else {
                 continue;
             };
-            if t.level >= LEVELS || self.tets.len() > MAX_TETS {
+            if t.level >= self.levels || self.tets.len() > MAX_TETS {
                 match why {
                     Bridge::Gap => self.left += 1,
                     Bridge::Shape => self.crotches += 1,
@@ -584,7 +622,7 @@ mod tests {
             h: 1.0,
             points: [10, 10, 10],
         };
-        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0, 0.25);
+        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0, (0.25, 16));
         adapt.bring([4, 4, 4]);
         let mut seed = 7u64;
         for _ in 0..400 {
