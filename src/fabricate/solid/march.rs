@@ -276,8 +276,9 @@ pub fn mesh_union(
         // Only cells something was cut in count as refined.
         let mut cut: QuickSet<[usize; 3]> = QuickSet::default();
         for t in refine.tets.iter().filter(|t| t.alive) {
-            if t.v.iter().any(|p| adapt::grid_point(*p).is_none()) {
-                let lo = [0, 1, 2].map(|a| t.v.iter().map(|p| p[a]).min().unwrap_or(0));
+            let v = refine.corners(t);
+            if v.iter().any(|p| adapt::grid_point(*p).is_none()) {
+                let lo = [0, 1, 2].map(|a| v.iter().map(|p| p[a]).min().unwrap_or(0));
                 cut.insert(lo.map(|c| (c / adapt::SCALE) as usize));
             }
         }
@@ -396,8 +397,9 @@ fn fine_triangles<F: adapt::Field>(
         if !t.alive {
             continue;
         }
+        let v = refine.corners(&t);
         let mut mask = 0usize;
-        for (i, &p) in t.v.iter().enumerate() {
+        for (i, &p) in v.iter().enumerate() {
             if refine.inside(p) {
                 mask |= 1 << i;
             }
@@ -405,10 +407,10 @@ fn fine_triangles<F: adapt::Field>(
         if mask == 0 || mask == 15 {
             continue;
         }
-        for tri in cases_at(&t.v, mask) {
+        for tri in cases_at(&v, mask) {
             let mut ids = [0u32; 3];
             for (slot, &[i, j]) in ids.iter_mut().zip(&tri) {
-                let (p, q) = (t.v[i as usize], t.v[j as usize]);
+                let (p, q) = (v[i as usize], v[j as usize]);
                 *slot = if let Some((lo, dir)) = adapt::grid_edge(p, q) {
                     grid_vertex((bricks, keys, offsets), usize::MAX, lo, dir)?
                 } else {

@@ -70,7 +70,8 @@ struct Sample {
 
 #[derive(Clone, Copy)]
 pub(super) struct Tet {
-    pub v: [Pt; 4],
+    /// The corners, by number (`Adapt::corners` gives the points): 16 bytes instead of 96.
+    n: [u32; 4],
     tag: u8,
     level: u8,
     pub alive: bool,
@@ -107,8 +108,9 @@ pub(super) struct Adapt<'a, F: Field> {
     eps: f64,
     samples: QuickMap<Pt, Sample>,
     pub tets: Vec<Tet>,
-    /// Each corner's number, for `edges`.
+    /// Each corner's number, and the corners by number.
     ids: QuickMap<Pt, u32>,
+    pts: Vec<Pt>,
     /// The live tetrahedra around each edge, by its corners' numbers (`pair`): two u32 keys
     /// instead of two points take half the memory of the largest map here.
     edges: QuickMap<u64, Vec<u32>>,
@@ -147,6 +149,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             samples: QuickMap::default(),
             tets: Vec::new(),
             ids: QuickMap::default(),
+            pts: Vec::new(),
             edges: QuickMap::default(),
             cells: QuickSet::default(),
             work: Vec::new(),
@@ -229,19 +232,25 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
     }
 
-    /// The key of the edge from `a` to `b` in `edges`, numbering new corners.
-    fn edge_id(&mut self, a: Pt, b: Pt) -> u64 {
-        let next = self.ids.len() as u32;
-        let a = *self.ids.entry(a).or_insert(next);
-        let next = self.ids.len() as u32;
-        let b = *self.ids.entry(b).or_insert(next);
-        pair(a, b)
+    /// Corner `p`'s number, numbering it if new.
+    fn number(&mut self, p: Pt) -> u32 {
+        let next = self.pts.len() as u32;
+        let n = *self.ids.entry(p).or_insert(next);
+        if n == next {
+            self.pts.push(p);
+        }
+        n
+    }
+
+    /// Tetrahedron `t`'s corners.
+    pub fn corners(&self, t: &Tet) -> [Pt; 4] {
+        t.n.map(|i| self.pts[i as usize])
     }
 
     fn add(&mut self, t: Tet) {
         let id = self.tets.len() as u32;
         for (a, b) in pairs() {
-            let key = self.edge_id(t.v[a], t.v[b]);
+            let key = pair(t.n[a], t.n[b]);
             self.edges.entry(key).or_default().push(id);
         }
         self.tets.push(t);
@@ -251,9 +260,9 @@ impl<'a, F: Field> Adapt<'a, F> {
     fn kill(&mut self, id: u32) {
         let t = &mut self.tets[id as usize];
         t.alive = false;
-        let v = t.v;
+        let n = t.n;
         for (a, b) in pairs() {
-            let key = self.edge_id(v[a], v[b]);
+            let key = pair(n[a], n[b]);
             if let Some(list) = self.edges.get_mut(&key) {
                 list.retain(|&u| u != id);
                 if list.is_empty() {
@@ -283,8 +292,9 @@ impl<'a, F: Field> Adapt<'a, F> {
                 let o = corner(code);
                 [0, 1, 2].map(|a| (c[a] + o[a]) as i64 * SCALE)
             });
+            let n = v.map(|p| self.number(p));
             self.add(Tet {
-                v,
+                n,
                 tag: 3,
                 level: 0,
                 alive: true,
@@ -294,7 +304,8 @@ impl<'a, F: Field> Adapt<'a, F> {
 
     fn cut_edge(&self, id: u32) -> (Pt, Pt) {
         let t = &self.tets[id as usize];
-        edge_key(t.v[0], t.v[t.tag as usize])
+        let v = self.corners(t);
+        edge_key(v[0], v[t.tag as usize])
     }
 
     /// The live tetrahedra holding edge `e`, bringing in the cells around it if it is a grid
@@ -322,7 +333,8 @@ impl<'a, F: Field> Adapt<'a, F> {
     fn bisect(&mut self, id: u32) -> Result<(), MarchError> {
         let t = self.tets[id as usize];
         let k = t.tag as usize;
-        let (a, b) = (t.v[0], t.v[k]);
+        let v = self.corners(&t);
+        let (a, b) = (v[0], v[k]);
         if (0..3).any(|i| (a[i] + b[i]) % 2 != 0) {
             return Err(MarchError::Internal(
                 "a tetrahedron was cut finer than the fine grid".into(),
@@ -330,15 +342,16 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
         let z = [0, 1, 2].map(|i| (a[i] + b[i]) / 2);
         let tag = if k == 1 { 3 } else { t.tag - 1 };
-        let mut first = t.v;
-        first[k] = z;
-        let mut second = t.v;
-        second[..k].copy_from_slice(&t.v[1..=k]);
-        second[k] = z;
+        let zn = self.number(z);
+        let mut first = t.n;
+        first[k] = zn;
+        let mut second = t.n;
+        second[..k].copy_from_slice(&t.n[1..=k]);
+        second[k] = zn;
         self.kill(id);
-        for v in [first, second] {
+        for n in [first, second] {
             self.add(Tet {
-                v,
+                n,
                 tag,
                 level: t.level + 1,
                 alive: true,
@@ -393,7 +406,7 @@ impl<'a, F: Field> Adapt<'a, F> {
     /// Whether the inside of tetrahedron `id`, as marching makes it (one piece, the hull of its
     /// inside corners and crossings), holds points outside the union that matter, and why.
     fn bridges(&mut self, id: u32) -> Option<Bridge> {
-        let v = self.tets[id as usize].v;
+        let v = self.corners(&self.tets[id as usize]);
         let s: Vec<Sample> = v.iter().map(|&p| self.sample(p).clone()).collect();
         let ins: Vec<usize> = (0..4).filter(|&i| s[i].inside).collect();
         if ins.is_empty() {
@@ -638,9 +651,10 @@ mod tests {
         let mut faces: QuickMap<[Pt; 3], usize> = QuickMap::default();
         let mut total = 0i128;
         for t in adapt.tets.iter().filter(|t| t.alive) {
-            total += volume(&t.v);
+            let v = adapt.corners(t);
+            total += volume(&v);
             for skip in 0..4 {
-                let mut f: Vec<Pt> = (0..4).filter(|&i| i != skip).map(|i| t.v[i]).collect();
+                let mut f: Vec<Pt> = (0..4).filter(|&i| i != skip).map(|i| v[i]).collect();
                 f.sort();
                 *faces.entry([f[0], f[1], f[2]]).or_default() += 1;
             }
