@@ -47,7 +47,7 @@ pub const MAX_FINEST: u32 = 32;
 /// Finer corners than the grid's count as inside this many times closer to zero than grid
 /// corners (`eps_at`).
 const FINE_EPS: f64 = 64.0;
-/// The most tetrahedra made (about 200 bytes each with their edges and corners); past it no
+/// The most tetrahedra made (about 120 bytes each with their edges and corners); past it no
 /// more cells are brought in and no more bisected, and what is left is counted.
 const MAX_TETS: usize = 6_000_000;
 
