@@ -86,7 +86,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::quick::Quick;
+use super::quick::{Quick, QuickSet};
 use super::sdf::Primitive;
 use crate::mesh::TriMesh;
 
@@ -731,7 +731,8 @@ pub fn simplify(
         }
     };
     at_floor(mesh);
-    let (fitted, fit_put_back) = fit_held(mesh, field, bounds, tol, &at_floor);
+    let mut proofs = Proofs::new(tol);
+    let (fitted, fit_put_back) = fit_held(mesh, field, bounds, &at_floor, &mut proofs);
     if progress.cancelled() {
         return None;
     }
@@ -744,7 +745,7 @@ pub fn simplify(
             clock.elapsed().as_secs_f64()
         );
     }
-    let mut unheld = touch_up(mesh, field, tol);
+    let mut unheld = touch_up(mesh, field, tol, &mut proofs);
     // What fitting and the last check's splits made short, low or flat: tidied or pushed
     // apart, and checked again.
     let (mut collapsed, mut flipped) = (collapsed, flipped);
@@ -758,7 +759,7 @@ pub fn simplify(
         flipped += f;
         pushed_apart += pushed;
         at_floor(mesh);
-        unheld = touch_up(mesh, field, tol);
+        unheld = touch_up(mesh, field, tol, &mut proofs);
     }
     let slivers_left = defects(mesh, COINCIDENT * tol, &across(mesh)).1;
     // What the last check's splits put below the plate by a rounding.
@@ -882,21 +883,13 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
 /// midpoints and centres; one lying on a vein across a thinner one), has its longest edge and
 /// each edge whose midpoint is not near split at the surface, for up to `TOUCH_ROUNDS` rounds.
 /// Returns how many triangles are still off.
-fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
-    let limit = proof_limit(mesh, tol);
+fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64, proofs: &mut Proofs) -> usize {
     let step = 0.01 * tol;
     for round in 0..=TOUCH_ROUNDS {
+        let bad = check_triangles(mesh, field, proofs, &|_| true);
+        let limit = proofs.limit;
         let positions = &mesh.positions;
         let corners = |t: &[u32; 3]| t.map(|v| positions[v as usize]);
-        let bad: Vec<[u32; 3]> = mesh
-            .triangles
-            .par_iter()
-            .map_init(Vec::new, |near, t| {
-                let p = corners(t);
-                (field.off(&p, limit, near) || field.deep(&p, limit, near)).then_some(*t)
-            })
-            .flatten()
-            .collect();
         if bad.is_empty() || round == TOUCH_ROUNDS {
             return bad.len();
         }
@@ -924,14 +917,93 @@ fn touch_up(mesh: &mut TriMesh, field: &Field, tol: f64) -> usize {
     0
 }
 
-/// The tolerance the last check proves: `tol` less room for the rounding of vertices to 32-bit
-/// floats (two units in the last place).
-fn proof_limit(mesh: &TriMesh, tol: f64) -> f64 {
-    let extent = mesh
-        .positions
-        .iter()
-        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    tol - 2.0 * extent * f64::from(f32::EPSILON)
+/// Triangles the last check has proven within its limit, by their corners' bits: one whose
+/// corners have not moved since needs no second proof (`fit_held` and each round of
+/// `touch_up` look only at what moved or was cut).
+///
+/// The limit is `tol` less room for the rounding of vertices to 32-bit floats (two units in
+/// the last place) at an extent a little past the mesh's; should the mesh reach further, the
+/// limit tightens to match and the proofs are dropped.
+struct Proofs {
+    tol: f64,
+    extent: f64,
+    limit: f64,
+    held: QuickSet<[u64; 9]>,
+}
+
+impl Proofs {
+    fn new(tol: f64) -> Proofs {
+        Proofs {
+            tol,
+            extent: 0.0,
+            limit: tol,
+            held: QuickSet::default(),
+        }
+    }
+
+    /// The limit for `mesh` as it is now.
+    fn limit(&mut self, mesh: &TriMesh) -> f64 {
+        let extent = mesh
+            .positions
+            .iter()
+            .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+        if extent > self.extent {
+            self.extent = extent * (1.0 + 1e-3);
+            self.limit = self.tol - 2.0 * self.extent * f64::from(f32::EPSILON);
+            self.held.clear();
+        }
+        self.limit
+    }
+
+    fn key(p: &[DVec3; 3]) -> [u64; 9] {
+        let b = |k: usize| p[k / 3][k % 3].to_bits();
+        std::array::from_fn(b)
+    }
+
+    fn proven(&self, p: &[DVec3; 3]) -> bool {
+        self.held.contains(&Proofs::key(p))
+    }
+}
+
+/// Whether each triangle of `mesh` that `look` picks is off or deep (`Field::off`,
+/// `Field::deep`), unless proven before; those found held are added to the proofs. Returns
+/// the triangles found off, in order.
+fn check_triangles(
+    mesh: &TriMesh,
+    field: &Field,
+    proofs: &mut Proofs,
+    look: &(dyn Fn(&[u32; 3]) -> bool + Sync),
+) -> Vec<[u32; 3]> {
+    let limit = proofs.limit(mesh);
+    let known = &*proofs;
+    let found: Vec<Result<[u64; 9], [u32; 3]>> = mesh
+        .triangles
+        .par_iter()
+        .map_init(Vec::new, |near, t| {
+            let p = mesh.corners(t);
+            if !look(t) || known.proven(&p) {
+                return None;
+            }
+            Some(
+                if field.off(&p, limit, near) || field.deep(&p, limit, near) {
+                    Err(*t)
+                } else {
+                    Ok(Proofs::key(&p))
+                },
+            )
+        })
+        .flatten()
+        .collect();
+    let mut off = Vec::new();
+    for r in found {
+        match r {
+            Ok(key) => {
+                proofs.held.insert(key);
+            }
+            Err(t) => off.push(t),
+        }
+    }
+    off
 }
 
 /// Passes of `fit_held`.
@@ -942,46 +1014,43 @@ const FIT_ROUNDS: usize = 8;
 /// Fits the simplified mesh to the surface on average (`fit`: its vertices lie on the surface
 /// and its chords under a vein by up to the tolerance, so it is smaller than the solid), but
 /// not where that takes a triangle out of the tolerance: after each pass the last check's test
-/// looks at every triangle, and the vertices of one it finds off go back to where they were
-/// (rounds until none does). `floor` is applied after each move. Returns (vertices moved and
+/// looks at every triangle a vertex moved in, and the vertices of one it finds off go back to
+/// where they were (rounds, looking again at the triangles around those, until none is off). `floor` is applied after each move. Returns (vertices moved and
 /// left moved, vertices put back).
 fn fit_held(
     mesh: &mut TriMesh,
     field: &Field,
     bounds: (DVec3, DVec3),
-    tol: f64,
     floor: &dyn Fn(&mut TriMesh),
+    proofs: &mut Proofs,
 ) -> (usize, usize) {
-    let limit = proof_limit(mesh, tol);
     let start = mesh.positions.clone();
     let mut back = vec![false; start.len()];
     for _ in 0..FIT_PASSES {
         let before = mesh.positions.clone();
         super::fit::fit_passes(mesh, field, bounds, 1, &|| false);
         floor(mesh);
+        // The triangles to look at: first those a vertex moved in, then those a vertex was
+        // put back in (the others are as they were when last found held).
+        let mut changed: Vec<bool> = (0..before.len())
+            .map(|v| mesh.positions[v] != before[v])
+            .collect();
         for _ in 0..FIT_ROUNDS {
             let positions = &mesh.positions;
-            let off: Vec<u32> = mesh
-                .triangles
-                .par_iter()
-                .map_init(Vec::new, |near, t| {
-                    if t.iter()
-                        .all(|&v| positions[v as usize] == before[v as usize])
-                    {
-                        return None;
-                    }
-                    let p = t.map(|v| positions[v as usize]);
-                    (field.off(&p, limit, near) || field.deep(&p, limit, near)).then_some(*t)
-                })
-                .flatten()
-                .flatten()
-                .collect();
+            let look = |t: &[u32; 3]| {
+                t.iter().any(|&v| changed[v as usize])
+                    && t.iter()
+                        .any(|&v| positions[v as usize] != before[v as usize])
+            };
+            let off = check_triangles(mesh, field, proofs, &look);
+            changed.iter_mut().for_each(|c| *c = false);
             let mut put = 0;
-            for v in off {
+            for v in off.into_iter().flatten() {
                 let v = v as usize;
                 if mesh.positions[v] != before[v] {
                     mesh.positions[v] = before[v];
                     back[v] = true;
+                    changed[v] = true;
                     put += 1;
                 }
             }
