@@ -45,7 +45,7 @@
 //! chords cut creases, simplified by edge collapse within that distance of the exact surface
 //! (`simplify`), and every triangle is checked whole at the end, with a proof either way
 //! (`simplify`'s last check). The 12,700-node leaf at 50 mm: 4.59 M marched triangles → 282 k
-//! in 74 s, 89 CPU-s and 0.91 GB, against 14.4 M → 257 k in 102 s, 130 CPU-s and 1.44 GB
+//! in 45 s, 68 CPU-s and 0.91 GB, against 14.4 M → 257 k in 67 s, 115 CPU-s and 1.37 GB
 //! marched at the cell, side by side (BENCHMARKS.md).
 //!
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
@@ -79,7 +79,7 @@ pub const DEFAULT_CELL: f64 = 0.035;
 /// is at least twice that grid's cell thick (`Primitive::half_thickness`), and `march::adapt`
 /// splits it as much finer where it must (`FINEST` · `COARSE` cells per marched cell), so the
 /// narrowest gap told apart is the same: a third of the triangles to march and simplify (the
-/// 12,700-node leaf at 50 mm: 130 → 89 CPU-s side by side), the tolerance held as before. Not with
+/// 12,700-node leaf at 50 mm: 115 → 68 CPU-s side by side), the tolerance held as before. Not with
 /// supports: where a tree's pillars stand on their discs on the plate, the finishing steps
 /// left vertices there that an STL's 32-bit floats merge (as they do at `cell` 0.1 mm and
 /// `tolerance` 0.0125 mm, an eighth of the grid, without this).
