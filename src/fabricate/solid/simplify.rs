@@ -1108,7 +1108,9 @@ const SPREAD_ROUNDS: usize = 8;
 /// longest edge in its plane, until the edge or height is half as long again (a move of at
 /// most 3/4 of `COINCIDENT · tol`); the far corner of a triangle folded onto its neighbour
 /// moves off the neighbour's plane to 1.5 `COINCIDENT · tol` (`defects`); unless that turns a
-/// triangle around the vertex by more than 60°; rounds until none is left. The mesh keeps its topology (where a collapse would
+/// triangle around the vertex by more than 60° (one with no area must come out facing as the
+/// vertex's triangles do), when half or a quarter of the move, or as far towards the middle of
+/// the vertex's ring, is tried; rounds until none is left. The mesh keeps its topology (where a collapse would
 /// not: ends with three neighbours in common); the last check follows. Returns (edges and
 /// triangles pushed, those left).
 fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
@@ -1137,7 +1139,13 @@ fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
         let mut made = 0;
         for v in listed {
             // No triangle around it may turn by more than 60°, nor over (a sliver's own
-            // normal is rough: it may turn): else half the move, or a quarter.
+            // normal is rough: it may turn; one with no area, two corners on one point, has
+            // none: it must come out facing as the triangles around the vertex do): else half
+            // the move, or a quarter.
+            let facing: DVec3 = at[v as usize]
+                .iter()
+                .map(|&f| normal(mesh.corners(&mesh.triangles[f as usize])))
+                .sum();
             let keeps = |to: DVec3| {
                 at[v as usize].iter().all(|&f| {
                     let t = mesh.triangles[f as usize];
@@ -1150,16 +1158,30 @@ fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
                         }
                     });
                     let (before, after) = (normal(p), normal(q));
+                    if before == DVec3::ZERO {
+                        return after.dot(facing) > 0.0;
+                    }
                     let lens = before.length() * after.length();
                     let sliver = before.length() < short * short;
                     lens > 0.0 && before.dot(after) >= if sliver { 0.0 } else { 0.5 * lens }
                 })
             };
+            // Else as far towards the middle of its own ring (where two vertices lie on one
+            // point, the way out that keeps each one's own triangles facing out).
             let from = mesh.positions[v as usize];
+            let ring: Vec<DVec3> = at[v as usize]
+                .iter()
+                .flat_map(|&f| mesh.triangles[f as usize])
+                .filter(|&w| w != v)
+                .map(|w| mesh.positions[w as usize])
+                .collect();
+            let middle = ring.iter().sum::<DVec3>() / ring.len().max(1) as f64;
+            let inwards = (middle - from).normalize_or_zero() * step[v as usize].length();
             if let Some(to) = [1.0, 0.5, 0.25]
                 .into_iter()
                 .map(|f| from + f * step[v as usize])
-                .find(|&to| keeps(to))
+                .chain([1.0, 0.5, 0.25].into_iter().map(|f| from + f * inwards))
+                .find(|&to| to != from && keeps(to))
             {
                 mesh.positions[v as usize] = to;
                 made += 1;
@@ -2873,9 +2895,12 @@ mod tests {
             let mid = 0.5 * (p[0] + p[1]);
             mid + ((p[0] + p[1] + p[2]) / 3.0 - mid).normalize() * 1e-6
         };
+        // Exactly on a corner: two vertices on one point, two triangles with no area.
+        let on_corner = |p: [DVec3; 3]| p[0];
         for (name, at) in [
             ("short edge", &near_corner as &dyn Fn([DVec3; 3]) -> DVec3),
             ("sliver", &near_edge),
+            ("one point", &on_corner),
         ] {
             let mut m = split_at(at);
             let volume = m.signed_volume();
