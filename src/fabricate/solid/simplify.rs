@@ -1015,8 +1015,9 @@ const FIT_ROUNDS: usize = 8;
 /// and its chords under a vein by up to the tolerance, so it is smaller than the solid), but
 /// not where that takes a triangle out of the tolerance: after each pass the last check's test
 /// looks at every triangle a vertex moved in, and the vertices of one it finds off go back to
-/// where they were (rounds, looking again at the triangles around those, until none is off). `floor` is applied after each move. Returns (vertices moved and
-/// left moved, vertices put back).
+/// where they were (rounds, looking again at the triangles around those, until none is off).
+/// `floor` is applied after each move. Returns (vertices moved and left moved, vertices put
+/// back).
 fn fit_held(
     mesh: &mut TriMesh,
     field: &Field,
@@ -1110,9 +1111,9 @@ const SPREAD_ROUNDS: usize = 8;
 /// moves off the neighbour's plane to 1.5 `COINCIDENT · tol` (`defects`); unless that turns a
 /// triangle around the vertex by more than 60° (one with no area must come out facing as the
 /// vertex's triangles do), when half or a quarter of the move, or as far towards the middle of
-/// the vertex's ring, is tried; rounds until none is left. The mesh keeps its topology (where a collapse would
-/// not: ends with three neighbours in common); the last check follows. Returns (edges and
-/// triangles pushed, those left).
+/// the vertex's ring, is tried; rounds until none is left. The mesh keeps its topology (where
+/// a collapse would not: ends with three neighbours in common); the last check follows.
+/// Returns (edges and triangles pushed, those left).
 fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
     let short = COINCIDENT * tol;
     let mut pushed = 0;
