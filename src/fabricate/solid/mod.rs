@@ -79,11 +79,11 @@ pub const DEFAULT_CELL: f64 = 0.035;
 /// is at least twice that grid's cell thick (`Primitive::half_thickness`), and `march::adapt`
 /// splits it as much finer where it must (`FINEST` · `COARSE` cells per marched cell), so the
 /// narrowest gap told apart is the same: a third of the triangles to march and simplify (the
-/// 12,700-node leaf at 50 mm: 115 → 68 CPU-s side by side), the tolerance held as before. Not with
-/// supports: where a tree's pillars stood on their discs on the plate, the finishing steps left
-/// pairs of vertices on one point that an STL's 32-bit floats merge (as they did at `cell` 0.1
-/// mm and `tolerance` 0.0125 mm, an eighth of the grid, without this). `spread` now separates
-/// such pairs, but supported solids marched coarser have not been validated yet.
+/// 12,700-node leaf at 50 mm: 115 → 68 CPU-s side by side), the tolerance held as before. Not
+/// with supports: where a tree's pillars stood on their discs on the plate, the finishing steps
+/// left pairs of vertices on one point that an STL's 32-bit floats merge (as they did at `cell`
+/// 0.1 mm and `tolerance` 0.0125 mm, an eighth of the grid, without this). `spread` now
+/// separates such pairs, but supported solids marched coarser have not been validated yet.
 const COARSE: u32 = 2;
 /// How much finer than the cell `march::adapt` splits, along a side.
 const FINEST: u32 = 16;
