@@ -27,10 +27,10 @@ z = 0 (as `solid` places it). Checks:
   --samples of them spread by area, are within T of the mesh (trimesh's closest point);
 - both ways, a point beyond T in a gap between facing veins (outward directions more than
   120 degrees apart) narrower than the mesher's cell diagonal (sqrt(3) x --cell, default the
-  report's march_cell_mm, the grid it marched on, else its cell_mm) fails like any other, and is also counted apart: such a gap can fall between the
-  grid points, where the mesher must look closer (the marched mesh bridges it); with
-  --excuse-gaps those points are reported and not failed (the check before the mesher split
-  cells at gaps);
+  report's march_cell_mm, the grid it marched on, else its cell_mm) fails like any other, and
+  is also counted apart: such a gap can fall between the grid points, where the mesher must
+  look closer (the marched mesh bridges it); with --excuse-gaps those points are reported and
+  not failed (the check before the mesher split cells at gaps);
 - the volume (trimesh) within --volume-tolerance of the exact union's, three standard errors
   of the estimate included: each hull's volume is exact (the frustum of the tangent cone and
   two caps), and points drawn in a box about its axis, one uniformly in each cell of a k^3

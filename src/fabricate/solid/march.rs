@@ -130,8 +130,9 @@ pub struct Marched {
 /// Meshes the union of `prims` on a grid of spacing `h`; with `gaps` (a tolerance and the finest
 /// split, as cells per grid cell along a side), cells where a gap between veins, or the narrow
 /// crotch between two that meet at a sharp angle, may be narrower than the grid are split finer
-/// until no tetrahedron bridges it by more than the tolerance allows (`adapt`). `progress` counts bricks as they finish (from several threads)
-/// and stops the meshing with `MarchError::Cancelled` when asked: the bricks left are skipped.
+/// until no tetrahedron bridges it by more than the tolerance allows (`adapt`). `progress`
+/// counts bricks as they finish (from several threads) and stops the meshing with
+/// `MarchError::Cancelled` when asked: the bricks left are skipped.
 pub fn mesh_union(
     prims: &[Primitive],
     h: f64,

@@ -1268,19 +1268,28 @@ fn defects(mesh: &TriMesh, short: f64, across: &[[u32; 3]]) -> (Vec<(u32, DVec3)
     (moves, count)
 }
 
+/// A directed edge (from, to) as one key.
+fn directed(a: u32, b: u32) -> u64 {
+    (a as u64) << 32 | b as u64
+}
+
+/// Directed edges (`directed`) → the triangle that runs along each.
+fn directed_edges(mesh: &TriMesh) -> HashMap<u64, u32, Quick> {
+    let mut runs = HashMap::with_capacity_and_hasher(mesh.triangles.len() * 3, Quick);
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        for j in 0..3 {
+            runs.insert(directed(t[j], t[(j + 1) % 3]), k as u32);
+        }
+    }
+    runs
+}
+
 /// Each triangle's neighbours: the one across its edge from corner j to corner j + 1, or
 /// `NONE`.
 fn across(mesh: &TriMesh) -> Vec<[u32; 3]> {
-    let key = |a: u32, b: u32| (a as u64) << 32 | b as u64;
-    let mut runs: HashMap<u64, u32, Quick> =
-        HashMap::with_capacity_and_hasher(mesh.triangles.len() * 3, Quick);
-    for (k, t) in mesh.triangles.iter().enumerate() {
-        for j in 0..3 {
-            runs.insert(key(t[j], t[(j + 1) % 3]), k as u32);
-        }
-    }
+    let runs = directed_edges(mesh);
     let next = |t: &[u32; 3], j: usize| {
-        runs.get(&key(t[(j + 1) % 3], t[j]))
+        runs.get(&directed(t[(j + 1) % 3], t[j]))
             .copied()
             .unwrap_or(NONE)
     };
@@ -1569,15 +1578,7 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
 
 /// One pass of flips of the longest edge of triangles lower than `short`; returns how many.
 fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
-    // Directed edges: (from, to) → the triangle that runs along it.
-    let key = |a: u32, b: u32| (a as u64) << 32 | b as u64;
-    let mut edge: HashMap<u64, u32, Quick> =
-        HashMap::with_capacity_and_hasher(mesh.triangles.len() * 3, Quick);
-    for (k, t) in mesh.triangles.iter().enumerate() {
-        for j in 0..3 {
-            edge.insert(key(t[j], t[(j + 1) % 3]), k as u32);
-        }
-    }
+    let mut edge = directed_edges(mesh);
     let mut busy = vec![false; mesh.triangles.len()];
     let mut made = 0;
     for k in 0..mesh.triangles.len() {
@@ -1598,7 +1599,7 @@ fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
             continue;
         }
         // The triangle across it runs b → a.
-        let Some(&o) = edge.get(&key(b, a)) else {
+        let Some(&o) = edge.get(&directed(b, a)) else {
             continue;
         };
         if o as usize == k || busy[o as usize] {
@@ -1611,8 +1612,8 @@ fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
         let new_edge = mesh.positions[c as usize].distance(mesh.positions[d as usize]);
         if d == c
             || new_edge < short
-            || edge.contains_key(&key(c, d))
-            || edge.contains_key(&key(d, c))
+            || edge.contains_key(&directed(c, d))
+            || edge.contains_key(&directed(d, c))
         {
             continue;
         }
@@ -1625,13 +1626,13 @@ fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
         }
         mesh.triangles[k] = new1;
         mesh.triangles[o as usize] = new2;
-        edge.remove(&key(a, b));
-        edge.remove(&key(b, a));
+        edge.remove(&directed(a, b));
+        edge.remove(&directed(b, a));
         for (from, to, tri) in [(a, d, k as u32), (d, c, k as u32), (c, a, k as u32)]
             .into_iter()
             .chain([(d, b, o), (b, c, o), (c, d, o)])
         {
-            edge.insert(key(from, to), tri);
+            edge.insert(directed(from, to), tri);
         }
         busy[k] = true;
         busy[o as usize] = true;
