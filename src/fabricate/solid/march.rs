@@ -251,10 +251,14 @@ pub fn mesh_union(
     }
     let keys: Vec<u64> = bricks.iter().map(|b| b.key).collect();
 
-    // Where veins come close: bisected tetrahedra replace those cells' own.
+    // Where veins come close: bisected tetrahedra replace those cells' own. Bisecting is
+    // sequential: the bricks' own triangles are made beside it, on the other threads, each
+    // cell's apart so that those of the cells it takes can be left out.
     let mut marched = Marched::default();
-    let mut fine: Option<Split> = None;
-    if let Some(split) = gaps {
+    let split_cells = |marched: &mut Marched| -> Result<Option<Split>, MarchError> {
+        let Some(split) = gaps else {
+            return Ok(None);
+        };
         let field = GridField {
             groups: &groups,
             members: &members,
@@ -284,38 +288,47 @@ pub fn mesh_union(
             }
         }
         marched.cells_refined = cut.len();
-        fine = Some(Split {
+        Ok(Some(Split {
             positions,
             triangles: tris,
             cells,
-        });
-    }
-    let (explicit, explicit_bricks) = match &fine {
-        Some(split) => (
-            Some(&split.cells),
-            split
-                .cells
-                .iter()
-                .map(|c| pack(c.map(|x| x / B)))
-                .collect::<QuickSet<u64>>(),
-        ),
-        None => (None, QuickSet::default()),
+        }))
     };
-    let parts: Vec<Result<Vec<[u32; 3]>, MarchError>> = (0..bricks.len())
-        .into_par_iter()
-        .map(|i| {
-            if stop() {
-                return Ok(Vec::new());
-            }
-            let skip = explicit.filter(|_| explicit_bricks.contains(&bricks[i].key));
-            let t = triangles(&bricks, &keys, &offsets, i, skip);
-            tick();
-            t
-        })
-        .collect();
+    let own_triangles = || {
+        (0..bricks.len())
+            .into_par_iter()
+            .map(|i| {
+                if stop() {
+                    return Ok(Cells::default());
+                }
+                let t = triangles(&bricks, &keys, &offsets, i);
+                tick();
+                t
+            })
+            .collect::<Vec<Result<Cells, MarchError>>>()
+    };
+    let (fine, parts) = rayon::join(|| split_cells(&mut marched), own_triangles);
+    let fine = fine?;
     let mut triangles_out = Vec::new();
-    for p in parts {
-        triangles_out.extend(p?);
+    for (b, part) in bricks.iter().zip(parts) {
+        let part = part?;
+        let base = unpack(b.key).map(|c| c * B);
+        match &fine {
+            Some(split) if !split.cells.is_empty() => {
+                for (k, &(c, start)) in part.starts.iter().enumerate() {
+                    let c = c as usize;
+                    let cell = [base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B];
+                    if !split.cells.contains(&cell) {
+                        let end = part
+                            .starts
+                            .get(k + 1)
+                            .map_or(part.triangles.len(), |s| s.1 as usize);
+                        triangles_out.extend_from_slice(&part.triangles[start as usize..end]);
+                    }
+                }
+            }
+            _ => triangles_out.extend(part.triangles),
+        }
     }
     if stopped.load(Ordering::Relaxed) {
         return Err(MarchError::Cancelled);
@@ -770,12 +783,12 @@ fn triangles(
     keys: &[u64],
     offsets: &[usize],
     i: usize,
-    skip: Option<&QuickSet<[usize; 3]>>,
-) -> Result<Vec<[u32; 3]>, MarchError> {
+) -> Result<Cells, MarchError> {
     let brick = &bricks[i];
     let base = unpack(brick.key).map(|c| c * B);
     let table = table();
     let mut out = Vec::new();
+    let mut starts = Vec::new();
     for x in 0..B {
         for y in 0..B {
             for z in 0..B {
@@ -790,9 +803,7 @@ fn triangles(
                     continue;
                 }
                 let cell = [base[0] + x, base[1] + y, base[2] + z];
-                if skip.is_some_and(|s| s.contains(&cell)) {
-                    continue;
-                }
+                starts.push((((x * B + y) * B + z) as u16, out.len() as u32));
                 for (t, tet) in TETS.iter().enumerate() {
                     let m = (0..4).fold(0usize, |m, v| m | (((mask >> tet[v]) & 1) as usize) << v);
                     for tri in &table[t * 16 + m] {
@@ -813,7 +824,18 @@ fn triangles(
             }
         }
     }
-    Ok(out)
+    Ok(Cells {
+        triangles: out,
+        starts,
+    })
+}
+
+/// A brick's marched triangles, cell by cell: each cell that has any (its number in the
+/// brick, x-major) with where its triangles start.
+#[derive(Default)]
+struct Cells {
+    triangles: Vec<[u32; 3]>,
+    starts: Vec<(u16, u32)>,
 }
 
 /// The six Kuhn tetrahedra of a cell as corner codes, each a monotone path from corner 0 to

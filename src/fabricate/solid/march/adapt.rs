@@ -117,6 +117,10 @@ pub(super) struct Adapt<'a, F: Field> {
     /// Cuts down to the finest split: `3 log2(finest)`.
     levels: u8,
     pub cells: QuickSet<[usize; 3]>,
+    /// Each brought-in cell's pieces (in `pool`): those of its brick that can reach a point
+    /// of the cell or its neighbours within `band` (farther ones only ever give `band`).
+    lists: QuickMap<[usize; 3], (u32, u32)>,
+    pool: Vec<u32>,
     work: Vec<u32>,
     /// Pairs of pieces told apart (a gap between them) or not.
     apart: QuickMap<(u32, u32), bool>,
@@ -152,6 +156,8 @@ impl<'a, F: Field> Adapt<'a, F> {
             pts: Vec::new(),
             edges: QuickMap::default(),
             cells: QuickSet::default(),
+            lists: QuickMap::default(),
+            pool: Vec::new(),
             work: Vec::new(),
             apart: QuickMap::default(),
             left: 0,
@@ -171,10 +177,18 @@ impl<'a, F: Field> Adapt<'a, F> {
         })
     }
 
+    /// The pieces that can reach a point of `cell` or its neighbours within `band`: the
+    /// cell's own list if it was brought in, else its brick's.
+    fn pieces(&self, cell: [usize; 3]) -> &[u32] {
+        match self.lists.get(&cell) {
+            Some(&(start, len)) => &self.pool[start as usize..(start + len) as usize],
+            None => self.field.near(cell),
+        }
+    }
+
     /// The exact value at `x`, a point of `cell`.
     pub fn value(&self, x: DVec3, cell: [usize; 3]) -> f64 {
-        self.field
-            .near(cell)
+        self.pieces(cell)
             .iter()
             .map(|&i| self.prims[i as usize].eval(x, self.band))
             .fold(self.band, f64::min)
@@ -196,7 +210,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             let eps = self.eps_at(p);
             let mut f = self.band;
             let mut pieces = Vec::new();
-            for &i in self.field.near(cell) {
+            for &i in self.pieces(cell) {
                 let v = self.prims[i as usize].eval(x, self.band);
                 f = f.min(v);
                 if v <= -eps {
@@ -287,6 +301,19 @@ impl<'a, F: Field> Adapt<'a, F> {
         if (0..3).any(|a| c[a] + 1 >= self.grid.points[a]) || !self.cells.insert(c) {
             return;
         }
+        // Every point a query of this cell looks at (its tetrahedra's, and those of a
+        // neighbour's tetrahedra whose first corner lies on its faces) is within 1.5 cell
+        // diagonals of its centre; the pieces are 1-Lipschitz.
+        let centre = self.position(c.map(|x| x as i64 * SCALE + SCALE / 2));
+        let reach = self.band + 1.5 * 3f64.sqrt() * self.grid.h * (1.0 + 1e-9);
+        let start = self.pool.len() as u32;
+        for &i in self.field.near(c) {
+            if self.prims[i as usize].eval(centre, reach) <= reach {
+                self.pool.push(i);
+            }
+        }
+        self.lists
+            .insert(c, (start, self.pool.len() as u32 - start));
         for tet in &TETS {
             let v = tet.map(|code| {
                 let o = corner(code);
@@ -475,7 +502,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         let half = 0.5 * a.distance(b);
         let centre = a.lerp(b, 0.5);
         let mut spans: Vec<(f64, f64, u32)> = Vec::new();
-        for &i in self.field.near(cell) {
+        for &i in self.pieces(cell) {
             let prim = &self.prims[i as usize];
             // 1-Lipschitz: a piece this far from the centre misses the segment.
             if prim.eval(centre, self.band) > half {
