@@ -106,6 +106,17 @@ fn local(i: usize, j: usize, k: usize) -> usize {
     (i * P + j) * P + k
 }
 
+/// A cell's number within its brick, `(i·B + j)·B + k`.
+fn cell_number(i: usize, j: usize, k: usize) -> u16 {
+    ((i * B + j) * B + k) as u16
+}
+
+/// The grid cell numbered `n` within the brick keyed `key`.
+fn cell_at(key: u64, n: u16) -> [usize; 3] {
+    let (base, n) = (unpack(key).map(|c| c * B), n as usize);
+    [base[0] + n / (B * B), base[1] + n / B % B, base[2] + n % B]
+}
+
 /// Offset of a cell corner from its code: bit 0 x, bit 1 y, bit 2 z.
 fn corner(code: u8) -> [usize; 3] {
     [
@@ -267,10 +278,8 @@ pub fn mesh_union(
         };
         let mut refine = adapt::Adapt::new(&grid, prims, &field, band, split);
         for b in &bricks {
-            let base = unpack(b.key).map(|c| c * B);
             for &c in &b.close {
-                let c = c as usize;
-                refine.look_at([base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B]);
+                refine.look_at(cell_at(b.key, c));
             }
         }
         refine.run()?;
@@ -312,13 +321,10 @@ pub fn mesh_union(
     let mut triangles_out = Vec::new();
     for (b, part) in bricks.iter().zip(parts) {
         let part = part?;
-        let base = unpack(b.key).map(|c| c * B);
         match &fine {
             Some(split) if !split.cells.is_empty() => {
                 for (k, &(c, start)) in part.starts.iter().enumerate() {
-                    let c = c as usize;
-                    let cell = [base[0] + c / (B * B), base[1] + c / B % B, base[2] + c % B];
-                    if !split.cells.contains(&cell) {
+                    if !split.cells.contains(&cell_at(b.key, c)) {
                         let end = part
                             .starts
                             .get(k + 1)
@@ -703,7 +709,7 @@ fn close_cells(
                     }
                 }
                 if apart {
-                    out.push(((i * B + j) * B + k) as u16);
+                    out.push(cell_number(i, j, k));
                 }
             }
         }
@@ -803,7 +809,7 @@ fn triangles(
                     continue;
                 }
                 let cell = [base[0] + x, base[1] + y, base[2] + z];
-                starts.push((((x * B + y) * B + z) as u16, out.len() as u32));
+                starts.push((cell_number(x, y, z), out.len() as u32));
                 for (t, tet) in TETS.iter().enumerate() {
                     let m = (0..4).fold(0usize, |m, v| m | (((mask >> tet[v]) & 1) as usize) << v);
                     for tri in &table[t * 16 + m] {
