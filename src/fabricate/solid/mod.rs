@@ -391,11 +391,11 @@ pub fn shapes(net: &Network, opts: &SolidOptions) -> Result<Shapes, SolidError> 
             });
         }
         let bucket = 8.0 * opts.cell;
-        prims.push(Primitive::Prism(Prism {
+        prims.push(Primitive::Prism(Box::new(Prism {
             outline: Polygon::new(outline.iter().map(|p| *p * scale).collect(), bucket),
             z0: z - t,
             z1: z,
-        }));
+        })));
     }
     let mut widest = vec![0.0f64; n];
     for (e, r) in net.edges.iter().zip(&ends) {

@@ -8,11 +8,13 @@
 
 use glam::{DVec2, DVec3};
 
-/// One solid piece. Its union with the others is the solid.
+/// One solid piece. Its union with the others is the solid. (The prism, one to a solid, is
+/// boxed: a piece is then a cone's 128 bytes, not the prism's 200, and the pieces a query
+/// looks at are fewer cache lines.)
 #[derive(Clone, Debug)]
 pub enum Primitive {
     Cone(RoundCone),
-    Prism(Prism),
+    Prism(Box<Prism>),
     Cylinder(Cylinder),
 }
 

@@ -60,12 +60,76 @@ enum Bridge {
     Shape,
 }
 
-/// What a corner is: its value, its side, and the pieces holding it.
-#[derive(Clone)]
+/// What a corner is: its value, its side, and the pieces holding it (`Adapt::holding`).
+#[derive(Clone, Copy)]
 struct Sample {
     f: f64,
     inside: bool,
-    pieces: Vec<u32>,
+    /// Where its pieces start in `Adapt::holders`, and how many: millions of corners, so one
+    /// pool instead of a list each (whose allocations, and freeing them, cost seconds).
+    start: u32,
+    len: u32,
+}
+
+/// The live tetrahedra around an edge: most edges have at most `AROUND` of them, kept in place
+/// (millions of edges: a list each would cost an allocation each, and freeing them seconds).
+#[derive(Clone)]
+enum Around {
+    Few(u8, [u32; AROUND]),
+    Many(Vec<u32>),
+}
+
+const AROUND: usize = 7;
+
+impl Default for Around {
+    fn default() -> Self {
+        Around::Few(0, [0; AROUND])
+    }
+}
+
+impl Around {
+    fn as_slice(&self) -> &[u32] {
+        match self {
+            Around::Few(n, ids) => &ids[..*n as usize],
+            Around::Many(ids) => ids,
+        }
+    }
+
+    fn push(&mut self, id: u32) {
+        match self {
+            Around::Few(n, ids) if (*n as usize) < AROUND => {
+                ids[*n as usize] = id;
+                *n += 1;
+            }
+            Around::Few(_, ids) => {
+                let mut all = ids.to_vec();
+                all.push(id);
+                *self = Around::Many(all);
+            }
+            Around::Many(ids) => ids.push(id),
+        }
+    }
+
+    /// Takes `id` out, keeping the others' order; whether none is left.
+    fn remove(&mut self, id: u32) -> bool {
+        match self {
+            Around::Few(n, ids) => {
+                let mut kept = 0;
+                for k in 0..*n as usize {
+                    if ids[k] != id {
+                        ids[kept] = ids[k];
+                        kept += 1;
+                    }
+                }
+                *n = kept as u8;
+                kept == 0
+            }
+            Around::Many(ids) => {
+                ids.retain(|&u| u != id);
+                ids.is_empty()
+            }
+        }
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -107,13 +171,15 @@ pub(super) struct Adapt<'a, F: Field> {
     tol: f64,
     eps: f64,
     samples: QuickMap<Pt, Sample>,
+    /// The samples' pieces (`Sample::start`).
+    holders: Vec<u32>,
     pub tets: Vec<Tet>,
     /// Each corner's number, and the corners by number.
     ids: QuickMap<Pt, u32>,
     pts: Vec<Pt>,
     /// The live tetrahedra around each edge, by its corners' numbers (`pair`): two u32 keys
     /// instead of two points take half the memory of the largest map here.
-    edges: QuickMap<u64, Vec<u32>>,
+    edges: QuickMap<u64, Around>,
     /// Cuts down to the finest split: `3 log2(finest)`.
     levels: u8,
     pub cells: QuickSet<[usize; 3]>,
@@ -151,6 +217,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             band,
             eps: 0.01 * grid.h,
             samples: QuickMap::default(),
+            holders: Vec::new(),
             tets: Vec::new(),
             ids: QuickMap::default(),
             pts: Vec::new(),
@@ -203,31 +270,47 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
     }
 
-    fn sample(&mut self, p: Pt) -> &Sample {
-        if !self.samples.contains_key(&p) {
-            let x = self.position(p);
-            let cell = self.cell_of(p);
-            let eps = self.eps_at(p);
-            let mut f = self.band;
-            let mut pieces = Vec::new();
-            for &i in self.pieces(cell) {
-                let v = self.prims[i as usize].eval(x, self.band);
-                f = f.min(v);
-                if v <= -eps {
-                    pieces.push(i);
-                }
-            }
-            let on_grid = p.iter().all(|c| c % SCALE == 0);
-            let inside = on_grid
-                .then(|| self.field.grid_inside(p.map(|c| (c / SCALE) as usize)))
-                .flatten()
-                .unwrap_or(f <= -eps);
-            if !inside {
-                pieces.clear();
-            }
-            self.samples.insert(p, Sample { f, inside, pieces });
+    fn sample(&mut self, p: Pt) -> Sample {
+        if let Some(&s) = self.samples.get(&p) {
+            return s;
         }
-        &self.samples[&p]
+        let x = self.position(p);
+        let cell = self.cell_of(p);
+        let eps = self.eps_at(p);
+        let mut f = self.band;
+        let start = self.holders.len();
+        let list = match self.lists.get(&cell) {
+            Some(&(at, len)) => &self.pool[at as usize..(at + len) as usize],
+            None => self.field.near(cell),
+        };
+        for &i in list {
+            let v = self.prims[i as usize].eval(x, self.band);
+            f = f.min(v);
+            if v <= -eps {
+                self.holders.push(i);
+            }
+        }
+        let on_grid = p.iter().all(|c| c % SCALE == 0);
+        let inside = on_grid
+            .then(|| self.field.grid_inside(p.map(|c| (c / SCALE) as usize)))
+            .flatten()
+            .unwrap_or(f <= -eps);
+        if !inside {
+            self.holders.truncate(start);
+        }
+        let s = Sample {
+            f,
+            inside,
+            start: start as u32,
+            len: (self.holders.len() - start) as u32,
+        };
+        self.samples.insert(p, s);
+        s
+    }
+
+    /// The pieces holding sample `s` (none when it is outside).
+    fn holding(&self, s: &Sample) -> &[u32] {
+        &self.holders[s.start as usize..(s.start + s.len) as usize]
     }
 
     /// Whether fine point `p` counts as inside.
@@ -278,8 +361,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         for (a, b) in pairs() {
             let key = pair(n[a], n[b]);
             if let Some(list) = self.edges.get_mut(&key) {
-                list.retain(|&u| u != id);
-                if list.is_empty() {
+                if list.remove(id) {
                     self.edges.remove(&key);
                 }
             }
@@ -337,7 +419,7 @@ impl<'a, F: Field> Adapt<'a, F> {
 
     /// The live tetrahedra holding edge `e`, bringing in the cells around it if it is a grid
     /// edge.
-    fn around(&mut self, e: (Pt, Pt)) -> Vec<u32> {
+    fn around(&mut self, e: (Pt, Pt)) -> Around {
         let (p, q) = e;
         let d = [0, 1, 2].map(|a| q[a] - p[a]);
         let on_grid = p.iter().chain(&q).all(|c| c % SCALE == 0);
@@ -353,7 +435,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
         match (self.ids.get(&p), self.ids.get(&q)) {
             (Some(&a), Some(&b)) => self.edges.get(&pair(a, b)).cloned().unwrap_or_default(),
-            _ => Vec::new(),
+            _ => Around::default(),
         }
     }
 
@@ -397,11 +479,11 @@ impl<'a, F: Field> Adapt<'a, F> {
         let e = self.cut_edge(id);
         loop {
             let around = self.around(e);
-            if let Some(&u) = around.iter().find(|&&u| self.cut_edge(u) != e) {
+            if let Some(&u) = around.as_slice().iter().find(|&&u| self.cut_edge(u) != e) {
                 self.refine(u, depth + 1)?;
                 continue;
             }
-            for u in around {
+            for &u in around.as_slice() {
                 self.bisect(u)?;
             }
             return Ok(());
@@ -434,7 +516,7 @@ impl<'a, F: Field> Adapt<'a, F> {
     /// inside corners and crossings), holds points outside the union that matter, and why.
     fn bridges(&mut self, id: u32) -> Option<Bridge> {
         let v = self.corners(&self.tets[id as usize]);
-        let s: Vec<Sample> = v.iter().map(|&p| self.sample(p).clone()).collect();
+        let s = v.map(|p| self.sample(p));
         let ins: Vec<usize> = (0..4).filter(|&i| s[i].inside).collect();
         if ins.is_empty() {
             return None;
@@ -452,19 +534,20 @@ impl<'a, F: Field> Adapt<'a, F> {
         if ins.len() < 2 {
             return None;
         }
-        let common = s[ins[0]]
-            .pieces
+        let common = self
+            .holding(&s[ins[0]])
             .iter()
-            .any(|p| ins.iter().all(|&i| s[i].pieces.contains(p)));
+            .any(|p| ins.iter().all(|&i| self.holding(&s[i]).contains(p)));
         if common {
             return None;
         }
         for (n, &i) in ins.iter().enumerate() {
             for &j in &ins[n + 1..] {
-                if s[i].pieces.iter().any(|p| s[j].pieces.contains(p)) {
+                let (pi, pj) = (self.holding(&s[i]), self.holding(&s[j]));
+                if pi.iter().any(|p| pj.contains(p)) {
                     continue;
                 }
-                if self.joined(x[i], &s[i].pieces, x[j], &s[j].pieces) {
+                if self.joined(x[i], pi, x[j], pj) {
                     continue;
                 }
                 if let Some(why) = self.across_gap(x[i], x[j], self.cell_of(v[i])) {
