@@ -401,15 +401,18 @@ impl adapt::Field for GridField<'_> {
 }
 
 /// The marched triangles of the bisected tetrahedra: vertices on grid edges are the bricks'
-/// own (indices below `count`), the others new (numbered from `count`, returned).
-fn fine_triangles<F: adapt::Field>(
+/// own (indices below `count`), the others new (numbered from `count`, returned). The new
+/// vertices are numbered in one pass, in order, and placed on the surface afterwards, in
+/// parallel (each is a root search along its edge).
+fn fine_triangles<F: adapt::Field + Sync>(
     refine: &mut adapt::Adapt<F>,
     bricks: &[Brick],
     keys: &[u64],
     offsets: &[usize],
     count: usize,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), MarchError> {
-    let mut positions = Vec::new();
+    // The new vertices' edges: inside end, outside end, their values and the cell.
+    let mut edges: Vec<(adapt::Pt, f64, adapt::Pt, f64, [usize; 3])> = Vec::new();
     let mut made: QuickMap<(adapt::Pt, adapt::Pt), u32> = QuickMap::default();
     let mut out = Vec::new();
     for id in 0..refine.tets.len() {
@@ -440,12 +443,9 @@ fn fine_triangles<F: adapt::Field>(
                         None => {
                             let (a, b) = if mask >> i & 1 == 1 { (p, q) } else { (q, p) };
                             let (fa, fb) = (refine.signed(a), refine.signed(b));
-                            let (xa, xb) = (refine.position(a), refine.position(b));
                             let cell = [0, 1, 2].map(|k| (a[k].min(b[k]) / adapt::SCALE) as usize);
-                            let eps = refine.eps_at(a).min(refine.eps_at(b));
-                            let f = |x: DVec3| refine.value(x, cell);
-                            let v = (count + positions.len()) as u32;
-                            positions.push(crossing(xa, fa, xb, fb, &f, eps));
+                            let v = (count + edges.len()) as u32;
+                            edges.push((a, fa, b, fb, cell));
                             made.insert(key, v);
                             v
                         }
@@ -455,9 +455,19 @@ fn fine_triangles<F: adapt::Field>(
             out.push(ids);
         }
     }
-    if count + positions.len() > u32::MAX as usize {
-        return Err(MarchError::TooManyVertices(count + positions.len()));
+    if count + edges.len() > u32::MAX as usize {
+        return Err(MarchError::TooManyVertices(count + edges.len()));
     }
+    drop(made);
+    let refine = &*refine;
+    let positions = edges
+        .par_iter()
+        .map(|&(a, fa, b, fb, cell)| {
+            let eps = refine.eps_at(a).min(refine.eps_at(b));
+            let f = |x: DVec3| refine.value(x, cell);
+            crossing(refine.position(a), fa, refine.position(b), fb, &f, eps)
+        })
+        .collect();
     Ok((positions, out))
 }
 

@@ -47,7 +47,9 @@
 //! (`simplify`'s last check). The 12,700-node leaf at 50 mm: 4.59 M marched triangles → 282 k
 //! in 45 s, 68 CPU-s and 0.91 GB, against 14.4 M → 257 k in 67 s, 115 CPU-s and 1.37 GB
 //! marched at the cell, side by side (BENCHMARKS.md); with the bricks' own triangles marched
-//! beside the bisection, the same mesh in 37.8 s at best and 0.99 GB.
+//! beside the bisection, the same mesh in 37.8 s at best (a quiet host) and 0.99 GB; with
+//! fewer allocations and more of refinement and bisection's last step in parallel, 13 % less
+//! time than that side by side (median 55 s against 64 s on a slower host) and 0.93 GB.
 //!
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
 //! so both put the solid on the same pixels.
