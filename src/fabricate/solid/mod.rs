@@ -54,6 +54,7 @@
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
 //! so both put the solid on the same pixels.
 
+mod few;
 mod fit;
 mod march;
 mod quick;

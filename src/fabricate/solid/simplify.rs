@@ -86,6 +86,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 use rayon::prelude::*;
 
+use super::few::Few;
 use super::quick::{Quick, QuickSet};
 use super::sdf::Primitive;
 use crate::mesh::TriMesh;
@@ -2096,7 +2097,7 @@ struct Brick {
     triangles: Vec<[u32; 3]>,
     dead: Vec<bool>,
     /// Vertex -> its live triangles.
-    stars: Vec<Vec<u32>>,
+    stars: Vec<Few<8>>,
     /// Witnesses (which each is in the whole), and each triangle's first witness (`NONE`
     /// for none): a list through `Witness::next`.
     witness: Vec<Witness>,
@@ -2135,7 +2136,7 @@ impl Brick {
             }));
         }
         let n = global.len();
-        let mut stars = vec![Vec::new(); n];
+        let mut stars = vec![Few::default(); n];
         for (k, t) in triangles.iter().enumerate() {
             for &v in t {
                 stars[v as usize].push(k as u32);
@@ -2492,8 +2493,7 @@ impl Brick {
         both.clear();
         both.extend_from_slice(&self.stars[a as usize]);
         both.extend_from_slice(&self.stars[b as usize]);
-        let mut star = std::mem::take(&mut self.stars[a as usize]);
-        star.clear();
+        let mut star = Few::default();
         for &t in both.iter() {
             let tri = &mut self.triangles[t as usize];
             if tri.contains(&a) && tri.contains(&b) {
@@ -2501,7 +2501,7 @@ impl Brick {
                     self.dead[t as usize] = true;
                     for &v in tri.iter() {
                         if v != a && v != b {
-                            self.stars[v as usize].retain(|&x| x != t);
+                            self.stars[v as usize].retain(|x| x != t);
                         }
                     }
                 }
@@ -2522,7 +2522,7 @@ impl Brick {
         }
         self.changed[a as usize] = true;
         self.stars[a as usize] = star;
-        self.stars[b as usize] = Vec::new();
+        self.stars[b as usize] = Few::default();
         self.positions[a as usize] = c.to;
         self.least[a as usize] = c.least;
         self.quadrics[a as usize] = self.quadrics[a as usize].add(&self.quadrics[b as usize]);

@@ -31,6 +31,7 @@
 use glam::DVec3;
 
 use super::{corner, outward_cos, Grid, MarchError, FACING, TETS};
+use crate::fabricate::solid::few::Few;
 use crate::fabricate::solid::quick::{QuickMap, QuickSet};
 use crate::fabricate::solid::sdf::{golden, Primitive};
 
@@ -71,66 +72,8 @@ struct Sample {
     len: u32,
 }
 
-/// The live tetrahedra around an edge: most edges have at most `AROUND` of them, kept in place
-/// (millions of edges: a list each would cost an allocation each, and freeing them seconds).
-#[derive(Clone)]
-enum Around {
-    Few(u8, [u32; AROUND]),
-    Many(Vec<u32>),
-}
-
-const AROUND: usize = 7;
-
-impl Default for Around {
-    fn default() -> Self {
-        Around::Few(0, [0; AROUND])
-    }
-}
-
-impl Around {
-    fn as_slice(&self) -> &[u32] {
-        match self {
-            Around::Few(n, ids) => &ids[..*n as usize],
-            Around::Many(ids) => ids,
-        }
-    }
-
-    fn push(&mut self, id: u32) {
-        match self {
-            Around::Few(n, ids) if (*n as usize) < AROUND => {
-                ids[*n as usize] = id;
-                *n += 1;
-            }
-            Around::Few(_, ids) => {
-                let mut all = ids.to_vec();
-                all.push(id);
-                *self = Around::Many(all);
-            }
-            Around::Many(ids) => ids.push(id),
-        }
-    }
-
-    /// Takes `id` out, keeping the others' order; whether none is left.
-    fn remove(&mut self, id: u32) -> bool {
-        match self {
-            Around::Few(n, ids) => {
-                let mut kept = 0;
-                for k in 0..*n as usize {
-                    if ids[k] != id {
-                        ids[kept] = ids[k];
-                        kept += 1;
-                    }
-                }
-                *n = kept as u8;
-                kept == 0
-            }
-            Around::Many(ids) => {
-                ids.retain(|&u| u != id);
-                ids.is_empty()
-            }
-        }
-    }
-}
+/// The live tetrahedra around an edge: most edges have at most 7, kept in place.
+type Around = Few<7>;
 
 #[derive(Clone, Copy)]
 pub(super) struct Tet {
@@ -361,7 +304,8 @@ impl<'a, F: Field> Adapt<'a, F> {
         for (a, b) in pairs() {
             let key = pair(n[a], n[b]);
             if let Some(list) = self.edges.get_mut(&key) {
-                if list.remove(id) {
+                list.retain(|u| u != id);
+                if list.is_empty() {
                     self.edges.remove(&key);
                 }
             }
@@ -479,11 +423,11 @@ impl<'a, F: Field> Adapt<'a, F> {
         let e = self.cut_edge(id);
         loop {
             let around = self.around(e);
-            if let Some(&u) = around.as_slice().iter().find(|&&u| self.cut_edge(u) != e) {
+            if let Some(&u) = around.iter().find(|&&u| self.cut_edge(u) != e) {
                 self.refine(u, depth + 1)?;
                 continue;
             }
-            for &u in around.as_slice() {
+            for &u in around.iter() {
                 self.bisect(u)?;
             }
             return Ok(());
