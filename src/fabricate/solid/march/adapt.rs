@@ -67,8 +67,9 @@ struct Sample {
     f: f64,
     inside: bool,
     /// Where its pieces start in `Adapt::holders`, and how many: millions of corners, so one
-    /// pool instead of a list each (whose allocations, and freeing them, cost seconds).
-    start: u32,
+    /// pool instead of a list each (whose allocations, and freeing them, cost seconds). (A
+    /// `usize` start keeps the sample 24 bytes and cannot overflow.)
+    start: usize,
     len: u32,
 }
 
@@ -244,7 +245,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         let s = Sample {
             f,
             inside,
-            start: start as u32,
+            start,
             len: (self.holders.len() - start) as u32,
         };
         self.samples.insert(p, s);
@@ -253,7 +254,7 @@ impl<'a, F: Field> Adapt<'a, F> {
 
     /// The pieces holding sample `s` (none when it is outside).
     fn holding(&self, s: &Sample) -> &[u32] {
-        &self.holders[s.start as usize..(s.start + s.len) as usize]
+        &self.holders[s.start..s.start + s.len as usize]
     }
 
     /// Whether fine point `p` counts as inside.
