@@ -15,6 +15,7 @@ pub enum Few<const N: usize> {
 
 impl<const N: usize> Default for Few<N> {
     fn default() -> Self {
+        let () = Self::COUNTED;
         Few::In(0, [0; N])
     }
 }
@@ -38,6 +39,9 @@ impl<'a, const N: usize> IntoIterator for &'a Few<N> {
 }
 
 impl<const N: usize> Few<N> {
+    /// The count in place is a `u8` (checked when the type is used).
+    const COUNTED: () = assert!(N <= u8::MAX as usize, "Few keeps at most 255 in place");
+
     pub fn push(&mut self, x: u32) {
         match self {
             Few::In(n, items) if (*n as usize) < N => {

@@ -48,8 +48,8 @@
 //! in 45 s, 68 CPU-s and 0.91 GB, against 14.4 M → 257 k in 67 s, 115 CPU-s and 1.37 GB
 //! marched at the cell, side by side (BENCHMARKS.md); with the bricks' own triangles marched
 //! beside the bisection, the same mesh in 37.8 s at best (a quiet host) and 0.99 GB; with
-//! fewer allocations and more of refinement and bisection's last step in parallel, 13 % less
-//! time than that side by side (median 55 s against 64 s on a slower host) and 0.93 GB.
+//! fewer allocations and more of refinement and bisection's last step in parallel, the same
+//! mesh in 37.0 s at best and 0.95 GB (12 % less time than before, side by side).
 //!
 //! The mesh is placed by the exact box of its pieces (`placing_shift`), as `print` places them,
 //! so both put the solid on the same pixels.

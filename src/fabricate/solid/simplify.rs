@@ -1655,7 +1655,7 @@ fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) ->
     // `before` (a chain, not a list each: most cells hold one).
     let apart = COINCIDENT * tol;
     let mut taken: HashMap<[i64; 3], u32, Quick> = HashMap::with_hasher(Quick);
-    let mut before: Vec<u32> = Vec::with_capacity(split.len());
+    let mut before: Vec<Option<u32>> = Vec::with_capacity(split.len());
     let cell_of = |p: DVec3| (p / apart).floor().as_i64vec3().to_array();
     for (a, b, p) in split {
         let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
@@ -1669,7 +1669,7 @@ fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) ->
                         if positions[n as usize].distance(p) < apart {
                             return true;
                         }
-                        v = Some(before[n as usize - first]).filter(|&m| m != u32::MAX);
+                        v = before[n as usize - first];
                     }
                     false
                 })
@@ -1679,7 +1679,7 @@ fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) ->
             continue;
         }
         let n = mesh.positions.len() as u32;
-        before.push(taken.insert(c, n).unwrap_or(u32::MAX));
+        before.push(taken.insert(c, n));
         mid.insert(edge_key(a, b), n);
         mesh.positions.push(p);
         ends[a as usize] = true;
