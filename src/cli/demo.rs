@@ -15,7 +15,7 @@ mod simplify;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args as ClapArgs;
 use indicatif::ProgressStyle;
 
@@ -40,9 +40,13 @@ pub struct Args {
     /// Folder for every output (made if missing)
     #[arg(long, default_value = "demo-out")]
     pub out: PathBuf,
-    /// Longer side of PNG renders, in pixels
+    /// Longer side of PNG renders, in pixels (16 to 16384)
     #[arg(long, default_value_t = 1600)]
     pub size: u32,
+    /// Work spent making each cut sheet denser, as `nest --time` (seconds of a 2-core
+    /// reference machine a sheet, counted as work: the same sheets on any machine)
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    pub nest_time: f64,
 }
 
 /// The fixtures the demo runs on, inside the binary so it needs no checkout.
@@ -98,6 +102,17 @@ const SURFACES: &[(&str, &[u8], &str)] = &[
 pub(crate) use lamina::report::demo_index::{Entry, Headline};
 
 pub fn run(args: Args) -> Result<()> {
+    // Checked before anything is written.
+    let (lo, hi) = lamina::network::io::PNG_SIZE_RANGE;
+    if !(lo..=hi).contains(&args.size) {
+        bail!("--size: must be {lo} to {hi} pixels, got {}", args.size);
+    }
+    lamina::stage::positive(
+        "nest_time",
+        args.nest_time,
+        lamina::stage::nest::MAX_TIME,
+        "s",
+    )?;
     let out = &args.out;
     let inputs = out.join("inputs");
     std::fs::create_dir_all(&inputs)
@@ -127,7 +142,7 @@ pub fn run(args: Args) -> Result<()> {
     entries.push(calyx(out, &inputs, args.size)?);
     bar.inc(1);
     bar.set_message("calyx: plates, groups, cut sheets");
-    let (entry, steel_job) = steel(out)?;
+    let (entry, steel_job) = steel(out, args.nest_time)?;
     entries.push(entry);
     bar.inc(1);
     bar.set_message("calyx: planarity audit of the panels");
@@ -135,7 +150,12 @@ pub fn run(args: Args) -> Result<()> {
     entries.push(entry);
     bar.inc(1);
     bar.set_message("simplified networks: calyx to cut sheets, band, leaf");
-    entries.push(simplify::simplified(out, &inputs, args.size)?);
+    entries.push(simplify::simplified(
+        out,
+        &inputs,
+        args.size,
+        args.nest_time,
+    )?);
     bar.inc(1);
     for (name, bytes, _) in SURFACES {
         write_atomic(&inputs.join(name), |w| std::io::Write::write_all(w, bytes))?;
@@ -407,7 +427,7 @@ fn calyx(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
 
 /// From the Gauss-Newton axes to steel: plates in seven assembly groups (base ring at 6 mm, the rest
 /// by vein radius), nested on 3000 × 1500 sheets per thickness.
-fn steel(out: &Path) -> Result<(Entry, Headline)> {
+fn steel(out: &Path, nest_time: f64) -> Result<(Entry, Headline)> {
     let dir = out.join("calyx");
     let joints = super::plates::JointArgs {
         node_core: Some(
@@ -492,7 +512,7 @@ fn steel(out: &Path) -> Result<(Entry, Headline)> {
         post: None,
         nc_on: None,
         nc_off: None,
-        time: 2.0,
+        time: nest_time,
         output: dir.join("cut"),
         json: false,
     })?;

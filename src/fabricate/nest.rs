@@ -218,9 +218,34 @@ pub enum NestError {
     Cancelled(#[from] crate::stage::Cancelled),
 }
 
+impl NestError {
+    /// The error of one family's nesting with its parts named by their indices in the whole
+    /// (`family[k]` for the family's part `k`).
+    fn of(self, family: &[usize]) -> NestError {
+        match self {
+            NestError::Degenerate(k) => NestError::Degenerate(family[k]),
+            NestError::NotFinite(k) => NestError::NotFinite(family[k]),
+            NestError::Engine(k, m) => NestError::Engine(family[k], m),
+            NestError::TooLarge(list) => {
+                NestError::TooLarge(list.into_iter().map(|(k, s)| (family[k], s)).collect())
+            }
+            e => e,
+        }
+    }
+}
+
+/// Parts that fit no sheet: each one's index and the size of its hull at its best allowed
+/// rotation.
+pub type Misfits = Vec<(usize, DVec2)>;
+
 pub trait Nester {
     /// Places every part on sheets of one family (same stock); sheets are numbered from 0.
     fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError>;
+
+    /// The parts `nest` would report as fitting no sheet of `opts` (index, size of the hull
+    /// at its best allowed rotation), found without nesting anything; the errors `nest`
+    /// gives before it nests (bad options, a degenerate or non-finite part) alike.
+    fn too_large(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Misfits, NestError>;
 }
 
 /// A stock sheet size and what one costs (any currency; 0 when only sizes matter).
@@ -245,12 +270,49 @@ pub fn nest_families<K: Ord + Clone>(
 ) -> Result<(Nesting, Vec<(K, Stock)>), NestError> {
     let mut order: Vec<usize> = (0..parts.len()).collect();
     order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
+    let families: Vec<Vec<Vec<DVec2>>> = order
+        .chunk_by(|&a, &b| keys[a] == keys[b])
+        .map(|family| family.iter().map(|&i| parts[i].clone()).collect())
+        .collect();
+    // Parts too large are found before any family is nested, so that a refusal does not wait
+    // for the other families' nesting. A family that no stock size takes whole names the parts
+    // that fit no size (or, if each size takes each part but none takes them all, the first
+    // size's misfits).
+    let mut too_large = Vec::new();
+    for (family, these) in order.chunk_by(|&a, &b| keys[a] == keys[b]).zip(&families) {
+        let mut lists = Vec::new();
+        for st in stock {
+            let on = NestOptions {
+                sheet: st.size,
+                pack_last: false,
+                ..opts.clone()
+            };
+            let list = nester.too_large(these, &on).map_err(|e| e.of(family))?;
+            if list.is_empty() {
+                lists.clear();
+                break;
+            }
+            lists.push(list);
+        }
+        let Some((first, others)) = lists.split_first() else {
+            continue;
+        };
+        let nowhere: Vec<(usize, DVec2)> = first
+            .iter()
+            .filter(|(k, _)| others.iter().all(|l| l.iter().any(|t| t.0 == *k)))
+            .copied()
+            .collect();
+        let named = if nowhere.is_empty() { first } else { &nowhere };
+        too_large.extend(named.iter().map(|&(k, s)| (family[k], s)));
+    }
+    if !too_large.is_empty() {
+        too_large.sort_by_key(|t| t.0);
+        return Err(NestError::TooLarge(too_large));
+    }
     let mut places = vec![Place::ORIGIN; parts.len()];
     let mut sheets: Vec<(K, Stock)> = Vec::new();
-    let mut too_large = Vec::new();
-    for family in order.chunk_by(|&a, &b| keys[a] == keys[b]) {
-        let these: Vec<Vec<DVec2>> = family.iter().map(|&i| parts[i].clone()).collect();
-        match cheapest(nester, &these, stock, opts) {
+    for (family, these) in order.chunk_by(|&a, &b| keys[a] == keys[b]).zip(&families) {
+        match cheapest(nester, these, stock, opts) {
             Ok((local, stocks)) => {
                 for (&i, p) in family.iter().zip(local) {
                     places[i] = Place {
@@ -261,18 +323,8 @@ pub fn nest_families<K: Ord + Clone>(
                 let key = &keys[family[0]];
                 sheets.extend(stocks.into_iter().map(|st| (key.clone(), st)));
             }
-            Err(NestError::TooLarge(list)) => {
-                too_large.extend(list.into_iter().map(|(k, s)| (family[k], s)));
-            }
-            Err(NestError::Degenerate(k)) => return Err(NestError::Degenerate(family[k])),
-            Err(NestError::NotFinite(k)) => return Err(NestError::NotFinite(family[k])),
-            Err(NestError::Engine(k, m)) => return Err(NestError::Engine(family[k], m)),
-            Err(e) => return Err(e),
+            Err(e) => return Err(e.of(family)),
         }
-    }
-    if !too_large.is_empty() {
-        too_large.sort_by_key(|t| t.0);
-        return Err(NestError::TooLarge(too_large));
     }
     Ok((
         Nesting {
@@ -1177,61 +1229,16 @@ impl BottomLeft<'_> {
 }
 
 impl Nester for BottomLeft<'_> {
+    fn too_large(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Misfits, NestError> {
+        self.prepare(parts, opts).map(|(_, too_large)| too_large)
+    }
+
     fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError> {
-        check(opts)?;
-        let container = Container::new(opts);
-        let mut hulls = Vec::with_capacity(parts.len());
-        for (i, p) in parts.iter().enumerate() {
-            if p.iter().any(|q| !q.is_finite()) {
-                return Err(NestError::NotFinite(i));
-            }
-            let h = convex_hull(p);
-            if h.len() < 3 || area(&h) < 1e-9 {
-                return Err(NestError::Degenerate(i));
-            }
-            hulls.push(h);
-        }
-        let d = 0.5 * opts.spacing + SLACK;
-        let mut items = Vec::new();
-        let mut too_large = Vec::new();
-        // A quad is its own hull when its outline has just the hull's four corners.
-        let own: Vec<bool> = parts
-            .iter()
-            .zip(&hulls)
-            .map(|(p, h)| {
-                h.len() == 4 && h.iter().all(|c| p.contains(c)) && {
-                    let mut distinct = p.clone();
-                    distinct.dedup();
-                    if distinct.len() > 1 && distinct.first() == distinct.last() {
-                        distinct.pop();
-                    }
-                    distinct.len() == 4
-                }
-            })
-            .collect();
-        for (members, hull) in self.items(&hulls, &own, opts) {
-            if let Some(item) = make_item(members.clone(), &hull, &hulls, d, opts, &container)? {
-                items.push(item);
-                continue;
-            }
-            // Too big: a pair's parts go alone; a part alone is reported.
-            for m in members {
-                let single = Member {
-                    angle: 0.0,
-                    offset: DVec2::ZERO,
-                    ..m
-                };
-                let hull = &hulls[m.part];
-                match make_item(vec![single], hull, &hulls, d, opts, &container)? {
-                    Some(item) => items.push(item),
-                    None => too_large.push((m.part, smallest(hull, &opts.rotations))),
-                }
-            }
-        }
+        let (items, too_large) = self.prepare(parts, opts)?;
         if !too_large.is_empty() {
-            too_large.sort_by_key(|t| t.0);
             return Err(NestError::TooLarge(too_large));
         }
+        let container = Container::new(opts);
         let mut best: Option<(usize, f64, Spots)> = None;
         for t in 0..opts.tries.max(1) {
             let mut rng = ChaCha8Rng::seed_from_u64(opts.seed.wrapping_add(t as u64));
@@ -1293,6 +1300,68 @@ impl Nester for BottomLeft<'_> {
 }
 
 impl BottomLeft<'_> {
+    /// What `nest` does before nesting: the options checked, each part's hull, the items
+    /// (parts alone or paired) with the shapes they take at the allowed rotations that fit the
+    /// sheet, and the parts that fit it at none (index, smallest box), in index order.
+    fn prepare(
+        &self,
+        parts: &[Vec<DVec2>],
+        opts: &NestOptions,
+    ) -> Result<(Vec<Item>, Misfits), NestError> {
+        check(opts)?;
+        let container = Container::new(opts);
+        let mut hulls = Vec::with_capacity(parts.len());
+        for (i, p) in parts.iter().enumerate() {
+            if p.iter().any(|q| !q.is_finite()) {
+                return Err(NestError::NotFinite(i));
+            }
+            let h = convex_hull(p);
+            if h.len() < 3 || area(&h) < 1e-9 {
+                return Err(NestError::Degenerate(i));
+            }
+            hulls.push(h);
+        }
+        let d = 0.5 * opts.spacing + SLACK;
+        let mut items = Vec::new();
+        let mut too_large = Vec::new();
+        // A quad is its own hull when its outline has just the hull's four corners.
+        let own: Vec<bool> = parts
+            .iter()
+            .zip(&hulls)
+            .map(|(p, h)| {
+                h.len() == 4 && h.iter().all(|c| p.contains(c)) && {
+                    let mut distinct = p.clone();
+                    distinct.dedup();
+                    if distinct.len() > 1 && distinct.first() == distinct.last() {
+                        distinct.pop();
+                    }
+                    distinct.len() == 4
+                }
+            })
+            .collect();
+        for (members, hull) in self.items(&hulls, &own, opts) {
+            if let Some(item) = make_item(members.clone(), &hull, &hulls, d, opts, &container)? {
+                items.push(item);
+                continue;
+            }
+            // Too big: a pair's parts go alone; a part alone is reported.
+            for m in members {
+                let single = Member {
+                    angle: 0.0,
+                    offset: DVec2::ZERO,
+                    ..m
+                };
+                let hull = &hulls[m.part];
+                match make_item(vec![single], hull, &hulls, d, opts, &container)? {
+                    Some(item) => items.push(item),
+                    None => too_large.push((m.part, smallest(hull, &opts.rotations))),
+                }
+            }
+        }
+        too_large.sort_by_key(|t| t.0);
+        Ok((items, too_large))
+    }
+
     /// Denser sheets (see [`crate::fabricate::separate`]): for each sheet but the last, given
     /// work enough, the sheet is first compressed (its items separated into a room shorter
     /// along x by a step at a time, the step shrinking while that fails and growing while it
@@ -2004,6 +2073,67 @@ mod tests {
             BottomLeft::default().nest(&parts[..1], &bad).unwrap_err(),
             NestError::Spacing(-1.0)
         );
+    }
+
+    #[test]
+    fn parts_too_large_for_every_stock_are_named_before_anything_is_nested() {
+        /// Counts the nestings asked of the engine.
+        struct Counting(std::cell::Cell<usize>);
+        impl Nester for Counting {
+            fn nest(&self, parts: &[Vec<DVec2>], opts: &NestOptions) -> Result<Nesting, NestError> {
+                self.0.set(self.0.get() + 1);
+                BottomLeft::default().nest(parts, opts)
+            }
+            fn too_large(
+                &self,
+                parts: &[Vec<DVec2>],
+                opts: &NestOptions,
+            ) -> Result<Misfits, NestError> {
+                BottomLeft::default().too_large(parts, opts)
+            }
+        }
+        // Family 0 fits; family 1's part 3 fits the larger stock only, part 4 neither; family
+        // 2's part 5 neither.
+        let parts = vec![
+            rect(100.0, 50.0),
+            rect(120.0, 60.0),
+            rect(80.0, 80.0),
+            rect(900.0, 50.0),
+            rect(1500.0, 40.0),
+            rect(1400.0, 30.0),
+        ];
+        let keys = [0, 0, 1, 1, 1, 2];
+        let stock = [
+            Stock {
+                size: DVec2::new(600.0, 400.0),
+                cost: 1.0,
+            },
+            Stock {
+                size: DVec2::new(1000.0, 500.0),
+                cost: 2.0,
+            },
+        ];
+        let engine = Counting(Default::default());
+        let err =
+            nest_families(&engine, &parts, &keys, &stock, &NestOptions::default()).unwrap_err();
+        let NestError::TooLarge(list) = err else {
+            panic!("{err}");
+        };
+        // Part 3 fits the larger stock: not named.
+        let named: Vec<usize> = list.iter().map(|t| t.0).collect();
+        assert_eq!(named, [4, 5]);
+        assert_eq!(engine.0.get(), 0, "no family was nested");
+        // Without the parts that fit nowhere, every family is nested.
+        let (n, _) = nest_families(
+            &engine,
+            &parts[..4],
+            &keys[..4],
+            &stock,
+            &NestOptions::default(),
+        )
+        .expect("fits");
+        assert_eq!(n.places.len(), 4);
+        assert!(engine.0.get() > 0);
     }
 
     #[test]

@@ -367,6 +367,18 @@ fn extreme_flag_values_are_refused_naming_the_flag() -> TestResult {
             "--tolerance 1e300 mm is more than ten cells",
         ),
     ];
+    // The demo's own flags, checked before its folder is made.
+    let demo = [
+        ("--size", "0"),
+        ("--size", "99999"),
+        ("--nest-time", "0"),
+        ("--nest-time", "NaN"),
+        ("--nest-time", "1e9"),
+    ];
+    let cases = cases.into_iter().chain(demo.map(|(flag, value)| {
+        let args = ["demo", "--out", &out("demo"), flag, value].map(String::from);
+        (args.to_vec(), flag)
+    }));
     for (args, flag) in cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = lamina(&args);

@@ -20,7 +20,7 @@ use lamina::network::Network;
 use lamina::rationalize::simplify::{Figures, Report};
 use lamina::stage::{venation, Quiet};
 
-pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
+pub fn simplified(out: &Path, inputs: &Path, size: u32, nest_time: f64) -> Result<Entry> {
     let dir = out.join("simplify");
     std::fs::create_dir_all(&dir)?;
     let surface = inputs.join("calyx.obj");
@@ -131,7 +131,7 @@ pub fn simplified(out: &Path, inputs: &Path, size: u32) -> Result<Entry> {
         post: None,
         nc_on: None,
         nc_off: None,
-        time: 2.0,
+        time: nest_time,
         output: dir.join("cut"),
         json: false,
     })?;

@@ -26,7 +26,7 @@ use super::{Network, Problem, Weld, WeldStats};
 use crate::files::{extension, ReadError, WriteError};
 use units::{LengthUnit, SourceUnits};
 
-pub use png::render_png_bytes;
+pub use png::{render_png_bytes, SIZE_RANGE as PNG_SIZE_RANGE};
 pub use svg::render_svg_string;
 
 /// The network formats lamina knows, by file extension.
