@@ -349,11 +349,10 @@ def steel(tmp_path_factory, solved):
     plates = lamina.plates(solved, sizing=sizing, groups=7, out=out)
     cli(tmp, "plates", "axes.json", "--sizing", "sizing.json", "--groups", 7, "-o", "plates",
         ok=(0, 1))
-    # Half a second of nesting work a sheet, not the default 2: the same sheets either way.
     cut = lamina.nest(plates, sheet="3000x1500", margin=10, spacing=5, lead_in=2, nc="gcode",
-                      post="qtplasmac", time=0.5, out=tmp / "py-cut")
+                      post="qtplasmac", out=tmp / "py-cut")
     cli(tmp, "nest", "plates/plates.json", "--sheet", "3000x1500", "--margin", 10, "--spacing",
-        5, "--lead-in", 2, "--nc", "gcode", "--post", "qtplasmac", "--time", 0.5, "-o", "cut")
+        5, "--lead-in", 2, "--nc", "gcode", "--post", "qtplasmac", "-o", "cut")
     return tmp, sizing, plates, cut
 
 

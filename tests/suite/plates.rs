@@ -224,9 +224,7 @@ fn seven_groups_tag_every_plate_and_split_seams_in_half() -> TestResult {
     Ok(())
 }
 
-/// `lamina nest` on `plates` into `dir`/`name`; returns the folder and nest.json. A quarter
-/// second of densifying work a sheet unless `extra` says otherwise (the default, 2 s, made
-/// these tests the suite's longest; what they check does not depend on it).
+/// `lamina nest` on `plates` into `dir`/`name`; returns the folder and nest.json.
 fn nest_of(
     dir: &Path,
     plates: &Path,
@@ -236,9 +234,6 @@ fn nest_of(
     let out = dir.join(name);
     let mut args = vec!["nest", s(plates), "-o", s(&out)];
     args.extend_from_slice(extra);
-    if !extra.contains(&"--time") {
-        args.extend(["--time", "0.25"]);
-    }
     let o = lamina(&args);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let doc = serde_json::from_str(&std::fs::read_to_string(out.join("nest.json"))?)?;
@@ -620,8 +615,6 @@ fn the_material_travels_from_the_sizing_to_the_cut_files() -> TestResult {
         s(&out.join("plates.json")),
         "--sheet",
         "3000x1500",
-        "--time",
-        "0.25",
         "-o",
         s(&cut),
     ]);

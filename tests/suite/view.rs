@@ -133,8 +133,6 @@ fn plates_with_welds_sizing_and_axes_and_their_cut_sheets() -> TestResult {
         s(&plates.join("plates.json")),
         "--sheet",
         "3000x1500",
-        "--time",
-        "0.25",
         "-o",
         s(&cut),
     ]);
