@@ -270,8 +270,10 @@ pub fn nest_families<K: Ord + Clone>(
 ) -> Result<(Nesting, Vec<(K, Stock)>), NestError> {
     let mut order: Vec<usize> = (0..parts.len()).collect();
     order.sort_by(|&a, &b| keys[a].cmp(&keys[b]).then(a.cmp(&b)));
-    let families: Vec<Vec<Vec<DVec2>>> = order
-        .chunk_by(|&a, &b| keys[a] == keys[b])
+    // Each family's indices into `parts`, and its parts.
+    let groups: Vec<&[usize]> = order.chunk_by(|&a, &b| keys[a] == keys[b]).collect();
+    let families: Vec<Vec<Vec<DVec2>>> = groups
+        .iter()
         .map(|family| family.iter().map(|&i| parts[i].clone()).collect())
         .collect();
     // Parts too large are found before any family is nested, so that a refusal does not wait
@@ -279,7 +281,7 @@ pub fn nest_families<K: Ord + Clone>(
     // that fit no size (or, if each size takes each part but none takes them all, the first
     // size's misfits).
     let mut too_large = Vec::new();
-    for (family, these) in order.chunk_by(|&a, &b| keys[a] == keys[b]).zip(&families) {
+    for (&family, these) in groups.iter().zip(&families) {
         let mut lists = Vec::new();
         for st in stock {
             let on = NestOptions {
@@ -311,7 +313,7 @@ pub fn nest_families<K: Ord + Clone>(
     }
     let mut places = vec![Place::ORIGIN; parts.len()];
     let mut sheets: Vec<(K, Stock)> = Vec::new();
-    for (family, these) in order.chunk_by(|&a, &b| keys[a] == keys[b]).zip(&families) {
+    for (&family, these) in groups.iter().zip(&families) {
         match cheapest(nester, these, stock, opts) {
             Ok((local, stocks)) => {
                 for (&i, p) in family.iter().zip(local) {
