@@ -263,7 +263,8 @@ pub fn mesh_union(
     let keys: Vec<u64> = bricks.iter().map(|b| b.key).collect();
 
     // Where veins come close: bisected tetrahedra replace those cells' own. Bisecting is
-    // sequential: the bricks' own triangles are made beside it, on the other threads, each
+    // sequential within a cluster of close cells, two groups of clusters side by side
+    // (`halves`); the bricks' own triangles are made beside it, on the other threads, each
     // cell's apart so that those of the cells it takes can be left out.
     let mut marched = Marched::default();
     let split_cells = |marched: &mut Marched| -> Result<Option<Split>, MarchError> {
@@ -276,30 +277,56 @@ pub fn mesh_union(
             bricks: &bricks,
             keys: &keys,
         };
-        let mut refine = adapt::Adapt::new(&grid, prims, &field, band, split);
-        for b in &bricks {
-            for &c in &b.close {
-                refine.look_at(cell_at(b.key, c));
-            }
+        let looked: Vec<[usize; 3]> = bricks
+            .iter()
+            .flat_map(|b| b.close.iter().map(|&c| cell_at(b.key, c)))
+            .collect();
+        let budgets = [adapt::Budget::default(), adapt::Budget::default()];
+        let setup = Setup {
+            grid: &grid,
+            prims,
+            field: &field,
+            band,
+            split,
+        };
+        let mut parts = setup.bisect(&looked, halves(&looked), &budgets)?;
+        let made = parts
+            .par_iter_mut()
+            .map(|refine| fine_triangles(refine, &bricks, &keys, &offsets, count))
+            .collect::<Result<Vec<_>, MarchError>>()?;
+        // Each part's new vertices numbered after the last part's.
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for (p, t) in made {
+            let shift = positions.len() as u32;
+            triangles.extend(
+                t.into_iter()
+                    .map(|t: [u32; 3]| t.map(|v| if v as usize >= count { v + shift } else { v })),
+            );
+            positions.extend(p);
         }
-        refine.run()?;
-        let (positions, tris) = fine_triangles(&mut refine, &bricks, &keys, &offsets, count)?;
-        marched.gaps_left = refine.left;
-        marched.crotch_ends = refine.crotches;
-        let cells = std::mem::take(&mut refine.cells);
+        if count + positions.len() > u32::MAX as usize {
+            return Err(MarchError::TooManyVertices(count + positions.len()));
+        }
+        let mut cells = QuickSet::default();
         // Only cells something was cut in count as refined.
         let mut cut: QuickSet<[usize; 3]> = QuickSet::default();
-        for t in refine.tets.iter().filter(|t| t.alive) {
-            let v = refine.corners(t);
-            if v.iter().any(|p| adapt::grid_point(*p).is_none()) {
-                let lo = [0, 1, 2].map(|a| v.iter().map(|p| p[a]).min().unwrap_or(0));
-                cut.insert(lo.map(|c| (c / adapt::SCALE) as usize));
+        for refine in &mut parts {
+            marched.gaps_left += refine.left;
+            marched.crotch_ends += refine.crotches;
+            cells.extend(std::mem::take(&mut refine.cells));
+            for t in refine.tets.iter().filter(|t| t.alive) {
+                let v = refine.corners(t);
+                if v.iter().any(|p| adapt::grid_point(*p).is_none()) {
+                    let lo = [0, 1, 2].map(|a| v.iter().map(|p| p[a]).min().unwrap_or(0));
+                    cut.insert(lo.map(|c| (c / adapt::SCALE) as usize));
+                }
             }
         }
         marched.cells_refined = cut.len();
         Ok(Some(Split {
             positions,
-            triangles: tris,
+            triangles,
             cells,
         }))
     };
@@ -356,6 +383,137 @@ pub fn mesh_union(
         mesh.drop_unused();
     }
     Ok((mesh, marched))
+}
+
+/// What `adapt` bisects with.
+struct Setup<'a, F> {
+    grid: &'a Grid,
+    prims: &'a [Primitive],
+    field: &'a F,
+    band: f64,
+    split: (f64, u32),
+}
+
+impl<'a, F: adapt::Field + Sync> Setup<'a, F> {
+    /// Bisects where the cells `looked` at need it, all in one `Adapt`, or with `groups` (the
+    /// same cells, see `halves`) each group in its own, side by side: kept when neither brought
+    /// in a cell the other did and the budget never bound (what each did is then what one
+    /// would have done with all); when they met, the one that made more goes on with the
+    /// other's cells (bisection ends the same whatever the order it cuts in); when the budget
+    /// bound (what each did then hung on the other's pace), all at once in one, anew.
+    fn bisect(
+        &self,
+        looked: &[[usize; 3]],
+        groups: Option<[Vec<[usize; 3]>; 2]>,
+        [shared, alone]: &'a [adapt::Budget; 2],
+    ) -> Result<Vec<adapt::Adapt<'a, F>>, MarchError> {
+        let run = |cells: &[[usize; 3]], budget| {
+            let mut refine = adapt::Adapt::new(
+                self.grid, self.prims, self.field, budget, self.band, self.split,
+            );
+            for &c in cells {
+                refine.look_at(c);
+            }
+            refine.run().map(|()| refine)
+        };
+        let Some([a, b]) = groups else {
+            return Ok(vec![run(looked, alone)?]);
+        };
+        let (ra, rb) = rayon::join(|| run(&a, shared), || run(&b, shared));
+        let (ra, rb) = (ra?, rb?);
+        if !adapt::Budget::never_met(ra.tets.len() + rb.tets.len()) {
+            drop((ra, rb));
+            return Ok(vec![run(looked, alone)?]);
+        }
+        let (small, large) = if ra.cells.len() <= rb.cells.len() {
+            (&ra, &rb)
+        } else {
+            (&rb, &ra)
+        };
+        if small.cells.iter().all(|c| !large.cells.contains(c)) {
+            return Ok(vec![ra, rb]);
+        }
+        let (mut more, rest) = if ra.tets.len() >= rb.tets.len() {
+            drop(rb);
+            (ra, b)
+        } else {
+            drop(ra);
+            (rb, a)
+        };
+        more.alone(alone);
+        for &c in &rest {
+            more.look_at(c);
+        }
+        more.run()?;
+        Ok(vec![more])
+    }
+}
+
+/// Cells per side of the blocks `halves` groups the close cells by.
+const APART: usize = 3;
+
+/// The close cells in two groups to be bisected apart, each in the order given: whole
+/// clusters (close cells in blocks of `APART` cells, blocks that touch joined, so two clusters
+/// are more than `APART` cells apart), the largest first, each into the group with fewer cells
+/// so far. `None` when they are one cluster.
+///
+/// Bisection meets a neighbour only through a cut edge, and every cell around a cut grid edge
+/// is brought in: two groups that brought in no cell in common left every face between them
+/// whole, and bisected each what they would have together.
+fn halves(cells: &[[usize; 3]]) -> Option<[Vec<[usize; 3]>; 2]> {
+    let block = |c: &[usize; 3]| c.map(|x| x / APART);
+    let mut blocks: Vec<[usize; 3]> = cells.iter().map(block).collect();
+    blocks.sort_unstable();
+    blocks.dedup();
+    let index = |b: &[usize; 3]| blocks.binary_search(b).ok();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut parent: Vec<u32> = (0..blocks.len() as u32).collect();
+    for (i, b) in blocks.iter().enumerate() {
+        for code in (0..27).filter(|&c| c != 13) {
+            let d = [code % 3, code / 3 % 3, code / 9].map(|x| x as i64 - 1);
+            let n = [0, 1, 2].map(|a| b[a] as i64 + d[a]);
+            if n.iter().any(|&x| x < 0) {
+                continue;
+            }
+            if let Some(j) = index(&n.map(|x| x as usize)) {
+                let (ri, rj) = (root(&mut parent, i as u32), root(&mut parent, j as u32));
+                parent[ri.max(rj) as usize] = ri.min(rj);
+            }
+        }
+    }
+    let cluster: Vec<u32> = cells
+        .iter()
+        .map(|c| index(&block(c)).map_or(0, |i| root(&mut parent, i as u32)))
+        .collect();
+    let mut weight = vec![0usize; blocks.len()];
+    for &r in &cluster {
+        weight[r as usize] += 1;
+    }
+    let mut order: Vec<u32> = (0..blocks.len() as u32)
+        .filter(|&r| weight[r as usize] > 0)
+        .collect();
+    if order.len() < 2 {
+        return None;
+    }
+    order.sort_by_key(|&r| (std::cmp::Reverse(weight[r as usize]), r));
+    let mut side = vec![0usize; blocks.len()];
+    let mut load = [0usize; 2];
+    for r in order {
+        let s = usize::from(load[1] < load[0]);
+        side[r as usize] = s;
+        load[s] += weight[r as usize];
+    }
+    let mut out = [Vec::new(), Vec::new()];
+    for (c, r) in cells.iter().zip(cluster) {
+        out[side[r as usize]].push(*c);
+    }
+    Some(out)
 }
 
 /// What the split cells make: their new vertices (numbered after the bricks'), their
@@ -981,6 +1139,97 @@ mod tests {
         let want = std::f64::consts::PI * (0.3 + 4.0 / 3.0);
         let got = mesh.signed_volume();
         assert!((got - want).abs() / want < 0.005, "volume {got} vs {want}");
+    }
+
+    /// Every piece near every cell; the grid's signs not known.
+    struct All(Vec<u32>);
+
+    impl adapt::Field for All {
+        fn near(&self, _: [usize; 3]) -> &[u32] {
+            &self.0
+        }
+        fn grid_inside(&self, _: [usize; 3]) -> Option<bool> {
+            None
+        }
+    }
+
+    #[test]
+    fn bisecting_in_two_groups_ends_as_bisecting_all_at_once() {
+        // Three pairs of parallel veins a fifth of a cell apart, across the middle of a cell,
+        // 30 cells from pair to pair.
+        let h = 0.1;
+        let mut prims = Vec::new();
+        for k in 0..3 {
+            let x = 3.0 * k as f64;
+            for (dx, r) in [(0.0, 0.24), (0.46, 0.2)] {
+                let (a, b) = (DVec3::new(x + dx, -0.5, 0.0), DVec3::new(x + dx, 0.5, 0.0));
+                prims.push(Primitive::Cone(RoundCone::new(a, b, r, r)));
+            }
+        }
+        let grid = Grid {
+            origin: DVec3::splat(-1.0),
+            h,
+            points: [100, 21, 21],
+        };
+        let field = All((0..prims.len() as u32).collect());
+        let setup = Setup {
+            grid: &grid,
+            prims: &prims,
+            field: &field,
+            band: 2.0 * h,
+            split: (0.025, 4),
+        };
+        // The cells along each gap.
+        let mut looked = Vec::new();
+        for i in 0..99 {
+            for j in 0..20 {
+                for k in 0..20 {
+                    let c = grid.at([i, j, k]) + DVec3::splat(0.5 * h);
+                    let gap = (0..3).any(|p| (c.x - (3.0 * p as f64 + 0.25)).abs() < 0.15);
+                    if gap && c.y.abs() < 0.5 && c.z.abs() < 0.2 {
+                        looked.push([i, j, k]);
+                    }
+                }
+            }
+        }
+        let alive = |parts: &[adapt::Adapt<All>]| {
+            let mut all: Vec<[adapt::Pt; 4]> = parts
+                .iter()
+                .flat_map(|r| {
+                    r.tets.iter().filter(|t| t.alive).map(|t| {
+                        let mut v = r.corners(t);
+                        v.sort_unstable();
+                        v
+                    })
+                })
+                .collect();
+            all.sort_unstable();
+            all
+        };
+        let budgets = || [adapt::Budget::default(), adapt::Budget::default()];
+        let b = budgets();
+        let one = setup.bisect(&looked, None, &b).unwrap();
+        let whole = alive(&one);
+        assert!(
+            whole.len() > 6 * one[0].cells.len(),
+            "the gaps were bisected: {} tetrahedra in {} cells",
+            whole.len(),
+            one[0].cells.len()
+        );
+        // Whole clusters apart: two groups kept.
+        let groups = halves(&looked).expect("three clusters");
+        let b = budgets();
+        let two = setup.bisect(&looked, Some(groups), &b).unwrap();
+        assert_eq!(two.len(), 2);
+        assert_eq!(alive(&two), whole);
+        // One cluster cut in two: the groups meet, and one goes on with the other's cells.
+        let (first, rest) = looked.split_at(looked.len() / 6);
+        let b = budgets();
+        let met = setup
+            .bisect(&looked, Some([first.to_vec(), rest.to_vec()]), &b)
+            .unwrap();
+        assert_eq!(met.len(), 1);
+        assert_eq!(alive(&met), whole);
     }
 
     #[test]

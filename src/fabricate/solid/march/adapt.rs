@@ -28,6 +28,8 @@
 //! Corners on the grid keep the sign the grid gave them; finer corners count as inside at
 //! `eps / FINE_EPS` below zero.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+
 use glam::DVec3;
 
 use super::{corner, outward_cos, Grid, MarchError, FACING, TETS};
@@ -51,6 +53,23 @@ const FINE_EPS: f64 = 64.0;
 /// The most tetrahedra made (about 120 bytes each with their edges and corners); past it no
 /// more cells are brought in and no more bisected, and what is left is counted.
 const MAX_TETS: usize = 6_000_000;
+
+/// The tetrahedra made by every `Adapt` that shares it, held to `MAX_TETS` together: each
+/// adds its own in steps of `PUBLISH` (a count shared by two threads, bumped millions of times,
+/// would cost more than the bisection it counts).
+#[derive(Debug, Default)]
+pub(super) struct Budget(AtomicUsize);
+
+/// Tetrahedra an `Adapt` makes between additions to its `Budget`.
+const PUBLISH: usize = 1024;
+
+impl Budget {
+    /// Whether `Adapt`s that shared a budget and made `made` tetrahedra in all never met it
+    /// (each counts no more than all have made): then each bisected what it would have alone.
+    pub fn never_met(made: usize) -> bool {
+        made + 6 <= MAX_TETS
+    }
+}
 
 /// Why a tetrahedron is bisected.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,6 +137,10 @@ pub(super) struct Adapt<'a, F: Field> {
     /// The samples' pieces (`Sample::start`).
     holders: Vec<u32>,
     pub tets: Vec<Tet>,
+    /// The tetrahedra made by this and every `Adapt` running beside it, and those made here
+    /// not added to it yet.
+    budget: &'a Budget,
+    unpublished: usize,
     /// Each corner's number, and the corners by number.
     ids: QuickMap<Pt, u32>,
     pts: Vec<Pt>,
@@ -148,6 +171,7 @@ impl<'a, F: Field> Adapt<'a, F> {
         grid: &'a Grid,
         prims: &'a [Primitive],
         field: &'a F,
+        budget: &'a Budget,
         band: f64,
         (tol, finest): (f64, u32),
     ) -> Self {
@@ -163,6 +187,8 @@ impl<'a, F: Field> Adapt<'a, F> {
             samples: QuickMap::default(),
             holders: Vec::new(),
             tets: Vec::new(),
+            budget,
+            unpublished: 0,
             ids: QuickMap::default(),
             pts: Vec::new(),
             edges: QuickMap::default(),
@@ -296,6 +322,24 @@ impl<'a, F: Field> Adapt<'a, F> {
         }
         self.tets.push(t);
         self.work.push(id);
+        self.unpublished += 1;
+        if self.unpublished == PUBLISH {
+            self.budget.0.fetch_add(PUBLISH, Ordering::Relaxed);
+            self.unpublished = 0;
+        }
+    }
+
+    /// Counts against `budget` from now on, alone: it has made its own tetrahedra, no more.
+    pub fn alone(&mut self, budget: &'a Budget) {
+        budget.0.store(self.tets.len(), Ordering::Relaxed);
+        self.budget = budget;
+        self.unpublished = 0;
+    }
+
+    /// The tetrahedra made so far, here and (as far as they have said) beside it: exactly
+    /// this one's when it runs alone, never more than all have made.
+    fn spent(&self) -> usize {
+        self.budget.0.load(Ordering::Relaxed) + self.unpublished
     }
 
     fn kill(&mut self, id: u32) {
@@ -316,7 +360,7 @@ impl<'a, F: Field> Adapt<'a, F> {
     /// Brings in cell `c` to be looked at, unless the budget is spent (then it is counted
     /// as left).
     pub fn look_at(&mut self, c: [usize; 3]) {
-        if self.tets.len() + 6 > MAX_TETS {
+        if self.spent() + 6 > MAX_TETS {
             self.left += 1;
             return;
         }
@@ -445,7 +489,7 @@ impl<'a, F: Field> Adapt<'a, F> {
             let Some(why) = self.bridges(id) else {
                 continue;
             };
-            if t.level >= self.levels || self.tets.len() > MAX_TETS {
+            if t.level >= self.levels || self.spent() > MAX_TETS {
                 match why {
                     Bridge::Gap => self.left += 1,
                     Bridge::Shape => self.crotches += 1,
@@ -690,7 +734,8 @@ mod tests {
             h: 1.0,
             points: [10, 10, 10],
         };
-        let mut adapt = Adapt::new(&grid, &[], &Empty, 1.0, (0.25, 16));
+        let budget = Budget::default();
+        let mut adapt = Adapt::new(&grid, &[], &Empty, &budget, 1.0, (0.25, 16));
         adapt.bring([4, 4, 4]);
         let mut seed = 7u64;
         for _ in 0..400 {
