@@ -62,7 +62,8 @@
 //! apart: the ends of a short edge along it, the apex of a low triangle away from its longest
 //! edge in its plane, to half as long again as a hundredth of the tolerance (`spread`). After
 //! the last check, what fitting and its splits left short, low or flat is tidied and pushed
-//! apart again, and checked again (up to `RETIDY_ROUNDS` times).
+//! apart again, and checked again (up to `RETIDY_ROUNDS` times, until a round has nothing to
+//! tidy, no fewer slivers to push apart and nothing split).
 //!
 //! *The last check* looks at every triangle whole, with a proof either way. Outside: no point
 //! more than the tolerance out of the union (one convex piece within it at all three corners
@@ -737,7 +738,7 @@ pub fn simplify(
     if progress.cancelled() {
         return None;
     }
-    let (mut pushed_apart, _) = spread(mesh, tol);
+    let (mut pushed_apart, ..) = spread(mesh, tol);
     at_floor(mesh);
     if debug {
         eprintln!(
@@ -752,7 +753,7 @@ pub fn simplify(
     let (mut collapsed, mut flipped) = (collapsed, flipped);
     for _ in 0..RETIDY_ROUNDS {
         let (c, f) = tidy(mesh, tol);
-        let (pushed, _) = spread(mesh, tol);
+        let (pushed, found, left) = spread(mesh, tol);
         if c + f + pushed == 0 {
             break;
         }
@@ -760,7 +761,13 @@ pub fn simplify(
         flipped += f;
         pushed_apart += pushed;
         at_floor(mesh);
+        let triangles = mesh.triangles.len();
         unheld = touch_up(mesh, field, tol, &mut proofs);
+        // Nothing to tidy, no fewer defects for the pushing, nothing split since: another
+        // round would push the same ones again.
+        if c + f == 0 && left >= found && mesh.triangles.len() == triangles {
+            break;
+        }
     }
     let slivers_left = defects(mesh, COINCIDENT * tol, &across(mesh)).1;
     // What the last check's splits put below the plate by a rounding.
@@ -1115,20 +1122,22 @@ const SPREAD_ROUNDS: usize = 8;
 /// the vertex's ring, is tried; rounds until none is left. The mesh keeps its topology (where
 /// a collapse would not: ends with three neighbours in common); the last check follows.
 /// Returns (edges and triangles pushed, those left).
-fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
+fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize, usize) {
     let short = COINCIDENT * tol;
     let mut pushed = 0;
+    // Only vertices move: the triangles across each edge and around each vertex stay.
     let next = across(mesh);
+    let at = around(mesh);
+    let (mut moves, found) = defects(mesh, short, &next);
+    let mut left = found;
     for _ in 0..SPREAD_ROUNDS {
-        let (moves, _) = defects(mesh, short, &next);
         if moves.is_empty() {
             break;
         }
-        let at = around(mesh);
         let mut step = vec![DVec3::ZERO; mesh.positions.len()];
         // A vertex asked to move by several defects takes the longest move.
         let mut listed: Vec<u32> = Vec::new();
-        for (v, d) in moves {
+        for (v, d) in moves.drain(..) {
             let s = &mut step[v as usize];
             if *s == DVec3::ZERO {
                 listed.push(v);
@@ -1193,8 +1202,9 @@ fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize) {
         if made == 0 {
             break;
         }
+        (moves, left) = defects(mesh, short, &next);
     }
-    (pushed, defects(mesh, short, &next).1)
+    (pushed, found, left)
 }
 
 /// The moves that would push apart each edge shorter than `short` and each triangle lower than
@@ -1300,15 +1310,30 @@ fn across(mesh: &TriMesh) -> Vec<[u32; 3]> {
         .collect()
 }
 
-/// Each vertex's triangles.
-fn around(mesh: &TriMesh) -> Vec<Vec<u32>> {
-    let mut at = vec![Vec::new(); mesh.positions.len()];
-    for (k, t) in mesh.triangles.iter().enumerate() {
-        for &v in t {
-            at[v as usize].push(k as u32);
-        }
+/// Each vertex's triangles, in order: vertex v's are `list[start[v]..start[v + 1]]` (one
+/// list for all, not one each: the tidying passes build this for every vertex, every round).
+struct Stars {
+    start: Vec<u32>,
+    list: Vec<u32>,
+}
+
+impl std::ops::Index<usize> for Stars {
+    type Output = [u32];
+    fn index(&self, v: usize) -> &[u32] {
+        &self.list[self.start[v] as usize..self.start[v + 1] as usize]
     }
-    at
+}
+
+/// Each vertex's triangles.
+fn around(mesh: &TriMesh) -> Stars {
+    let (start, list) = group(
+        mesh.positions.len(),
+        mesh.triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(k, t)| t.map(|v| (v, k as u32))),
+    );
+    Stars { start, list }
 }
 
 /// Twice the area times the unit normal.
@@ -1443,7 +1468,7 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
     let mut touched = vec![false; mesh.positions.len()];
     let mut made = 0;
     // A vertex's neighbours, in order.
-    fn ring_of(at: &[Vec<u32>], triangles: &[[u32; 3]], v: u32, dead: &[bool]) -> Vec<u32> {
+    fn ring_of(at: &Stars, triangles: &[[u32; 3]], v: u32, dead: &[bool]) -> Vec<u32> {
         let mut r: Vec<u32> = at[v as usize]
             .iter()
             .filter(|&&f| !dead[f as usize])
@@ -1456,6 +1481,30 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
     }
     for v in 0..mesh.positions.len() as u32 {
         if touched[v as usize] || at[v as usize].is_empty() {
+            continue;
+        }
+        // Most vertices are neither flat nor a spike: that is told first, with nothing
+        // allocated (in a closed 2-manifold a vertex has as many neighbours as triangles, so
+        // only one with three triangles can be a spike).
+        let live = || {
+            at[v as usize]
+                .iter()
+                .copied()
+                .filter(|&f| !dead[f as usize])
+        };
+        let area = |k: u32| normal(mesh.corners(&mesh.triangles[k as usize])).length();
+        let at_v = mesh.positions[v as usize];
+        let largest = live().max_by(|&f, &g| area(f).total_cmp(&area(g)).then(g.cmp(&f)));
+        let Some(n) =
+            largest.and_then(|f| normal(mesh.corners(&mesh.triangles[f as usize])).try_normalize())
+        else {
+            continue;
+        };
+        let near_plane = live().all(|f| {
+            let p = mesh.corners(&mesh.triangles[f as usize]);
+            p.iter().all(|&x| (x - at_v).dot(n).abs() < short)
+        });
+        if !near_plane && live().count() != 3 {
             continue;
         }
         let faces: Vec<u32> = at[v as usize]
@@ -1472,7 +1521,6 @@ fn tidy_flat(mesh: &mut TriMesh, short: f64) -> usize {
         else {
             continue;
         };
-        let at_v = mesh.positions[v as usize];
         let ring = ring_of(&at, &mesh.triangles, v, &dead);
         let flat = ring.len() >= 3
             && ring
@@ -2940,7 +2988,7 @@ mod tests {
             let mut m = split_at(at);
             let volume = m.signed_volume();
             assert!(defects(&m, short, &across(&m)).1 > 0, "{name}");
-            let (pushed, left) = spread(&mut m, tol);
+            let (pushed, _, left) = spread(&mut m, tol);
             assert!(
                 pushed > 0 && left == 0,
                 "{name}: {pushed} pushed, {left} left"
@@ -2978,7 +3026,7 @@ mod tests {
         };
         assert!(m.triangles.iter().all(|t| height(m.corners(t)) > short));
         assert!(defects(&m, short, &across(&m)).1 > 0);
-        let (pushed, left) = spread(&mut m, tol);
+        let (pushed, _, left) = spread(&mut m, tol);
         assert!(pushed > 0 && left == 0, "{pushed} pushed, {left} left");
         assert_eq!((m.triangles.len(), m.positions.len()), (4, 4));
         let topo = m.check_manifold();
