@@ -2280,17 +2280,16 @@ impl Brick {
     /// Greedy edge collapse, cheapest first, until no edge within the tolerance passes.
     fn run(&mut self, limits: &Limits) {
         let tol2 = limits.tol * limits.tol;
-        // (cost bits, a, b): costs are never negative, so their bits order them. An entry
-        // whose edge has changed since (its cost is not the same any more) is passed over:
-        // the change pushed the edge anew. (One whose cost came out the same is looked at
-        // twice in a row, to the same effect.)
-        let entry = |s: &Brick, a: u32, b: u32| {
+        // (cost, a, b, collapses made when pushed): the cost as a 32-bit float, whose bits
+        // order it (costs are never negative). An entry one of whose ends has changed since
+        // (a collapse into it, or of it) is passed over: the change pushed the edge anew.
+        let entry = |s: &Brick, a: u32, b: u32, when: u32| {
             if a == b || !s.open(a, b) {
                 return None;
             }
             let (a, b) = (a.min(b), a.max(b));
             let e = s.cost(a, b);
-            (e <= tol2).then_some((e.to_bits(), a, b))
+            (e <= tol2).then_some(((e as f32).to_bits(), a, b, when))
         };
         let mut first = Vec::new();
         for t in 0..self.triangles.len() {
@@ -2298,26 +2297,29 @@ impl Brick {
             for k in 0..3 {
                 let (a, b) = (tri[k], tri[(k + 1) % 3]);
                 if a < b {
-                    first.extend(entry(self, a, b));
+                    first.extend(entry(self, a, b, 0));
                 }
             }
         }
         let mut heap = Heap::from(first);
-        let push = |heap: &mut Heap, s: &Brick, a, b| {
-            if let Some(key) = entry(s, a, b) {
+        let push = |heap: &mut Heap, s: &Brick, a, b, when| {
+            if let Some(key) = entry(s, a, b, when) {
                 heap.push(key);
             }
         };
+        // How many collapses had been made when each vertex last changed (`self.made`).
+        let mut changed_at = vec![0u32; self.positions.len()];
         let mut tried = std::collections::HashSet::with_hasher(Quick);
         // How many of each vertex's edges are in `tried` (or were, for a vertex collapsed
         // away): an edge neither of whose ends has one is not looked up.
         let mut rejects = vec![0u32; self.positions.len()];
         let mut scratch = Scratch::default();
         let (mut ring, mut both) = (Vec::new(), Vec::new());
-        while let Some((cost, a, b)) = heap.pop() {
+        while let Some((_, a, b, when)) = heap.pop() {
             if self.stars[a as usize].is_empty()
                 || self.stars[b as usize].is_empty()
-                || self.cost(a, b).to_bits() != cost
+                || changed_at[a as usize] > when
+                || changed_at[b as usize] > when
             {
                 continue;
             }
@@ -2330,9 +2332,12 @@ impl Brick {
                 }
                 Some(c) => {
                     self.apply(&c, &mut ring, &mut both);
+                    let made = self.made as u32;
+                    changed_at[a as usize] = made;
+                    changed_at[b as usize] = made;
                     // The merged vertex's edges anew; edges rejected around it again.
                     for &v in &ring {
-                        push(&mut heap, self, a, v);
+                        push(&mut heap, self, a, v, made);
                     }
                     for &v in &ring {
                         if rejects[v as usize] == 0 {
@@ -2347,7 +2352,7 @@ impl Brick {
                                 {
                                     rejects[v as usize] -= 1;
                                     rejects[w as usize] -= 1;
-                                    push(&mut heap, self, v, w);
+                                    push(&mut heap, self, v, w, made);
                                 }
                             }
                         }
@@ -2598,23 +2603,31 @@ impl Brick {
     }
 }
 
-/// A heap of edges, least (cost bits, a, b) first: four children to a node, so a pop looks
-/// at half as many levels as a binary heap's, each level's children side by side in memory
-/// (a brick's heap holds ~10⁵ entries, more than a core's cache). Each is kept as one 128-bit
-/// number, whose order is the triple's, so a comparison is one instruction pair, not three
-/// branches.
+/// A heap of edges, least (cost bits, a, b, when) first: four children to a node, so a pop
+/// looks at half as many levels as a binary heap's, each level's children side by side in
+/// memory (a brick's heap holds ~10⁵ entries, more than a core's cache). Each is kept as one
+/// 128-bit number, whose order is the four's, so a comparison is one instruction pair, not
+/// four branches.
 struct Heap(Vec<u128>);
 
+/// A heap entry: four numbers, compared in order.
+type Entry = (u32, u32, u32, u32);
+
 impl Heap {
-    fn pack((cost, a, b): (u64, u32, u32)) -> u128 {
-        (u128::from(cost) << 64) | (u128::from(a) << 32) | u128::from(b)
+    fn pack((w, x, y, z): Entry) -> u128 {
+        (u128::from(w) << 96) | (u128::from(x) << 64) | (u128::from(y) << 32) | u128::from(z)
     }
 
-    fn unpack(k: u128) -> (u64, u32, u32) {
-        ((k >> 64) as u64, (k >> 32) as u32, k as u32)
+    fn unpack(k: u128) -> Entry {
+        (
+            (k >> 96) as u32,
+            (k >> 64) as u32,
+            (k >> 32) as u32,
+            k as u32,
+        )
     }
 
-    fn from(items: Vec<(u64, u32, u32)>) -> Heap {
+    fn from(items: Vec<Entry>) -> Heap {
         let mut items: Vec<u128> = items.into_iter().map(Heap::pack).collect();
         let n = items.len();
         for i in (0..n.div_ceil(4)).rev() {
@@ -2623,7 +2636,7 @@ impl Heap {
         Heap(items)
     }
 
-    fn push(&mut self, item: (u64, u32, u32)) {
+    fn push(&mut self, item: Entry) {
         let item = Heap::pack(item);
         let v = &mut self.0;
         let mut i = v.len();
@@ -2639,7 +2652,7 @@ impl Heap {
         v[i] = item;
     }
 
-    fn pop(&mut self) -> Option<(u64, u32, u32)> {
+    fn pop(&mut self) -> Option<Entry> {
         let last = self.0.pop()?;
         if self.0.is_empty() {
             return Some(Heap::unpack(last));
@@ -3055,12 +3068,13 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let mut key = || {
             (
-                rng.random_range(0..97u64),
+                rng.random_range(0..97u32),
                 rng.random_range(0..5u32),
                 rng.random_range(0..5u32),
+                rng.random_range(0..3u32),
             )
         };
-        let first: Vec<(u64, u32, u32)> = (0..1000).map(|_| key()).collect();
+        let first: Vec<Entry> = (0..1000).map(|_| key()).collect();
         let mut heap = Heap::from(first.clone());
         let mut all = first;
         let mut popped = Vec::new();
