@@ -819,11 +819,19 @@ fn edge_key(a: u32, b: u32) -> u64 {
 /// Splits edges whose midpoints are off the surface (see the module notes).
 fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
     let step = 0.01 * tol;
-    // After the first round only edges to new vertices are looked at again.
-    let mut fresh: Option<usize> = None;
+    // After the first round only edges to new vertices are looked at again, and triangles
+    // with one: the pieces of those cut (`cut`).
+    let mut last: Option<(usize, Vec<u32>)> = None;
     for _ in 0..REFINE_ROUNDS {
-        let mut edges: Vec<(u32, u32)> = mesh
-            .triangles
+        let cut_last: Vec<[u32; 3]>;
+        let (triangles, fresh) = match &last {
+            None => (&mesh.triangles, None),
+            Some((first, pieces)) => {
+                cut_last = pieces.iter().map(|&k| mesh.triangles[k as usize]).collect();
+                (&cut_last, Some(*first))
+            }
+        };
+        let mut edges: Vec<(u32, u32)> = triangles
             .par_iter()
             .flat_map_iter(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
             .filter(|&(a, b)| a < b)
@@ -846,8 +854,7 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
             .collect();
         // A triangle whose centre is off (in a corner where three veins meet) though no
         // edge's midpoint is: its longest edge is split too.
-        let mut longest: Vec<(u32, u32)> = mesh
-            .triangles
+        let mut longest: Vec<(u32, u32)> = triangles
             .par_iter()
             .filter(|t| fresh.is_none_or(|first| t.iter().any(|&v| v as usize >= first)))
             .filter_map(|t| {
@@ -881,7 +888,7 @@ fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
         if split.is_empty() {
             break;
         }
-        fresh = Some(cut_edges(mesh, split, tol));
+        last = Some(cut_edges(mesh, split, tol));
     }
 }
 
@@ -1691,8 +1698,9 @@ fn tidy_flip(mesh: &mut TriMesh, short: f64) -> usize {
 }
 
 /// Splits each edge `(a, b)` of `split` at its point (on the surface), unless that point is
-/// within `COINCIDENT · tol` of a vertex; returns the index of the first new vertex.
-fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) -> usize {
+/// within `COINCIDENT · tol` of a vertex; returns the index of the first new vertex and the
+/// triangles cut (each piece: the first in the old one's place, the others added at the end).
+fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) -> (usize, Vec<u32>) {
     split.sort_unstable_by_key(|&(a, b, _)| (a, b));
     split.dedup_by_key(|&mut (a, b, _)| (a, b));
     let first = mesh.positions.len();
@@ -1733,22 +1741,30 @@ fn cut_edges(mesh: &mut TriMesh, mut split: Vec<(u32, u32, DVec3)>, tol: f64) ->
         ends[a as usize] = true;
         ends[b as usize] = true;
     }
-    mesh.triangles = mesh
+    // Each cut triangle's first piece in its place, the others after the last triangle.
+    let cuts: Vec<(usize, [[u32; 3]; 4], usize)> = mesh
         .triangles
         .par_iter()
-        .flat_map_iter(|&t| {
-            let (tris, n) = if t.iter().any(|&v| ends[v as usize]) {
-                cut(
-                    t,
-                    [0, 1, 2].map(|k| mid.get(&edge_key(t[k], t[(k + 1) % 3])).copied()),
-                )
-            } else {
-                ([t; 4], 1)
-            };
-            (0..n).map(move |k| tris[k])
+        .enumerate()
+        .filter(|(_, t)| t.iter().any(|&v| ends[v as usize]))
+        .filter_map(|(k, &t)| {
+            let (tris, n) = cut(
+                t,
+                [0, 1, 2].map(|k| mid.get(&edge_key(t[k], t[(k + 1) % 3])).copied()),
+            );
+            (n > 1).then_some((k, tris, n))
         })
         .collect();
-    first
+    let mut pieces = Vec::with_capacity(3 * cuts.len());
+    for (k, tris, n) in cuts {
+        mesh.triangles[k] = tris[0];
+        pieces.push(k as u32);
+        for t in &tris[1..n] {
+            pieces.push(mesh.triangles.len() as u32);
+            mesh.triangles.push(*t);
+        }
+    }
+    (first, pieces)
 }
 
 /// Triangle `t` cut at the midpoints `m[k]` of its edges `(t[k], t[k + 1])`, same orientation:
