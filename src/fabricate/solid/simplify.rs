@@ -820,7 +820,7 @@ fn edge_key(a: u32, b: u32) -> u64 {
 fn refine(mesh: &mut TriMesh, field: &Field, tol: f64) {
     let step = 0.01 * tol;
     // After the first round only edges to new vertices are looked at again, and triangles
-    // with one: the pieces of those cut (`cut`).
+    // with one: the pieces of those the last round cut (`cut_edges` returns them).
     let mut last: Option<(usize, Vec<u32>)> = None;
     for _ in 0..REFINE_ROUNDS {
         let cut_last: Vec<[u32; 3]>;
@@ -1128,7 +1128,7 @@ const SPREAD_ROUNDS: usize = 8;
 /// vertex's triangles do), when half or a quarter of the move, or as far towards the middle of
 /// the vertex's ring, is tried; rounds until none is left. The mesh keeps its topology (where
 /// a collapse would not: ends with three neighbours in common); the last check follows.
-/// Returns (edges and triangles pushed, those left).
+/// Returns (moves made, triangles with a defect at the start, those left).
 fn spread(mesh: &mut TriMesh, tol: f64) -> (usize, usize, usize) {
     let short = COINCIDENT * tol;
     let mut pushed = 0;
