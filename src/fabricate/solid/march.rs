@@ -24,7 +24,7 @@ use rayon::prelude::*;
 
 use super::quick::{QuickMap, QuickSet};
 use super::sdf::Primitive;
-use crate::mesh::TriMesh;
+use crate::mesh::{find, union, TriMesh};
 
 mod adapt;
 
@@ -466,13 +466,6 @@ fn halves(cells: &[[usize; 3]]) -> Option<[Vec<[usize; 3]>; 2]> {
     blocks.sort_unstable();
     blocks.dedup();
     let index = |b: &[usize; 3]| blocks.binary_search(b).ok();
-    fn root(parent: &mut [u32], mut i: u32) -> u32 {
-        while parent[i as usize] != i {
-            parent[i as usize] = parent[parent[i as usize] as usize];
-            i = parent[i as usize];
-        }
-        i
-    }
     let mut parent: Vec<u32> = (0..blocks.len() as u32).collect();
     for (i, b) in blocks.iter().enumerate() {
         for code in (0..27).filter(|&c| c != 13) {
@@ -482,14 +475,13 @@ fn halves(cells: &[[usize; 3]]) -> Option<[Vec<[usize; 3]>; 2]> {
                 continue;
             }
             if let Some(j) = index(&n.map(|x| x as usize)) {
-                let (ri, rj) = (root(&mut parent, i as u32), root(&mut parent, j as u32));
-                parent[ri.max(rj) as usize] = ri.min(rj);
+                union(&mut parent, i as u32, j as u32);
             }
         }
     }
     let cluster: Vec<u32> = cells
         .iter()
-        .map(|c| index(&block(c)).map_or(0, |i| root(&mut parent, i as u32)))
+        .map(|c| index(&block(c)).map_or(0, |i| find(&mut parent, i as u32)))
         .collect();
     let mut weight = vec![0usize; blocks.len()];
     for &r in &cluster {
